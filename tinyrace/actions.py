@@ -1,0 +1,89 @@
+"""Action spaces and their checking: every action becomes plain floats or is refused.
+
+Continuous actions may be any real-valued array-like of the right shape (lists,
+float64 and integer arrays are cast to float32); discrete actions may be Python
+or numpy integers. Anything else, NaN, infinity or a value outside the space
+raises ``gymnasium.error.InvalidAction`` naming the space.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.error import InvalidAction
+
+# CarRacing's Discrete(5): nothing, right, left, gas, brake -> (steer, gas, brake).
+DISCRETE_CONTROLS = (
+    (0.0, 0.0, 0.0),
+    (0.6, 0.0, 0.0),
+    (-0.6, 0.0, 0.0),
+    (0.0, 0.2, 0.0),
+    (0.0, 0.0, 0.8),
+)
+
+
+@dataclass(frozen=True)
+class ActionSpec:
+    """How actions look for one car: the gymnasium space and how to read an action."""
+
+    space: spaces.Space
+    kind: str  # "discrete", "dynamic" ([steer, gas, brake]) or "kinematic" ([steer])
+
+    @classmethod
+    def for_car(cls, model: str, actions: str) -> ActionSpec:
+        if model == "kinematic":
+            return cls(spaces.Box(-1.0, 1.0, (1,), np.float32), "kinematic")
+        if actions == "discrete":
+            return cls(spaces.Discrete(5), "discrete")
+        low, high = np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32)
+        return cls(spaces.Box(low, high, dtype=np.float32), "dynamic")
+
+    def __post_init__(self) -> None:
+        if isinstance(self.space, spaces.Box):  # plain floats: cheaper to compare per step
+            bounds = list(zip(self.space.low.tolist(), self.space.high.tolist(), strict=True))
+            object.__setattr__(self, "_bounds", bounds)
+
+    def read(self, action: object) -> tuple[float, ...]:
+        """The controls of a valid action: (steer, gas, brake) or (steer,)."""
+        if self.kind == "discrete":
+            return DISCRETE_CONTROLS[self._index(action)]
+        if (
+            type(action) is np.ndarray
+            and action.dtype == np.float32
+            and action.shape == self.space.shape
+        ):
+            values = action.tolist()  # the common case, checked without numpy calls
+            if all(low <= v <= high for v, (low, high) in zip(values, self._bounds, strict=True)):
+                return tuple(values)
+        return tuple(self._vector(action).tolist())
+
+    def _index(self, action: object) -> int:
+        if isinstance(action, np.ndarray) and action.shape == () and action.dtype.kind in "iu":
+            action = action.item()
+        if not isinstance(action, (int, np.integer)) or isinstance(action, (bool, np.bool_)):
+            raise InvalidAction(f"action {action!r} is not an integer of {self.space}")
+        if not 0 <= action < self.space.n:
+            raise InvalidAction(f"action {action!r} is outside {self.space}")
+        return int(action)
+
+    def _vector(self, action: object) -> np.ndarray:
+        array = action if isinstance(action, np.ndarray) else _as_array(action, self.space)
+        if array.dtype.kind not in "fiu":
+            raise InvalidAction(
+                f"action {action!r} of dtype {array.dtype} is not real-valued; space {self.space}"
+            )
+        if array.shape != self.space.shape:
+            raise InvalidAction(f"action of shape {array.shape} does not fit {self.space}")
+        array = array.astype(np.float32, copy=False)
+        if not (np.all(array >= self.space.low) and np.all(array <= self.space.high)):
+            raise InvalidAction(f"action {array.tolist()} is outside {self.space} (NaN included)")
+        return array
+
+
+def _as_array(action: object, space: spaces.Space) -> np.ndarray:
+    try:
+        return np.asarray(action)
+    except (TypeError, ValueError) as exc:
+        raise InvalidAction(f"action {action!r} is not an array for {space}") from exc

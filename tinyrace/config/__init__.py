@@ -1,0 +1,171 @@
+"""One path for configuration: YAML files, dicts and ``gym.make`` kwargs become ``EnvConfig``."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tinyrace.config.colors import Color
+from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.config.schema import (
+    CameraConfig,
+    CarConfig,
+    ColorObstacle,
+    CrossTrackErrorConfig,
+    EnvConfig,
+    ImageTrackConfig,
+    ProceduralTrackConfig,
+    RewardConfig,
+    SimConfig,
+    TrackConfig,
+)
+from tinyrace.errors import ConfigError, Problem
+
+__all__ = [
+    "CameraConfig",
+    "CarConfig",
+    "Color",
+    "ColorObstacle",
+    "ConfigError",
+    "CrossTrackErrorConfig",
+    "EnvConfig",
+    "ImageTrackConfig",
+    "LoadedConfig",
+    "ProceduralTrackConfig",
+    "RewardConfig",
+    "SimConfig",
+    "TrackConfig",
+    "load_env_config",
+]
+
+TRACK_FILE = "track.yaml"
+
+
+@dataclass(frozen=True)
+class LoadedConfig:
+    """A validated config, with where it came from (for errors) and where its images live."""
+
+    config: EnvConfig
+    source: str  # file path or "<dict>", used in error messages
+    base_dir: Path  # images are relative to this
+
+
+def load_env_config(
+    config: str | Path | Mapping[str, Any] | None = None,
+    environment: str | Path | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> LoadedConfig:
+    """Read a track folder (``environment``), a YAML path or a dict, apply overrides, validate.
+
+    With neither ``config`` nor ``environment``, the result is the default procedural track.
+    Raises ConfigError listing every problem found.
+    """
+    if config is not None and environment is not None:
+        raise ConfigError(
+            Problem(
+                "<kwargs>",
+                "environment",
+                str(environment),
+                "give either config= or environment=, not both",
+            )
+        )
+    raw, source, base_dir = _read_source(config, environment)
+    if overrides:
+        raw = deep_merge(raw, overrides)
+    return LoadedConfig(parse_env_config(raw, source), source, base_dir)
+
+
+def _read_source(
+    config: str | Path | Mapping[str, Any] | None, environment: str | Path | None
+) -> tuple[dict[str, Any], str, Path]:
+    if environment is not None:
+        folder = Path(environment)
+        if not folder.is_dir():
+            raise ConfigError(
+                Problem(
+                    str(folder), "", str(environment), "expected a track folder holding track.yaml"
+                )
+            )
+        config = folder / TRACK_FILE
+    if config is None:
+        return {}, "<defaults>", Path.cwd()
+    if isinstance(config, Mapping):
+        return dict(config), "<dict>", Path.cwd()
+    if not isinstance(config, (str, Path)):
+        raise ConfigError(Problem("<kwargs>", "config", config, "expected a YAML path or a dict"))
+    path = Path(config)
+    if path.is_dir():
+        path = path / TRACK_FILE
+    raw = read_yaml(path)
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, Mapping):
+        raise ConfigError(
+            Problem(
+                str(path), "", raw, "expected a YAML mapping of sections (sim, track, car, ...)"
+            )
+        )
+    return dict(raw), str(path), path.parent
+
+
+def parse_env_config(raw: Mapping[str, Any], source: str) -> EnvConfig:
+    """Validate a raw mapping into an EnvConfig with every kind-dependent default resolved."""
+    parser = Parser(source)
+    config = parser.dataclass(EnvConfig, raw, "")
+    parser.check()
+    _check_consistency(config, parser)
+    parser.check()
+    return resolve_defaults(config)
+
+
+def _check_consistency(config: EnvConfig, parser: Parser) -> None:
+    """Rules that span sections."""
+    kinds = {t.type for t in config.tracks}
+    if len(kinds) > 1:
+        parser.problem("tracks", sorted(kinds), "all tracks of one env must be of one type")
+    if not config.tracks:
+        parser.problem("tracks", [], "expected at least one track")
+    image = "image" in kinds
+    if image and not config.cameras:
+        parser.problem(
+            "cameras",
+            [],
+            "an image track needs at least one camera (id, resolution, roi, position)",
+        )
+    ids = [c.id for c in config.cameras]
+    for i, cam_id in enumerate(ids):
+        if cam_id in ids[:i]:
+            parser.problem(f"cameras[{i}].id", cam_id, "camera ids must be unique")
+    model = config.car.model or ("kinematic" if image else "dynamic")
+    if config.car.actions == "discrete" and model != "dynamic":
+        parser.problem("car.actions", "discrete", "discrete actions need car.model: dynamic")
+    if not image and config.reward_design.color_obstacles:
+        parser.problem(
+            "reward_design.color_obstacles", "...", "colour obstacles need an image track"
+        )
+
+
+def resolve_defaults(config: EnvConfig) -> EnvConfig:
+    """Fill the ``None`` knobs whose default depends on the track kind."""
+    procedural = config.kind == "procedural"
+    sim = config.sim
+    if sim.fps is None:
+        sim = dataclasses.replace(sim, fps=50.0 if procedural else 30.0)
+    car = config.car
+    if car.model is None:
+        car = dataclasses.replace(car, model="dynamic" if procedural else "kinematic")
+    reward = config.reward_design
+    reward = dataclasses.replace(
+        reward,
+        tile_progress=_default(reward.tile_progress, 1000.0 if procedural else 0.0),
+        time_penalty=_default(reward.time_penalty, 0.1 if procedural else 0.0),
+        out_of_bounds_penalty=_default(reward.out_of_bounds_penalty, 100.0 if procedural else 0.0),
+    )
+    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
+
+
+def _default(value: float | None, default: float) -> float:
+    return default if value is None else value

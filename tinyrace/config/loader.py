@@ -1,0 +1,233 @@
+"""Turn YAML files, dicts and kwargs into the schema's dataclasses, reporting every problem.
+
+The parser walks a dataclass's type hints; it knows bools, numbers, strings,
+``None``, ``Literal`` choices, tuples, colours, nested dataclasses and unions of
+dataclasses told apart by their ``type`` key.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import types
+import typing
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal, Union
+
+import yaml
+
+from tinyrace.config.colors import Color
+from tinyrace.errors import ConfigError, Problem
+
+_INVALID = object()  # a value that failed to parse; the problem is already recorded
+
+
+class Parser:
+    """Parses one source (a file or a dict) and collects its problems."""
+
+    def __init__(self, source: str):
+        self.source = source
+        self.problems: list[Problem] = []
+
+    def problem(self, path: str, value: object, allowed: str) -> object:
+        self.problems.append(Problem(self.source, path, value, allowed))
+        return _INVALID
+
+    def check(self) -> None:
+        if self.problems:
+            raise ConfigError(self.problems)
+
+    # -- dataclasses -------------------------------------------------------------------------
+    def dataclass(self, cls: type, data: object, path: str) -> Any:
+        """Build ``cls`` from a mapping; unknown keys, bad values and missing keys are problems."""
+        if not isinstance(data, Mapping):
+            keys = ", ".join(f.name for f in dataclasses.fields(cls))
+            return self.problem(path, data, f"expected a mapping with keys: {keys}")
+        fields = {f.name: f for f in dataclasses.fields(cls)}
+        aliases = {a: f.name for f in fields.values() for a in f.metadata.get("aliases", ())}
+        hints = typing.get_type_hints(cls)
+        values: dict[str, Any] = {}
+        for key, raw in data.items():
+            name = aliases.get(key, key)
+            sub = _join(path, key)
+            if name not in fields:
+                self.problem(sub, raw, _unknown_key_hint(key, [*fields, *aliases]))
+            elif name in values:
+                self.problem(sub, raw, f"'{name}' is given twice (under two spellings)")
+            else:
+                value = self.value(hints[name], raw, sub, fields[name].metadata)
+                if value is not _INVALID:
+                    values[name] = value
+        for f in fields.values():
+            if _required(f) and f.name not in values and f.name not in data:
+                self.problem(
+                    _join(path, f.name), None, f"a required key is missing: {f.metadata['doc']}"
+                )
+        if any(_required(f) and f.name not in values for f in fields.values()):
+            return _INVALID
+        return cls(**values)
+
+    def union_of_dataclasses(self, options: tuple[type, ...], data: object, path: str) -> Any:
+        """Pick the member whose ``type`` matches ``data["type"]`` (the first if absent)."""
+        kinds = {
+            f.default: cls for cls in options for f in dataclasses.fields(cls) if f.name == "type"
+        }
+        kind = (
+            data.get("type", next(iter(kinds))) if isinstance(data, Mapping) else next(iter(kinds))
+        )
+        if kind not in kinds:
+            return self.problem(_join(path, "type"), kind, f"expected one of: {', '.join(kinds)}")
+        return self.dataclass(kinds[kind], data, path)
+
+    # -- values ------------------------------------------------------------------------------
+    def value(self, hint: Any, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+        origin, args = typing.get_origin(hint), typing.get_args(hint)
+        if origin in (Union, types.UnionType):
+            return self.union(args, raw, path, meta)
+        if origin is Literal:
+            if raw in args and type(raw) is type(args[0]):
+                return raw
+            return self.problem(path, raw, f"expected one of: {', '.join(map(str, args))}")
+        if origin is tuple:
+            return self.tuple(args, raw, path, meta)
+        if dataclasses.is_dataclass(hint):
+            return self.dataclass(hint, raw, path)
+        if hint is Color:
+            try:
+                return Color.from_yaml(raw, binary=meta.get("binary", False))
+            except ValueError as exc:
+                return self.problem(path, raw, str(exc))
+        return self.scalar(hint, raw, path, meta)
+
+    def union(self, args: tuple, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+        members = [a for a in args if a is not type(None)]
+        if raw is None:
+            if len(members) < len(args):
+                return None
+            return self.problem(path, raw, f"expected {_describe(members[0], meta)}")
+        if all(dataclasses.is_dataclass(m) for m in members):
+            return self.union_of_dataclasses(tuple(members), raw, path)
+        for member in members:  # try each member quietly, keep the first that fits
+            trial = Parser(self.source)
+            value = trial.value(member, raw, path, meta)
+            if not trial.problems:
+                return value
+        allowed = " or ".join(_describe(m, meta) for m in members)
+        return self.problem(path, raw, f"expected {allowed}")
+
+    def tuple(self, args: tuple, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+        if isinstance(raw, Mapping) and len(args) == 2 and args[1] is Ellipsis:
+            raw = [raw]  # tinycarlo's singular sections: a mapping stands for a list of one
+        if not isinstance(raw, (list, tuple)):
+            return self.problem(path, raw, f"expected a list ({_describe_tuple(args, meta)})")
+        if len(args) == 2 and args[1] is Ellipsis:
+            items = [(args[0], item) for item in raw]
+        elif len(raw) != len(args):
+            return self.problem(
+                path, raw, f"expected a list of {len(args)} ({_describe_tuple(args, meta)})"
+            )
+        else:
+            items = list(zip(args, raw, strict=True))
+        values = [self.value(h, item, f"{path}[{i}]", meta) for i, (h, item) in enumerate(items)]
+        return _INVALID if any(v is _INVALID for v in values) else tuple(values)
+
+    def scalar(self, hint: type, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+        if hint is bool:
+            return (
+                raw if isinstance(raw, bool) else self.problem(path, raw, "expected true or false")
+            )
+        if hint is str:
+            if isinstance(raw, str) and raw.strip():
+                return raw
+            return self.problem(path, raw, "expected a non-empty string")
+        if hint in (int, float):
+            return self.number(hint, raw, path, meta)
+        raise TypeError(f"schema type {hint!r} at {path} has no parser")  # a bug in the schema
+
+    def number(self, hint: type, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+        allowed = f"expected {_describe(hint, meta)}"
+        if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+            return self.problem(path, raw, allowed)
+        if not math.isfinite(raw):
+            return self.problem(path, raw, allowed)
+        if hint is int:
+            if isinstance(raw, float) and not raw.is_integer():
+                return self.problem(path, raw, allowed)
+            raw = int(raw)
+        low, high = meta.get("low"), meta.get("high")
+        too_low = low is not None and (raw <= low if meta.get("low_open") else raw < low)
+        if too_low or (high is not None and raw > high):
+            return self.problem(path, raw, allowed)
+        return hint(raw)
+
+
+def _required(f: dataclasses.Field) -> bool:
+    return f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+
+
+def _join(path: str, key: object) -> str:
+    return f"{path}.{key}" if path else str(key)
+
+
+def _unknown_key_hint(key: object, valid: list[str]) -> str:
+    close = difflib.get_close_matches(str(key), valid, n=1, cutoff=0.5)
+    hint = f"did you mean '{close[0]}'? " if close else ""
+    return f"unknown key; {hint}valid keys: {', '.join(sorted(valid))}"
+
+
+def _describe(hint: Any, meta: Mapping[str, Any]) -> str:
+    """A human description of an accepted value, with range and unit."""
+    if typing.get_origin(hint) is Literal:
+        return "one of: " + ", ".join(map(str, typing.get_args(hint)))
+    if hint in (int, float):
+        text = "a whole number" if hint is int else "a number"
+        low, high = meta.get("low"), meta.get("high")
+        if low is not None:
+            text += f" {'>' if meta.get('low_open') else '>='} {low:g}"
+        if high is not None:
+            text += f"{' and' if low is not None else ''} <= {high:g}"
+        unit = meta.get("unit")
+        return f"{text} [{unit}]" if unit else text
+    if hint is Color:
+        return "a colour"
+    return getattr(hint, "__name__", str(hint))
+
+
+def _describe_tuple(args: tuple, meta: Mapping[str, Any]) -> str:
+    if len(args) == 2 and args[1] is Ellipsis:
+        return f"each {_describe(args[0], meta)}"
+    return ", ".join(_describe(a, meta) for a in args)
+
+
+# -- reading files ---------------------------------------------------------------------------
+def read_yaml(path: Path) -> Any:
+    """Read a YAML file, turning I/O and syntax failures into ConfigError."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(Problem(str(path), "", str(path), "the file does not exist")) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(
+            Problem(str(path), "", str(path), f"the file is unreadable ({exc})")
+        ) from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark else ""
+        line = text.splitlines()[mark.line] if mark and mark.line < len(text.splitlines()) else ""
+        reason = getattr(exc, "problem", None) or str(exc)
+        raise ConfigError(Problem(str(path), where, line, f"invalid YAML: {reason}")) from None
+
+
+def deep_merge(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """Overrides win; mappings merge key by key, anything else replaces."""
+    merged = dict(base)
+    for key, value in overrides.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = deep_merge(merged[key], value)
+        else:
+            merged[key] = value
+    return merged

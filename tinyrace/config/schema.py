@@ -1,0 +1,246 @@
+"""Every configuration section as a dataclass: one schema for YAML files, dicts and kwargs.
+
+Field metadata carries the documentation, the unit and the allowed range; the
+loader validates against it and the README's YAML reference is generated from it.
+``None`` defaults mean "the track kind decides" (see ``resolve_defaults``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, Literal, Union
+
+from tinyrace.config.colors import Color
+
+
+def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
+    """A config field with its documentation, unit and validation rules.
+
+    rules: low / high (inclusive bounds), low_open (strict lower bound),
+    binary (colour channels 0 or 255), aliases (other accepted key names).
+    """
+    meta = {"doc": doc, "unit": unit, **rules}
+    if isinstance(default, (list, dict, set)):
+        raise TypeError("use tuples for defaults")
+    if default is dataclasses.MISSING:
+        return field(metadata=meta)
+    if dataclasses.is_dataclass(default):
+        return field(default_factory=lambda: default, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+REQUIRED = dataclasses.MISSING
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """``sim``: time step and episode length."""
+
+    fps: float | None = knob(
+        None,
+        "simulation steps per second; null: 50 on procedural tracks, 30 on image tracks",
+        "Hz",
+        low=1,
+        high=1000,
+    )
+    render_realtime: bool = knob(True, "the human window waits so that it plays in real time")
+    step_limit: int | None = knob(
+        None, "truncate the episode after this many steps (null: no limit)", "steps", low=1
+    )
+    overview_downscale: float = knob(
+        1.0,
+        "divide the track image size by this in the overview (rgb_array/human render)",
+        low=0.05,
+        high=100,
+    )
+
+
+@dataclass(frozen=True)
+class ProceduralTrackConfig:
+    """A ``track`` of ``type: procedural``: CarRacing-v3's generated track."""
+
+    type: Literal["procedural"] = knob("procedural", "track kind")
+    checkpoints: int = knob(12, "number of checkpoints the track passes", low=3, high=64)
+    radius: float = knob(900 / 6, "mean checkpoint radius (TRACK_RAD)", "u", low=10, high=2000)
+    half_width: float = knob(40 / 6, "half the road width (TRACK_WIDTH)", "u", low=1, high=100)
+    turn_rate: float = knob(0.31, "max heading change per detail step", "rad", low=0.01, high=3)
+    detail_step: float = knob(21 / 6, "distance between track points", "u", low=0.5, high=50)
+    border: float = knob(8 / 6, "kerb width on hard turns", "u", low=0, high=20)
+    border_min_count: int = knob(4, "turning points in a row that make a kerb", low=1, high=50)
+    playfield: float = knob(
+        2000 / 6, "|x| or |y| of the car beyond this ends the episode", "u", low=10, high=10000
+    )
+    lap_complete_percent: float = knob(
+        0.95, "fraction of tiles visited before returning to tile 0 ends a lap", low=0, high=1
+    )
+    domain_randomize: bool = knob(False, "draw new road/background/grass colours per reset")
+    road_color: Color = knob(Color.rgb(102, 102, 102), "road colour (list BGR, #rrggbb RGB)")
+    background_color: Color = knob(Color.rgb(102, 204, 102), "background colour")
+    grass_color: Color = knob(Color.rgb(102, 230, 102), "grass patch colour")
+    pixels_per_unit: float = knob(
+        2.0,
+        "resolution of the pre-drawn ground texture the cameras sample",
+        "px/u",
+        low=0.25,
+        high=16,
+    )
+
+
+Spawn = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ImageTrackConfig:
+    """A ``track`` of ``type: image`` (the default for tinycarlo files): a picture of the track."""
+
+    type: Literal["image"] = knob("image", "track kind")
+    image: str | None = knob(
+        None, "image path relative to track.yaml (PNG/JPEG); null: an empty black plane"
+    )
+    spawns: tuple[Spawn, ...] = knob(
+        ((500.0, 500.0, 0.0),),
+        "start poses [x, y, heading]; heading 0 along +x, clockwise",
+        "px, px, rad",
+    )
+    plane_size: tuple[int, int] = knob(
+        (1000, 1000),
+        "[height, width] of the black plane used when image is null",
+        "px",
+        low=16,
+        high=20000,
+    )
+
+
+# A track entry without ``type`` is an image track (tinycarlo files have none): listed first.
+TrackConfig = Union[ImageTrackConfig, ProceduralTrackConfig]  # noqa: UP007 (read at runtime)
+
+
+@dataclass(frozen=True)
+class CarConfig:
+    """``car``: the car model and its parameters."""
+
+    model: Literal["kinematic", "dynamic"] | None = knob(
+        None, "kinematic bicycle (tinycarlo) or CarRacing's dynamic car; null: by track kind"
+    )
+    actions: Literal["continuous", "discrete"] = knob(
+        "continuous", "dynamic car only: Box [steer, gas, brake] or CarRacing's Discrete(5)"
+    )
+    wheelbase: float = knob(160.0, "kinematic car: rear to front axle", "px", low=1, high=10000)
+    track_width: float = knob(
+        100.0, "kinematic car: width of its footprint", "px", low=1, high=10000
+    )
+    velocity: float = knob(500.0, "kinematic car: constant speed", "px/s", low=0, high=100000)
+    max_steering_angle: float = knob(33.0, "kinematic car: full lock", "deg", low=1, high=89)
+    max_steering_change: float | None = knob(
+        None, "kinematic car: steering rate limit (null: none)", "deg/s", low=0, low_open=True
+    )
+    pixels_per_unit: float = knob(
+        20.0,
+        "dynamic car on an image track: image pixels per CarRacing world unit",
+        "px/u",
+        low=0.1,
+        high=1000,
+    )
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """``cameras[i]``: a bird's-eye camera fixed to the car."""
+
+    id: str = knob(REQUIRED, "observation key of this camera")
+    resolution: tuple[int, int] = knob(
+        (480, 640), "[y, x] output image size", "px", low=1, high=4096
+    )
+    roi: tuple[float, float] = knob(
+        (480.0, 640.0),
+        "[y, x] size of the track window seen (ahead of the front axle)",
+        "track px (u on procedural tracks)",
+        low=1,
+    )
+    position: tuple[float, float] = knob(
+        (0.0, 0.0),
+        "[y, x] shift of the window from the front axle middle; +y back, +x right",
+        "track px (u on procedural tracks)",
+    )
+    yaw: float = knob(
+        0.0, "camera rotation from straight ahead; 90 right, 180 back", "deg", low=-360, high=360
+    )
+
+
+@dataclass(frozen=True)
+class ColorObstacle:
+    """``reward_design.color_obstacles[i]``: pixels of one colour the car must not touch."""
+
+    color: Color = knob(
+        REQUIRED, "obstacle colour ([b, g, r] with 0/255 channels, or #rrggbb)", binary=True
+    )
+    reward: float | Literal["done"] = knob(
+        REQUIRED, "reward for each step the footprint touches it, or done to end the episode"
+    )
+
+
+CteShaping = Literal["none", "linear", "quadratic", "exponential", "gaussian"]
+
+
+@dataclass(frozen=True)
+class CrossTrackErrorConfig:
+    """``reward_design.cross_track_error``: distance to a trajectory drawn in the image."""
+
+    use_cte: bool = knob(False, "compute info['cte'] from trajectory pixels (image tracks)")
+    trajectory_color: Color = knob(
+        Color.rgb(255, 255, 255),
+        "colour of the trajectory pixels (removed from the view)",
+        binary=True,
+    )
+    shaping: CteShaping = knob(
+        "none",
+        "reward from cte: linear -w*e/s, quadratic -w*(e/s)^2, exponential w*exp(-e/s), "
+        "gaussian w*exp(-(e/s)^2/2); a cte_shaping callable kwarg overrides it",
+    )
+    scale: float = knob(50.0, "s in the shapings above", "px", low=0, low_open=True)
+    weight: float = knob(1.0, "w in the shapings above")
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """``reward_design``: the reward terms, summed; each is reported in info['reward_terms']."""
+
+    color_obstacles: tuple[ColorObstacle, ...] = knob(
+        (), "image tracks: colours the car must avoid"
+    )
+    cross_track_error: CrossTrackErrorConfig = knob(CrossTrackErrorConfig(), "image tracks")
+    tile_progress: float | None = knob(
+        None, "procedural: reward for visiting every tile once (null: 1000)", "per lap"
+    )
+    time_penalty: float | None = knob(
+        None, "subtracted every step (null: 0.1 procedural, 0 image)", "per step"
+    )
+    off_road_penalty: float = knob(0.0, "procedural: subtracted per wheel on grass", "per step")
+    out_of_bounds_penalty: float | None = knob(
+        None,
+        "subtracted when the car leaves the playfield or image; ends the episode "
+        "(null: 100 procedural, 0 image)",
+    )
+
+
+@dataclass(frozen=True)
+class EnvConfig:
+    """A whole environment: what a track.yaml holds."""
+
+    sim: SimConfig = knob(SimConfig(), "time step and episode length")
+    tracks: tuple[TrackConfig, ...] = knob(
+        (ProceduralTrackConfig(),), "one or more tracks (a mapping or a list)", aliases=("track",)
+    )
+    car: CarConfig = knob(CarConfig(), "car model")
+    cameras: tuple[CameraConfig, ...] = knob(
+        (),
+        "observation cameras (a mapping or a list); none on a procedural track: "
+        "CarRacing's 96x96 view as a Box",
+        aliases=("camera",),
+    )
+    reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
+
+    @property
+    def kind(self) -> str:
+        return self.tracks[0].type

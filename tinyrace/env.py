@@ -1,0 +1,209 @@
+"""TinyRaceEnv: builds its parts from one config; reset, step, render, close."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.error import ResetNeeded
+
+from tinyrace.actions import ActionSpec
+from tinyrace.config import EnvConfig, load_env_config
+from tinyrace.episodes import StepFacts
+from tinyrace.episodes.procedural import ProceduralCourse
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.render.window import Window
+from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
+
+RENDER_MODES = ("human", "rgb_array", "state_pixels")
+RESET_OPTIONS = ("randomize", "track", "spawn")
+
+
+class TinyRaceEnv(gym.Env):
+    """A car on a 2D track seen from above, configured by YAML.
+
+    ## Description
+    Two kinds of track, chosen by the config's ``track.type``: ``procedural``
+    reproduces Gymnasium's CarRacing-v3 (same tracks for the same seed, same
+    rewards), ``image`` loads a tinycarlo 1.1 track folder whose pixel colours
+    are markings, obstacles and a reference trajectory.
+
+    ## Action Space
+    Dynamic car: Box([-1, 0, 0], [1, 1, 1]) as [steer, gas, brake] (steer +1 turns
+    right), or CarRacing's Discrete(5). Kinematic car: Box(-1, 1, (1,)) steering.
+
+    ## Observation Space
+    With no cameras configured on a procedural track: CarRacing's 96x96x3 RGB
+    view. Otherwise a Dict of uint8 RGB images keyed by camera id.
+
+    ## Rewards
+    Named terms from ``reward_design`` (see ``tinyrace.rewards``), reported in
+    ``info["reward_terms"]``.
+
+    ## Episode End
+    Terminated when a lap is finished, the car leaves the playfield or image, or
+    touches a ``done`` obstacle (``info["termination"]`` says which). Truncated at
+    ``sim.step_limit``.
+    """
+
+    metadata: ClassVar[dict] = {"render_modes": list(RENDER_MODES), "render_fps": 50}
+
+    def __init__(
+        self,
+        config: str | Path | Mapping[str, Any] | None = None,
+        environment: str | Path | None = None,
+        render_mode: str | None = None,
+        cte_shaping: Callable[[float], float] | None = None,
+        verbose: bool = False,
+        **overrides: Any,
+    ):
+        loaded = load_env_config(config, environment, overrides)
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ConfigError(
+                Problem(
+                    "<kwargs>",
+                    "render_mode",
+                    render_mode,
+                    f"expected one of: {', '.join(RENDER_MODES)} or None",
+                )
+            )
+        self.config: EnvConfig = loaded.config
+        self.render_mode = render_mode
+        self.verbose = verbose
+        self.course = ProceduralCourse(self.config)
+        self.dt = 1.0 / self.config.sim.fps  # [s]
+        self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
+        self._actions = ActionSpec.for_car(self.config.car.model, self.config.car.actions)
+        self.action_space = self._actions.space
+        self.observation_space = self._observation_space()
+        self._shaping = cte_shaping or shaping_from_config(self.config.reward_design)
+        self.episode = None
+        self._window: Window | None = None
+
+    def _observation_space(self) -> spaces.Space:
+        if not self.config.cameras:
+            w, h = self.course.observation_size
+            return spaces.Box(0, 255, (h, w, 3), np.uint8)
+        return spaces.Dict(
+            {c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras}
+        )
+
+    # -- gymnasium API -----------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        options = _check_options(options)
+        self.episode = self.course.new_episode(self.np_random, options)
+        if self.verbose and getattr(self.episode.track, "attempts", 1) > 1:
+            print(f"tinyrace: track generation needed {self.episode.track.attempts} attempts")
+        self.t = 0.0  # [s] since reset
+        self.steps = 0
+        self.score = 0.0  # running reward, shown on CarRacing's dashboard
+        self.terminated = False
+        facts = self._advance()
+        # The reset step is not rewarded; what it earned (tiles touched) is paid by the first step.
+        self._carry = reward_terms(
+            facts, self.config.reward_design, self._shaping, charge_time=False
+        )
+        self.score += sum(self._carry.values())
+        observation = self._observe()
+        if self.render_mode == "human":
+            self.render()
+        return observation, self._info(facts, {})
+
+    def step(self, action):
+        if self.episode is None:
+            raise ResetNeeded("call reset() before step()")
+        controls = self._actions.read(action)
+        self.episode.car.control(*controls)
+        facts = self._advance()
+        self.steps += 1
+        terms = reward_terms(facts, self.config.reward_design, self._shaping)
+        carried, self._carry = self._carry, {}
+        if carried:
+            terms = _add_terms(terms, carried)
+        reward = float(sum(terms.values()))
+        if not facts.out_of_bounds:  # CarRacing's score ignores the out-of-bounds penalty
+            self.score += reward - sum(carried.values())
+        reason = ends_episode(facts, self.config.reward_design)
+        limit = self.config.sim.step_limit
+        truncated = reason is None and limit is not None and self.steps >= limit
+        observation = self._observe()
+        info = self._info(facts, terms)
+        if reason is not None:
+            info["termination"] = reason
+            info["lap_finished"] = reason == "lap_finished"
+        if self.render_mode == "human":
+            self.render()
+        return observation, reward, reason is not None, truncated, info
+
+    def _advance(self) -> StepFacts:
+        facts = self.episode.step(self.dt)
+        self.t += self.dt
+        return facts
+
+    def _observe(self):
+        if not self.config.cameras:
+            return self.episode.chase_view(self.course.observation_size).render(self.t, self.score)
+        return self.episode.observe()
+
+    def _info(self, facts: StepFacts, terms: dict[str, float]) -> dict[str, Any]:
+        info = self.episode.info()
+        info["reward_terms"] = terms
+        if facts.cte is not None:
+            info["cte"] = facts.cte
+        return info
+
+    # -- pictures ------------------------------------------------------------------------------
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn(
+                "render() called without a render_mode; make the env with render_mode='rgb_array'"
+            )
+            return None
+        if self.episode is None:
+            raise ResetNeeded("call reset() before render()")
+        if self.render_mode == "state_pixels":
+            return self.episode.chase_view(self.course.observation_size).render(self.t, self.score)
+        if self.render_mode == "rgb_array":
+            return self.episode.chase_view(self.course.video_size).render(self.t, self.score)
+        frame = self.episode.chase_view(self.course.window_size).render(self.t, self.score)
+        if self._window is None:
+            self._window = Window("tinyrace", self.metadata["render_fps"])
+        self._window.show(frame, realtime=self.config.sim.render_realtime)
+        return None
+
+    def close(self):
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state["_window"] = None  # a window belongs to this process
+        return state
+
+
+def _check_options(options: dict | None) -> dict:
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ConfigError(Problem("<reset options>", "", options, "expected a dict or None"))
+    for key in options:
+        if key not in RESET_OPTIONS:
+            raise ConfigError(
+                Problem(
+                    "<reset options>",
+                    str(key),
+                    options[key],
+                    f"unknown option; valid: {', '.join(RESET_OPTIONS)}",
+                )
+            )
+    return dict(options)
+
+
+def _add_terms(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:
+    return {key: a.get(key, 0.0) + b.get(key, 0.0) for key in {**a, **b}}

@@ -1,0 +1,149 @@
+"""An episode on CarRacing's procedural track: tiles to visit, a lap to finish, a playfield."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from tinyrace.config import EnvConfig, ProceduralTrackConfig
+from tinyrace.episodes import StepFacts
+from tinyrace.physics.dynamic_car import DynamicCar
+from tinyrace.physics.world import World
+from tinyrace.render.chase_view import ChaseView
+from tinyrace.render.procedural_ground import GroundColors, paint_ground, repaint_tile
+from tinyrace.render.texture import GroundTexture
+from tinyrace.track.procedural import ProceduralTrackParams, generate_track
+
+VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
+
+
+def track_params(config: ProceduralTrackConfig) -> ProceduralTrackParams:
+    return ProceduralTrackParams(
+        checkpoints=config.checkpoints,
+        radius=config.radius,
+        half_width=config.half_width,
+        turn_rate=config.turn_rate,
+        detail_step=config.detail_step,
+        border=config.border,
+        border_min_count=config.border_min_count,
+    )
+
+
+def draw_colors(config: ProceduralTrackConfig, rng: np.random.Generator) -> GroundColors:
+    """Domain randomisation: road, background uniform(0, 210); grass +20 on one channel."""
+    road = rng.uniform(0, 210, size=3)
+    background = rng.uniform(0, 210, size=3)
+    grass = background.copy()
+    grass[rng.integers(3)] += 20
+    return GroundColors(road, background, grass)
+
+
+def config_colors(config: ProceduralTrackConfig) -> GroundColors:
+    return GroundColors(
+        np.array(config.road_color, float),
+        np.array(config.background_color, float),
+        np.array(config.grass_color, float),
+    )
+
+
+class ProceduralEpisode:
+    """One reset of the procedural track: track, pymunk world, car, visited tiles."""
+
+    def __init__(self, config: EnvConfig, rng: np.random.Generator, colors: GroundColors):
+        self.config = config
+        self.track_config: ProceduralTrackConfig = config.tracks[0]
+        self.track = generate_track(rng, track_params(self.track_config))
+        self.colors = colors
+        self.world = World()
+        self.world.add_tiles(self.track.tiles)
+        x, y, hull_angle = self.track.start_pose
+        self.car = DynamicCar.build(self.world.space, (x, y, hull_angle + math.pi / 2))
+        self.visited = np.zeros(len(self.track.tiles), bool)
+        self.visited_count = 0
+        self._textures: dict[float, GroundTexture] = {}
+        self._views: dict[tuple[int, int], ChaseView] = {}
+
+    # -- physics and facts -------------------------------------------------------------------
+    def step(self, dt: float) -> StepFacts:
+        contacts = self.world.contacts
+        on_road = [bool(tiles) for tiles in contacts.wheel_tiles]
+        self.car.apply_forces(dt, on_road)
+        self.world.step(dt)
+        self.car.after_step(dt)
+        facts = self._visit(contacts.new_tile_touches)
+        facts.wheels_on_grass = sum(not tiles for tiles in contacts.wheel_tiles)
+        x, y = self.car.body.position
+        facts.out_of_bounds = max(abs(x), abs(y)) > self.track_config.playfield
+        return facts
+
+    def _visit(self, touched: Sequence[int]) -> StepFacts:
+        """Mark newly touched tiles; a lap ends on all tiles, or back on tile 0 after enough."""
+        facts = StepFacts(tiles_total=len(self.visited))
+        for tile in touched:
+            if not self.visited[tile]:
+                self.visited[tile] = True
+                self.visited_count += 1
+                facts.new_tiles += 1
+                for texture in self._textures.values():
+                    repaint_tile(texture, self.track, tile, self.colors.road)
+            fraction = self.visited_count / len(self.visited)
+            if tile == 0 and fraction > self.track_config.lap_complete_percent:
+                facts.lap_finished = True
+        if self.visited_count == len(self.visited):
+            facts.lap_finished = True
+        return facts
+
+    def info(self) -> dict:
+        x, y, heading = self.car.pose
+        return {
+            "pose": (x, y, heading),
+            "speed": self.car.speed,
+            "tiles_visited": self.visited_count,
+            "tiles_total": len(self.visited),
+            "wheels_on_grass": sum(not tiles for tiles in self.world.contacts.wheel_tiles),
+        }
+
+    # -- pictures ----------------------------------------------------------------------------
+    def chase_view(self, size: tuple[int, int]) -> ChaseView:
+        """CarRacing's view at ``size`` (w, h); small views share the observation texture."""
+        view = self._views.get(size)
+        if view is None:
+            small = max(size) <= 160
+            ppu = self.track_config.pixels_per_unit if small else VIDEO_PIXELS_PER_UNIT
+            view = self._views[size] = ChaseView(size, self.texture(ppu), self.car)
+        return view
+
+    def texture(self, pixels_per_unit: float) -> GroundTexture:
+        texture = self._textures.get(pixels_per_unit)
+        if texture is None:
+            texture = paint_ground(
+                self.track, self.colors, self.track_config.playfield, pixels_per_unit
+            )
+            self._repaint_visited(texture)
+            self._textures[pixels_per_unit] = texture
+        return texture
+
+    def _repaint_visited(self, texture: GroundTexture) -> None:
+        for tile in np.flatnonzero(self.visited):
+            repaint_tile(texture, self.track, int(tile), self.colors.road)
+
+
+class ProceduralCourse:
+    """What lasts across resets on a procedural track: the colours of the last episode."""
+
+    observation_size = (96, 96)  # [px] CarRacing's state_pixels (w, h)
+    video_size = (600, 400)
+    window_size = (1000, 800)
+
+    def __init__(self, config: EnvConfig):
+        self.config = config
+        self.track_config: ProceduralTrackConfig = config.tracks[0]
+        self.colors = config_colors(self.track_config)
+
+    def new_episode(self, rng: np.random.Generator, options: dict) -> ProceduralEpisode:
+        """CarRacing's reset order: colours (when randomised) are drawn before the track."""
+        if self.track_config.domain_randomize and options.get("randomize", True):
+            self.colors = draw_colors(self.track_config, rng)
+        return ProceduralEpisode(self.config, rng, self.colors)

@@ -1,0 +1,45 @@
+"""The one error type users see for bad configuration."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with a configuration, located precisely."""
+
+    source: str  # the file (or "<dict>" / "<kwargs>") the value came from
+    path: str  # dotted key path, e.g. "cameras[0].roi"
+    value: object  # the offending value, as read
+    allowed: str  # what would have been accepted
+
+    def __str__(self) -> str:
+        where = f"{self.source}: {self.path}" if self.path else self.source
+        return f"{where}: got {_show(self.value)}; {self.allowed}"
+
+
+def _show(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+class ConfigError(ValueError):
+    """Raised for any invalid track, environment or experiment configuration.
+
+    Every problem names the file, the key path, the value and what is allowed;
+    all problems found in one pass are reported together in ``problems``.
+    """
+
+    def __init__(self, problems: list[Problem] | Problem):
+        self.problems = [problems] if isinstance(problems, Problem) else list(problems)
+        lines = [str(p) for p in self.problems]
+        head = (
+            "invalid configuration" if len(lines) == 1 else f"{len(lines)} configuration problems"
+        )
+        super().__init__(head + ":\n  " + "\n  ".join(lines))
+
+
+def config_error(source: str, path: str, value: object, allowed: str) -> ConfigError:
+    """Shorthand for a ConfigError with a single problem."""
+    return ConfigError(Problem(source, path, value, allowed))

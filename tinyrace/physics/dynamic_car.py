@@ -1,0 +1,316 @@
+"""CarRacing's rear-wheel-drive car on one pymunk body.
+
+The hull and the four wheels share one rigid body (the wheels carry their own
+mass, as in the reference); each wheel keeps its own spin, steering angle, gas
+and brake. Tyre forces follow CarRacing-v3's model: a slip force proportional
+to the difference between rim speed and ground speed, capped by the friction
+limit of the surface under the wheel (road 1.0, grass 0.6).
+
+The model is written in CarRacing's frame (y up, angles counter-clockwise). A
+``scale`` (track units per world unit) and ``y_down`` put it on an image track.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymunk
+
+from tinyrace.physics.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
+
+SIZE = 0.02  # [u per model unit] CarRacing's car model scale
+
+HULL_POLYGONS = (  # [model units], the nose along +y
+    ((-60, 130), (60, 130), (60, 110), (-60, 110)),
+    ((-15, 120), (15, 120), (20, 20), (-20, 20)),
+    ((25, 20), (50, -10), (50, -40), (20, -90), (-20, -90), (-50, -40), (-50, -10), (-25, 20)),
+    ((-50, -120), (50, -120), (50, -90), (-50, -90)),
+)
+WHEEL_POSITIONS = ((-55, 80), (55, 80), (-55, -82), (55, -82))  # [model units] FL, FR, RL, RR
+WHEEL_RADIUS = 27  # [model units]
+WHEEL_HALF_WIDTH = 14  # [model units]
+
+
+@dataclass(frozen=True)
+class DynamicCarSpec:
+    """CarRacing-v3's car constants, in world units (u), kilograms-ish and seconds."""
+
+    hull_density: float = 1.0  # [mass/u^2]
+    wheel_density: float = 0.1  # [mass/u^2]
+    engine_power: float = 1e8 * SIZE**2  # [mass u^2/s^3]
+    wheel_moment: float = 4000 * SIZE**2  # [mass u^2]
+    friction_limit: float = 1e6 * SIZE**2  # [mass u/s^2] on road; grass has grass_friction of it
+    grass_friction: float = 0.6  # fraction of the road's friction limit
+    slip_gain: float = 205000 * SIZE**2  # [mass/s] tyre force per unit of slip speed
+    brake_rate: float = 15.0  # [rad/s per step] spin removed by full (non-locking) brake
+    brake_lock: float = 0.9  # brake input at which the wheels lock
+    gas_rise: float = 0.1  # max gas increase per step
+    steer_gain: float = 50.0  # [1/s] steering motor speed per rad of error
+    steer_speed: float = 3.0  # [rad/s] max steering motor speed
+    steer_limit: float = 0.4  # [rad] front wheel lock
+    max_translation: float = 2.0  # [u per step] Box2D's speed cap, kept for identical top speed
+
+
+@dataclass
+class Wheel:
+    """One wheel's own state; position is in the body's frame (track units)."""
+
+    x: float
+    y: float
+    omega: float = 0.0  # [rad/s] spin
+    steer: float = 0.0  # [rad] steering angle (front wheels)
+    gas: float = 0.0  # 0..1 (rear wheels)
+    brake: float = 0.0  # 0..1
+    phase: float = 0.0  # [rad] accumulated spin, for drawing
+    skidding: bool = False
+
+
+class SkidMarks:
+    """The newest skid marks, polylines in track units, kept in one ring of arrays."""
+
+    def __init__(self, capacity: int = 30, max_points: int = 30):
+        self.points = np.zeros((capacity, max_points, 2))  # [track units]
+        self.lengths = np.zeros(capacity, np.int64)  # points used per mark; 0 = free
+        self.on_grass = np.zeros(capacity, bool)
+        self.serial = np.zeros(capacity, np.int64)  # which mark a slot holds now
+        self._next = 0
+        self._count = 0
+
+    def __len__(self) -> int:
+        return int(np.count_nonzero(self.lengths))
+
+    def start(self, first: tuple, second: tuple, on_grass: bool) -> tuple[int, int]:
+        """A new two-point mark (evicting the oldest); returns its handle (slot, serial)."""
+        slot = self._next
+        self._next = (slot + 1) % len(self.lengths)
+        self._count += 1
+        self.points[slot, :2] = (first, second)
+        self.lengths[slot] = 2
+        self.on_grass[slot] = on_grass
+        self.serial[slot] = self._count
+        return slot, self._count
+
+    def extend(self, handle: tuple[int, int], point: tuple, on_grass: bool) -> bool:
+        """Append to a mark if it still exists, is on the same ground and has room."""
+        slot, serial = handle
+        n = self.lengths[slot]
+        if (
+            self.serial[slot] != serial
+            or self.on_grass[slot] != on_grass
+            or n >= self.points.shape[1]
+        ):
+            return False
+        self.points[slot, n] = point
+        self.lengths[slot] = n + 1
+        return True
+
+
+@dataclass
+class DynamicCar:
+    """The car: a pymunk body plus wheel states. Controls are set, then ``apply_forces(dt)``."""
+
+    body: pymunk.Body
+    wheels: list[Wheel]
+    spec: DynamicCarSpec
+    scale: float  # [track units per u]
+    steer_sign: float  # +1 in CarRacing's y-up frame, -1 on a y-down image
+    steer_target: float = 0.0  # [rad] internal sign (positive: counter-clockwise)
+    skids: SkidMarks = field(default_factory=SkidMarks)
+    _skid_open: list = field(default_factory=lambda: [None] * 4)  # per wheel: mark being drawn
+    _skid_start: list = field(default_factory=lambda: [None] * 4)  # per wheel: first point
+
+    @classmethod
+    def build(
+        cls,
+        space: pymunk.Space,
+        pose: tuple[float, float, float],
+        scale: float = 1.0,
+        y_down: bool = False,
+        spec: DynamicCarSpec = DynamicCarSpec(),
+    ) -> DynamicCar:
+        """Add a car at ``pose`` (x, y, heading: the forward direction's angle from +x)."""
+        body = pymunk.Body()
+        x, y, heading = pose
+        body.position = (x, y)
+        body.angle = heading - math.pi / 2  # the model's nose points along its +y axis
+        unit = SIZE * scale  # [track units per model unit]
+        shapes = [
+            _hull_shape(body, poly, unit, spec.hull_density / scale**2) for poly in HULL_POLYGONS
+        ]
+        wheels = []
+        for index, (wx, wy) in enumerate(WHEEL_POSITIONS):
+            wheels.append(Wheel(wx * unit, wy * unit))
+            shapes.append(_wheel_sensor(body, index, wx, wy, unit, spec.wheel_density / scale**2))
+        rear, base, width = _footprint(scale)
+        shapes.append(footprint_sensor(body, (-width / 2, rear), (width / 2, rear + base)))
+        space.add(body, *shapes)
+        return cls(body, wheels, spec, scale, steer_sign=-1.0 if y_down else 1.0)
+
+    # -- controls ----------------------------------------------------------------------------
+    def control(self, steer: float, gas: float, brake: float) -> None:
+        """steer -1 (left) .. 1 (right), gas 0..1, brake 0..1, as CarRacing's action."""
+        self.steer_target = -steer * self.steer_sign
+        gas = min(max(gas, 0.0), 1.0)
+        for wheel in self.wheels[2:]:
+            wheel.gas += min(gas - wheel.gas, self.spec.gas_rise)
+        for wheel in self.wheels:
+            wheel.brake = brake
+
+    # -- physics -----------------------------------------------------------------------------
+    def apply_forces(self, dt: float, on_road: list[bool]) -> None:
+        """Spin the wheels, compute tyre forces and set them on the body for the next space step."""
+        spec, body = self.spec, self.body
+        angle, (vx, vy), spin = body.angle, body.velocity, body.angular_velocity
+        cos_a, sin_a = math.cos(angle), math.sin(angle)
+        cx, cy = body.center_of_gravity
+        fx_total = fy_total = torque = 0.0
+        for index, wheel in enumerate(self.wheels):
+            self._spin(wheel, dt)
+            # wheel position relative to the centre of gravity, in the world frame
+            lx, ly = wheel.x - cx, wheel.y - cy
+            rx, ry = cos_a * lx - sin_a * ly, sin_a * lx + cos_a * ly
+            wvx, wvy = vx - spin * ry, vy + spin * rx
+            heading = angle + wheel.steer
+            side_x, side_y = math.cos(heading), math.sin(heading)
+            forward_x, forward_y = -side_y, side_x
+            limit = (
+                spec.friction_limit * self.scale * (1.0 if on_road[index] else spec.grass_friction)
+            )
+            v_forward = forward_x * wvx + forward_y * wvy
+            f, p = self._tyre_force(wheel, v_forward, side_x * wvx + side_y * wvy, limit)
+            wheel.omega -= dt * f * self.wheel_radius / (spec.wheel_moment * self.scale**2)
+            fx, fy = p * side_x + f * forward_x, p * side_y + f * forward_y
+            fx_total, fy_total = fx_total + fx, fy_total + fy
+            torque += rx * fy - ry * fx
+            if wheel.skidding or self._skid_start[index] or self._skid_open[index]:
+                self._track_skid(index, wheel, on_road[index])
+        body.force = (fx_total, fy_total)
+        body.torque = torque
+        self._steer(dt)
+
+    def _spin(self, wheel: Wheel, dt: float) -> None:
+        """Engine and brake act on the wheel's spin."""
+        spec = self.spec
+        wheel.omega += (
+            dt * spec.engine_power * wheel.gas / spec.wheel_moment / (abs(wheel.omega) + 5.0)
+        )
+        if wheel.brake >= spec.brake_lock:
+            wheel.omega = 0.0
+        elif wheel.brake > 0:
+            slow = min(spec.brake_rate * wheel.brake, abs(wheel.omega))
+            wheel.omega -= math.copysign(slow, wheel.omega)
+        wheel.phase += wheel.omega * dt
+
+    @property
+    def wheel_radius(self) -> float:
+        """[track units]"""
+        return WHEEL_RADIUS * SIZE * self.scale
+
+    def _tyre_force(
+        self, wheel: Wheel, v_forward: float, v_side: float, limit: float
+    ) -> tuple[float, float]:
+        """Forward and sideways tyre force from slip, capped at the friction limit."""
+        rim = wheel.omega * self.wheel_radius
+        f = (rim - v_forward) * self.spec.slip_gain
+        p = -v_side * self.spec.slip_gain
+        total = math.hypot(f, p)
+        wheel.skidding = total > 2.0 * limit
+        if total > limit:
+            f, p = f * limit / total, p * limit / total
+        return f, p
+
+    def _steer(self, dt: float) -> None:
+        """Front wheels turn toward the target like the reference's joint motor."""
+        spec = self.spec
+        for wheel in self.wheels[:2]:
+            error = self.steer_target - wheel.steer
+            rate = math.copysign(min(spec.steer_gain * abs(error), spec.steer_speed), error)
+            wheel.steer = min(max(wheel.steer + rate * dt, -spec.steer_limit), spec.steer_limit)
+
+    def after_step(self, dt: float) -> None:
+        """Box2D caps a body's travel per step; keep the same top speed."""
+        vx, vy = self.body.velocity
+        cap = self.spec.max_translation * self.scale / dt
+        speed = math.hypot(vx, vy)
+        if speed > cap:
+            self.body.velocity = (vx * cap / speed, vy * cap / speed)
+
+    def _track_skid(self, index: int, wheel: Wheel, on_road: bool) -> None:
+        """Skid marks: polylines where the tyre force exceeds twice the friction limit."""
+        if not wheel.skidding:
+            self._skid_open[index] = self._skid_start[index] = None
+            return
+        point = self.body.local_to_world((wheel.x, wheel.y))
+        point = (point.x, point.y)
+        handle = self._skid_open[index]
+        if handle and self.skids.extend(handle, point, not on_road):
+            return
+        if self._skid_start[index] is None:
+            self._skid_open[index], self._skid_start[index] = None, point
+        else:
+            self._skid_open[index] = self.skids.start(self._skid_start[index], point, not on_road)
+            self._skid_start[index] = None
+
+    # -- state -------------------------------------------------------------------------------
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """(x, y, heading) in track units; heading is the forward direction's angle from +x."""
+        x, y = self.body.position
+        return x, y, self.body.angle + math.pi / 2
+
+    @property
+    def speed(self) -> float:
+        """[track units/s] of the body."""
+        return abs(self.body.velocity)
+
+    @property
+    def footprint(self) -> tuple[float, float]:
+        """(wheelbase, track width) of the obstacle footprint, in track units."""
+        _, base, width = _footprint(self.scale)
+        return base, width
+
+    @property
+    def rear_axle(self) -> tuple[float, float]:
+        """Middle of the rear axle in track units (the footprint's back edge)."""
+        rear, _, _ = _footprint(self.scale)
+        point = self.body.local_to_world((0.0, rear))
+        return point.x, point.y
+
+
+def _footprint(scale: float) -> tuple[float, float, float]:
+    """Rear axle offset on the forward axis, wheelbase, outer wheel track [track units]."""
+    unit = SIZE * scale
+    rear = WHEEL_POSITIONS[2][1] * unit
+    base = (WHEEL_POSITIONS[0][1] - WHEEL_POSITIONS[2][1]) * unit
+    width = 2 * (WHEEL_POSITIONS[1][0] + WHEEL_HALF_WIDTH) * unit
+    return rear, base, width
+
+
+def _hull_shape(body: pymunk.Body, polygon: tuple, unit: float, density: float) -> pymunk.Poly:
+    shape = pymunk.Poly(body, [(x * unit, y * unit) for x, y in polygon])
+    shape.density = density
+    shape.filter = NOTHING  # the hull only carries mass; nothing in CarRacing collides with it
+    return shape
+
+
+def _wheel_sensor(
+    body: pymunk.Body, index: int, wx: float, wy: float, unit: float, density: float
+) -> pymunk.Poly:
+    """The wheel's footprint (unsteered): a sensor that finds the tiles under it, and its mass."""
+    half_w, half_r = WHEEL_HALF_WIDTH * unit, WHEEL_RADIUS * unit
+    cx, cy = wx * unit, wy * unit
+    corners = [
+        (cx - half_w, cy - half_r),
+        (cx + half_w, cy - half_r),
+        (cx + half_w, cy + half_r),
+        (cx - half_w, cy + half_r),
+    ]
+    shape = pymunk.Poly(body, corners)
+    shape.density = density
+    shape.sensor = True
+    shape.collision_type = WHEEL
+    shape.filter = WHEEL_FILTER
+    shape.index = index
+    return shape

@@ -1,0 +1,86 @@
+"""tinycarlo's car: a kinematic bicycle at constant speed, no slip.
+
+The body's origin is the middle of the rear axle and its +x axis points forward,
+so ``body.angle`` is the heading: 0 along +x, growing clockwise on a y-down image.
+A positive steering angle turns the car toward growing headings (right on screen).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import pymunk
+
+from tinyrace.physics.world import footprint_sensor
+
+
+@dataclass
+class KinematicCar:
+    """Constant-speed bicycle; ``control(steer)`` takes the normalised angle -1..1."""
+
+    body: pymunk.Body
+    wheelbase: float  # [px]
+    track_width: float  # [px]
+    velocity: float  # [px/s]
+    max_angle: float  # [rad] full lock
+    max_rate: float | None  # [rad/s] steering rate limit, None: unlimited
+    steer: float = 0.0  # [rad] current steering angle
+    steer_target: float = 0.0  # [rad]
+
+    @classmethod
+    def build(
+        cls,
+        space: pymunk.Space,
+        pose: tuple[float, float, float],
+        wheelbase: float,
+        track_width: float,
+        velocity: float,
+        max_angle_deg: float,
+        max_rate_deg: float | None,
+    ) -> KinematicCar:
+        # A dynamic body driven by its velocity: pymunk pairs kinematic bodies with no
+        # static shape, and the footprint must meet the track's static obstacle sensors.
+        body = pymunk.Body(1.0, math.inf)
+        x, y, heading = pose
+        body.position, body.angle = (x, y), heading
+        half = track_width / 2
+        space.add(body, footprint_sensor(body, (0.0, -half), (wheelbase, half)))
+        rate = None if max_rate_deg is None else math.radians(max_rate_deg)
+        return cls(body, wheelbase, track_width, velocity, math.radians(max_angle_deg), rate)
+
+    def control(self, steer: float) -> None:
+        self.steer_target = min(max(steer, -1.0), 1.0) * self.max_angle
+
+    def apply_forces(self, dt: float, on_road: object = None) -> None:
+        """Move the steering toward its target, then set the velocities for this step."""
+        change = self.steer_target - self.steer
+        if self.max_rate is not None:
+            limit = self.max_rate * dt
+            change = min(max(change, -limit), limit)
+        self.steer += change
+        heading = self.body.angle
+        self.body.velocity = (self.velocity * math.cos(heading), self.velocity * math.sin(heading))
+        self.body.angular_velocity = self.velocity * math.tan(self.steer) / self.wheelbase
+
+    def after_step(self, dt: float) -> None:
+        """Nothing to correct: the bicycle has no slip and no speed cap."""
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        x, y = self.body.position
+        return x, y, self.body.angle
+
+    @property
+    def speed(self) -> float:
+        return self.velocity
+
+    @property
+    def footprint(self) -> tuple[float, float]:
+        """(wheelbase, track width) in px."""
+        return self.wheelbase, self.track_width
+
+    @property
+    def rear_axle(self) -> tuple[float, float]:
+        x, y = self.body.position
+        return x, y

@@ -1,0 +1,122 @@
+"""The pymunk space: the car's body, the track's sensors and the contact facts they produce.
+
+Collision callbacks only record facts (which tile a wheel touches, which obstacle
+cell the footprint overlaps); rewards are decided elsewhere from those facts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pymunk
+
+# Collision types: what a sensor shape stands for.
+WHEEL = 1
+TILE = 2
+FOOTPRINT = 3
+OBSTACLE = 4
+
+# Filters keep pymunk from pairing shapes that have nothing to report (wheel-obstacle, ...).
+_WHEEL_BIT, _TILE_BIT, _FOOTPRINT_BIT, _OBSTACLE_BIT = 1, 2, 4, 8
+NOTHING = pymunk.ShapeFilter(categories=0, mask=0)  # shapes that only carry mass
+WHEEL_FILTER = pymunk.ShapeFilter(categories=_WHEEL_BIT, mask=_TILE_BIT)
+TILE_FILTER = pymunk.ShapeFilter(categories=_TILE_BIT, mask=_WHEEL_BIT)
+FOOTPRINT_FILTER = pymunk.ShapeFilter(categories=_FOOTPRINT_BIT, mask=_OBSTACLE_BIT)
+OBSTACLE_FILTER = pymunk.ShapeFilter(categories=_OBSTACLE_BIT, mask=_FOOTPRINT_BIT)
+
+
+def footprint_sensor(
+    body: pymunk.Body, low: tuple[float, float], high: tuple[float, float]
+) -> pymunk.Poly:
+    """The car's obstacle footprint: a box from ``low`` to ``high`` in the body's frame."""
+    (x0, y0), (x1, y1) = low, high
+    shape = pymunk.Poly(body, [(x0, y0), (x1, y0), (x1, y1), (x0, y1)])
+    shape.sensor = True
+    shape.collision_type = FOOTPRINT
+    shape.filter = FOOTPRINT_FILTER
+    return shape
+
+
+@dataclass
+class Contacts:
+    """What the sensors reported; ``new_tile_touches`` is refilled every step."""
+
+    wheel_tiles: list[set[int]] = field(default_factory=lambda: [set() for _ in range(4)])
+    new_tile_touches: list[int] = field(default_factory=list)  # tiles a wheel began touching
+    obstacle_cells: set[int] = field(default_factory=set)  # cells the footprint overlaps now
+
+
+class World:
+    """A pymunk space holding static track sensors and one car.
+
+    Units are the track's: world units on procedural tracks, pixels on image tracks.
+    """
+
+    def __init__(self) -> None:
+        self.space = pymunk.Space()
+        self.contacts = Contacts()
+        self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
+        self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
+
+    # -- track sensors ---------------------------------------------------------------------
+    def add_tiles(self, tiles: np.ndarray) -> None:
+        """Road tiles (N x 4 x 2 quads) as static sensors; a wheel on none of them is on grass."""
+        shapes = [
+            self._static_sensor(quad.tolist(), TILE, index, TILE_FILTER)
+            for index, quad in enumerate(tiles)
+        ]
+        self.space.add(*shapes)
+
+    def add_obstacle_cells(self, boxes: np.ndarray) -> None:
+        """Axis-aligned boxes (M x 4: x0, y0, x1, y1) around obstacle pixels, as static sensors."""
+        shapes = []
+        for index, (x0, y0, x1, y1) in enumerate(boxes.tolist()):
+            corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+            shapes.append(self._static_sensor(corners, OBSTACLE, index, OBSTACLE_FILTER))
+        if shapes:
+            self.space.add(*shapes)
+
+    def _static_sensor(
+        self, vertices: list, kind: int, index: int, shape_filter: pymunk.ShapeFilter
+    ) -> pymunk.Poly:
+        shape = pymunk.Poly(self.space.static_body, vertices)
+        shape.sensor = True
+        shape.filter = shape_filter
+        shape.collision_type = kind
+        shape.index = index
+        return shape
+
+    # -- stepping ----------------------------------------------------------------------------
+    def step(self, dt: float) -> Contacts:
+        """Advance the space by ``dt`` seconds; return the contact facts of this step."""
+        self.contacts.new_tile_touches.clear()
+        self.space.step(dt)
+        return self.contacts
+
+    @property
+    def counts(self) -> tuple[int, int, int]:
+        """(bodies, shapes, constraints) in the space, for leak checks."""
+        return len(self.space.bodies), len(self.space.shapes), len(self.space.constraints)
+
+    # -- callbacks: facts only ---------------------------------------------------------------
+    # (pymunk may hand the pair over in either order when a space is torn down)
+    def _wheel_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        wheel, tile = _ordered(arbiter, WHEEL)
+        self.contacts.wheel_tiles[wheel.index].add(tile.index)
+        self.contacts.new_tile_touches.append(tile.index)
+
+    def _wheel_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        wheel, tile = _ordered(arbiter, WHEEL)
+        self.contacts.wheel_tiles[wheel.index].discard(tile.index)
+
+    def _cell_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.contacts.obstacle_cells.add(_ordered(arbiter, FOOTPRINT)[1].index)
+
+    def _cell_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.contacts.obstacle_cells.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+
+
+def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:
+    a, b = arbiter.shapes
+    return (a, b) if a.collision_type == first_type else (b, a)

@@ -1,0 +1,146 @@
+"""The car seen from above: hull, wheels and skid marks, drawn from a physics snapshot.
+
+Small frames (the 96x96 observation) would lose the car's shape to cv2's
+antialiasing, so the car is drawn there at 4x into a patch, area-averaged
+down (like the reference's smooth scaling) and blended. A chase camera turns
+with the hull, so that patch only depends on the zoom and the steering angle:
+it is cached and reused from step to step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from tinyrace.physics.dynamic_car import (
+    HULL_POLYGONS,
+    SIZE,
+    WHEEL_HALF_WIDTH,
+    WHEEL_RADIUS,
+    DynamicCar,
+    SkidMarks,
+)
+from tinyrace.render.texture import compose, transform_points
+
+HULL_COLOR = (204, 0, 0)  # RGB
+WHEEL_COLOR = (0, 0, 0)
+SKID_ROAD_COLOR = (0, 0, 0)
+SKID_GRASS_COLOR = (102, 102, 0)  # mud
+SUPERSAMPLE = 4
+_BITS = 3  # subpixel precision of cv2 vertices
+_WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
+    WHEEL_HALF_WIDTH,
+    WHEEL_RADIUS,
+)
+_STEER_STEP = 0.005  # [rad] steering resolution of cached patches
+
+
+class CarSprite:
+    """Draws one DynamicCar; polygons are prepared once, transformed per frame."""
+
+    def __init__(self, car: DynamicCar, supersample: bool):
+        unit = SIZE * car.scale
+        self.car = car
+        self.hull = [np.array(poly, float) * unit for poly in HULL_POLYGONS]
+        self.wheel_box = _WHEEL_BOX * unit
+        self.supersample = supersample
+        self._patches: dict[tuple, tuple] = {}
+
+    def draw(
+        self, image: np.ndarray, world_to_out: np.ndarray, skid_width: int, cache_key=None
+    ) -> None:
+        """Skid marks, wheels, then hull into ``image`` seen through ``world_to_out``.
+
+        ``cache_key`` (e.g. the zoom) promises that the car's placement in the frame
+        depends only on it and the steering angle, which allows reusing patches.
+        """
+        if self.car.skids.lengths.any():
+            _draw_skids(image, world_to_out, self.car.skids, skid_width)
+        if self.supersample:
+            steer = round(self.car.wheels[0].steer / _STEER_STEP)
+            key = None if cache_key is None else (cache_key, steer)
+            patch = self._patches.get(key)
+            if patch is None:
+                patch = self._render_patch(self._local_to_out(world_to_out), steer * _STEER_STEP)
+                if key is not None:
+                    self._patches[key] = patch
+            _blend(image, *patch)
+            return
+        polygons = self._polygons(self.car.wheels[0].steer)
+        local_to_out = self._local_to_out(world_to_out)
+        _fill(image, local_to_out, polygons[:4], WHEEL_COLOR)
+        _fill(image, local_to_out, polygons[4:], HULL_COLOR)
+
+    def _local_to_out(self, world_to_out: np.ndarray) -> np.ndarray:
+        body = self.car.body
+        x, y = body.position
+        cos_a, sin_a = math.cos(body.angle), math.sin(body.angle)
+        return compose(world_to_out, np.array([[cos_a, -sin_a, x], [sin_a, cos_a, y]]))
+
+    def _polygons(self, steer: float) -> list[np.ndarray]:
+        """Four wheels (front ones steered) then the hull, in the body's frame."""
+        cos_s, sin_s = math.cos(steer), math.sin(steer)
+        turn = np.array([[cos_s, sin_s], [-sin_s, cos_s]])
+        wheels = [
+            (self.wheel_box @ turn if i < 2 else self.wheel_box) + (w.x, w.y)
+            for i, w in enumerate(self.car.wheels)
+        ]
+        return wheels + self.hull
+
+    def _render_patch(self, local_to_out: np.ndarray, steer: float) -> tuple:
+        """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha)."""
+        polygons = [transform_points(local_to_out, p) for p in self._polygons(steer)]
+        points = np.concatenate(polygons)
+        x0, y0 = np.floor(points.min(axis=0)).astype(int) - 1
+        x1, y1 = np.ceil(points.max(axis=0)).astype(int) + 1
+        size = ((x1 - x0) * SUPERSAMPLE, (y1 - y0) * SUPERSAMPLE)
+        color = np.zeros((size[1], size[0], 3), np.uint8)
+        alpha = np.zeros((size[1], size[0]), np.uint8)
+        to_patch = np.array(
+            [[SUPERSAMPLE, 0, -x0 * SUPERSAMPLE], [0, SUPERSAMPLE, -y0 * SUPERSAMPLE]], float
+        )
+        for polys, rgb in ((polygons[:4], WHEEL_COLOR), (polygons[4:], HULL_COLOR)):
+            _fill(color, to_patch, polys, rgb, antialias=False)
+            _fill(alpha, to_patch, polys, 255, antialias=False)
+        small = (x1 - x0, y1 - y0)
+        color = cv2.resize(color, small, interpolation=cv2.INTER_AREA).astype(np.float32) + 0.5
+        alpha = cv2.resize(alpha, small, interpolation=cv2.INTER_AREA).astype(np.float32) / 255
+        # premultiplied: frame = frame * (1 - a) + color * a, color already holds color * a
+        weight = np.repeat(1.0 - alpha[:, :, None], 3, axis=2)
+        return int(x0), int(y0), color, weight
+
+
+def _blend(image: np.ndarray, x0: int, y0: int, color: np.ndarray, weight: np.ndarray) -> None:
+    """Composite a premultiplied patch, clipped to the frame."""
+    h, w = color.shape[:2]
+    H, W = image.shape[:2]
+    ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, W), min(y0 + h, H)
+    if ax >= bx or ay >= by:
+        return
+    region = image[ay:by, ax:bx]
+    px, py = ax - x0, ay - y0
+    mixed = (
+        region * weight[py : py + by - ay, px : px + bx - ax]
+        + color[py : py + by - ay, px : px + bx - ax]
+    )
+    region[:] = mixed
+
+
+def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidMarks, width: int) -> None:
+    """All skid marks in one transform and one polyline call per colour."""
+    points = np.round(transform_points(world_to_out, skids.points) * (1 << _BITS)).astype(np.int32)
+    road, grass = [], []
+    for slot in np.flatnonzero(skids.lengths).tolist():
+        (grass if skids.on_grass[slot] else road).append(points[slot, : skids.lengths[slot]])
+    for lines, color in ((road, SKID_ROAD_COLOR), (grass, SKID_GRASS_COLOR)):
+        if lines:
+            cv2.polylines(image, lines, False, color, width, cv2.LINE_AA, _BITS)
+
+
+def _fill(image, matrix, polygons, color, antialias: bool = True) -> None:
+    pixels = [
+        np.round(transform_points(matrix, p) * (1 << _BITS)).astype(np.int32) for p in polygons
+    ]
+    cv2.fillPoly(image, pixels, color, cv2.LINE_AA if antialias else cv2.LINE_8, _BITS)

@@ -1,0 +1,69 @@
+"""CarRacing's camera: follows the hull and turns with it, zooms in during the first second.
+
+The frame is laid out as the reference's 1000x800 window, then mapped straight
+to the requested size (96x96 observation, 600x400 video, 1000x800 window) in one
+affine warp of the pre-drawn ground; the car and the dashboard are drawn on top.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tinyrace.physics.dynamic_car import DynamicCar
+from tinyrace.render.car_sprite import CarSprite
+from tinyrace.render.dashboard import Dashboard
+from tinyrace.render.texture import GroundTexture
+
+WINDOW = (1000, 800)  # [px] the reference's layout size (w, h)
+ZOOM = 2.7 * 6.0  # [window px/u] after the first second
+START_ZOOM = 0.1 * 6.0  # [window px/u] at t = 0
+
+
+def zoom_at(t: float) -> float:
+    """Window pixels per world unit, t seconds after reset (the reference's zoom-in)."""
+    return START_ZOOM * max(1.0 - t, 0.0) + ZOOM * min(t, 1.0)
+
+
+def chase_matrix(
+    position: tuple[float, float], hull_angle: float, zoom: float, size: tuple[int, int]
+) -> np.ndarray:
+    """World -> output pixels: the car at half width, a quarter height from the bottom, nose up."""
+    sx, sy = size[0] / WINDOW[0], size[1] / WINDOW[1]
+    cos_a, sin_a = math.cos(hull_angle), math.sin(hull_angle)
+    a, b = sx * zoom * cos_a, sx * zoom * sin_a  # rotate by -hull_angle, then scale
+    c, d = sy * zoom * sin_a, -sy * zoom * cos_a  # ... and flip y (screen y points down)
+    px, py = position
+    # output pixel centres sit half a pixel in; so do the reference's window pixels
+    ox = WINDOW[0] / 2 * sx - (a * px + b * py) - 0.5 + 0.5 * sx
+    oy = WINDOW[1] * 3 / 4 * sy - (c * px + d * py) - 0.5 + 0.5 * sy
+    return np.array([[a, b, ox], [c, d, oy]])
+
+
+class ChaseView:
+    """One output size of CarRacing's view; ``render`` fills a reused frame buffer."""
+
+    def __init__(self, size: tuple[int, int], texture: GroundTexture, car: DynamicCar):
+        self.size = size  # (w, h)
+        self.texture = texture
+        self.car = car
+        small = max(size) <= 160  # observation-sized: supersample the car and the instruments
+        self.sprite = CarSprite(car, supersample=small)
+        self.dashboard = Dashboard(size[0], size[1], supersample=4 if small else 1)
+        self.frame = np.zeros((size[1], size[0], 3), np.uint8)
+        self.skid_width = max(1, round(2 * size[1] / WINDOW[1]))
+
+    def render(self, t: float, score: float) -> np.ndarray:
+        """The view t seconds after reset, with ``score`` on the dashboard. Returns a new array."""
+        body = self.car.body
+        zoom = zoom_at(t)
+        matrix = chase_matrix(tuple(body.position), body.angle, zoom / self.car.scale, self.size)
+        pixels_per_unit = (
+            zoom / self.car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
+        )
+        self.texture.warp(matrix, self.size, out=self.frame, pixels_per_unit=pixels_per_unit)
+        # the car sits still in this frame: its patch depends on zoom and steering only
+        self.sprite.draw(self.frame, matrix, self.skid_width, cache_key=zoom if t >= 1 else None)
+        self.dashboard.draw(self.frame, self.car, score)
+        return self.frame.copy()

@@ -1,0 +1,113 @@
+"""CarRacing's bottom bar: speed, wheel spins, steering, gyro and score, in any frame size.
+
+Small frames draw the bar at 4x and area-average it down, as the reference's
+smooth scaling of its 1000x800 window does, so that bar lengths keep their
+sub-pixel information.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from tinyrace.physics.dynamic_car import DynamicCar
+
+_WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
+_GREEN, _RED = (0, 255, 0), (255, 0, 0)
+
+
+class Dashboard:
+    """The instruments of one frame size, drawn into the bottom 5/40 of the frame.
+
+    With ``supersample`` > 1 each bar is drawn at that factor and area-averaged;
+    bar patches are cached by their length (in 1/supersample px), so a step only
+    pastes a few small arrays.
+    """
+
+    def __init__(self, width: int, height: int, supersample: int = 1):
+        self.width, self.height = width, height
+        self.top = round(height - 5 * height / 40)  # first row of the bar
+        self.factor = supersample
+        self.strip = np.zeros((height - self.top, width, 3), np.uint8)
+        self._patches: dict[tuple, tuple[int, np.ndarray]] = {}
+        self._shown: tuple | None = None  # what the strip holds now
+
+    def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
+        wheels, sign, q = car.wheels, car.steer_sign, 8 * self.factor  # q: steps per layout unit
+        bars = (
+            ("v", 5, round(0.02 * car.speed / car.scale * q), _WHITE),
+            ("v", 7, round(0.01 * wheels[0].omega * q), _BLUE),
+            ("v", 8, round(0.01 * wheels[1].omega * q), _BLUE),
+            ("v", 9, round(0.01 * wheels[2].omega * q), _PURPLE),
+            ("v", 10, round(0.01 * wheels[3].omega * q), _PURPLE),
+            ("h", 20, round(-10.0 * wheels[0].steer * sign * q), _GREEN),
+            ("h", 30, round(-0.8 * car.body.angular_velocity * sign * q), _RED),
+        )
+        shown = (bars, int(score))
+        if shown != self._shown:  # redraw the strip only when an instrument moved
+            self._shown = shown
+            self._redraw(bars, int(score))
+        image[self.top :] = self.strip
+
+    def _redraw(self, bars: tuple, score: int) -> None:
+        strip = self.strip
+        strip[:] = 0
+        for kind, place, steps, color in bars:
+            if steps:
+                first, patch = self._bar(kind, place, steps, color)
+                region = strip[:, first : first + patch.shape[1]]
+                np.maximum(region, patch[:, : region.shape[1]], out=region)
+        mask, x0, y0 = _text_mask(f"{score:04d}", self.width, self.height)
+        region = strip[y0 - self.top : y0 - self.top + mask.shape[0], x0 : x0 + mask.shape[1]]
+        np.maximum(region, mask[:, :, None], out=region)
+
+    def _bar(self, kind: str, place: int, steps: int, color: tuple) -> tuple[int, np.ndarray]:
+        key = (kind, place, steps)
+        cached = self._patches.get(key)
+        if cached is None:
+            value = steps / (8 * self.factor)
+            cached = self._patches[key] = self._render_bar(kind, place, value, color)
+        return cached
+
+    def _render_bar(
+        self, kind: str, place: int, value: float, color: tuple
+    ) -> tuple[int, np.ndarray]:
+        """Draw one bar at ``factor`` x into a strip-high patch; return (first column, patch)."""
+        f = self.factor
+        s, h = self.width / 40.0 * f, self.height / 40.0 * f
+        bottom = (self.height - self.top) * f  # the frame's bottom, in patch rows
+        if kind == "v":
+            x0, y0, x1, y1 = place * s, bottom - h - h * value, (place + 1) * s, bottom - h
+        else:
+            x0, y0, x1, y1 = place * s, bottom - 4 * h, (place + value) * s, bottom - 2 * h
+        xa, xb = sorted((x0, x1))
+        first = max(int(xa // f), 0)
+        last = min(int(np.ceil(xb / f)), self.width)
+        big = np.zeros((bottom, max(last - first, 1) * f, 3), np.uint8)
+        cols = slice(max(round(xa) - first * f, 0), max(round(xb) - first * f, 0))
+        big[max(round(min(y0, y1)), 0) : max(round(max(y0, y1)), 0), cols] = color
+        small = cv2.resize(
+            big, (big.shape[1] // f, big.shape[0] // f), interpolation=cv2.INTER_AREA
+        )
+        small.setflags(write=False)
+        return first, small
+
+
+@lru_cache(maxsize=512)
+def _text_mask(text: str, width: int, height: int) -> tuple[np.ndarray, int, int]:
+    """The score rendered once per distinct text and frame size: a grey mask and its corner."""
+    sx, sy = width / 1000, height / 800  # the reference lays out text on a 1000x800 window
+    scale = 42 * sy / 30  # Hershey simplex is ~30 px tall at scale 1; the reference's font is 42
+    thickness = max(1, round(2.5 * sy))
+    (tw, th), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thickness)
+    mask = np.zeros((th + base + 2, tw + 2), np.uint8)
+    cv2.putText(
+        mask, text, (1, th + 1), cv2.FONT_HERSHEY_SIMPLEX, scale, 255, thickness, cv2.LINE_AA
+    )
+    cx, cy = 60 * sx, height - height * 2.5 / 40
+    x0 = int(np.clip(round(cx - mask.shape[1] / 2), 0, width - mask.shape[1]))
+    y0 = int(np.clip(round(cy - mask.shape[0] / 2), 0, height - mask.shape[0]))
+    mask.setflags(write=False)
+    return mask, x0, y0

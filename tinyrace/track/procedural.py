@@ -1,0 +1,271 @@
+"""CarRacing-v3's procedural track, drawn from the same random numbers.
+
+A track is made in five steps: random checkpoints on a rough circle, a path
+steered through them for several laps, one clean lap cut out of that path,
+red/white kerbs on the hard turns, and one road tile per lap point. Given the
+same ``numpy.random.Generator`` state, :func:`generate_track` returns the
+track CarRacing-v3 builds after ``reset`` (tiles and kerbs within 1e-6 u).
+
+Pure numpy: no physics, no drawing, no gymnasium.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+# Fixed parts of CarRacing's steering law, kept apart from the tunable params.
+# The law reads the projection in Box2D units (world units times SCALE = 6),
+# so its dead band and gain are stated in those units to keep the same floats.
+_STEER_SCALE = 6.0  # [Box2D units / u]
+_STEER_DEADBAND = 0.3  # [Box2D units] no turn while |projection| is below this
+_STEER_GAIN = 0.001  # [rad / Box2D unit] turn per unit of projection, before the rate cap
+_START_RADIUS_FACTOR = 1.5  # first and last checkpoints sit at 1.5 * radius
+_MAX_LAPS = 4  # the path stops once it has completed more laps than this
+_MAX_STEPS = 2500  # hard cap on path points
+_KERB_TURN_FRACTION = 0.2  # a hard turn steps by more than this fraction of turn_rate
+
+
+@dataclass(frozen=True)
+class ProceduralTrackParams:
+    """Knobs of the CarRacing generator; the defaults reproduce CarRacing-v3."""
+
+    checkpoints: int = 12
+    radius: float = 900 / 6  # TRACK_RAD [u]
+    half_width: float = 40 / 6  # TRACK_WIDTH, half the road width [u]
+    turn_rate: float = 0.31  # [rad] max heading change per detail step
+    detail_step: float = 21 / 6  # [u]
+    border: float = 8 / 6  # kerb width [u]
+    border_min_count: int = 4  # kerbs need this many sharp same-way steps in a row
+    # Regeneration attempts before raising RuntimeError (CarRacing retries forever; we cap).
+    max_attempts: int = 100
+
+
+@dataclass(frozen=True, eq=False)
+class ProceduralTrack:
+    """One generated lap; arrays are read-only."""
+
+    # (N, 2) float64, track points in order, point 0 first (the car's start point) [u]
+    centerline: np.ndarray
+    # (N,) float64, beta of each point [rad] (the car's hull angle at the start is headings[0])
+    headings: np.ndarray
+    # (N, 4, 2) float64, tile i = quad between points i-1 and i, vertices in CarRacing's order [u]
+    tiles: np.ndarray
+    kerbs: np.ndarray  # (K, 4, 2) float64 kerb quads [u] (K may be 0)
+    kerb_red: np.ndarray  # (K,) bool, True for red kerb quads, False for white
+    attempts: int  # how many generation attempts were needed (>= 1)
+
+    @property
+    def start_pose(self) -> tuple[float, float, float]:
+        """Where the car starts: (x [u], y [u], hull angle [rad])."""
+        x, y = self.centerline[0]
+        return float(x), float(y), float(self.headings[0])
+
+
+def generate_track(
+    rng: np.random.Generator, params: ProceduralTrackParams = ProceduralTrackParams()
+) -> ProceduralTrack:
+    """Draw a CarRacing track from rng; same draws, same track as CarRacing-v3.
+
+    Each attempt draws ``2 * params.checkpoints`` uniforms. An attempt fails when
+    its lap does not close; like CarRacing, the next attempt draws afresh from
+    the same rng. Raises RuntimeError after ``params.max_attempts`` failures.
+    """
+    for attempt in range(1, params.max_attempts + 1):
+        checkpoints = _draw_checkpoints(rng, params)
+        lap = _extract_lap(_trace_path(checkpoints, params), params)
+        if lap is not None:
+            return _build_track(lap, params, attempt)
+    raise RuntimeError(
+        f"no closed track after {params.max_attempts} attempts; "
+        "raise max_attempts or check radius, detail_step and turn_rate"
+    )
+
+
+def _draw_checkpoints(rng: np.random.Generator, params: ProceduralTrackParams) -> np.ndarray:
+    """Checkpoints as rows (alpha [rad], x [u], y [u]), counter-clockwise from alpha 0.
+
+    Draws (noise, radius) per checkpoint, in that order; the first and last
+    checkpoints are then pinned to the start line's radius.
+    """
+    n = params.checkpoints
+    sector = 2 * math.pi / n  # [rad]
+    draws = rng.uniform((0.0, params.radius / 3), (sector, params.radius), size=(n, 2))
+    alpha = 2 * math.pi * np.arange(n) / n + draws[:, 0]
+    rad = draws[:, 1]
+    alpha[0], rad[0] = 0.0, _START_RADIUS_FACTOR * params.radius
+    alpha[-1], rad[-1] = 2 * math.pi * (n - 1) / n, _START_RADIUS_FACTOR * params.radius
+    return np.column_stack((alpha, rad * np.cos(alpha), rad * np.sin(alpha)))
+
+
+def _trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
+    """Steer from the start line towards the checkpoints for a few laps.
+
+    Returns rows (alpha [rad], beta [rad], x [u], y [u]): the point's polar
+    angle (shifted by 2*pi past the last checkpoint), the mean heading over the
+    step, and the point reached.
+    """
+    cp_alpha, cp_x, cp_y = (list(column) for column in checkpoints.T)
+    x, y, beta = _START_RADIUS_FACTOR * params.radius, 0.0, 0.0  # [u], [u], [rad]
+    target, laps, below_axis = 0, 0, False
+    points = []
+    for _ in range(_MAX_STEPS):
+        alpha = math.atan2(y, x)
+        if below_axis and alpha > 0:
+            laps, below_axis = laps + 1, False
+        if alpha < 0:
+            below_axis, alpha = True, alpha + 2 * math.pi
+        alpha, target = _aim(alpha, target, cp_alpha)
+        target_index = target % len(cp_alpha)
+        cos_beta, sin_beta = math.cos(beta), math.sin(beta)
+        proj = cos_beta * (cp_x[target_index] - x) + sin_beta * (cp_y[target_index] - y)  # [u]
+        beta = _unwrap_near(beta, alpha)
+        prev_beta = beta
+        beta = _steer(beta, proj * _STEER_SCALE, params.turn_rate)
+        # The step runs along the heading's normal, using the heading before this turn.
+        x, y = x - sin_beta * params.detail_step, y + cos_beta * params.detail_step
+        points.append((alpha, prev_beta * 0.5 + beta * 0.5, x, y))
+        if laps > _MAX_LAPS:
+            break
+    return np.array(points)
+
+
+def _aim(alpha: float, target: int, cp_alpha: list[float]) -> tuple[float, int]:
+    """Advance target to the first checkpoint not behind polar angle alpha [rad].
+
+    Past the last checkpoint, alpha drops by 2*pi and the search wraps to
+    checkpoint 0. ``target`` only grows; callers use ``target % len(cp_alpha)``.
+    """
+    while alpha > cp_alpha[target % len(cp_alpha)]:
+        target += 1
+        if target % len(cp_alpha) == 0:
+            alpha -= 2 * math.pi
+    return alpha, target
+
+
+def _unwrap_near(beta: float, alpha: float) -> float:
+    """Shift heading beta [rad] by whole turns to within 1.5*pi of polar angle alpha."""
+    while beta - alpha > 1.5 * math.pi:
+        beta -= 2 * math.pi
+    while beta - alpha < -1.5 * math.pi:
+        beta += 2 * math.pi
+    return beta
+
+
+def _steer(beta: float, proj: float, turn_rate: float) -> float:
+    """Turn heading beta [rad] towards the target, given its projection [Box2D units]."""
+    turn = min(turn_rate, abs(_STEER_GAIN * proj))  # [rad]
+    if proj > _STEER_DEADBAND:
+        return beta - turn
+    if proj < -_STEER_DEADBAND:
+        return beta + turn
+    return beta
+
+
+def _extract_lap(path: np.ndarray, params: ProceduralTrackParams) -> np.ndarray | None:
+    """Cut the last full lap out of the path, or None if it does not close.
+
+    The lap runs from the second-to-last crossing of the start angle up to
+    two points before the last crossing.
+    """
+    start_alpha = -math.pi / params.checkpoints  # [rad] half a sector before alpha 0
+    alpha = path[:, 0]
+    crossings = np.flatnonzero((alpha[1:] > start_alpha) & (alpha[:-1] <= start_alpha)) + 1
+    if len(crossings) < 2:
+        return None
+    lap = path[crossings[-2] : crossings[-1] - 1]
+    return lap if _seam_gap(lap) <= params.detail_step else None
+
+
+def _seam_gap(lap: np.ndarray) -> float:
+    """Distance [u] between the lap's last and first points, as CarRacing measures it.
+
+    Each coordinate of the gap is weighted by the matching component of the
+    first heading's unit vector (not a dot product), then combined as a norm.
+    """
+    beta0 = lap[0, 1]
+    dx, dy = lap[0, 2:4] - lap[-1, 2:4]
+    return math.hypot(math.cos(beta0) * dx, math.sin(beta0) * dy)
+
+
+def _build_track(lap: np.ndarray, params: ProceduralTrackParams, attempts: int) -> ProceduralTrack:
+    """Turn a closed lap's rows (alpha, beta, x, y) into tiles and kerbs."""
+    centerline, headings = lap[:, 2:4].copy(), lap[:, 1].copy()
+    normals = np.column_stack((np.cos(headings), np.sin(headings)))
+    tiles = _quads(centerline, normals, -params.half_width, params.half_width)
+    kerbs, kerb_red = _kerbs(centerline, headings, normals, params)
+    arrays = (centerline, headings, tiles, kerbs, kerb_red)
+    for array in arrays:
+        array.setflags(write=False)
+    return ProceduralTrack(*arrays, attempts=attempts)
+
+
+def _quads(
+    points: np.ndarray,
+    normals: np.ndarray,
+    inner: float | np.ndarray,
+    outer: float | np.ndarray,
+) -> np.ndarray:
+    """Quads (N, 4, 2) between each point i and point i-1 (cyclic) [u].
+
+    Vertices: point i + inner, point i + outer, point i-1 + outer, point i-1 + inner,
+    each offset along that point's normal by the given distance [u].
+    """
+    inner = np.broadcast_to(inner, len(points))[:, None]
+    outer = np.broadcast_to(outer, len(points))[:, None]
+    prev_points, prev_normals = np.roll(points, 1, axis=0), np.roll(normals, 1, axis=0)
+    return np.stack(
+        (
+            points + inner * normals,
+            points + outer * normals,
+            prev_points + outer * prev_normals,
+            prev_points + inner * prev_normals,
+        ),
+        axis=1,
+    )
+
+
+def _kerbs(
+    centerline: np.ndarray,
+    headings: np.ndarray,
+    normals: np.ndarray,
+    params: ProceduralTrackParams,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Kerb quads (K, 4, 2) [u] on the outer side of hard turns, and their red flags (K,)."""
+    turns = headings - np.roll(headings, 1)  # [rad] turn into each point from the one before
+    flagged = _spread_back(_hard_turns(turns, params), params.border_min_count)
+    index = np.flatnonzero(flagged)
+    side = np.sign(-turns)  # +1 or -1: the outer side of the turn along the normal
+    kerbs = _quads(
+        centerline,
+        normals,
+        side * params.half_width,
+        side * (params.half_width + params.border),
+    )
+    return kerbs[index], index % 2 == 1
+
+
+def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
+    """Points whose last ``border_min_count`` turns are all sharp and all one way.
+
+    Indices wrap: the first points look back across the seam to the lap's
+    last points, as CarRacing does (headings there differ by well under a turn).
+    """
+    window = np.stack([np.roll(turns, k) for k in range(params.border_min_count)])
+    sharp = np.all(np.abs(window) > params.turn_rate * _KERB_TURN_FRACTION, axis=0)
+    one_way = np.abs(np.sign(window).sum(axis=0)) == params.border_min_count
+    return sharp & one_way
+
+
+def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
+    """Also flag the ``count - 1`` points before each flagged point, cyclically.
+
+    CarRacing spreads in place while walking forward, so flags on the first
+    points wrap to the end of the lap and spread once more from there.
+    """
+    spread = flags.copy()
+    for k in range(1, count):
+        spread[-k] |= flags[: count - k].any()
+    return np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
