@@ -14,13 +14,15 @@ from gymnasium.error import ResetNeeded
 from tinyrace.actions import ActionSpec
 from tinyrace.config import EnvConfig, load_env_config
 from tinyrace.episodes import StepFacts
-from tinyrace.episodes.procedural import ProceduralCourse
+from tinyrace.episodes.image import ImageCourse
+from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralCourse
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
+COURSES = {"procedural": ProceduralCourse, "image": ImageCourse}  # by track type
 
 
 class TinyRaceEnv(gym.Env):
@@ -74,7 +76,7 @@ class TinyRaceEnv(gym.Env):
         self.config: EnvConfig = loaded.config
         self.render_mode = render_mode
         self.verbose = verbose
-        self.course = ProceduralCourse(self.config)
+        self.course = COURSES[self.config.kind](self.config, loaded.base_dir, loaded.source)
         self.dt = 1.0 / self.config.sim.fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
         self._actions = ActionSpec.for_car(self.config.car.model, self.config.car.actions)
@@ -86,7 +88,7 @@ class TinyRaceEnv(gym.Env):
 
     def _observation_space(self) -> spaces.Space:
         if not self.config.cameras:
-            w, h = self.course.observation_size
+            w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
         return spaces.Dict(
             {c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras}
@@ -146,9 +148,7 @@ class TinyRaceEnv(gym.Env):
         return facts
 
     def _observe(self):
-        if not self.config.cameras:
-            return self.episode.chase_view(self.course.observation_size).render(self.t, self.score)
-        return self.episode.observe()
+        return self.episode.observe(self.t, self.score)
 
     def _info(self, facts: StepFacts, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()
@@ -156,6 +156,20 @@ class TinyRaceEnv(gym.Env):
         if facts.cte is not None:
             info["cte"] = facts.cte
         return info
+
+    @property
+    def track(self):
+        """The current episode's track data (read-only arrays in track units)."""
+        if self.episode is None:
+            raise ResetNeeded("call reset() before reading the track")
+        return self.episode.track
+
+    @property
+    def car(self):
+        """The current episode's car (a pymunk body plus its state)."""
+        if self.episode is None:
+            raise ResetNeeded("call reset() before reading the car")
+        return self.episode.car
 
     # -- pictures ------------------------------------------------------------------------------
     def render(self):
@@ -166,11 +180,9 @@ class TinyRaceEnv(gym.Env):
             return None
         if self.episode is None:
             raise ResetNeeded("call reset() before render()")
-        if self.render_mode == "state_pixels":
-            return self.episode.chase_view(self.course.observation_size).render(self.t, self.score)
-        if self.render_mode == "rgb_array":
-            return self.episode.chase_view(self.course.video_size).render(self.t, self.score)
-        frame = self.episode.chase_view(self.course.window_size).render(self.t, self.score)
+        frame = self.episode.frame(self.render_mode, self.t, self.score)
+        if self.render_mode != "human":
+            return frame
         if self._window is None:
             self._window = Window("tinyrace", self.metadata["render_fps"])
         self._window.show(frame, realtime=self.config.sim.render_realtime)

@@ -50,7 +50,9 @@ def reward_terms(
     ``charge_time`` is False for the step that ``reset`` takes with no action.
     """
     if facts.out_of_bounds:
-        return {"out_of_bounds": -config.out_of_bounds_penalty}
+        return (
+            {"out_of_bounds": -config.out_of_bounds_penalty} if config.out_of_bounds_penalty else {}
+        )
     terms: dict[str, float] = {}
     if charge_time and config.time_penalty:
         terms["time"] = -config.time_penalty

@@ -13,10 +13,13 @@ from tinyrace.physics.dynamic_car import DynamicCar
 from tinyrace.physics.world import World
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.procedural_ground import GroundColors, paint_ground, repaint_tile
+from tinyrace.render.roi_camera import RoiCamera
 from tinyrace.render.texture import GroundTexture
 from tinyrace.track.procedural import ProceduralTrackParams, generate_track
 
 VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
+OBSERVATION_SIZE = (96, 96)  # [px] (w, h) CarRacing's state_pixels
+RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "human": (1000, 800)}
 
 
 def track_params(config: ProceduralTrackConfig) -> ProceduralTrackParams:
@@ -64,6 +67,7 @@ class ProceduralEpisode:
         self.visited_count = 0
         self._textures: dict[float, GroundTexture] = {}
         self._views: dict[tuple[int, int], ChaseView] = {}
+        self._cameras: list[RoiCamera] | None = None
 
     # -- physics and facts -------------------------------------------------------------------
     def step(self, dt: float) -> StepFacts:
@@ -106,6 +110,23 @@ class ProceduralEpisode:
         }
 
     # -- pictures ----------------------------------------------------------------------------
+    def observe(self, t: float, score: float):
+        """CarRacing's 96x96 view, or a Dict of the configured cameras' images."""
+        if not self.config.cameras:
+            return self.chase_view(OBSERVATION_SIZE).render(t, score)
+        front, heading = self.car.front_axle, self.car.pose[2]
+        return {camera.config.id: camera.render(front, heading) for camera in self.cameras()}
+
+    def frame(self, mode: str, t: float, score: float) -> np.ndarray:
+        """The picture of a render mode: state_pixels 96x96, rgb_array 600x400, human 1000x800."""
+        return self.chase_view(RENDER_SIZES[mode]).render(t, score)
+
+    def cameras(self) -> list[RoiCamera]:
+        if self._cameras is None:
+            texture = self.texture(self.track_config.pixels_per_unit)
+            self._cameras = [RoiCamera(c, texture, y_down=False) for c in self.config.cameras]
+        return self._cameras
+
     def chase_view(self, size: tuple[int, int]) -> ChaseView:
         """CarRacing's view at ``size`` (w, h); small views share the observation texture."""
         view = self._views.get(size)
@@ -133,11 +154,7 @@ class ProceduralEpisode:
 class ProceduralCourse:
     """What lasts across resets on a procedural track: the colours of the last episode."""
 
-    observation_size = (96, 96)  # [px] CarRacing's state_pixels (w, h)
-    video_size = (600, 400)
-    window_size = (1000, 800)
-
-    def __init__(self, config: EnvConfig):
+    def __init__(self, config: EnvConfig, base_dir: object = None, source: str = ""):
         self.config = config
         self.track_config: ProceduralTrackConfig = config.tracks[0]
         self.colors = config_colors(self.track_config)

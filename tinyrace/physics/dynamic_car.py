@@ -278,6 +278,13 @@ class DynamicCar:
         point = self.body.local_to_world((0.0, rear))
         return point.x, point.y
 
+    @property
+    def front_axle(self) -> tuple[float, float]:
+        """Middle of the front axle in track units (where cameras are mounted)."""
+        rear, base, _ = _footprint(self.scale)
+        point = self.body.local_to_world((0.0, rear + base))
+        return point.x, point.y
+
 
 def _footprint(scale: float) -> tuple[float, float, float]:
     """Rear axle offset on the forward axis, wheelbase, outer wheel track [track units]."""

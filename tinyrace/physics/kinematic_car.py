@@ -84,3 +84,9 @@ class KinematicCar:
     def rear_axle(self) -> tuple[float, float]:
         x, y = self.body.position
         return x, y
+
+    @property
+    def front_axle(self) -> tuple[float, float]:
+        x, y = self.body.position
+        heading = self.body.angle
+        return x + self.wheelbase * math.cos(heading), y + self.wheelbase * math.sin(heading)

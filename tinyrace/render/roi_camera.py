@@ -1,0 +1,71 @@
+"""Bird's-eye cameras fixed to the car, tinycarlo-style: a window of the track ahead of the front axle.
+
+A camera sees ``roi`` = [y, x] track units: the window's bottom edge is centred
+on the mount point (the front axle's middle shifted by ``position`` = [y, x],
++y toward the rear, +x to the right of the car), it extends ``roi[0]`` ahead
+along the camera's direction (the car's heading turned by ``yaw`` degrees,
+positive to the right), and it is sampled at ``resolution`` = [y, x] pixels by
+one affine warp of the ground texture.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tinyrace.config import CameraConfig
+from tinyrace.render.texture import GroundTexture
+
+
+class RoiCamera:
+    """One configured camera on a ground texture; ``y_down`` for image tracks (pixels)."""
+
+    def __init__(self, config: CameraConfig, texture: GroundTexture, y_down: bool):
+        self.config = config
+        self.texture = texture
+        self.y_down = y_down
+        self.size = (config.resolution[1], config.resolution[0])  # (w, h) for cv2
+        ry, rx = config.roi
+        self.scale = (self.size[0] / rx, self.size[1] / ry)  # output px per track unit
+        self.pixels_per_unit = math.sqrt(self.scale[0] * self.scale[1])
+
+    def _axes(self, heading: float, turn_deg: float) -> tuple[float, float, float, float]:
+        """Forward and right unit vectors of a direction ``turn_deg`` right of ``heading``."""
+        turn = math.radians(turn_deg)
+        angle = heading + turn if self.y_down else heading - turn
+        fx, fy = math.cos(angle), math.sin(angle)
+        return (fx, fy, -fy, fx) if self.y_down else (fx, fy, fy, -fx)
+
+    def mount(self, front: tuple[float, float], heading: float) -> tuple[float, float]:
+        """The window's bottom-centre point in track units."""
+        fx, fy, rx, ry = self._axes(heading, 0.0)
+        back, right = self.config.position
+        return front[0] - back * fx + right * rx, front[1] - back * fy + right * ry
+
+    def matrix(self, front: tuple[float, float], heading: float) -> np.ndarray:
+        """World -> output pixel affine for the car's front-axle middle and heading."""
+        mx, my = self.mount(front, heading)
+        fx, fy, rx, ry = self._axes(heading, self.config.yaw)
+        sx, sy = self.scale
+        roi_y, roi_x = self.config.roi
+        # u = roi_x/2 + (p - m).right ; v = roi_y - (p - m).forward ; pixel index = u * sx - 0.5
+        return np.array(
+            [
+                [sx * rx, sx * ry, sx * (roi_x / 2 - (mx * rx + my * ry)) - 0.5],
+                [-sy * fx, -sy * fy, sy * (roi_y + (mx * fx + my * fy)) - 0.5],
+            ]
+        )
+
+    def render(self, front: tuple[float, float], heading: float) -> np.ndarray:
+        """The camera image (H, W, 3) uint8 RGB."""
+        matrix = self.matrix(front, heading)
+        return self.texture.warp(matrix, self.size, pixels_per_unit=self.pixels_per_unit)
+
+    def corners(self, front: tuple[float, float], heading: float) -> np.ndarray:
+        """(4, 2) track-unit corners of the window (bottom-left, bottom-right, top-right, top-left)."""
+        mx, my = self.mount(front, heading)
+        fx, fy, rx, ry = self._axes(heading, self.config.yaw)
+        roi_y, roi_x = self.config.roi
+        offsets = [(-roi_x / 2, 0), (roi_x / 2, 0), (roi_x / 2, roi_y), (-roi_x / 2, roi_y)]
+        return np.array([(mx + a * rx + b * fx, my + a * ry + b * fy) for a, b in offsets])

@@ -1,0 +1,202 @@
+"""Image tracks (tinycarlo 1.1's format): a picture whose pixel colours mean things.
+
+Loaded once per env: the image is binarised at 100 per channel as tinycarlo
+does, the trajectory pixels are taken out of the visible picture into a
+nearest-point index, and the pixels of each obstacle colour are summarised as
+boxes (one per grid cell they occupy) for pymunk's broad phase. Pixels are the
+world units: x right, y down.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from tinyrace.config import Color, EnvConfig, ImageTrackConfig
+from tinyrace.errors import Problem
+from tinyrace.track.nearest import NearestPoint
+
+THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
+CELL = 32  # [px] side of the obstacle broad-phase cells
+_ROWS_PER_CHUNK = 512  # bounds the temporary masks when scanning huge images
+
+
+@dataclass(frozen=True, eq=False)
+class ImageTrack:
+    """One loaded track image and what was read from its colours."""
+
+    image: np.ndarray  # (H, W, 4) uint8 RGBx, binarised, trajectory removed
+    spawns: tuple[tuple[float, float, float], ...]  # (x px, y px, heading rad)
+    obstacle_colors: tuple[Color, ...]  # per obstacle of reward_design.color_obstacles
+    cells: np.ndarray  # (M, 4) float: x0, y0, x1, y1 of cell boxes holding obstacle pixels
+    cell_obstacles: np.ndarray  # (M,) int: which obstacle each cell box belongs to
+    trajectory: NearestPoint | None  # None unless cross_track_error.use_cte
+    trajectory_mask: np.ndarray | None  # (K, 2) int pixel coordinates, for drawing
+    path: str  # the image file, for messages
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in px."""
+        return self.image.shape[1], self.image.shape[0]
+
+    def packed(self) -> np.ndarray:
+        """The image as one uint32 per pixel (RGBx), for fast colour comparisons."""
+        return self.image.view(np.uint32)[:, :, 0]
+
+
+def pack(color: Color) -> np.uint32:
+    """The uint32 word of an RGBx pixel of ``color`` (alpha 255)."""
+    return np.array([*color, 255], np.uint8).view(np.uint32)[0]
+
+
+def load_image_track(
+    track: ImageTrackConfig, index: int, config: EnvConfig, base_dir: Path, source: str
+) -> tuple[ImageTrack | None, list[Problem]]:
+    """Load ``tracks[index]``; returns the track or the problems found (file, key path, value)."""
+    where = f"tracks[{index}]"
+    image, problems = _read_rgbx(track, where, base_dir, source)
+    if image is None:
+        return None, problems
+    height, width = image.shape[:2]
+    for j, (x, y, _) in enumerate(track.spawns):
+        if not (0 <= x < width and 0 <= y < height):
+            allowed = f"a spawn inside the {width}x{height} px image (0 <= x < {width}, 0 <= y < {height})"
+            problems.append(Problem(source, f"{where}.spawns[{j}]", [x, y, _], allowed))
+    for k, camera in enumerate(config.cameras):
+        if camera.roi[0] > height or camera.roi[1] > width:
+            allowed = f"an roi [y, x] no larger than the image ({height}, {width})"
+            problems.append(Problem(source, f"cameras[{k}].roi", list(camera.roi), allowed))
+    trajectory, drawn = None, None
+    cte = config.reward_design.cross_track_error
+    if cte.use_cte:
+        drawn = _take_color(image, cte.trajectory_color)
+        if len(drawn) == 0:
+            allowed = f"a colour present in {track.image or 'the plane'} (no pixel has it)"
+            problems.append(
+                Problem(
+                    source,
+                    "reward_design.cross_track_error.trajectory_color",
+                    cte.trajectory_color,
+                    allowed,
+                )
+            )
+        else:
+            trajectory = NearestPoint(drawn.astype(np.float64))
+    colors = tuple(o.color for o in config.reward_design.color_obstacles)
+    cells, owners = _obstacle_cells(image, colors)
+    loaded = ImageTrack(
+        image, track.spawns, colors, cells, owners, trajectory, drawn, str(track.image)
+    )
+    return (None if problems else loaded), problems
+
+
+def _read_rgbx(
+    track: ImageTrackConfig, where: str, base_dir: Path, source: str
+) -> tuple[np.ndarray | None, list[Problem]]:
+    """Read and binarise the image (PNG/JPEG; RGB, RGBA or grey) as RGBx."""
+    if track.image is None:
+        height, width = track.plane_size
+        plane = np.zeros((height, width, 4), np.uint8)
+        plane[:, :, 3] = 255
+        return plane, []
+    path = (base_dir / track.image).resolve()
+    if not path.is_file():
+        return None, [
+            Problem(
+                source,
+                f"{where}.image",
+                track.image,
+                f"a file next to the YAML; {path} does not exist",
+            )
+        ]
+    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)  # grey and RGBA become BGR; alpha is ignored
+    if bgr is None:
+        return None, [
+            Problem(
+                source,
+                f"{where}.image",
+                track.image,
+                f"a readable PNG or JPEG image; {path} is not",
+            )
+        ]
+    cv2.threshold(bgr, THRESHOLD, 255, cv2.THRESH_BINARY, dst=bgr)
+    rgbx = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGBA)
+    del bgr
+    return rgbx, []
+
+
+def _take_color(image: np.ndarray, color: Color) -> np.ndarray:
+    """Coordinates (x, y) of every pixel of ``color``, painted black in the image."""
+    packed = image.view(np.uint32)[:, :, 0]
+    word, black = pack(color), pack(Color.rgb(0, 0, 0))
+    found = []
+    for top in range(0, packed.shape[0], _ROWS_PER_CHUNK):
+        rows = packed[top : top + _ROWS_PER_CHUNK]
+        ys, xs = np.nonzero(rows == word)
+        rows[ys, xs] = black
+        found.append(np.stack([xs, ys + top], axis=1))
+    return np.concatenate(found) if found else np.zeros((0, 2), np.int64)
+
+
+def _obstacle_cells(image: np.ndarray, colors: tuple[Color, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Tight boxes around the obstacle pixels of each CELL x CELL grid cell, per colour."""
+    packed = image.view(np.uint32)[:, :, 0]
+    boxes, owners = [], []
+    for owner, color in enumerate(colors):
+        word = pack(color)
+        for top in range(
+            0, packed.shape[0], _ROWS_PER_CHUNK
+        ):  # _ROWS_PER_CHUNK is a multiple of CELL
+            hits = packed[top : top + _ROWS_PER_CHUNK] == word
+            found = _cell_boxes(hits)
+            if len(found):
+                found[:, [1, 3]] += top
+                boxes.append(found)
+                owners.append(np.full(len(found), owner))
+    if not boxes:
+        return np.zeros((0, 4)), np.zeros(0, np.int64)
+    # pixel (x, y) is centred on integer coordinates: it spans x - 0.5 .. x + 0.5
+    return np.concatenate(boxes).astype(np.float64) - 0.5, np.concatenate(owners)
+
+
+def _cell_boxes(hits: np.ndarray) -> np.ndarray:
+    """(M, 4) int boxes x0, y0, x1, y1 (exclusive ends) of the hits within each occupied cell."""
+    h, w = hits.shape
+    ph, pw = -h % CELL, -w % CELL
+    grid = np.pad(hits, ((0, ph), (0, pw))).reshape((h + ph) // CELL, CELL, (w + pw) // CELL, CELL)
+    rows_hit = grid.any(axis=3)  # (gy, CELL, gx): which rows of each cell hold a hit
+    cols_hit = grid.any(axis=1)  # (gy, gx, CELL)
+    gy, gx = np.nonzero(rows_hit.any(axis=1))
+    if len(gy) == 0:
+        return np.zeros((0, 4), np.int64)
+    r = rows_hit[gy, :, gx]  # (M, CELL)
+    c = cols_hit[gy, gx, :]
+    y0 = r.argmax(axis=1)
+    y1 = CELL - r[:, ::-1].argmax(axis=1)
+    x0 = c.argmax(axis=1)
+    x1 = CELL - c[:, ::-1].argmax(axis=1)
+    return np.stack([gx * CELL + x0, gy * CELL + y0, gx * CELL + x1, gy * CELL + y1], axis=1)
+
+
+def touched_obstacles(track: ImageTrack, corners: np.ndarray, candidates: set[int]) -> list[int]:
+    """Which ``candidates`` (obstacle indices) have a pixel inside the polygon ``corners``.
+
+    Pixel-exact, over the polygon's bounding window only: O(footprint area).
+    """
+    width, height = track.size
+    x0, y0 = np.floor(corners.min(axis=0)).astype(int)
+    x1, y1 = np.ceil(corners.max(axis=0)).astype(int) + 1
+    x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
+    if x0 >= x1 or y0 >= y1:
+        return []
+    window = track.packed()[y0:y1, x0:x1]
+    inside = np.zeros(window.shape, np.uint8)
+    local = np.round((corners - (x0, y0)) * 8).astype(np.int32)
+    cv2.fillConvexPoly(inside, local, 1, cv2.LINE_8, 3)  # pixels whose centres are inside
+    inside = inside.view(bool)
+    return [
+        i for i in sorted(candidates) if np.any(window[inside] == pack(track.obstacle_colors[i]))
+    ]

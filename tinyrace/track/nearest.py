@@ -1,0 +1,54 @@
+"""Exact nearest-point queries on a fixed point set (the trajectory's pixels), built once.
+
+Points are bucketed in a grid and sorted by cell, so that a row of cells is one
+contiguous slice. A coarse distance transform of the occupied cells tells, for
+any cell, how many rings around it can hold the nearest point; a query reads
+only those rows: O(points near the query), never a scan of all points.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+
+class NearestPoint:
+    """Nearest of a fixed set of 2-D points, in the points' units (pixels)."""
+
+    def __init__(self, points: np.ndarray, cell: float = 32.0):
+        if len(points) == 0:
+            raise ValueError("NearestPoint needs at least one point")
+        points = np.asarray(points, np.float64)
+        self.cell = cell
+        low = points.min(axis=0)
+        self.origin = low
+        cols_rows = ((points - low) // cell).astype(np.int64)
+        self.cols = int(cols_rows[:, 0].max()) + 1
+        self.rows = int(cols_rows[:, 1].max()) + 1
+        keys = cols_rows[:, 1] * self.cols + cols_rows[:, 0]
+        order = np.argsort(keys, kind="stable")
+        self.points = points[order]
+        counts = np.bincount(keys, minlength=self.rows * self.cols)
+        self.offsets = np.concatenate([[0], np.cumsum(counts)])
+        empty = (counts.reshape(self.rows, self.cols) == 0).astype(np.uint8)
+        # distance (in cells, centre to centre) from each cell to the nearest occupied cell
+        self.reach = cv2.distanceTransform(empty, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+
+    def query(self, x: float, y: float) -> tuple[float, float, float]:
+        """(distance, nearest x, nearest y) for the point (x, y)."""
+        fx, fy = (x - self.origin[0]) / self.cell, (y - self.origin[1]) / self.cell
+        col = min(max(int(math.floor(fx)), 0), self.cols - 1)
+        row = min(max(int(math.floor(fy)), 0), self.rows - 1)
+        outside = math.hypot(fx - min(max(fx, 0), self.cols), fy - min(max(fy, 0), self.rows))
+        # every point closer than the nearest occupied cell's far corner lies within this many rings
+        rings = int(math.ceil(self.reach[row, col] + outside)) + 2
+        r0, r1 = max(row - rings, 0), min(row + rings, self.rows - 1)
+        c0, c1 = max(col - rings, 0), min(col + rings, self.cols - 1)
+        starts = self.offsets[np.arange(r0, r1 + 1) * self.cols + c0]
+        ends = self.offsets[np.arange(r0, r1 + 1) * self.cols + c1 + 1]
+        candidates = np.concatenate([self.points[a:b] for a, b in zip(starts, ends, strict=True)])
+        d2 = (candidates[:, 0] - x) ** 2 + (candidates[:, 1] - y) ** 2
+        best = int(np.argmin(d2))
+        return math.sqrt(d2[best]), float(candidates[best, 0]), float(candidates[best, 1])
