@@ -1,4 +1,4 @@
-"""Bird's-eye cameras fixed to the car, tinycarlo-style: a window of the track ahead of the front axle.
+"""Bird's-eye cameras fixed to the car, tinycarlo-style: a track window ahead of the car.
 
 A camera sees ``roi`` = [y, x] track units: the window's bottom edge is centred
 on the mount point (the front axle's middle shifted by ``position`` = [y, x],
@@ -63,7 +63,7 @@ class RoiCamera:
         return self.texture.warp(matrix, self.size, pixels_per_unit=self.pixels_per_unit)
 
     def corners(self, front: tuple[float, float], heading: float) -> np.ndarray:
-        """(4, 2) track-unit corners of the window (bottom-left, bottom-right, top-right, top-left)."""
+        """(4, 2) corners of the window in track units: bottom-left, bottom-right, top-right, top-left."""
         mx, my = self.mount(front, heading)
         fx, fy, rx, ry = self._axes(heading, self.config.yaw)
         roi_y, roi_x = self.config.roi

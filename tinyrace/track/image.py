@@ -63,7 +63,7 @@ def load_image_track(
     height, width = image.shape[:2]
     for j, (x, y, _) in enumerate(track.spawns):
         if not (0 <= x < width and 0 <= y < height):
-            allowed = f"a spawn inside the {width}x{height} px image (0 <= x < {width}, 0 <= y < {height})"
+            allowed = f"a spawn inside the image: 0 <= x < {width} and 0 <= y < {height} [px]"
             problems.append(Problem(source, f"{where}.spawns[{j}]", [x, y, _], allowed))
     for k, camera in enumerate(config.cameras):
         if camera.roi[0] > height or camera.roi[1] > width:

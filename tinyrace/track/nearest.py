@@ -39,11 +39,11 @@ class NearestPoint:
     def query(self, x: float, y: float) -> tuple[float, float, float]:
         """(distance, nearest x, nearest y) for the point (x, y)."""
         fx, fy = (x - self.origin[0]) / self.cell, (y - self.origin[1]) / self.cell
-        col = min(max(int(math.floor(fx)), 0), self.cols - 1)
-        row = min(max(int(math.floor(fy)), 0), self.rows - 1)
+        col = min(max(math.floor(fx), 0), self.cols - 1)
+        row = min(max(math.floor(fy), 0), self.rows - 1)
         outside = math.hypot(fx - min(max(fx, 0), self.cols), fy - min(max(fy, 0), self.rows))
         # every point closer than the nearest occupied cell's far corner lies within this many rings
-        rings = int(math.ceil(self.reach[row, col] + outside)) + 2
+        rings = math.ceil(self.reach[row, col] + outside) + 2
         r0, r1 = max(row - rings, 0), min(row + rings, self.rows - 1)
         c0, c1 = max(col - rings, 0), min(col + rings, self.cols - 1)
         starts = self.offsets[np.arange(r0, r1 + 1) * self.cols + c0]
