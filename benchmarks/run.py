@@ -385,3 +385,211 @@ def measure_vector(budget: Budget) -> dict[str, Any]:
         results[name] = timing.as_dict()
         steppers[name].close()
     return results
+
+
+# -- targets and tables -----------------------------------------------------------------------
+def rate_of(entry: Any) -> float | None:
+    return entry["steps_per_s"] if isinstance(entry, dict) and "steps_per_s" in entry else None
+
+
+def verdict(ok: bool | None) -> str:
+    return "n/a" if ok is None else ("PASS" if ok else "FAIL")
+
+
+def why_missing(entry: Any) -> str:
+    return entry if isinstance(entry, str) else "unavailable (see JSON)"
+
+
+def ratio_row(label: str, a: Any, b: Any, target: float, unit: str = "steps/s") -> list[str]:
+    """``a / b`` of two timings against ``>= target``."""
+    ra, rb = rate_of(a), rate_of(b)
+    if ra is None or rb is None:
+        return [label, why_missing(a if ra is None else b), f">= {target:g}x", "n/a"]
+    ratio = ra / rb
+    value = f"{ratio:.2f}x ({ra:,.0f} vs {rb:,.0f} {unit})"
+    return [label, value, f">= {target:g}x", verdict(ratio >= target)]
+
+
+def target_rows(results: dict[str, Any]) -> list[list[str]]:
+    """One row per target: measure, value, target, PASS/FAIL/n/a."""
+    speed, reset, image = results["throughput"], results["reset"], results["image_tracks"]
+    rss, vector = results["rss"], results["vector"]
+    rows = [
+        ratio_row("tinyrace vs CarRacing-v3", speed.get("tinyrace"), speed.get("carracing_v3"),
+                  TARGETS["vs_carracing_v3"]),
+        ratio_row("tinyrace vs EnvPool (1 env, 1 thread)", speed.get("tinyrace"),
+                  speed.get("envpool"), TARGETS["vs_envpool"]),
+    ]  # fmt: skip
+    if "tinyrace" in reset and "carracing_v3" in reset:
+        mine, theirs = reset["tinyrace"]["mean_ms"], reset["carracing_v3"]["mean_ms"]
+        value = f"{theirs / mine:.2f}x ({mine:.1f} vs {theirs:.1f} ms)"
+        ok = theirs / mine >= TARGETS["reset_ratio"]
+        rows.append(["reset: CarRacing-v3 time / tinyrace's", value, ">= 1x (no slower)",
+                     verdict(ok)])  # fmt: skip
+    else:
+        rows.append(["reset: CarRacing-v3 time / tinyrace's", why_missing(reset), ">= 1x", "n/a"])
+    floor = TARGETS["image_steps_per_s"]
+    for name in EXAMPLE_TRACKS:
+        r = rate_of(image.get(f"{name}_1cam"))
+        value = f"{r:,.0f} steps/s" if r is not None else why_missing(image.get(f"{name}_1cam"))
+        ok = None if r is None else r >= floor
+        rows.append([f"image track {name}, 1 camera", value, f">= {floor:g} steps/s", verdict(ok)])
+    big, small = image.get("generated_6000x3000"), image.get("generated_1000x1000")
+    tolerance = TARGETS["size_tolerance"]
+    row = ratio_row("image track 6000x3000 vs 1000x1000", big, small, 0.0)
+    if rate_of(big) is not None and rate_of(small) is not None:
+        row[3] = verdict(abs(rate_of(big) / rate_of(small) - 1.0) <= tolerance)
+    row[2] = f"within {tolerance:.0%}"
+    rows.append(row)
+    rows.append(rss_row(rss))
+    rows.append(ratio_row("AsyncVectorEnv(2) vs one env", vector.get("async_2"),
+                          vector.get("single"), TARGETS["async_ratio"], "env-steps/s"))  # fmt: skip
+    return rows
+
+
+def rss_row(rss: dict[str, Any]) -> list[str]:
+    label = "peak RSS, 6000x3000 image track"
+    peak, target = rss.get("generated_6000x3000"), rss.get("generated_6000x3000_target_bytes")
+    image_mb = rss.get("generated_6000x3000_image_bytes", 0) / MB
+    target_text = (
+        f"<= {target / MB:.0f} MB (3 x {image_mb:.0f} MB + 80 MB)" if target else "n/a"
+    )
+    if not isinstance(peak, int):
+        return [label, why_missing(peak), target_text, "n/a"]
+    return [label, f"{peak / MB:.0f} MB", target_text, verdict(peak <= target)]
+
+
+def detail_rows(results: dict[str, Any]) -> list[list[str]]:
+    """Every steps/s figure: section, case, steps/s, ms per step, resets during timing."""
+    rows = []
+    for section in ("throughput", "image_tracks", "vector"):
+        for name, entry in results[section].items():
+            r = rate_of(entry)
+            if r is None:
+                rows.append([section, name, why_missing(entry), "", ""])
+            else:
+                rows.append([section, name, f"{r:,.0f}", f"{1e3 / r:.3f}", str(entry["resets"])])
+    return rows
+
+
+def memory_rows(rss: dict[str, Any]) -> list[list[str]]:
+    baseline = rss.get("baseline_imports")
+    rows = []
+    for name, peak in rss.items():
+        if name.endswith("_bytes"):
+            continue
+        if not isinstance(peak, int):
+            rows.append([name, why_missing(peak), ""])
+            continue
+        extra = f"{(peak - baseline) / MB:+.0f}" if isinstance(baseline, int) else ""
+        rows.append([name, f"{peak / MB:.0f}", extra])
+    return rows
+
+
+def print_table(title: str, headers: list[str], rows: list[list[str]], width: int = 72) -> None:
+    """A plain-text table; cells longer than ``width`` are cut (the JSON keeps them whole)."""
+    cells = [[c if len(c) <= width else c[: width - 3] + "..." for c in row] for row in rows]
+    widths = [max(len(r[i]) for r in [headers, *cells]) for i in range(len(headers))]
+    print(f"\n{title}")
+    print("  ".join(h.ljust(w) for h, w in zip(headers, widths, strict=True)))
+    print("  ".join("-" * w for w in widths))
+    for row in cells:
+        print("  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip())
+
+
+# -- the run ----------------------------------------------------------------------------------
+def machine() -> dict[str, Any]:
+    """Where and on what the figures were taken."""
+    versions = {}
+    for module in ("gymnasium", "numpy", "cv2", "pymunk", "envpool", "tinyrace"):
+        try:
+            versions[module] = __import__(module).__version__
+        except Exception as error:
+            versions[module] = unavailable(error)
+    git = subprocess.run(
+        ["git", "-C", str(ROOT), "describe", "--always", "--dirty"], capture_output=True, text=True
+    )
+    return {
+        "time": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "usable_cpus": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+        "python": sys.version.split()[0],
+        "versions": versions,
+        "git": git.stdout.strip() or None,
+    }
+
+
+def guarded(name: str, measure: Callable[..., dict[str, Any]], *args: Any) -> dict[str, Any]:
+    """Run one measurement; a crash becomes an entry in the results, not the end of the run."""
+    print(f"measuring {name} ...", file=sys.stderr, flush=True)
+    start = time.perf_counter()
+    try:
+        result = measure(*args)
+    except Exception as error:
+        traceback.print_exc()
+        result = {"error": unavailable(error)}
+    print(f"  {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
+    return result
+
+
+def run(budget: Budget) -> dict[str, Any]:
+    results: dict[str, Any] = {"machine": machine(), "budget": asdict(budget), "targets": TARGETS}
+    with tempfile.TemporaryDirectory(prefix="tinyrace-bench-") as tmp, quiet_gym_warnings():
+        generated = Path(tmp)
+        for name, (width, height) in GENERATED_SIZES.items():
+            write_generated_track(generated / name, width, height)
+        results["throughput"] = guarded("throughput", measure_throughput, budget)
+        results["reset"] = guarded("reset time", measure_reset, budget)
+        results["image_tracks"] = guarded("image tracks", measure_image_tracks, budget, generated)
+        results["rss"] = guarded("peak RSS (subprocesses)", measure_rss, generated)
+        results["vector"] = guarded("vector envs", measure_vector, budget)
+    return results
+
+
+def report(results: dict[str, Any]) -> None:
+    m = results["machine"]
+    print(f"\ntinyrace benchmark  {m['time']}  git {m['git']}  python {m['python']}")
+    print(f"{m['processor']}, {m['usable_cpus']} usable CPUs; {m['platform']}")
+    print_table("Targets", ["measure", "value", "target", "result"], target_rows(results))
+    print_table(
+        "Steps (random actions, observation every step; resets inside the timing)",
+        ["section", "case", "steps/s", "ms/step", "resets"],
+        detail_rows(results),
+    )
+    reset = results["reset"]
+    print_table(
+        "Reset (seeded, mean)",
+        ["env", "mean ms", "median ms"],
+        [
+            [name, f"{r['mean_ms']:.2f}", f"{r['median_ms']:.2f}"]
+            for name, r in reset.items()
+            if isinstance(r, dict)
+        ],
+    )
+    print_table(
+        f"Peak RSS after make, reset and {RSS_STEPS} steps (fresh process each)",
+        ["kind", "MB", "MB over baseline"],
+        memory_rows(results["rss"]),
+    )
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="smoke run, about a minute")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON file to write")
+    parser.add_argument("--rss-child", help=argparse.SUPPRESS)  # internal: one RSS subprocess
+    args = parser.parse_args(argv)
+    if args.rss_child:
+        rss_child(json.loads(args.rss_child))
+        return
+    results = run(QUICK if args.quick else FULL)
+    report(results)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"\nwrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -63,7 +63,7 @@ class RoiCamera:
         return self.texture.warp(matrix, self.size, pixels_per_unit=self.pixels_per_unit)
 
     def corners(self, front: tuple[float, float], heading: float) -> np.ndarray:
-        """(4, 2) corners of the window in track units: bottom-left, bottom-right, top-right, top-left."""
+        """(4, 2) window corners [track units]: bottom-left, bottom-right, top-right, top-left."""
         mx, my = self.mount(front, heading)
         fx, fy, rx, ry = self._axes(heading, self.config.yaw)
         roi_y, roi_x = self.config.roi
