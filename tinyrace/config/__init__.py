@@ -54,7 +54,7 @@ class LoadedConfig:
 
 
 def load_env_config(
-    config: str | Path | Mapping[str, Any] | None = None,
+    config: str | Path | Mapping[str, Any] | LoadedConfig | None = None,
     environment: str | Path | None = None,
     overrides: Mapping[str, Any] | None = None,
 ) -> LoadedConfig:
@@ -63,6 +63,8 @@ def load_env_config(
     With neither ``config`` nor ``environment``, the result is the default procedural track.
     Raises ConfigError listing every problem found.
     """
+    if isinstance(config, LoadedConfig) and not overrides and environment is None:
+        return config  # already validated (e.g. by ``tinyrace play``)
     if config is not None and environment is not None:
         raise ConfigError(
             Problem(
@@ -111,41 +113,41 @@ def _read_source(
     return dict(raw), str(path), path.parent
 
 
-def parse_env_config(raw: Mapping[str, Any], source: str) -> EnvConfig:
-    """Validate a raw mapping into an EnvConfig with every kind-dependent default resolved."""
+def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> EnvConfig:
+    """Validate a raw mapping into an EnvConfig with every kind-dependent default resolved.
+
+    ``prefix`` is put before key paths in messages (e.g. "env" inside an experiment file).
+    """
     parser = Parser(source)
-    config = parser.dataclass(EnvConfig, raw, "")
+    config = parser.dataclass(EnvConfig, raw, prefix)
     parser.check()
-    _check_consistency(config, parser)
+    _check_consistency(config, parser, f"{prefix}." if prefix else "")
     parser.check()
     return resolve_defaults(config)
 
 
-def _check_consistency(config: EnvConfig, parser: Parser) -> None:
-    """Rules that span sections."""
+def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
+    """Rules that span sections; ``at`` prefixes key paths."""
     kinds = {t.type for t in config.tracks}
     if len(kinds) > 1:
-        parser.problem("tracks", sorted(kinds), "all tracks of one env must be of one type")
+        parser.problem(f"{at}tracks", sorted(kinds), "all tracks of one env must be of one type")
     if not config.tracks:
-        parser.problem("tracks", [], "expected at least one track")
+        parser.problem(f"{at}tracks", [], "expected at least one track")
     image = "image" in kinds
     if image and not config.cameras:
-        parser.problem(
-            "cameras",
-            [],
-            "an image track needs at least one camera (id, resolution, roi, position)",
-        )
+        allowed = "an image track needs at least one camera (id, resolution, roi, position)"
+        parser.problem(f"{at}cameras", [], allowed)
     ids = [c.id for c in config.cameras]
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
-            parser.problem(f"cameras[{i}].id", cam_id, "camera ids must be unique")
+            parser.problem(f"{at}cameras[{i}].id", cam_id, "camera ids must be unique")
     model = config.car.model or ("kinematic" if image else "dynamic")
     if config.car.actions == "discrete" and model != "dynamic":
-        parser.problem("car.actions", "discrete", "discrete actions need car.model: dynamic")
+        parser.problem(f"{at}car.actions", "discrete", "discrete actions need car.model: dynamic")
     if not image and config.reward_design.color_obstacles:
-        parser.problem(
-            "reward_design.color_obstacles", "...", "colour obstacles need an image track"
-        )
+        obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
+        allowed = "colour obstacles need an image track"
+        parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
 
 
 def resolve_defaults(config: EnvConfig) -> EnvConfig:

@@ -92,6 +92,10 @@ class Parser:
             return self.problem(path, raw, f"expected one of: {', '.join(map(str, args))}")
         if origin is tuple:
             return self.tuple(args, raw, path, meta)
+        if origin is dict:  # free-form mapping (e.g. driver arguments), checked by its user
+            if isinstance(raw, Mapping) and all(isinstance(k, str) for k in raw):
+                return dict(raw)
+            return self.problem(path, raw, "expected a mapping with string keys")
         if dataclasses.is_dataclass(hint):
             return self.dataclass(hint, raw, path)
         if hint is Color:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, Literal, Union
 
 from tinyrace.config.colors import Color
@@ -22,11 +23,13 @@ def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
     """
     meta = {"doc": doc, "unit": unit, **rules}
     if isinstance(default, (list, dict, set)):
-        raise TypeError("use tuples for defaults")
+        raise TypeError("use tuples or MappingProxyType for defaults")
     if default is dataclasses.MISSING:
         return field(metadata=meta)
     if dataclasses.is_dataclass(default):
         return field(default_factory=lambda: default, metadata=meta)
+    if isinstance(default, MappingProxyType):  # a free-form mapping: a fresh dict per instance
+        return field(default_factory=lambda: dict(default), metadata=meta)
     return field(default=default, metadata=meta)
 
 
@@ -160,7 +163,7 @@ class CameraConfig:
     )
     position: tuple[float, float] = knob(
         (0.0, 0.0),
-        "[y, x] shift of the window from the front axle middle; +y back, +x right",
+        "[y, x] shift of the window from the front axle middle; +y ahead, +x right",
         "track px (u on procedural tracks)",
     )
     yaw: float = knob(

@@ -1,0 +1,22 @@
+"""YAML experiments: an env, a driver, episodes; run end to end by ``tinyrace run``."""
+
+from tinyrace.experiment.load import (
+    Experiment,
+    experiment_from_dict,
+    is_experiment,
+    load_experiment,
+)
+from tinyrace.experiment.runner import RunResult, print_report, run_experiment
+from tinyrace.experiment.schema import ExperimentConfig, OutputConfig
+
+__all__ = [
+    "Experiment",
+    "ExperimentConfig",
+    "OutputConfig",
+    "RunResult",
+    "experiment_from_dict",
+    "is_experiment",
+    "load_experiment",
+    "print_report",
+    "run_experiment",
+]

@@ -1,0 +1,92 @@
+"""Reading and validating an experiment file, with the env it describes."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tinyrace.config import TRACK_FILE, EnvConfig, load_env_config, parse_env_config
+from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.experiment.schema import ExperimentConfig
+
+ENV_FOLDER_KEY = "environment"  # inside ``env``: a track folder or track.yaml
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """A validated experiment and the keyword arguments that make its env."""
+
+    config: ExperimentConfig
+    source: str  # the file, for messages and the run directory's name
+    env_config: EnvConfig
+    env_kwargs: dict[str, Any]  # for TinyRaceEnv(**env_kwargs)
+
+    @property
+    def name(self) -> str:
+        return Path(self.source).stem if self.source.endswith((".yaml", ".yml")) else "experiment"
+
+
+def is_experiment(raw: object) -> bool:
+    """An experiment file has experiment keys; a track.yaml has track sections."""
+    keys = {"env", "driver", "episodes", "output", "driver_args", "max_steps"}
+    return isinstance(raw, Mapping) and bool(keys & set(raw))
+
+
+def load_experiment(path: str | Path) -> Experiment:
+    """Read ``path``; every problem (experiment keys and env keys) raises one ConfigError."""
+    path = Path(path)
+    raw = read_yaml(path)
+    return experiment_from_dict(raw if raw is not None else {}, str(path), path.parent)
+
+
+def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment:
+    parser = Parser(source)
+    config = parser.dataclass(ExperimentConfig, raw, "")
+    parser.check()
+    sections = dict(config.env)
+    track_file = sections.pop(ENV_FOLDER_KEY, None)
+    kwargs: dict[str, Any] = {}
+    if track_file is None:
+        sections = _absolute_images(sections, base_dir)
+        merged = sections
+    else:
+        if not isinstance(track_file, str):
+            where = f"env.{ENV_FOLDER_KEY}"
+            raise ConfigError(
+                Problem(source, where, track_file, "expected a track folder or track.yaml path")
+            )
+        track_file = base_dir / track_file
+        if track_file.is_dir():
+            track_file = track_file / TRACK_FILE
+        if not track_file.is_file():
+            where = f"env.{ENV_FOLDER_KEY}"
+            raise ConfigError(
+                Problem(
+                    source, where, str(track_file), "expected a track folder holding track.yaml"
+                )
+            )
+        load_env_config(config=track_file)  # its own problems, named in its own file
+        merged = deep_merge(read_yaml(track_file) or {}, sections)
+        kwargs["config"] = str(track_file.resolve())
+    env_config = parse_env_config(merged, source, prefix="env")
+    return Experiment(config, source, env_config, {**kwargs, **sections})
+
+
+def _absolute_images(sections: dict[str, Any], base_dir: Path) -> dict[str, Any]:
+    """Inline track images are relative to the experiment file: make them absolute."""
+    for key in ("track", "tracks"):
+        tracks = sections.get(key)
+        entries = (
+            [tracks] if isinstance(tracks, Mapping) else tracks if isinstance(tracks, list) else []
+        )
+        resolved = []
+        for entry in entries:
+            if isinstance(entry, Mapping) and isinstance(entry.get("image"), str):
+                entry = {**entry, "image": str((base_dir / entry["image"]).resolve())}
+            resolved.append(entry)
+        if entries:
+            sections = {**sections, key: resolved[0] if isinstance(tracks, Mapping) else resolved}
+    return sections
