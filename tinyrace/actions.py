@@ -1,9 +1,11 @@
 """Action spaces and their checking: every action becomes plain floats or is refused.
 
 Continuous actions may be any real-valued array-like of the right shape (lists,
-float64 and integer arrays are cast to float32); discrete actions may be Python
-or numpy integers. Anything else, NaN, infinity or a value outside the space
-raises ``gymnasium.error.InvalidAction`` naming the space.
+tuples, float16/float64 and integer arrays are checked against the bounds, then
+cast to float32); a scalar or 0-d array is not of shape (1,). Discrete actions may
+be Python or numpy integers, or 0-d integer arrays. Anything else (bools, strings,
+complex or object arrays), NaN, infinity or a value outside the space raises
+``gymnasium.error.InvalidAction`` naming the space, before anything changes.
 """
 
 from __future__ import annotations
@@ -69,17 +71,18 @@ class ActionSpec:
         return int(action)
 
     def _vector(self, action: object) -> np.ndarray:
-        array = action if isinstance(action, np.ndarray) else _as_array(action, self.space)
+        # subclasses (masked arrays, matrices) become plain arrays: tolist() must give floats
+        array = action if type(action) is np.ndarray else _as_array(action, self.space)
         if array.dtype.kind not in "fiu":
             raise InvalidAction(
                 f"action {action!r} of dtype {array.dtype} is not real-valued; space {self.space}"
             )
         if array.shape != self.space.shape:
             raise InvalidAction(f"action of shape {array.shape} does not fit {self.space}")
-        array = array.astype(np.float32, copy=False)
+        # bounds before the cast: a float64 beyond float32's range would warn as it became inf
         if not (np.all(array >= self.space.low) and np.all(array <= self.space.high)):
             raise InvalidAction(f"action {array.tolist()} is outside {self.space} (NaN included)")
-        return array
+        return array.astype(np.float32, copy=False)
 
 
 def _as_array(action: object, space: spaces.Space) -> np.ndarray:

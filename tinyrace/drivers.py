@@ -17,8 +17,10 @@ Box, or to the nearest action of CarRacing's Discrete(5).
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import gymnasium as gym
@@ -26,6 +28,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.actions import DISCRETE_CONTROLS
+from tinyrace.physics.dynamic_car import SIZE, DynamicCarSpec
 
 Controls = tuple[float, float, float]  # (steer -1..1, +1 right; gas 0..1; brake 0..1)
 
@@ -43,27 +46,59 @@ class ActionAdapter:
     """Turns ``(steer, gas, brake)`` into an action of ``space``.
 
     Box(3,): the controls themselves, clipped; Box(1,): the steering only (the
-    kinematic car); Discrete(5): the nearest of CarRacing's five actions, after
-    capping gas and brake at what those actions can give.
+    kinematic car); Discrete(5): see ``DiscreteChooser``.
     """
 
-    def __init__(self, space: spaces.Space):
+    def __init__(self, space: spaces.Space, dt: float = 1 / 50):
         self.space = space
-        if isinstance(space, spaces.Discrete):
-            self._choices = np.array(DISCRETE_CONTROLS[: space.n], float)
-            self._cap = self._choices.max(axis=0)  # gas 0.2, brake 0.8: the most on offer
-        elif not (isinstance(space, spaces.Box) and space.shape in ((3,), (1,))):
+        self._discrete = DiscreteChooser(dt) if isinstance(space, spaces.Discrete) else None
+        if self._discrete is None and not (
+            isinstance(space, spaces.Box) and space.shape in ((3,), (1,))
+        ):
             raise ValueError(f"drivers know Box(3,), Box(1,) and Discrete(5) actions, not {space}")
 
     def __call__(self, controls: Controls) -> Any:
+        if self._discrete is not None:
+            return self._discrete.choose(controls)
         steer, gas, brake = controls
-        if isinstance(self.space, spaces.Discrete):
-            wanted = np.minimum((steer, gas, brake), self._cap)
-            wanted[0] = max(wanted[0], -self._cap[0])
-            return int(np.argmin(np.square(self._choices - wanted).sum(axis=1)))
-        low, high = self.space.low, self.space.high
         values = (steer,) if self.space.shape == (1,) else (steer, gas, brake)
-        return np.clip(np.array(values, np.float32), low, high)
+        return np.clip(np.array(values, np.float32), self.space.low, self.space.high)
+
+
+class DiscreteChooser:
+    """The nearest of CarRacing's five actions to wanted ``(steer, gas, brake)``.
+
+    Nearest in effect, not in value: a discrete turn asks for 0.6 rad, beyond the
+    0.4 rad lock, and the steering servo moves at most 3 rad/s, so the chooser
+    predicts the front wheels' angle after each action (the wanted steer is read
+    as a wheel angle in rad, + right) and compares that; the pedals are compared
+    in units of what their action gives (gas 0.2, brake 0.8). One action per
+    step cannot steer and accelerate at once, so the pedal error left over (up to
+    half an action) is carried to the next step (error diffusion): the pedals
+    average out, and a small steering need still wins against a pedal now and then.
+    """
+
+    def __init__(self, dt: float, car: DynamicCarSpec | None = None):
+        self.dt = dt  # [s]
+        self.car = car or DynamicCarSpec()
+        self.choices = np.array(DISCRETE_CONTROLS, float)
+        self.pedals = self.choices[:, 1:] / self.choices[:, 1:].max(axis=0)  # one action = 1
+        self.wheel = 0.0  # [rad] + right: the front wheels' angle, as predicted
+        self._pedal_error = np.zeros(2)
+
+    def choose(self, controls: Controls) -> int:
+        steer, gas, brake = controls
+        reach = self.car.steer_speed * self.dt  # [rad] the most the wheels turn in one step
+        error = self.choices[:, 0] - self.wheel
+        turn = np.sign(error) * np.minimum(self.car.steer_gain * np.abs(error) * self.dt, reach)
+        limit = self.car.steer_limit
+        wheels = np.clip(self.wheel + turn, -limit, limit)
+        goal = np.clip((gas / 0.2, brake / 0.8), 0.0, 1.0) + self._pedal_error
+        cost = np.square((wheels - steer) / reach) + np.square(self.pedals - goal).sum(axis=1)
+        index = int(np.argmin(cost))
+        self.wheel = float(wheels[index])
+        self._pedal_error = np.clip(goal - self.pedals[index], -0.5, 0.5)
+        return index
 
 
 class ConstantDriver:
@@ -85,126 +120,246 @@ class ConstantDriver:
 
 
 class RandomDriver:
-    """Uniform samples of the action space, seeded from the env's ``np_random``."""
+    """Uniform samples of the action space.
 
-    def __init__(self) -> None:
+    Seeded per episode from ``seed`` (or the env's seed) and the episode count, on
+    its own copy of the space: the env's random streams are left alone.
+    """
+
+    def __init__(self, seed: int | None = None) -> None:
+        self.seed = seed
         self._space: spaces.Space | None = None
+        self._episodes = 0
 
     def reset(self, env: gym.Env) -> None:
-        self._space = env.action_space
-        # a child generator: reproducible per seed, and the env's own stream is left alone
-        self._space.seed(int(env.unwrapped.np_random.integers(2**31)))
+        self._space = copy.deepcopy(env.action_space)
+        seed = self.seed if self.seed is not None else env.unwrapped.np_random_seed
+        entropy = np.random.SeedSequence([max(int(seed), 0), self._episodes])
+        self._space.seed(int(entropy.generate_state(1)[0]))
+        self._episodes += 1
 
     def act(self, observation: Any, info: dict[str, Any]) -> Any:
         return self._space.sample()
 
 
+CARRACING_WHEELBASE = (80 + 82) * SIZE  # [u] axle to axle of CarRacing's car
+
+
+@dataclass(frozen=True)
+class Route:
+    """The line a driver follows, with what it needs to read poses and speeds on it."""
+
+    points: np.ndarray  # (N, 2) [track units] in driving order
+    closed: bool  # the last point joins the first
+    y_down: bool  # image tracks: y grows downwards and headings grow clockwise
+    unit: float  # [track units per u]: distances and speeds scale with the car
+    steer_lock: float  # [rad] the front wheels' largest angle
+    steer_per_rad: float  # steering action per rad of wheel angle
+
+
+def route_of(env: gym.Env) -> Route:
+    """The route of the env's current track: the procedural centreline, or the trajectory
+    drawn into an image track (``reward_design.cross_track_error.use_cte``), put in order
+    from the car's pose."""
+    unwrapped = env.unwrapped
+    track, car = unwrapped.track, unwrapped.car
+    unit = car.footprint[0] / CARRACING_WHEELBASE  # the car's wheelbase sets the scale
+    if unwrapped.config.car.model == "kinematic":
+        lock = math.radians(unwrapped.config.car.max_steering_angle)
+        steering = {"steer_lock": lock, "steer_per_rad": 1.0 / lock}
+    else:  # a steer action s asks for s rad, which the servo stops at its lock
+        steering = {"steer_lock": DynamicCarSpec().steer_limit, "steer_per_rad": 1.0}
+    centerline = getattr(track, "centerline", None)
+    if centerline is not None:
+        return Route(np.asarray(centerline, float), True, False, unit, **steering)
+    pixels = getattr(track, "trajectory_mask", None)
+    if pixels is None or len(pixels) == 0:
+        raise ValueError(
+            "the centerline driver needs a line to follow: a procedural track, or an image "
+            "track with reward_design.cross_track_error.use_cte and its trajectory_color"
+        )
+    spacing = 0.25 * car.footprint[0]  # [px] a quarter of the wheelbase
+    points, closed = order_path(np.asarray(pixels, float), car.pose, spacing)
+    return Route(points, closed, True, unit, **steering)
+
+
+def order_path(
+    pixels: np.ndarray, pose: Sequence[float], spacing: float
+) -> tuple[np.ndarray, bool]:
+    """Points ``spacing`` apart along a drawn line (an unordered (K, 2) pixel set), starting
+    near ``pose`` and leaving it along its heading; and whether the line closes."""
+    cells, inverse = np.unique(np.floor(pixels / spacing), axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    counts = np.bincount(inverse, minlength=len(cells))[:, None]
+    points = (
+        np.column_stack(
+            [np.bincount(inverse, weights=pixels[:, k], minlength=len(cells)) for k in (0, 1)]
+        )
+        / counts
+    )  # the mean pixel of each grid cell
+    x, y, heading = pose
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    current = int(np.argmin(np.hypot(points[:, 0] - x, points[:, 1] - y)))
+    free = np.ones(len(points), bool)
+    order = [current]
+    free[current] = False
+    while True:
+        offsets = points - points[current]
+        distance = np.hypot(offsets[:, 0], offsets[:, 1])
+        near = free & (distance < 2.5 * spacing)
+        ahead = near & (offsets @ direction > 0)
+        candidates = np.flatnonzero(ahead if ahead.any() else near)
+        if len(candidates) == 0:
+            break
+        step = int(candidates[np.argmin(distance[candidates])])
+        direction = offsets[step] / max(distance[step], 1e-9)
+        free[distance < 0.75 * spacing] = False  # a thick line leaves neighbours to skip
+        current = step
+        order.append(step)
+        free[step] = False
+    path = points[order]
+    closed = len(path) > 2 and np.hypot(*(path[-1] - path[0])) < 3 * spacing
+    if closed:
+        path = np.concatenate((path, path[:1]))
+    # even spacing: grid cells cut by the line leave some means close together
+    arc = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(path, axis=0).T))))
+    at = np.arange(0.0, arc[-1] - (0.5 * spacing if closed else -1e-9), spacing)
+    even = np.column_stack((np.interp(at, arc, path[:, 0]), np.interp(at, arc, path[:, 1])))
+    return even, bool(closed)
+
+
 class CenterlineDriver:
-    """Pure pursuit on the track's centreline, with a speed profile from its curvature.
+    """Pure pursuit on the track's centre line, with a speed profile from its curvature.
 
-    Steering aims at the centreline point ``lookahead`` ahead of the nearest one;
-    the target speed at each point is the highest that keeps the lateral
-    acceleration under ``lateral_accel`` there and allows braking (at
-    ``brake_accel``) for every curve further on. Gas below the target, coast
-    near it, brake when well above.
+    Steering aims at the route point ``lookahead`` ahead of the nearest one; the
+    target speed at each point is the highest that keeps the lateral acceleration
+    under ``lateral_accel`` there and allows braking (at ``brake_accel``) for every
+    curve further on. Gas below the target (less with the wheels turned: a
+    rear-wheel-drive car spins under full gas in a curve), coast near it, brake
+    when well above.
 
-    Reads ``env.unwrapped.track.centerline`` ((N, 2), in driving order) at reset
-    and the car's ``info["pose"]`` (x, y, heading; heading counter-clockwise from
-    +x, y up) each step.
+    The route is the procedural track's ``centerline`` or an image track's drawn
+    trajectory (see ``route_of``); the pose is ``info["pose"]`` (x, y, heading).
+    Lengths and speeds below are in CarRacing's units (u, u/s) and scale with the
+    car's wheelbase on image tracks. The kinematic car's speed is fixed: there the
+    driver only steers.
     """
 
     def __init__(
         self,
-        lookahead: float = 9.0,  # [u] pursuit distance at standstill
-        lookahead_per_speed: float = 0.12,  # [s] extra pursuit distance per u/s
-        wheelbase: float = 3.24,  # [u] CarRacing's car, axle to axle
-        max_wheel_angle: float = 0.4,  # [rad] a steer action of 1 asks for 1 rad; lock is 0.4
+        lookahead: float = 3.0,  # [u] pursuit distance at standstill
+        lookahead_per_speed: float = 0.22,  # [s] extra pursuit distance per u/s
         top_speed: float = 95.0,  # [u/s]
         lateral_accel: float = 140.0,  # [u/s^2] cornering grip used by the speed profile
         brake_accel: float = 90.0,  # [u/s^2] deceleration planned for curves ahead
-        brake_margin: float = 4.0,  # [u/s] brake only this much above the target
+        brake_margin: float = 8.0,  # [u/s] brake only this much above the target
         gas_gain: float = 0.2,  # [s/u] gas per u/s below the target speed
         corner_gas_cut: float = 0.7,  # fraction of gas taken away at full lock
     ):
-        self.gas_gain = gas_gain
-        self.corner_gas_cut = corner_gas_cut
         self.lookahead = lookahead
         self.lookahead_per_speed = lookahead_per_speed
-        self.wheelbase = wheelbase
-        self.max_wheel_angle = max_wheel_angle
         self.top_speed = top_speed
         self.lateral_accel = lateral_accel
         self.brake_accel = brake_accel
         self.brake_margin = brake_margin
-        self.points = np.zeros((0, 2))
-        self.target_speeds = np.zeros(0)
-        self._spacing = 1.0  # [u] mean distance between centreline points
-        self._nearest = 0
+        self.gas_gain = gas_gain
+        self.corner_gas_cut = corner_gas_cut
+        self.route: Route | None = None
+        self.target_speeds = np.zeros(0)  # [track units/s] per route point
+        self._spacing = 1.0  # [track units] mean distance between route points
+        self._nearest = -1
         self._adapt: ActionAdapter | None = None
 
     def reset(self, env: gym.Env) -> None:
-        track = env.unwrapped.track
-        self.points = np.asarray(track.centerline, float)
-        steps = np.linalg.norm(np.roll(self.points, -1, axis=0) - self.points, axis=1)
-        self._spacing = float(steps.mean())
+        self.follow(route_of(env), env.action_space, env.unwrapped.dt)
+
+    def follow(self, route: Route, action_space: spaces.Space, dt: float) -> None:
+        """Start on ``route`` (what ``reset`` does with the env's route); ``dt`` [s] per step."""
+        self.route = route
+        steps = np.linalg.norm(np.diff(route.points, axis=0), axis=1)
+        self._spacing = float(steps.mean()) if len(steps) else 1.0
         self.target_speeds = speed_profile(
-            self.points, self.top_speed, self.lateral_accel, self.brake_accel
+            route.points,
+            self.top_speed * route.unit,
+            self.lateral_accel * route.unit,
+            self.brake_accel * route.unit,
+            route.closed,
         )
-        self._nearest = -1  # unknown: search the whole lap once
-        self._adapt = ActionAdapter(env.action_space)
+        self._nearest = -1  # unknown: search the whole route once
+        self._adapt = ActionAdapter(action_space, dt)
 
     def act(self, observation: Any, info: dict[str, Any]) -> Any:
         return self._adapt(self.controls(info["pose"], info["speed"]))
 
     def controls(self, pose: Sequence[float], speed: float) -> Controls:
-        """(steer, gas, brake) for the car at ``pose`` moving at ``speed`` [u/s]."""
+        """(steer, gas, brake) for the car at ``pose`` moving at ``speed`` [track units/s]."""
+        route = self.route
         x, y, heading = pose
         nearest = self._find_nearest(x, y)
-        ahead = self.lookahead + self.lookahead_per_speed * speed  # [u]
-        target = self.points[(nearest + round(ahead / self._spacing)) % len(self.points)]
+        ahead = (self.lookahead * route.unit + self.lookahead_per_speed * speed) / self._spacing
+        target = route.points[self._index(nearest + round(ahead))]
         bearing = math.atan2(target[1] - y, target[0] - x) - heading
-        bearing = (bearing + math.pi) % (2 * math.pi) - math.pi  # [rad] + is to the left
+        bearing = (bearing + math.pi) % (2 * math.pi) - math.pi  # [rad] toward growing heading
         distance = math.hypot(target[0] - x, target[1] - y)
-        curvature = 2.0 * math.sin(bearing) / max(distance, 1e-6)  # [1/u] pure pursuit
-        wheel_angle = math.atan(self.wheelbase * curvature)  # [rad] + turns left
-        steer = -min(max(wheel_angle, -self.max_wheel_angle), self.max_wheel_angle)
+        curvature = 2.0 * math.sin(bearing) / max(distance, 1e-6)  # [1/track unit]
+        wheel = math.atan(CARRACING_WHEELBASE * route.unit * curvature)  # [rad]
+        wheel = min(max(wheel, -route.steer_lock), route.steer_lock)
+        right = wheel if route.y_down else -wheel  # growing headings turn right on y-down
+        steer = right * route.steer_per_rad
         # look at the speed limit a little ahead: the car reacts with a delay
-        limit = self.target_speeds[(nearest + 2) % len(self.points)]
-        # full gas with the wheels turned spins a rear-wheel-drive car: less gas, more lock
-        grip_left = 1.0 - self.corner_gas_cut * abs(steer) / self.max_wheel_angle
-        gas = min(max((limit - speed) * self.gas_gain, 0.0), 1.0) * grip_left
-        brake = 0.8 if speed > limit + self.brake_margin else 0.0
+        limit = self.target_speeds[self._index(nearest + 2)]
+        grip_left = 1.0 - self.corner_gas_cut * abs(wheel) / route.steer_lock
+        gas_gain = self.gas_gain / route.unit
+        gas = min(max((limit - speed) * gas_gain, 0.0), 1.0) * grip_left
+        brake = 0.8 if speed > limit + self.brake_margin * route.unit else 0.0
         return steer, gas, brake
 
+    def _index(self, i: int) -> int:
+        n = len(self.route.points)
+        return i % n if self.route.closed else min(i, n - 1)
+
     def _find_nearest(self, x: float, y: float) -> int:
-        """Nearest centreline index, searched near the last one (tracks may pass close by)."""
-        n = len(self.points)
+        """Nearest route index, searched near the last one (a track may pass close by)."""
+        n = len(self.route.points)
         if self._nearest < 0:
             candidates = np.arange(n)
         else:
-            candidates = np.arange(self._nearest - 5, self._nearest + 25) % n
-        offsets = self.points[candidates] - (x, y)
+            candidates = np.arange(self._nearest - 5, self._nearest + 25)
+            candidates = candidates % n if self.route.closed else candidates.clip(0, n - 1)
+        offsets = self.route.points[candidates] - (x, y)
         best = int(candidates[np.argmin(np.einsum("ij,ij->i", offsets, offsets))])
         self._nearest = best
         return best
 
 
 def speed_profile(
-    points: np.ndarray, top_speed: float, lateral_accel: float, brake_accel: float
+    points: np.ndarray,
+    top_speed: float,
+    lateral_accel: float,
+    brake_accel: float,
+    closed: bool = True,
 ) -> np.ndarray:
-    """(N,) target speeds [u/s] along a closed polyline: grip-limited, braking-feasible."""
+    """(N,) target speeds along a polyline: grip-limited and braking-feasible.
+
+    Units follow the points': speeds in units/s, accelerations in units/s^2.
+    """
     forward = np.roll(points, -1, axis=0) - points
+    if not closed:
+        forward[-1] = forward[-2] if len(points) > 1 else (1.0, 0.0)
     headings = np.arctan2(forward[:, 1], forward[:, 0])
     turn = np.angle(np.exp(1j * (headings - np.roll(headings, 1))))  # [rad] wrapped
-    spacing = np.linalg.norm(forward, axis=1)  # [u]
+    if not closed:
+        turn[0] = 0.0
+    spacing = np.linalg.norm(forward, axis=1)
     # curvature over a few points: single steps are noisy on sharp corners
     kernel = np.ones(5)
     turn_sum = np.convolve(np.concatenate((turn[-2:], turn, turn[:2])), kernel, "valid")
-    curvature = np.abs(turn_sum) / (5 * spacing.mean())  # [1/u]
-    speeds = np.minimum(top_speed, np.sqrt(lateral_accel / np.maximum(curvature, 1e-9)))
-    # braking: v_i^2 <= v_{i+1}^2 + 2 a d, swept backwards twice round the closed lap
+    arc = np.convolve(np.concatenate((spacing[-2:], spacing, spacing[:2])), kernel, "valid")
+    curvature = np.abs(turn_sum) / np.maximum(arc, 1e-9)
+    speeds = np.minimum(top_speed, np.sqrt(lateral_accel / np.maximum(curvature, 1e-12)))
+    # braking: v_i^2 <= v_{i+1}^2 + 2 a d, swept backwards (twice round a closed lap)
     n = len(speeds)
-    for k in range(2 * n - 1, -1, -1):
+    for k in range(2 * n - 1 if closed else n - 2, -1, -1):
         i, j = k % n, (k + 1) % n
         speeds[i] = min(speeds[i], math.sqrt(speeds[j] ** 2 + 2 * brake_accel * spacing[i]))
     return speeds

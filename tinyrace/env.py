@@ -23,6 +23,11 @@ from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
 COURSES = {"procedural": ProceduralCourse, "image": ImageCourse}  # by track type
+CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
+_NO_LAP = (
+    "expected knobs that close a lap: a smaller radius, a longer detail_step "
+    "or a larger turn_rate (the track generator found no closed lap)"
+)
 
 
 class TinyRaceEnv(gym.Env):
@@ -77,6 +82,7 @@ class TinyRaceEnv(gym.Env):
         self.render_mode = render_mode
         self.verbose = verbose
         self.course = COURSES[self.config.kind](self.config, loaded.base_dir, loaded.source)
+        self._source = loaded.source  # for errors found at reset
         self.dt = 1.0 / self.config.sim.fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
         self._actions = ActionSpec.for_car(self.config.car.model, self.config.car.actions)
@@ -98,18 +104,26 @@ class TinyRaceEnv(gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         options = _check_options(options)
-        self.episode = self.course.new_episode(self.np_random, options)
+        try:
+            self.episode = self.course.new_episode(self.np_random, options)
+        except RuntimeError as exc:  # the procedural generator closed no lap with these knobs
+            if self.config.kind != "procedural":
+                raise
+            t = self.config.tracks[0]
+            knobs = {"radius": t.radius, "detail_step": t.detail_step, "turn_rate": t.turn_rate}
+            raise ConfigError(Problem(self._source, "tracks[0]", knobs, _NO_LAP)) from exc
         if self.verbose and getattr(self.episode.track, "attempts", 1) > 1:
             print(f"tinyrace: track generation needed {self.episode.track.attempts} attempts")
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
         self.terminated = False
-        facts = self._advance()
-        # The reset step is not rewarded; what it earned (tiles touched) is paid by the first step.
-        self._carry = reward_terms(
-            facts, self.config.reward_design, self._shaping, charge_time=False
-        )
+        facts = self.episode.start(self.dt)
+        self.t += self.dt
+        # The reset step is not rewarded; tiles it touched are paid by the first step (as
+        # CarRacing does). Only such events carry over, never states like the cte.
+        terms = reward_terms(facts, self.config.reward_design, self._shaping, charge_time=False)
+        self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
         self.score += sum(self._carry.values())
         observation = self._observe()
         if self.render_mode == "human":
@@ -153,8 +167,6 @@ class TinyRaceEnv(gym.Env):
     def _info(self, facts: StepFacts, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()
         info["reward_terms"] = terms
-        if facts.cte is not None:
-            info["cte"] = facts.cte
         return info
 
     @property

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -77,6 +77,8 @@ def load_env_config(
     raw, source, base_dir = _read_source(config, environment)
     if overrides:
         raw = deep_merge(raw, overrides)
+    if environment is not None and "tracks" not in raw and "track" not in raw:
+        raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
     return LoadedConfig(parse_env_config(raw, source), source, base_dir)
 
 
@@ -84,14 +86,15 @@ def _read_source(
     config: str | Path | Mapping[str, Any] | None, environment: str | Path | None
 ) -> tuple[dict[str, Any], str, Path]:
     if environment is not None:
+        if not isinstance(environment, (str, Path)):
+            allowed = "expected a track folder (a path)"
+            raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
         folder = Path(environment)
-        if not folder.is_dir():
-            raise ConfigError(
-                Problem(
-                    str(folder), "", str(environment), "expected a track folder holding track.yaml"
-                )
-            )
         config = folder / TRACK_FILE
+        if not _safely(config.is_file):
+            missing = "no such folder" if not _safely(folder.is_dir) else f"{config} does not exist"
+            allowed = f"expected a track folder holding {TRACK_FILE} ({missing})"
+            raise ConfigError(Problem(str(config), "environment", str(environment), allowed))
     if config is None:
         return {}, "<defaults>", Path.cwd()
     if isinstance(config, Mapping):
@@ -99,7 +102,7 @@ def _read_source(
     if not isinstance(config, (str, Path)):
         raise ConfigError(Problem("<kwargs>", "config", config, "expected a YAML path or a dict"))
     path = Path(config)
-    if path.is_dir():
+    if _safely(path.is_dir):
         path = path / TRACK_FILE
     raw = read_yaml(path)
     if raw is None:
@@ -111,6 +114,14 @@ def _read_source(
             )
         )
     return dict(raw), str(path), path.parent
+
+
+def _safely(check: Callable[[], bool]) -> bool:
+    """A path check that is False, not an OSError, for names the OS refuses (too long, ...)."""
+    try:
+        return check()
+    except (OSError, ValueError):
+        return False
 
 
 def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> EnvConfig:
@@ -148,6 +159,22 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
         parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
+    for i, track in enumerate(config.tracks):
+        if track.type == "procedural":
+            _check_texture_side(track, parser, f"{at}tracks[{i}]")
+
+
+MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB
+
+
+def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -> None:
+    side = 2 * track.playfield * track.pixels_per_unit  # [px] the whole playfield, pre-drawn
+    if side > MAX_TEXTURE_SIDE:
+        allowed = (
+            f"expected 2 * playfield * pixels_per_unit (the ground texture's side, here "
+            f"{side:.0f} px) <= {MAX_TEXTURE_SIDE} px: lower pixels_per_unit or playfield"
+        )
+        parser.problem(f"{at}.pixels_per_unit", track.pixels_per_unit, allowed)
 
 
 def resolve_defaults(config: EnvConfig) -> EnvConfig:

@@ -22,6 +22,8 @@ from tinyrace.config.colors import Color
 from tinyrace.errors import ConfigError, Problem
 
 _INVALID = object()  # a value that failed to parse; the problem is already recorded
+# No float knob means anything beyond this; larger values overflow rewards and drawings.
+MAX_MAGNITUDE = 1e9
 
 
 class Parser:
@@ -77,7 +79,7 @@ class Parser:
         kind = (
             data.get("type", next(iter(kinds))) if isinstance(data, Mapping) else next(iter(kinds))
         )
-        if kind not in kinds:
+        if not isinstance(kind, str) or kind not in kinds:  # a list or dict is unhashable
             return self.problem(_join(path, "type"), kind, f"expected one of: {', '.join(kinds)}")
         return self.dataclass(kinds[kind], data, path)
 
@@ -87,7 +89,7 @@ class Parser:
         if origin in (Union, types.UnionType):
             return self.union(args, raw, path, meta)
         if origin is Literal:
-            if raw in args and type(raw) is type(args[0]):
+            if type(raw) is type(args[0]) and raw in args:  # type first: arrays can't be in
                 return raw
             return self.problem(path, raw, f"expected one of: {', '.join(map(str, args))}")
         if origin is tuple:
@@ -154,8 +156,10 @@ class Parser:
         allowed = f"expected {_describe(hint, meta)}"
         if isinstance(raw, bool) or not isinstance(raw, (int, float)):
             return self.problem(path, raw, allowed)
-        if not math.isfinite(raw):
+        if isinstance(raw, float) and not math.isfinite(raw):
             return self.problem(path, raw, allowed)
+        if hint is float and abs(raw) > MAX_MAGNITUDE:  # an int may be too big for a float
+            return self.problem(path, raw, f"{allowed}, at most {MAX_MAGNITUDE:g} in magnitude")
         if hint is int:
             if isinstance(raw, float) and not raw.is_integer():
                 return self.problem(path, raw, allowed)
@@ -196,11 +200,15 @@ def _describe(hint: Any, meta: Mapping[str, Any]) -> str:
         return f"{text} [{unit}]" if unit else text
     if hint is Color:
         return "a colour"
+    if dataclasses.is_dataclass(hint):
+        return "a mapping with keys: " + ", ".join(f.name for f in dataclasses.fields(hint))
     return getattr(hint, "__name__", str(hint))
 
 
 def _describe_tuple(args: tuple, meta: Mapping[str, Any]) -> str:
     if len(args) == 2 and args[1] is Ellipsis:
+        return f"each {_describe(args[0], meta)}"
+    if len(set(args)) == 1:  # the unit already names every element: [px, px, rad]
         return f"each {_describe(args[0], meta)}"
     return ", ".join(_describe(a, meta) for a in args)
 

@@ -79,8 +79,19 @@ class ImageEpisode:
         self.obstacles_hit: list[int] = []
         self.cte: float | None = None
 
+    def start(self, dt: float) -> StepFacts:
+        """The reset's look at the spawn: tinycarlo's reset neither moves the car nor rewards
+        anything, so the car stays put (pymunk still reports its contacts) and the facts
+        are for info only."""
+        self._sense(dt)
+        return StepFacts()
+
     def step(self, dt: float) -> StepFacts:
+        """Drive ``dt`` seconds and report what the sensors saw."""
         self.car.apply_forces(dt, _ALL_ROAD)
+        return self._sense(dt)
+
+    def _sense(self, dt: float) -> StepFacts:
         contacts = self.world.step(dt)
         self.car.after_step(dt)
         facts = StepFacts()
@@ -100,13 +111,16 @@ class ImageEpisode:
     def info(self) -> dict:
         x, y, heading = self.car.pose
         colors = self.track.obstacle_colors
-        return {
+        info = {
             "pose": (x, y, heading),
             "speed": self.car.speed,
             "track": self.track_index,
             "spawn": self.spawn_index,
             "obstacles_hit": [repr(colors[i]) for i in self.obstacles_hit],  # "#rrggbb" each
         }
+        if self.cte is not None:
+            info["cte"] = self.cte  # [px]
+        return info
 
     def observe(self, t: float, score: float) -> dict[str, np.ndarray]:
         front, heading = self.car.front_axle, self.car.pose[2]
@@ -175,6 +189,6 @@ def _pick(options: dict, key: str, count: int, rng: np.random.Generator) -> int:
         or not 0 <= chosen < count
     ):
         raise ConfigError(
-            Problem("<reset options>", key, chosen, f"an index from 0 to {count - 1}")
+            Problem("<reset options>", key, chosen, f"expected a {key} index from 0 to {count - 1}")
         )
     return int(chosen)

@@ -34,7 +34,7 @@ def track_params(config: ProceduralTrackConfig) -> ProceduralTrackParams:
     )
 
 
-def draw_colors(config: ProceduralTrackConfig, rng: np.random.Generator) -> GroundColors:
+def draw_colors(rng: np.random.Generator) -> GroundColors:
     """Domain randomisation: road, background uniform(0, 210); grass +20 on one channel."""
     road = rng.uniform(0, 210, size=3)
     background = rng.uniform(0, 210, size=3)
@@ -65,11 +65,16 @@ class ProceduralEpisode:
         self.car = DynamicCar.build(self.world.space, (x, y, hull_angle + math.pi / 2))
         self.visited = np.zeros(len(self.track.tiles), bool)
         self.visited_count = 0
+        self.visit_order: list[int] = []  # repainting in this order redraws the same pixels
         self._textures: dict[float, GroundTexture] = {}
         self._views: dict[tuple[int, int], ChaseView] = {}
         self._cameras: list[RoiCamera] | None = None
 
     # -- physics and facts -------------------------------------------------------------------
+    def start(self, dt: float) -> StepFacts:
+        """CarRacing's reset takes one physics step with no action."""
+        return self.step(dt)
+
     def step(self, dt: float) -> StepFacts:
         contacts = self.world.contacts
         on_road = [bool(tiles) for tiles in contacts.wheel_tiles]
@@ -89,6 +94,7 @@ class ProceduralEpisode:
             if not self.visited[tile]:
                 self.visited[tile] = True
                 self.visited_count += 1
+                self.visit_order.append(tile)
                 facts.new_tiles += 1
                 for texture in self._textures.values():
                     repaint_tile(texture, self.track, tile, self.colors.road)
@@ -147,8 +153,19 @@ class ProceduralEpisode:
         return texture
 
     def _repaint_visited(self, texture: GroundTexture) -> None:
-        for tile in np.flatnonzero(self.visited):
-            repaint_tile(texture, self.track, int(tile), self.colors.road)
+        for tile in self.visit_order:
+            repaint_tile(texture, self.track, tile, self.colors.road)
+
+    # -- pickling ----------------------------------------------------------------------------
+    def __getstate__(self) -> dict:
+        """Leave out the pictures (tens of MB): they are redrawn from the track when next asked."""
+        state = self.__dict__.copy()
+        state.update(_textures={}, _views={}, _cameras=None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self.car.rebind_contacts()  # pymunk's restored contacts lost their callbacks
 
 
 class ProceduralCourse:
@@ -162,5 +179,5 @@ class ProceduralCourse:
     def new_episode(self, rng: np.random.Generator, options: dict) -> ProceduralEpisode:
         """CarRacing's reset order: colours (when randomised) are drawn before the track."""
         if self.track_config.domain_randomize and options.get("randomize", True):
-            self.colors = draw_colors(self.track_config, rng)
+            self.colors = draw_colors(rng)
         return ProceduralEpisode(self.config, rng, self.colors)

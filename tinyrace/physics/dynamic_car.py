@@ -186,9 +186,26 @@ class DynamicCar:
             torque += rx * fy - ry * fx
             if wheel.skidding or self._skid_start[index] or self._skid_open[index]:
                 self._track_skid(index, wheel, on_road[index])
-        body.force = (fx_total, fy_total)
-        body.torque = torque
+        self._accelerate(dt, fx_total, fy_total, torque)
         self._steer(dt)
+
+    def _accelerate(self, dt: float, fx: float, fy: float, torque: float) -> None:
+        """Change the velocities now, so that the coming space step moves with the new ones.
+
+        Box2D updates velocities before positions (semi-implicit Euler); pymunk moves
+        positions with the old velocities first. Setting ``body.force`` would leave the
+        car one step behind the reference (dt * speed, about 2 u at top speed).
+        Box2D also caps a body's travel per step; the same cap keeps the same top speed.
+        """
+        body = self.body
+        vx, vy = body.velocity
+        vx, vy = vx + fx / body.mass * dt, vy + fy / body.mass * dt
+        cap = self.spec.max_translation * self.scale / dt  # [track units/s]
+        speed = math.hypot(vx, vy)
+        if speed > cap:
+            vx, vy = vx * cap / speed, vy * cap / speed
+        body.velocity = (vx, vy)
+        body.angular_velocity += torque / body.moment * dt
 
     def _spin(self, wheel: Wheel, dt: float) -> None:
         """Engine and brake act on the wheel's spin."""
@@ -230,12 +247,7 @@ class DynamicCar:
             wheel.steer = min(max(wheel.steer + rate * dt, -spec.steer_limit), spec.steer_limit)
 
     def after_step(self, dt: float) -> None:
-        """Box2D caps a body's travel per step; keep the same top speed."""
-        vx, vy = self.body.velocity
-        cap = self.spec.max_translation * self.scale / dt
-        speed = math.hypot(vx, vy)
-        if speed > cap:
-            self.body.velocity = (vx * cap / speed, vy * cap / speed)
+        """Nothing to correct: ``apply_forces`` already set this step's velocities."""
 
     def _track_skid(self, index: int, wheel: Wheel, on_road: bool) -> None:
         """Skid marks: polylines where the tyre force exceeds twice the friction limit."""
@@ -252,6 +264,20 @@ class DynamicCar:
         else:
             self._skid_open[index] = self.skids.start(self._skid_start[index], point, not on_road)
             self._skid_start[index] = None
+
+    def rebind_contacts(self) -> None:
+        """Reconnect an unpickled space's cached contacts to its collision callbacks.
+
+        pymunk restores the contacts that were touching, but not which handler each
+        belongs to, so their ``separate`` would never be reported. A collision pass
+        with the car held still (a 1 ns step at zero velocity: positions stay
+        bit-identical) rebinds them; every pair already touches, so no ``begin`` fires.
+        """
+        body = self.body
+        velocity, spin = body.velocity, body.angular_velocity
+        body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
+        body.space.step(1e-9)
+        body.velocity, body.angular_velocity = velocity, spin
 
     # -- state -------------------------------------------------------------------------------
     @property

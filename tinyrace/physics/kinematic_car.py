@@ -59,9 +59,15 @@ class KinematicCar:
             limit = self.max_rate * dt
             change = min(max(change, -limit), limit)
         self.steer += change
-        heading = self.body.angle
-        self.body.velocity = (self.velocity * math.cos(heading), self.velocity * math.sin(heading))
-        self.body.angular_velocity = self.velocity * math.tan(self.steer) / self.wheelbase
+        turn_rate = self.velocity * math.tan(self.steer) / self.wheelbase  # [rad/s]
+        # pymunk moves the body along a straight line per step: aim it along the chord of the
+        # arc the bicycle drives (as tinycarlo steps it), so poses land exactly on that arc
+        half_turn = turn_rate * dt / 2  # [rad]
+        chord = math.sin(half_turn) / half_turn if half_turn else 1.0  # chord / arc length
+        direction = self.body.angle + half_turn
+        speed = self.velocity * chord
+        self.body.velocity = (speed * math.cos(direction), speed * math.sin(direction))
+        self.body.angular_velocity = turn_rate
 
     def after_step(self, dt: float) -> None:
         """Nothing to correct: the bicycle has no slip and no speed cap."""

@@ -2,8 +2,8 @@
 
 A camera sees ``roi`` = [y, x] track units: the window's bottom edge is centred
 on the mount point (the front axle's middle shifted by ``position`` = [y, x],
-+y toward the rear, +x to the right of the car), it extends ``roi[0]`` ahead
-along the camera's direction (the car's heading turned by ``yaw`` degrees,
++y ahead, +x to the right of the car, as tinycarlo shifts its crop), it extends
+``roi[0]`` ahead along the camera's direction (the car's heading turned by ``yaw`` degrees,
 positive to the right), and it is sampled at ``resolution`` = [y, x] pixels by
 one affine warp of the ground texture.
 """
@@ -40,8 +40,8 @@ class RoiCamera:
     def mount(self, front: tuple[float, float], heading: float) -> tuple[float, float]:
         """The window's bottom-centre point in track units."""
         fx, fy, rx, ry = self._axes(heading, 0.0)
-        back, right = self.config.position
-        return front[0] - back * fx + right * rx, front[1] - back * fy + right * ry
+        ahead, right = self.config.position
+        return front[0] + ahead * fx + right * rx, front[1] + ahead * fy + right * ry
 
     def matrix(self, front: tuple[float, float], heading: float) -> np.ndarray:
         """World -> output pixel affine for the car's front-axle middle and heading."""

@@ -63,18 +63,20 @@ def load_image_track(
     height, width = image.shape[:2]
     for j, (x, y, _) in enumerate(track.spawns):
         if not (0 <= x < width and 0 <= y < height):
-            allowed = f"a spawn inside the image: 0 <= x < {width} and 0 <= y < {height} [px]"
+            allowed = (
+                f"expected a spawn inside the image: 0 <= x < {width} and 0 <= y < {height} [px]"
+            )
             problems.append(Problem(source, f"{where}.spawns[{j}]", [x, y, _], allowed))
     for k, camera in enumerate(config.cameras):
         if camera.roi[0] > height or camera.roi[1] > width:
-            allowed = f"an roi [y, x] no larger than the image ({height}, {width})"
+            allowed = f"expected an roi [y, x] no larger than the image [{height}, {width}] [px]"
             problems.append(Problem(source, f"cameras[{k}].roi", list(camera.roi), allowed))
     trajectory, drawn = None, None
     cte = config.reward_design.cross_track_error
     if cte.use_cte:
         drawn = _take_color(image, cte.trajectory_color)
         if len(drawn) == 0:
-            allowed = f"a colour present in {track.image or 'the plane'} (no pixel has it)"
+            allowed = f"expected a colour present in {track.image or 'the plane'} (no pixel has it)"
             problems.append(
                 Problem(
                     source,
@@ -103,13 +105,13 @@ def _read_rgbx(
         plane[:, :, 3] = 255
         return plane, []
     path = (base_dir / track.image).resolve()
-    if not path.is_file():
+    if not _is_file(path):  # also False for names the OS refuses (too long, ...)
         return None, [
             Problem(
                 source,
                 f"{where}.image",
                 track.image,
-                f"a file next to the YAML; {path} does not exist",
+                f"expected an image file (PNG or JPEG) next to the YAML; {path} does not exist",
             )
         ]
     bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)  # grey and RGBA become BGR; alpha is ignored
@@ -119,13 +121,21 @@ def _read_rgbx(
                 source,
                 f"{where}.image",
                 track.image,
-                f"a readable PNG or JPEG image; {path} is not",
+                f"expected a readable PNG or JPEG image; {path} is not one",
             )
         ]
     cv2.threshold(bgr, THRESHOLD, 255, cv2.THRESH_BINARY, dst=bgr)
     rgbx = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGBA)
     del bgr
     return rgbx, []
+
+
+def _is_file(path: Path) -> bool:
+    """Like ``Path.is_file``, but False for names the OS refuses (too long, ...)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def _take_color(image: np.ndarray, color: Color) -> np.ndarray:
@@ -182,21 +192,40 @@ def _cell_boxes(hits: np.ndarray) -> np.ndarray:
 
 
 def touched_obstacles(track: ImageTrack, corners: np.ndarray, candidates: set[int]) -> list[int]:
-    """Which ``candidates`` (obstacle indices) have a pixel inside the polygon ``corners``.
+    """Which ``candidates`` (obstacle indices) have a pixel inside the convex polygon ``corners``.
 
-    Pixel-exact, over the polygon's bounding window only: O(footprint area).
+    A pixel counts when its centre (integer coordinates) lies inside the polygon or on its
+    edge. Pixel-exact, over the polygon's bounding window only: O(footprint area).
     """
     width, height = track.size
-    x0, y0 = np.floor(corners.min(axis=0)).astype(int)
-    x1, y1 = np.ceil(corners.max(axis=0)).astype(int) + 1
+    x0, y0 = np.ceil(corners.min(axis=0)).astype(int)
+    x1, y1 = np.floor(corners.max(axis=0)).astype(int) + 1
     x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
     if x0 >= x1 or y0 >= y1:
         return []
+    left, right = _row_spans(corners, np.arange(y0, y1, dtype=np.float64))
+    columns = np.arange(x0, x1)
+    inside = (columns >= np.ceil(left)[:, None]) & (columns <= np.floor(right)[:, None])
     window = track.packed()[y0:y1, x0:x1]
-    inside = np.zeros(window.shape, np.uint8)
-    local = np.round((corners - (x0, y0)) * 8).astype(np.int32)
-    cv2.fillConvexPoly(inside, local, 1, cv2.LINE_8, 3)  # pixels whose centres are inside
-    inside = inside.view(bool)
     return [
-        i for i in sorted(candidates) if np.any(window[inside] == pack(track.obstacle_colors[i]))
+        i for i in sorted(candidates) if np.any((window == pack(track.obstacle_colors[i])) & inside)
     ]
+
+
+def _row_spans(corners: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Leftmost and rightmost x of the convex polygon ``corners`` on each horizontal line ``rows``.
+
+    Rows that miss the polygon get an empty span (left > right). A level edge needs no
+    case of its own: its ends are the ends of the edges next to it.
+    """
+    sx, sy = corners[:, 0], corners[:, 1]
+    ends = np.roll(corners, -1, axis=0)
+    rise = ends[:, 1] - sy
+    slope = np.divide(ends[:, 0] - sx, rise, out=np.zeros(len(rise)), where=rise != 0)
+    xs = sx + (rows[:, None] - sy) * slope  # (rows, edges)
+    crosses = (rows[:, None] >= np.minimum(sy, ends[:, 1])) & (
+        rows[:, None] <= np.maximum(sy, ends[:, 1])
+    )
+    left = np.where(crosses, xs, np.inf).min(axis=1)
+    right = np.where(crosses, xs, -np.inf).max(axis=1)
+    return left, right
