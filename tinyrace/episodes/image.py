@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -54,28 +55,31 @@ def footprint_corners(car) -> np.ndarray:
     )
 
 
+@dataclass(eq=False)
+class PreparedTrack:
+    """One track, prepared once per env: its data, ground texture, pymunk world (obstacle
+    sensors) and, when first drawn, its overview."""
+
+    track: ImageTrack
+    texture: GroundTexture
+    world: World
+    overview: Overview | None = None
+
+
 class ImageEpisode:
-    """One reset on an image track: the chosen track and spawn, a world, a car, cameras."""
+    """One reset on an image track: the chosen track and spawn, a car in its world, cameras."""
 
     def __init__(
-        self,
-        config: EnvConfig,
-        track: ImageTrack,
-        texture: GroundTexture,
-        track_index: int,
-        spawn_index: int,
-        overviews: dict[int, Overview],
+        self, config: EnvConfig, prepared: PreparedTrack, track_index: int, spawn_index: int
     ):
         self.config = config
-        self.track = track
+        self.prepared = prepared
+        self.track = prepared.track
         self.track_index, self.spawn_index = track_index, spawn_index
-        self.world = World()
-        self.world.add_obstacle_cells(track.cells)
-        self.car = build_car(config, self.world, track.spawns[spawn_index])
-        self.cameras = [RoiCamera(c, texture, y_down=True) for c in config.cameras]
-        self._overviews = (
-            overviews  # shared with the course: built once per track, when first drawn
-        )
+        self.world = prepared.world
+        self.world.remove_cars()  # the last episode's car; the obstacle sensors stay
+        self.car = build_car(config, self.world, self.track.spawns[spawn_index])
+        self.cameras = [RoiCamera(c, prepared.texture, y_down=True) for c in config.cameras]
         self.obstacles_hit: list[int] = []
         self.cte: float | None = None
 
@@ -136,13 +140,11 @@ class ImageEpisode:
         return self.overview().render(footprint_corners(self.car), windows, list(images.values()))
 
     def overview(self) -> Overview:
-        overview = self._overviews.get(self.track_index)
-        if overview is None:
+        if self.prepared.overview is None:
             cte = self.config.reward_design.cross_track_error
             color = cte.trajectory_color if cte.use_cte else None
-            overview = Overview(self.track, self.config.sim.overview_downscale, color)
-            self._overviews[self.track_index] = overview
-        return overview
+            self.prepared.overview = Overview(self.track, self.config.sim.overview_downscale, color)
+        return self.prepared.overview
 
 
 class ImageCourse:
@@ -150,30 +152,29 @@ class ImageCourse:
 
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         self.config = config
-        tracks, textures, problems = [], [], []
+        self.prepared: list[PreparedTrack] = []
+        problems = []
         for index, track_config in enumerate(config.tracks):
             track, found = load_image_track(track_config, index, config, base_dir, source)
             problems += found
             if track is not None:
-                tracks.append(track)
-                textures.append(GroundTexture.from_image(track.image))
+                world = World()
+                world.add_obstacle_cells(track.cells)
+                self.prepared.append(
+                    PreparedTrack(track, GroundTexture.from_image(track.image), world)
+                )
         if problems:
             raise ConfigError(problems)
-        self.tracks, self.textures = tracks, textures
-        self._overviews: dict[int, Overview] = {}
+
+    @property
+    def tracks(self) -> list[ImageTrack]:
+        return [p.track for p in self.prepared]
 
     def new_episode(self, rng: np.random.Generator, options: dict) -> ImageEpisode:
         """A track then a spawn, each drawn from ``rng`` unless ``options`` picks it."""
-        track_index = _pick(options, "track", len(self.tracks), rng)
-        spawn_index = _pick(options, "spawn", len(self.tracks[track_index].spawns), rng)
-        return ImageEpisode(
-            self.config,
-            self.tracks[track_index],
-            self.textures[track_index],
-            track_index,
-            spawn_index,
-            self._overviews,
-        )
+        track_index = _pick(options, "track", len(self.prepared), rng)
+        spawn_index = _pick(options, "spawn", len(self.prepared[track_index].track.spawns), rng)
+        return ImageEpisode(self.config, self.prepared[track_index], track_index, spawn_index)
 
 
 def _pick(options: dict, key: str, count: int, rng: np.random.Generator) -> int:

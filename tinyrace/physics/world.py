@@ -87,6 +87,12 @@ class World:
         shape.index = index
         return shape
 
+    def remove_cars(self) -> None:
+        """Take every body but the static track out, so that a track's sensors serve many resets."""
+        for body in list(self.space.bodies):
+            self.space.remove(body, *body.shapes)
+        self.contacts = Contacts()
+
     # -- stepping ----------------------------------------------------------------------------
     def step(self, dt: float) -> Contacts:
         """Advance the space by ``dt`` seconds; return the contact facts of this step."""
