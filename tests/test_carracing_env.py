@@ -75,6 +75,14 @@ def test_carracing_kwargs_and_spaces_match_carracing_v3(continuous: bool) -> Non
     reference.close()
 
 
+@pytest.mark.parametrize("env_id", ["tinyrace/CarRacing-v0", "CarRacing-v3"])
+def test_verbose_speaks_about_track_generation(env_id: str, capsys) -> None:
+    gym.make(env_id).reset(seed=36)  # the first track attempt fails to close on this seed
+    assert capsys.readouterr().out == ""
+    gym.make(env_id, verbose=True).reset(seed=36)
+    assert "track" in capsys.readouterr().out
+
+
 def test_unknown_kwarg_is_refused_like_carracing_v3() -> None:
     with pytest.raises(TypeError):
         gym.make("CarRacing-v3", track_width=3)

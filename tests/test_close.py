@@ -169,5 +169,7 @@ def test_resets_build_the_same_space_and_free_the_old_ones(kind):
     bodies, shapes, constraints = counts.pop()
     assert bodies == 1 and constraints == 0 and shapes >= 1  # the car, its shapes
     gc.collect()
-    assert sum(ref() is not None for ref in spaces) == 1  # only the current episode's space
+    # one space alive: procedural tracks build one per reset and free the old ones, image
+    # tracks keep one per track and swap only the car
+    assert len({id(ref()) for ref in spaces if ref() is not None}) == 1
     env.close()

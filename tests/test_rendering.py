@@ -156,3 +156,16 @@ def test_info_reports_json_friendly_values() -> None:
     env = gym.make("tinyrace/CarRacing-v0")
     _, info = env.reset(seed=0)
     json.dumps(info)  # plain floats and ints: loggable as they are
+
+
+@pytest.mark.parametrize("env_id", ["tinyrace/CarRacing-v0", "CarRacing-v3"])
+def test_skid_marks_in_the_video_but_not_in_the_observation(env_id: str) -> None:
+    env = gym.make(env_id, render_mode="rgb_array")
+    env.reset(seed=0)
+    for _ in range(45):  # full gas from standstill spins the rear wheels: skid marks
+        observation, *_ = env.step(np.array([0.0, 1.0, 0.0], np.float32))
+    frame = env.render()
+    below = frame[325:350, 280:320].max(axis=2)  # behind the car in the 600x400 frame
+    assert (below < 40).sum() > 20  # dark lines on the grey road
+    assert observation[78:84, 42:54].min() > 80  # the 96x96 view shows the plain road
+    env.close()

@@ -163,10 +163,6 @@ class ProceduralEpisode:
         state.update(_textures={}, _views={}, _cameras=None)
         return state
 
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        self.car.rebind_contacts()  # pymunk's restored contacts lost their callbacks
-
 
 class ProceduralCourse:
     """What lasts across resets on a procedural track: the colours of the last episode."""

@@ -265,20 +265,6 @@ class DynamicCar:
             self._skid_open[index] = self.skids.start(self._skid_start[index], point, not on_road)
             self._skid_start[index] = None
 
-    def rebind_contacts(self) -> None:
-        """Reconnect an unpickled space's cached contacts to its collision callbacks.
-
-        pymunk restores the contacts that were touching, but not which handler each
-        belongs to, so their ``separate`` would never be reported. A collision pass
-        with the car held still (a 1 ns step at zero velocity: positions stay
-        bit-identical) rebinds them; every pair already touches, so no ``begin`` fires.
-        """
-        body = self.body
-        velocity, spin = body.velocity, body.angular_velocity
-        body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
-        body.space.step(1e-9)
-        body.velocity, body.angular_velocity = velocity, spin
-
     # -- state -------------------------------------------------------------------------------
     @property
     def pose(self) -> tuple[float, float, float]:

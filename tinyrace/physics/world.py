@@ -93,6 +93,26 @@ class World:
             self.space.remove(body, *body.shapes)
         self.contacts = Contacts()
 
+    # -- pickling ----------------------------------------------------------------------------
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._rebind_contacts()
+
+    def _rebind_contacts(self) -> None:
+        """Reconnect an unpickled space's touching pairs to the collision callbacks.
+
+        pymunk restores the pairs that were touching but not which handler each belongs
+        to, so their ``separate`` would never be reported. One collision pass with every
+        body held still (a 1 ns step at zero velocity keeps positions bit-identical)
+        rebinds them; every pair already touches, so no ``begin`` fires.
+        """
+        saved = [(body, body.velocity, body.angular_velocity) for body in self.space.bodies]
+        for body, _, _ in saved:
+            body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
+        self.space.step(1e-9)
+        for body, velocity, spin in saved:
+            body.velocity, body.angular_velocity = velocity, spin
+
     # -- stepping ----------------------------------------------------------------------------
     def step(self, dt: float) -> Contacts:
         """Advance the space by ``dt`` seconds; return the contact facts of this step."""

@@ -51,12 +51,12 @@ class CarSprite:
     def draw(
         self, image: np.ndarray, world_to_out: np.ndarray, skid_width: int, cache_key=None
     ) -> None:
-        """Skid marks, wheels, then hull into ``image`` seen through ``world_to_out``.
+        """Skid marks (unless ``skid_width`` is 0), wheels, then hull into ``image``.
 
         ``cache_key`` (e.g. the zoom) promises that the car's placement in the frame
         depends only on it and the steering angle, which allows reusing patches.
         """
-        if self.car.skids.lengths.any():
+        if skid_width and self.car.skids.lengths.any():
             _draw_skids(image, world_to_out, self.car.skids, skid_width)
         if self.supersample:
             steer = round(self.car.wheels[0].steer / _STEER_STEP)

@@ -52,7 +52,8 @@ class ChaseView:
         self.sprite = CarSprite(car, supersample=small)
         self.dashboard = Dashboard(size[0], size[1], supersample=4 if small else 1)
         self.frame = np.zeros((size[1], size[0], 3), np.uint8)
-        self.skid_width = max(1, round(2 * size[1] / WINDOW[1]))
+        # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
+        self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
     def render(self, t: float, score: float) -> np.ndarray:
         """The view t seconds after reset, with ``score`` on the dashboard. Returns a new array."""

@@ -28,7 +28,6 @@ class Window:
         pygame = self.pygame
         height, width = frame.shape[:2]
         if self.screen is None or self.screen.get_size() != (width, height):
-            pygame.init()
             pygame.display.init()
             pygame.display.set_caption(self.title)
             self.screen = pygame.display.set_mode((width, height))
