@@ -12,13 +12,15 @@ from tinyrace.episodes import StepFacts
 from tinyrace.physics.dynamic_car import DynamicCar
 from tinyrace.physics.world import World
 from tinyrace.render.chase_view import ChaseView
-from tinyrace.render.procedural_ground import GroundColors, paint_ground, repaint_tile
+from tinyrace.render.dashboard import Dashboard
+from tinyrace.render.procedural_ground import GroundColors, GroundPainter, repaint_tile
 from tinyrace.render.roi_camera import RoiCamera
 from tinyrace.render.texture import GroundTexture
 from tinyrace.track.procedural import ProceduralTrackParams, generate_track
 
 VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
 OBSERVATION_SIZE = (96, 96)  # [px] (w, h) CarRacing's state_pixels
+SMALL_VIEW = 160  # [px] views up to this size sample the observation texture, supersample the car
 RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "human": (1000, 800)}
 
 
@@ -54,8 +56,15 @@ def config_colors(config: ProceduralTrackConfig) -> GroundColors:
 class ProceduralEpisode:
     """One reset of the procedural track: track, pymunk world, car, visited tiles."""
 
-    def __init__(self, config: EnvConfig, rng: np.random.Generator, colors: GroundColors):
+    def __init__(
+        self,
+        config: EnvConfig,
+        rng: np.random.Generator,
+        colors: GroundColors,
+        cache: RenderCache | None = None,
+    ):
         self.config = config
+        self.cache = cache or RenderCache(config.tracks[0].playfield)
         self.track_config: ProceduralTrackConfig = config.tracks[0]
         self.track = generate_track(rng, track_params(self.track_config))
         self.colors = colors
@@ -137,17 +146,17 @@ class ProceduralEpisode:
         """CarRacing's view at ``size`` (w, h); small views share the observation texture."""
         view = self._views.get(size)
         if view is None:
-            small = max(size) <= 160
+            small = max(size) <= SMALL_VIEW
             ppu = self.track_config.pixels_per_unit if small else VIDEO_PIXELS_PER_UNIT
-            view = self._views[size] = ChaseView(size, self.texture(ppu), self.car)
+            dashboard, patches = self.cache.for_view(size)
+            view = ChaseView(size, self.texture(ppu), self.car, dashboard, patches)
+            self._views[size] = view
         return view
 
     def texture(self, pixels_per_unit: float) -> GroundTexture:
         texture = self._textures.get(pixels_per_unit)
         if texture is None:
-            texture = paint_ground(
-                self.track, self.colors, self.track_config.playfield, pixels_per_unit
-            )
+            texture = self.cache.painter.paint(self.track, self.colors, pixels_per_unit)
             self._repaint_visited(texture)
             self._textures[pixels_per_unit] = texture
         return texture
@@ -164,6 +173,24 @@ class ProceduralEpisode:
         return state
 
 
+class RenderCache:
+    """Pictures that outlive an episode: the ground's background, dashboards, car patches."""
+
+    def __init__(self, playfield: float):
+        self.painter = GroundPainter(playfield)
+        self._views: dict[tuple[int, int], tuple[Dashboard, dict]] = {}
+
+    def for_view(self, size: tuple[int, int]) -> tuple[Dashboard, dict]:
+        """The dashboard and the car-patch cache of a view size."""
+        if size not in self._views:
+            small = max(size) <= SMALL_VIEW
+            self._views[size] = (Dashboard(size[0], size[1], supersample=4 if small else 1), {})
+        return self._views[size]
+
+    def __getstate__(self) -> dict:
+        return {"painter": GroundPainter(self.painter.playfield), "_views": {}}  # cheap to redo
+
+
 class ProceduralCourse:
     """What lasts across resets on a procedural track: the colours of the last episode."""
 
@@ -171,9 +198,10 @@ class ProceduralCourse:
         self.config = config
         self.track_config: ProceduralTrackConfig = config.tracks[0]
         self.colors = config_colors(self.track_config)
+        self.cache = RenderCache(self.track_config.playfield)
 
     def new_episode(self, rng: np.random.Generator, options: dict) -> ProceduralEpisode:
         """CarRacing's reset order: colours (when randomised) are drawn before the track."""
         if self.track_config.domain_randomize and options.get("randomize", True):
             self.colors = draw_colors(rng)
-        return ProceduralEpisode(self.config, rng, self.colors)
+        return ProceduralEpisode(self.config, rng, self.colors, self.cache)

@@ -35,18 +35,19 @@ _WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
     WHEEL_RADIUS,
 )
 _STEER_STEP = 0.005  # [rad] steering resolution of cached patches
+_MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
 
 
 class CarSprite:
     """Draws one DynamicCar; polygons are prepared once, transformed per frame."""
 
-    def __init__(self, car: DynamicCar, supersample: bool):
+    def __init__(self, car: DynamicCar, supersample: bool, patches: dict | None = None):
         unit = SIZE * car.scale
         self.car = car
         self.hull = [np.array(poly, float) * unit for poly in HULL_POLYGONS]
         self.wheel_box = _WHEEL_BOX * unit
         self.supersample = supersample
-        self._patches: dict[tuple, tuple] = {}
+        self._patches: dict[tuple, tuple] = {} if patches is None else patches
 
     def draw(
         self, image: np.ndarray, world_to_out: np.ndarray, skid_width: int, cache_key=None
@@ -63,10 +64,16 @@ class CarSprite:
             key = None if cache_key is None else (cache_key, steer)
             patch = self._patches.get(key)
             if patch is None:
-                patch = self._render_patch(self._local_to_out(world_to_out), steer * _STEER_STEP)
+                local_to_out = self._local_to_out(world_to_out)
+                patch = _clip(image.shape, *self._render_patch(local_to_out, steer * _STEER_STEP))
                 if key is not None:
+                    if len(self._patches) >= _MAX_PATCHES:
+                        self._patches.clear()
                     self._patches[key] = patch
-            _blend(image, *patch)
+            if patch is not None:
+                rows, cols, weight, color = patch
+                region = image[rows, cols]
+                region[:] = region * weight + color
             return
         polygons = self._polygons(self.car.wheels[0].steer)
         local_to_out = self._local_to_out(world_to_out)
@@ -112,20 +119,14 @@ class CarSprite:
         return int(x0), int(y0), color, weight
 
 
-def _blend(image: np.ndarray, x0: int, y0: int, color: np.ndarray, weight: np.ndarray) -> None:
-    """Composite a premultiplied patch, clipped to the frame."""
+def _clip(shape: tuple, x0: int, y0: int, color: np.ndarray, weight: np.ndarray):
+    """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour)."""
     h, w = color.shape[:2]
-    H, W = image.shape[:2]
-    ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, W), min(y0 + h, H)
+    ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
     if ax >= bx or ay >= by:
-        return
-    region = image[ay:by, ax:bx]
-    px, py = ax - x0, ay - y0
-    mixed = (
-        region * weight[py : py + by - ay, px : px + bx - ax]
-        + color[py : py + by - ay, px : px + bx - ax]
-    )
-    region[:] = mixed
+        return None
+    inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
+    return slice(ay, by), slice(ax, bx), weight[inside].copy(), color[inside].copy()
 
 
 def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidMarks, width: int) -> None:

@@ -44,13 +44,21 @@ def chase_matrix(
 class ChaseView:
     """One output size of CarRacing's view; ``render`` fills a reused frame buffer."""
 
-    def __init__(self, size: tuple[int, int], texture: GroundTexture, car: DynamicCar):
+    def __init__(
+        self,
+        size: tuple[int, int],
+        texture: GroundTexture,
+        car: DynamicCar,
+        dashboard: Dashboard,
+        patches: dict,
+    ):
+        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes."""
         self.size = size  # (w, h)
         self.texture = texture
         self.car = car
-        small = max(size) <= 160  # observation-sized: supersample the car and the instruments
-        self.sprite = CarSprite(car, supersample=small)
-        self.dashboard = Dashboard(size[0], size[1], supersample=4 if small else 1)
+        small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
+        self.sprite = CarSprite(car, supersample=small, patches=patches)
+        self.dashboard = dashboard
         self.frame = np.zeros((size[1], size[0], 3), np.uint8)
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
@@ -64,7 +72,8 @@ class ChaseView:
             zoom / self.car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
         )
         self.texture.warp(matrix, self.size, out=self.frame, pixels_per_unit=pixels_per_unit)
-        # the car sits still in this frame: its patch depends on zoom and steering only
-        self.sprite.draw(self.frame, matrix, self.skid_width, cache_key=zoom if t >= 1 else None)
+        # the car sits still in this frame: its patch depends on zoom and steering only (the
+        # zoom-in's values repeat every episode, so they are worth caching too)
+        self.sprite.draw(self.frame, matrix, self.skid_width, cache_key=zoom)
         self.dashboard.draw(self.frame, self.car, score)
         return self.frame.copy()

@@ -11,6 +11,7 @@ from tinyrace.render.texture import GroundTexture, transform_points
 from tinyrace.track.procedural import ProceduralTrack
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px precision
+LEVEL_ALIGN = 64  # texture sides are multiples of this: levels of detail halve exactly
 _KERB_RED = (255, 0, 0)
 _KERB_WHITE = (255, 255, 255)
 
@@ -30,27 +31,47 @@ def tile_colors(road: np.ndarray, count: int) -> np.ndarray:
     return (road[None, :] + shade[:, None]).astype(int)
 
 
-def paint_ground(
-    track: ProceduralTrack, colors: GroundColors, playfield: float, pixels_per_unit: float
-) -> GroundTexture:
-    """The whole playfield at ``pixels_per_unit`` plus halved levels of detail."""
-    side = int(np.ceil(2 * playfield * pixels_per_unit))
-    to_pixels = np.array(
-        [
-            [pixels_per_unit, 0, playfield * pixels_per_unit],
-            [0, pixels_per_unit, playfield * pixels_per_unit],
-        ]
-    )
-    shades = tile_colors(colors.road, len(track.tiles))
+class GroundPainter:
+    """Paints the ground textures of a procedural course.
 
-    def painter(image: np.ndarray, matrix: np.ndarray) -> None:
-        image.view(np.uint32)[:] = _pack(colors.background)  # one 32-bit fill: fast
-        _fill(image, matrix, _grass_squares(playfield), [colors.grass] * 400)
-        _fill(image, matrix, track.tiles, shades)
-        kerb_colors = [_KERB_RED if red else _KERB_WHITE for red in track.kerb_red]
-        _fill(image, matrix, track.kerbs, kerb_colors)
+    Background and grass depend only on the colours, the playfield and the resolution:
+    they are drawn once and copied at each reset; tiles and kerbs are drawn on top.
+    """
 
-    return GroundTexture.paint((side, side), to_pixels, painter)
+    def __init__(self, playfield: float):
+        self.playfield = playfield  # [u]
+        self._bases: dict[tuple, np.ndarray] = {}
+
+    def paint(
+        self, track: ProceduralTrack, colors: GroundColors, pixels_per_unit: float
+    ) -> GroundTexture:
+        """The whole playfield at ``pixels_per_unit``; halved levels of detail follow on demand."""
+        playfield = self.playfield
+        side = int(np.ceil(2 * playfield * pixels_per_unit / LEVEL_ALIGN)) * LEVEL_ALIGN
+        offset = playfield * pixels_per_unit
+        to_pixels = np.array([[pixels_per_unit, 0, offset], [0, pixels_per_unit, offset]])
+        image = self._base(colors, pixels_per_unit, side, to_pixels).copy()
+        shades = tile_colors(colors.road, len(track.tiles))
+        for k in range(min(3, len(track.tiles))):  # three shades: one fill call each
+            _fill(image, to_pixels, track.tiles[k::3], shades[k])
+        _fill(image, to_pixels, track.kerbs[track.kerb_red], _KERB_RED)
+        _fill(image, to_pixels, track.kerbs[~track.kerb_red], _KERB_WHITE)
+        return GroundTexture.from_image(image, to_pixels)
+
+    def _base(
+        self, colors: GroundColors, ppu: float, side: int, to_pixels: np.ndarray
+    ) -> np.ndarray:
+        key = (tuple(colors.background.astype(int)), tuple(colors.grass.astype(int)), ppu)
+        base = self._bases.get(key)
+        if base is None:
+            if len(self._bases) > 4:  # domain randomisation: a new palette every reset
+                self._bases.clear()
+            base = np.zeros((side, side, 4), np.uint8)  # black beyond the playfield, as CarRacing
+            inside = int(np.ceil(2 * self.playfield * ppu))
+            base[:inside, :inside].view(np.uint32)[:] = _pack(colors.background)  # fast fill
+            _fill(base, to_pixels, _grass_squares(self.playfield), colors.grass)
+            self._bases[key] = base
+        return base
 
 
 def repaint_tile(
@@ -58,7 +79,7 @@ def repaint_tile(
 ) -> None:
     """A visited tile loses its shade and shows the plain road colour, as in CarRacing."""
     texture.repaint(
-        lambda image, matrix: _fill(image, matrix, track.tiles[index : index + 1], [road])
+        lambda image, matrix: _fill(image, matrix, track.tiles[index : index + 1], road)
     )
 
 
@@ -76,13 +97,10 @@ def _grass_squares(playfield: float) -> np.ndarray:
     return np.stack([x.ravel(), y.ravel()], axis=1)[:, None, :] + corners[None]
 
 
-def _fill(image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, colors: list) -> None:
-    """Fill world-unit polygons, antialiased, each in its colour (grouped by colour)."""
+def _fill(image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, color) -> None:
+    """Fill world-unit polygons in one colour, antialiased, in one cv2 call."""
     if len(polygons) == 0:
         return
     pixels = np.round(transform_points(matrix, polygons) * (1 << _SUBPIXEL_BITS)).astype(np.int32)
-    groups: dict[tuple[int, ...], list[np.ndarray]] = {}
-    for poly, color in zip(pixels, colors, strict=True):
-        groups.setdefault(tuple(int(c) for c in color), []).append(poly)
-    for color, polys in groups.items():
-        cv2.fillPoly(image, polys, (*color, 255), lineType=cv2.LINE_AA, shift=_SUBPIXEL_BITS)
+    rgbx = (*(int(c) for c in color), 255)
+    cv2.fillPoly(image, list(pixels), rgbx, lineType=cv2.LINE_AA, shift=_SUBPIXEL_BITS)

@@ -50,25 +50,17 @@ def transform_points(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 @dataclass
 class GroundTexture:
-    """Images of the ground at decreasing resolution, each with its world->pixel affine."""
+    """Images of the ground at decreasing resolution, each with its world->pixel affine.
 
-    levels: list[np.ndarray]
+    Level 0 is the full image; level k halves it k times. Levels past 0 are made from
+    level 0 (area-averaged) the first time a camera needs them.
+    """
+
+    levels: list[np.ndarray | None]
     to_pixels: list[np.ndarray]  # per level: 2x3 world -> texture pixel
-    border: tuple[int, int, int]  # colour outside the texture
+    sizes: list[tuple[int, int]]  # per level: (w, h)
+    border: tuple[int, int, int] = (0, 0, 0)  # colour outside the texture
     interpolation: int = cv2.INTER_LINEAR
-
-    @classmethod
-    def paint(
-        cls,
-        size: tuple[int, int],
-        to_pixels: np.ndarray,
-        painter: Painter,
-        border: tuple[int, int, int] = (0, 0, 0),
-    ) -> GroundTexture:
-        """Draw the ground with ``painter`` at ``size`` (w, h); smaller levels are area-averaged."""
-        image = np.empty((size[1], size[0], 4), np.uint8)
-        painter(image, to_pixels)
-        return cls.from_image(image, to_pixels, border)
 
     @classmethod
     def from_image(
@@ -76,19 +68,29 @@ class GroundTexture:
         image: np.ndarray,
         to_pixels: np.ndarray | None = None,
         border: tuple[int, int, int] = (0, 0, 0),
-        extra_levels: int = 8,
         min_side: int = 64,
     ) -> GroundTexture:
-        """An RGBx image (world->pixel affine ``to_pixels``, identity if None) and halved copies."""
+        """An RGBx image (world->pixel affine ``to_pixels``, identity if None) and its levels."""
         if to_pixels is None:
             to_pixels = np.array([[1.0, 0, 0], [0, 1.0, 0]])
-        levels, matrices = [image], [to_pixels]
-        while len(levels) <= extra_levels and min(levels[-1].shape[:2]) > min_side:
-            h, w = levels[-1].shape[:2]
-            half = ((w + 1) // 2, (h + 1) // 2)
-            levels.append(cv2.resize(levels[-1], half, interpolation=cv2.INTER_AREA))
-            matrices.append(matrices[-1] * [[half[0] / w], [half[1] / h]])
-        return cls(levels, matrices, border)
+        h, w = image.shape[:2]
+        sizes, matrices = [(w, h)], [to_pixels]
+        while min(sizes[-1]) > min_side:
+            pw, ph = sizes[-1]
+            half = ((pw + 1) // 2, (ph + 1) // 2)
+            sizes.append(half)
+            matrices.append(to_pixels * [[half[0] / w], [half[1] / h]])
+        return cls([image] + [None] * (len(sizes) - 1), matrices, sizes, border)
+
+    def image(self, level: int) -> np.ndarray:
+        """The pixels of ``level``, made on first use by halving the level above it
+        (an exact 2x area average when the sizes are even: cv2's fast path)."""
+        pixels = self.levels[level]
+        if pixels is None:
+            finer = self.image(level - 1)
+            pixels = cv2.resize(finer, self.sizes[level], interpolation=cv2.INTER_AREA)
+            self.levels[level] = pixels
+        return pixels
 
     def __post_init__(self) -> None:
         # [texture px per world unit] of each level, for picking one by the output's scale
@@ -122,7 +124,7 @@ class GroundTexture:
         if scratch is None:
             scratch = self._scratch[size] = np.empty((size[1], size[0], 4), np.uint8)
         cv2.warpAffine(
-            self.levels[level],
+            self.image(level),
             texture_to_out,
             size,
             dst=scratch,
@@ -133,10 +135,12 @@ class GroundTexture:
         return cv2.cvtColor(scratch, cv2.COLOR_RGBA2RGB, dst=out)
 
     def repaint(self, painter: Painter) -> None:
-        """Draw on every level (e.g. a tile that changed colour)."""
-        for image, matrix in zip(self.levels, self.to_pixels, strict=True):
-            painter(image, matrix)
+        """Draw on level 0 (e.g. a tile that changed colour); smaller levels are made anew
+        from it when next needed, so a level never depends on when it was first made."""
+        painter(self.levels[0], self.to_pixels[0])
+        for level in range(1, len(self.levels)):
+            self.levels[level] = None
 
     @property
     def nbytes(self) -> int:
-        return sum(level.nbytes for level in self.levels)
+        return sum(level.nbytes for level in self.levels if level is not None)

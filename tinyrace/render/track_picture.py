@@ -11,7 +11,7 @@ from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.procedural import config_colors, draw_colors, track_params
-from tinyrace.render.procedural_ground import paint_ground
+from tinyrace.render.procedural_ground import GroundPainter
 from tinyrace.track.image import ImageTrack
 from tinyrace.track.procedural import generate_track
 
@@ -29,7 +29,7 @@ def procedural_picture(config: EnvConfig, seed: int) -> np.ndarray:
     track = generate_track(rng, track_params(track_config))
     playfield = track_config.playfield
     ppu = MAX_SIDE / (2 * playfield)
-    texture = paint_ground(track, colors, playfield, ppu)
+    texture = GroundPainter(playfield).paint(track, colors, ppu)
     image = np.ascontiguousarray(cv2.cvtColor(texture.levels[0], cv2.COLOR_RGBA2RGB)[::-1])
 
     def to_pixels(x: float, y: float) -> tuple[float, float]:
