@@ -131,8 +131,8 @@ def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> E
     """
     parser = Parser(source)
     config = parser.dataclass(EnvConfig, raw, prefix)
-    parser.check()
-    _check_consistency(config, parser, f"{prefix}." if prefix else "")
+    if parser.parsed(config):  # also when some keys were bad: report every problem at once
+        _check_consistency(config, parser, f"{prefix}." if prefix else "")
     parser.check()
     return resolve_defaults(config)
 

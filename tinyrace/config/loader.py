@@ -41,6 +41,11 @@ class Parser:
         if self.problems:
             raise ConfigError(self.problems)
 
+    @staticmethod
+    def parsed(value: object) -> bool:
+        """False for a value that could not be parsed at all (its problem is recorded)."""
+        return value is not _INVALID
+
     # -- dataclasses -------------------------------------------------------------------------
     def dataclass(self, cls: type, data: object, path: str) -> Any:
         """Build ``cls`` from a mapping; unknown keys, bad values and missing keys are problems."""

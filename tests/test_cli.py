@@ -1,0 +1,134 @@
+"""The tinyrace command: run, validate, show, play; and the README's YAML reference."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import pytest
+
+from tinyrace import cli
+from tinyrace.config.reference import END, START, markdown
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_run_a_config(tmp_path: Path, capsys):
+    config = ROOT / "configs" / "carolo_cup.yaml"
+    code = cli.main(
+        ["run", str(config), "--episodes", "1", "--no-video", "--quiet", "--out", str(tmp_path)]
+    )
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "return" in out and "|cte|" in out and "episode_return" in out  # table and summary
+    (run_dir,) = tmp_path.iterdir()
+    assert {p.name for p in run_dir.iterdir()} == {"results.json", "episodes.csv"}
+
+
+def test_run_without_arguments_finds_the_default_experiment(monkeypatch, tmp_path: Path):
+    monkeypatch.chdir(tmp_path)  # no configs/ here: the checkout's default is used
+    assert cli.default_experiment() == ROOT / "configs" / "carracing.yaml"
+
+
+def test_python_dash_m_runs_the_command():
+    done = subprocess.run(
+        [sys.executable, "-m", "tinyrace", "validate", str(ROOT / "configs" / "carracing.yaml")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0 and done.stdout.startswith("OK: procedural track")
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        *sorted((ROOT / "example_tracks").glob("*/track.yaml")),
+        *sorted((ROOT / "configs").glob("*.yaml")),
+    ],
+    ids=lambda p: f"{p.parent.name}/{p.name}",
+)
+def test_validate_accepts_every_shipped_file(path: Path, capsys):
+    assert cli.main(["validate", str(path)]) == 0
+    assert capsys.readouterr().out.startswith("OK:")
+
+
+def test_validate_prints_every_problem(tmp_path: Path, capsys):
+    bad = tmp_path / "track.yaml"
+    bad.write_text("sim: {fps: -3, stp_limit: 4}\ncar: {wheelbase: abc}\n")
+    assert cli.main(["validate", str(tmp_path)]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 4  # three bad keys, and a tinycarlo file (no tracks) needs a camera
+    assert any("cameras" in line and "at least one camera" in line for line in lines)
+    assert any("sim.fps" in line and "-3" in line for line in lines)
+    assert any("sim.stp_limit" in line and "did you mean 'step_limit'" in line for line in lines)
+    assert any("car.wheelbase" in line and "'abc'" in line for line in lines)
+    assert all(str(bad) in line for line in lines)
+
+
+def test_validate_reports_image_problems(tmp_path: Path, capsys):
+    (tmp_path / "track.yaml").write_text(
+        "cameras: [{id: front}]\ntracks: [{image: missing.png, spawns: [[1, 2, 0]]}]\n"
+    )
+    assert cli.main(["validate", str(tmp_path)]) == 1
+    out = capsys.readouterr().out
+    assert "tracks[0].image" in out and "missing.png" in out
+
+
+@pytest.mark.parametrize(
+    "target", ["procedural", "example_tracks/formula_student", "configs/carracing.yaml"]
+)
+def test_show_writes_a_picture(target: str, tmp_path: Path, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    output = tmp_path / "track.png"
+    assert cli.main(["show", target, "--seed", "3", "-o", str(output)]) == 0
+    image = cv2.imread(str(output))
+    assert image is not None and min(image.shape[:2]) > 500
+
+
+def test_show_procedural_is_the_seeds_track(tmp_path: Path):
+    a, b, c = (tmp_path / f"{n}.png" for n in "abc")
+    cli.main(["show", "procedural", "--seed", "1", "-o", str(a)])
+    cli.main(["show", "procedural", "--seed", "1", "-o", str(b)])
+    cli.main(["show", "procedural", "--seed", "2", "-o", str(c)])
+    first, again, other = (cv2.imread(str(p)) for p in (a, b, c))
+    assert (first == again).all() and not (first == other).all()
+
+
+def test_play_without_a_display_says_what_is_missing():
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")
+    }
+    done = subprocess.run(
+        [sys.executable, "-m", "tinyrace", "play"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
+    assert done.returncode == 2
+    assert "display" in done.stderr or "pygame" in done.stderr
+
+
+def test_no_command_prints_help(capsys):
+    assert cli.main([]) == 2
+    assert "run" in capsys.readouterr().out
+
+
+def test_readme_yaml_reference_matches_the_schema():
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split(START, 1)[1].split(END, 1)[0].strip()
+    assert section == markdown().strip(), "run: python -m tinyrace.config.reference README.md"
+
+
+def test_readme_quick_start_is_what_ci_runs():
+    readme = (ROOT / "README.md").read_text()
+    test_command = 'pip install -e ".[test]" && python -m pytest -q'
+    assert test_command in readme
+    assert test_command in (ROOT / ".ci" / "run").read_text()
+    assert "pip install -e . && tinyrace run" in readme

@@ -1,0 +1,141 @@
+"""Experiment files end to end: every shipped config runs; the built-in driver's results;
+results.json, episodes.csv and videos; validation of experiment keys."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+from pathlib import Path
+
+import cv2
+import pytest
+
+from tinyrace.errors import ConfigError
+from tinyrace.experiment import experiment_from_dict, load_experiment, run_experiment
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
+IMAGE_CONFIGS = ("formula_student", "segmented", "carolo_cup")
+
+
+def shortened(path: Path, episodes: int = 1, max_steps: int | None = 30, video: bool = False):
+    experiment = load_experiment(path)
+    config = dataclasses.replace(
+        experiment.config,
+        episodes=episodes,
+        max_steps=max_steps,
+        output=dataclasses.replace(experiment.config.output, video=video, video_episodes=1),
+    )
+    return dataclasses.replace(experiment, config=config)
+
+
+def test_the_shipped_configs_are_the_documented_ones():
+    names = {path.stem for path in CONFIGS}
+    assert {
+        "carracing",
+        "carracing_discrete",
+        "domain_randomize",
+        "formula_student",
+        "segmented",
+        "carolo_cup",
+        "multi_camera",
+    } <= names
+
+
+def test_multi_camera_has_three_or_more_cameras_one_looking_back():
+    cameras = load_experiment(ROOT / "configs" / "multi_camera.yaml").env_config.cameras
+    assert len(cameras) >= 3
+    assert any(abs(abs(c.yaw) - 180) < 1e-9 for c in cameras)
+
+
+@pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.stem)
+def test_every_config_runs_a_few_steps(path: Path, tmp_path: Path):
+    result = run_experiment(shortened(path), tmp_path, show_progress=False)
+    (episode,) = result.episodes
+    assert 1 <= episode.steps <= 30
+    data = json.loads((result.run_dir / "results.json").read_text())
+    assert data["episodes"][0]["steps"] == episode.steps
+    assert result.run_dir.name.startswith(path.stem + "-")
+
+
+def test_results_files_and_videos(tmp_path: Path):
+    experiment = shortened(
+        ROOT / "configs" / "formula_student.yaml", episodes=2, max_steps=40, video=True
+    )
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    rows = list(csv.DictReader((result.run_dir / "episodes.csv").open()))
+    assert [int(r["episode"]) for r in rows] == [0, 1]
+    assert all(int(r["steps"]) == 40 and r["end"] == "max_steps" for r in rows)
+    summary = json.loads((result.run_dir / "results.json").read_text())["summary"]
+    assert {"mean", "std"} <= set(summary["episode_return"])
+    video = cv2.VideoCapture(result.episodes[0].video)  # only the first episode has a video
+    assert video.isOpened() and int(video.get(cv2.CAP_PROP_FRAME_COUNT)) == 40
+    assert result.episodes[1].video is None
+
+
+def test_a_camera_view_video_has_the_camera_size(tmp_path: Path):
+    experiment = shortened(ROOT / "configs" / "segmented.yaml", max_steps=5, video=True)
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    video = cv2.VideoCapture(result.episodes[0].video)
+    assert (video.get(cv2.CAP_PROP_FRAME_WIDTH), video.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (160, 120)
+
+
+def test_the_centreline_driver_finishes_carracing_laps(tmp_path: Path):
+    """Issue 4: mean return >= 850 over 5 seeds on the default experiment."""
+    experiment = shortened(ROOT / "configs" / "carracing.yaml", episodes=5, max_steps=1000)
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    assert result.summary["episode_return"]["mean"] >= 850
+    assert all(e.end == "lap_finished" and e.laps == 1 for e in result.episodes)
+
+
+@pytest.mark.parametrize("name", IMAGE_CONFIGS)
+def test_the_centreline_driver_keeps_to_image_tracks(name: str, tmp_path: Path):
+    """Issue 4: mean |cte| under half the track width, step_limit reached without a done."""
+    experiment = shortened(ROOT / "configs" / f"{name}.yaml", max_steps=None)
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    (episode,) = result.episodes
+    car = experiment.env_config.car
+    assert episode.end == "step_limit"
+    assert episode.steps == experiment.env_config.sim.step_limit
+    assert episode.mean_abs_cte < car.track_width / 2
+    assert episode.obstacle_hits == 0
+
+
+def test_own_driver_from_module_callable(tmp_path: Path):
+    raw = {
+        "driver": "drivers_for_tests:straight_policy",
+        "episodes": 1,
+        "max_steps": 5,
+        "output": {"video": False},
+    }
+    experiment = experiment_from_dict(raw, "inline.yaml", ROOT)
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    assert result.episodes[0].steps == 5
+
+
+@pytest.mark.parametrize(
+    ("raw", "path", "value"),
+    [
+        ({"episodes": 0}, "episodes", "0"),
+        ({"episods": 3}, "episods", "did you mean 'episodes'"),
+        ({"env": {"sim": {"fps": "fast"}}}, "env.sim.fps", "'fast'"),
+        ({"env": {"environment": "no/such/folder"}}, "env.environment", "track.yaml"),
+        ({"output": {"view": 3}}, "output.view", "3"),
+        ({"driver": "nosuchmodule:thing"}, "driver", "nosuchmodule"),
+        ({"driver": "teleport"}, "driver", "teleport"),
+    ],
+)
+def test_bad_experiments_name_the_key(raw: dict, path: str, value: str, tmp_path: Path):
+    with pytest.raises(ConfigError) as error:
+        experiment = experiment_from_dict(raw, "exp.yaml", ROOT)
+        run_experiment(experiment, tmp_path, show_progress=False)
+    message = str(error.value)
+    assert "exp.yaml" in message and path in message and value in message
+
+
+def test_a_view_that_is_no_camera_is_refused(tmp_path: Path):
+    raw = {"env": {"environment": "example_tracks/segmented"}, "output": {"view": "roof"}}
+    experiment = experiment_from_dict(raw, "exp.yaml", ROOT)
+    with pytest.raises(ConfigError, match="output.view.*front_camera"):
+        run_experiment(experiment, tmp_path, show_progress=False)
