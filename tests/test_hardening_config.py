@@ -246,6 +246,8 @@ def _schema_meta(schema: type, path: Path_) -> Mapping[str, Any] | None:
     meta: Mapping[str, Any] | None = None
     for key in path:
         hint = _unwrap(hint)
+        if isinstance(key, str) and typing.get_origin(hint) is tuple:
+            hint = _unwrap(typing.get_args(hint)[0])  # a mapping stands for a list of one
         if isinstance(key, int):
             args = typing.get_args(hint)
             if typing.get_origin(hint) is not tuple or not args:
@@ -265,6 +267,8 @@ def _schema_meta(schema: type, path: Path_) -> Mapping[str, Any] | None:
         hint = typing.get_type_hints(
             next(m for m in members if fields[key] in dataclasses.fields(m))
         )[fields[key].name]
+        if key == "env" and typing.get_origin(hint) is dict:  # an experiment's env sections
+            hint = EnvConfig
     return meta
 
 
