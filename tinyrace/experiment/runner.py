@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import datetime as dt
-import importlib
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -12,7 +11,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from tinyrace.drivers import Driver, make_driver
+from tinyrace.drivers import Driver, load_driver
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.load import Experiment
@@ -61,7 +60,7 @@ def run_experiment(
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
     _check_view(experiment, env)
-    driver = load_driver(config.driver, config.driver_args, experiment.source)
+    driver = _driver(config.driver, config.driver_args, experiment.source)
     limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
     progress = Progress(config.episodes, enabled=show_progress)
     results = []
@@ -129,41 +128,12 @@ def _run_episode(
     )
 
 
-class _PolicyDriver:
-    """Wraps a plain ``policy(observation, info) -> action`` function as a Driver."""
-
-    def __init__(self, policy):
-        self.policy = policy
-
-    def reset(self, env) -> None:
-        pass
-
-    def act(self, observation, info):
-        return self.policy(observation, info)
-
-
-def load_driver(spec: str, args: dict, source: str = "<experiment>") -> Driver:
-    """A built-in driver by name, or ``module:callable``: a factory called with ``driver_args``
-    that returns a Driver (``reset(env)``, ``act(observation, info)``) or a policy function."""
-    if ":" not in spec:
-        try:
-            return make_driver(spec, **args)
-        except (ValueError, TypeError) as exc:
-            raise ConfigError(Problem(source, "driver", spec, str(exc))) from None
-    module_name, _, attribute = spec.partition(":")
+def _driver(spec: str, args: dict, source: str) -> Driver:
+    """The experiment's driver; problems name the experiment file and its ``driver`` key."""
     try:
-        factory = getattr(importlib.import_module(module_name), attribute)
-    except (ImportError, AttributeError) as exc:
-        allowed = f"an importable module:callable ({type(exc).__name__}: {exc})"
-        raise ConfigError(Problem(source, "driver", spec, allowed)) from None
-    made = factory(**args)
-    if hasattr(made, "act"):
-        return made
-    if callable(made):
-        return _PolicyDriver(made)
-    raise ConfigError(
-        Problem(source, "driver", spec, "a factory returning a driver or a policy function")
-    )
+        return load_driver(spec, **args)
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(Problem(source, "driver", spec, str(exc))) from None
 
 
 def _frame(env: TinyRaceEnv, observation, view: str) -> np.ndarray:

@@ -1,146 +1,18 @@
-"""Built-in drivers: policies that need no training, for baselines, demos and tests.
-
-A driver is set up once per episode with ``reset(env)`` (after ``env.reset``)
-and then asked for one action per step with ``act(observation, info)``. Drivers
-speak the env's own action space: they think in CarRacing's controls
-``(steer, gas, brake)`` (steer -1 full left .. +1 full right) and convert to a
-Box, or to the nearest action of CarRacing's Discrete(5).
-
->>> import gymnasium as gym, tinyrace
->>> from tinyrace.drivers import make_driver
->>> env = gym.make("tinyrace/CarRacing-v0")
->>> driver = make_driver("centerline")
->>> observation, info = env.reset(seed=0)
->>> driver.reset(env)
->>> observation, reward, terminated, truncated, info = env.step(driver.act(observation, info))
-"""
+"""Following a line: CarRacing's centreline, or an image track's drawn trajectory."""
 
 from __future__ import annotations
 
-import copy
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.actions import DISCRETE_CONTROLS
+from tinyrace.drivers.base import ActionAdapter, Controls
 from tinyrace.physics.dynamic_car import SIZE, DynamicCarSpec
-
-Controls = tuple[float, float, float]  # (steer -1..1, +1 right; gas 0..1; brake 0..1)
-
-
-@runtime_checkable
-class Driver(Protocol):
-    """What every driver offers; ``reset`` is called after each ``env.reset``."""
-
-    def reset(self, env: gym.Env) -> None: ...
-
-    def act(self, observation: Any, info: dict[str, Any]) -> Any: ...
-
-
-class ActionAdapter:
-    """Turns ``(steer, gas, brake)`` into an action of ``space``.
-
-    Box(3,): the controls themselves, clipped; Box(1,): the steering only (the
-    kinematic car); Discrete(5): see ``DiscreteChooser``.
-    """
-
-    def __init__(self, space: spaces.Space, dt: float = 1 / 50):
-        self.space = space
-        self._discrete = DiscreteChooser(dt) if isinstance(space, spaces.Discrete) else None
-        if self._discrete is None and not (
-            isinstance(space, spaces.Box) and space.shape in ((3,), (1,))
-        ):
-            raise ValueError(f"drivers know Box(3,), Box(1,) and Discrete(5) actions, not {space}")
-
-    def __call__(self, controls: Controls) -> Any:
-        if self._discrete is not None:
-            return self._discrete.choose(controls)
-        steer, gas, brake = controls
-        values = (steer,) if self.space.shape == (1,) else (steer, gas, brake)
-        return np.clip(np.array(values, np.float32), self.space.low, self.space.high)
-
-
-class DiscreteChooser:
-    """The nearest of CarRacing's five actions to wanted ``(steer, gas, brake)``.
-
-    Nearest in effect, not in value: a discrete turn asks for 0.6 rad, beyond the
-    0.4 rad lock, and the steering servo moves at most 3 rad/s, so the chooser
-    predicts the front wheels' angle after each action (the wanted steer is read
-    as a wheel angle in rad, + right) and compares that; the pedals are compared
-    in units of what their action gives (gas 0.2, brake 0.8). One action per
-    step cannot steer and accelerate at once, so the pedal error left over (up to
-    half an action) is carried to the next step (error diffusion): the pedals
-    average out, and a small steering need still wins against a pedal now and then.
-    """
-
-    def __init__(self, dt: float, car: DynamicCarSpec | None = None):
-        self.dt = dt  # [s]
-        self.car = car or DynamicCarSpec()
-        self.choices = np.array(DISCRETE_CONTROLS, float)
-        self.pedals = self.choices[:, 1:] / self.choices[:, 1:].max(axis=0)  # one action = 1
-        self.wheel = 0.0  # [rad] + right: the front wheels' angle, as predicted
-        self._pedal_error = np.zeros(2)
-
-    def choose(self, controls: Controls) -> int:
-        steer, gas, brake = controls
-        reach = self.car.steer_speed * self.dt  # [rad] the most the wheels turn in one step
-        error = self.choices[:, 0] - self.wheel
-        turn = np.sign(error) * np.minimum(self.car.steer_gain * np.abs(error) * self.dt, reach)
-        limit = self.car.steer_limit
-        wheels = np.clip(self.wheel + turn, -limit, limit)
-        goal = np.clip((gas / 0.2, brake / 0.8), 0.0, 1.0) + self._pedal_error
-        cost = np.square((wheels - steer) / reach) + np.square(self.pedals - goal).sum(axis=1)
-        index = int(np.argmin(cost))
-        self.wheel = float(wheels[index])
-        self._pedal_error = np.clip(goal - self.pedals[index], -0.5, 0.5)
-        return index
-
-
-class ConstantDriver:
-    """Always the same action (in the env's own action space)."""
-
-    def __init__(self, action: Any = (0.0, 0.0, 0.0)):
-        self.action = action
-        self._value: Any = None
-
-    def reset(self, env: gym.Env) -> None:
-        space = env.action_space
-        if isinstance(space, spaces.Discrete):
-            self._value = int(self.action)
-        else:
-            self._value = np.asarray(self.action, space.dtype)
-
-    def act(self, observation: Any, info: dict[str, Any]) -> Any:
-        return self._value
-
-
-class RandomDriver:
-    """Uniform samples of the action space.
-
-    Seeded per episode from ``seed`` (or the env's seed) and the episode count, on
-    its own copy of the space: the env's random streams are left alone.
-    """
-
-    def __init__(self, seed: int | None = None) -> None:
-        self.seed = seed
-        self._space: spaces.Space | None = None
-        self._episodes = 0
-
-    def reset(self, env: gym.Env) -> None:
-        self._space = copy.deepcopy(env.action_space)
-        seed = self.seed if self.seed is not None else env.unwrapped.np_random_seed
-        entropy = np.random.SeedSequence([max(int(seed), 0), self._episodes])
-        self._space.seed(int(entropy.generate_state(1)[0]))
-        self._episodes += 1
-
-    def act(self, observation: Any, info: dict[str, Any]) -> Any:
-        return self._space.sample()
-
 
 CARRACING_WHEELBASE = (80 + 82) * SIZE  # [u] axle to axle of CarRacing's car
 
@@ -363,36 +235,3 @@ def speed_profile(
         i, j = k % n, (k + 1) % n
         speeds[i] = min(speeds[i], math.sqrt(speeds[j] ** 2 + 2 * brake_accel * spacing[i]))
     return speeds
-
-
-DriverFactory = Callable[..., Driver]
-
-DRIVERS: dict[str, DriverFactory] = {
-    "random": RandomDriver,
-    "constant": ConstantDriver,
-    "centerline": CenterlineDriver,
-}
-
-
-def make_driver(name: str, **kwargs: Any) -> Driver:
-    """A driver by registry name; raises ValueError listing the valid names."""
-    factory = DRIVERS.get(name)
-    if factory is None:
-        raise ValueError(f"unknown driver {name!r}; valid drivers: {', '.join(sorted(DRIVERS))}")
-    return factory(**kwargs)
-
-
-def run_episode(
-    env: gym.Env, driver: Driver, seed: int | None = None, max_steps: int | None = None
-) -> tuple[float, int, dict[str, Any]]:
-    """Drive one episode; returns (return, steps, last info)."""
-    observation, info = env.reset(seed=seed)
-    driver.reset(env)
-    total, steps = 0.0, 0
-    while max_steps is None or steps < max_steps:
-        observation, reward, terminated, truncated, info = env.step(driver.act(observation, info))
-        total += float(reward)
-        steps += 1
-        if terminated or truncated:
-            break
-    return total, steps, info

@@ -1,0 +1,118 @@
+"""Built-in drivers: policies that need no training, for baselines, demos and tests.
+
+A driver is set up once per episode with ``reset(env)`` (after ``env.reset``)
+and then asked for one action per step with ``act(observation, info)``. Drivers
+speak the env's own action space: they think in CarRacing's controls
+``(steer, gas, brake)`` (steer -1 full left .. +1 full right) and convert to a
+Box, or to the nearest action of CarRacing's Discrete(5).
+
+>>> import gymnasium as gym, tinyrace
+>>> from tinyrace.drivers import make_driver
+>>> env = gym.make("tinyrace/CarRacing-v0")
+>>> driver = make_driver("centerline")
+>>> observation, info = env.reset(seed=0)
+>>> driver.reset(env)
+>>> observation, reward, terminated, truncated, info = env.step(driver.act(observation, info))
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+
+from tinyrace.drivers.base import (
+    ActionAdapter,
+    ConstantDriver,
+    Controls,
+    DiscreteChooser,
+    Driver,
+    RandomDriver,
+)
+from tinyrace.drivers.centerline import CenterlineDriver, Route, order_path, route_of, speed_profile
+
+__all__ = [
+    "DRIVERS",
+    "ActionAdapter",
+    "CenterlineDriver",
+    "ConstantDriver",
+    "Controls",
+    "DiscreteChooser",
+    "Driver",
+    "RandomDriver",
+    "Route",
+    "load_driver",
+    "make_driver",
+    "order_path",
+    "route_of",
+    "run_episode",
+    "speed_profile",
+]
+
+DriverFactory = Callable[..., Driver]
+
+DRIVERS: dict[str, DriverFactory] = {
+    "random": RandomDriver,
+    "constant": ConstantDriver,
+    "centerline": CenterlineDriver,
+}
+
+
+def make_driver(name: str, **kwargs: Any) -> Driver:
+    """A driver by registry name; raises ValueError listing the valid names."""
+    factory = DRIVERS.get(name)
+    if factory is None:
+        raise ValueError(f"unknown driver {name!r}; valid drivers: {', '.join(sorted(DRIVERS))}")
+    return factory(**kwargs)
+
+
+def run_episode(
+    env: gym.Env, driver: Driver, seed: int | None = None, max_steps: int | None = None
+) -> tuple[float, int, dict[str, Any]]:
+    """Drive one episode; returns (return, steps, last info)."""
+    observation, info = env.reset(seed=seed)
+    driver.reset(env)
+    total, steps = 0.0, 0
+    while max_steps is None or steps < max_steps:
+        observation, reward, terminated, truncated, info = env.step(driver.act(observation, info))
+        total += float(reward)
+        steps += 1
+        if terminated or truncated:
+            break
+    return total, steps, info
+
+
+class PolicyDriver:
+    """Wraps a plain ``policy(observation, info) -> action`` function as a Driver."""
+
+    def __init__(self, policy: Callable[[Any, dict[str, Any]], Any]):
+        self.policy = policy
+
+    def reset(self, env: gym.Env) -> None:
+        """A plain policy keeps no state between episodes."""
+
+    def act(self, observation: Any, info: dict[str, Any]) -> Any:
+        return self.policy(observation, info)
+
+
+def load_driver(spec: str, **kwargs: Any) -> Driver:
+    """A built-in driver by name, or ``module:callable``: a factory called with ``kwargs``
+    that returns a Driver (``reset(env)``, ``act(observation, info)``) or a policy function.
+
+    Raises ValueError (unknown name, import failure, wrong return) or the factory's TypeError.
+    """
+    if ":" not in spec:
+        return make_driver(spec, **kwargs)
+    module_name, _, attribute = spec.partition(":")
+    try:
+        factory = getattr(importlib.import_module(module_name), attribute)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None
+    made = factory(**kwargs)
+    if hasattr(made, "act"):
+        return made
+    if callable(made):
+        return PolicyDriver(made)
+    raise ValueError(f"{spec!r} returned {type(made).__name__}, not a driver or a policy function")
