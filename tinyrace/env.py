@@ -13,7 +13,6 @@ from gymnasium.error import ResetNeeded
 
 from tinyrace.actions import ActionSpec
 from tinyrace.config import EnvConfig, load_env_config
-from tinyrace.episodes import StepFacts
 from tinyrace.episodes.image import ImageCourse
 from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralCourse
 from tinyrace.errors import ConfigError, Problem
@@ -112,12 +111,14 @@ class TinyRaceEnv(gym.Env):
             t = self.config.tracks[0]
             knobs = {"radius": t.radius, "detail_step": t.detail_step, "turn_rate": t.turn_rate}
             raise ConfigError(Problem(self._source, "tracks[0]", knobs, _NO_LAP)) from exc
-        if self.verbose and getattr(self.episode.track, "attempts", 1) > 1:
-            print(f"tinyrace: track generation needed {self.episode.track.attempts} attempts")
+        if self.verbose and self.config.kind == "procedural":  # as CarRacing-v3 reports it
+            track = self.episode.track
+            print(
+                f"Track generation: {track.attempts} attempt(s) -> {len(track.tiles)}-tiles track"
+            )
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
-        self.terminated = False
         facts = self.episode.start(self.dt)
         self.t += self.dt
         # The reset step is not rewarded; tiles it touched are paid by the first step (as
@@ -128,14 +129,15 @@ class TinyRaceEnv(gym.Env):
         observation = self._observe()
         if self.render_mode == "human":
             self.render()
-        return observation, self._info(facts, {})
+        return observation, self._info({})
 
     def step(self, action):
         if self.episode is None:
             raise ResetNeeded("call reset() before step()")
         controls = self._actions.read(action)
         self.episode.car.control(*controls)
-        facts = self._advance()
+        facts = self.episode.step(self.dt)
+        self.t += self.dt
         self.steps += 1
         terms = reward_terms(facts, self.config.reward_design, self._shaping)
         carried, self._carry = self._carry, {}
@@ -148,7 +150,7 @@ class TinyRaceEnv(gym.Env):
         limit = self.config.sim.step_limit
         truncated = reason is None and limit is not None and self.steps >= limit
         observation = self._observe()
-        info = self._info(facts, terms)
+        info = self._info(terms)
         if reason is not None:
             info["termination"] = reason
             info["lap_finished"] = reason == "lap_finished"
@@ -156,15 +158,10 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, reward, reason is not None, truncated, info
 
-    def _advance(self) -> StepFacts:
-        facts = self.episode.step(self.dt)
-        self.t += self.dt
-        return facts
-
     def _observe(self):
         return self.episode.observe(self.t, self.score)
 
-    def _info(self, facts: StepFacts, terms: dict[str, float]) -> dict[str, Any]:
+    def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()
         info["reward_terms"] = terms
         return info

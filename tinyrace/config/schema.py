@@ -201,7 +201,7 @@ class CrossTrackErrorConfig:
         "reward from cte: linear -w*e/s, quadratic -w*(e/s)^2, exponential w*exp(-e/s), "
         "gaussian w*exp(-(e/s)^2/2); a cte_shaping callable kwarg overrides it",
     )
-    scale: float = knob(50.0, "s in the shapings above", "px", low=0, low_open=True)
+    scale: float = knob(50.0, "s in the shapings above", "px", low=0.01)
     weight: float = knob(1.0, "w in the shapings above")
 
 

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from tinyrace.config import EnvConfig, ProceduralTrackConfig
+from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
 from tinyrace.episodes import StepFacts
 from tinyrace.physics.dynamic_car import DynamicCar
 from tinyrace.physics.world import World
@@ -147,11 +147,15 @@ class ProceduralEpisode:
         view = self._views.get(size)
         if view is None:
             small = max(size) <= SMALL_VIEW
-            ppu = self.track_config.pixels_per_unit if small else VIDEO_PIXELS_PER_UNIT
+            ppu = self.track_config.pixels_per_unit if small else self._video_pixels_per_unit()
             dashboard, patches = self.cache.for_view(size)
             view = ChaseView(size, self.texture(ppu), self.car, dashboard, patches)
             self._views[size] = view
         return view
+
+    def _video_pixels_per_unit(self) -> float:
+        """4 px/u for videos, less on huge playfields (the texture stays <= MAX_TEXTURE_SIDE)."""
+        return min(VIDEO_PIXELS_PER_UNIT, MAX_TEXTURE_SIDE / (2 * self.track_config.playfield))
 
     def texture(self, pixels_per_unit: float) -> GroundTexture:
         texture = self._textures.get(pixels_per_unit)

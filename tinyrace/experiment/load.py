@@ -47,35 +47,41 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
     config = parser.dataclass(ExperimentConfig, raw, "")
     parser.check()
     sections = dict(config.env)
-    track_file = sections.pop(ENV_FOLDER_KEY, None)
+    track_path = sections.pop(ENV_FOLDER_KEY, None)
     kwargs: dict[str, Any] = {}
-    if track_file is None:
-        sections = _absolute_images(sections, base_dir)
-        merged = sections
+    if track_path is None:
+        merged = sections = _absolute_images(sections, base_dir, source)
     else:
-        if not isinstance(track_file, str):
-            where = f"env.{ENV_FOLDER_KEY}"
-            raise ConfigError(
-                Problem(source, where, track_file, "expected a track folder or track.yaml path")
-            )
-        track_file = base_dir / track_file
-        if track_file.is_dir():
-            track_file = track_file / TRACK_FILE
-        if not track_file.is_file():
-            where = f"env.{ENV_FOLDER_KEY}"
-            raise ConfigError(
-                Problem(
-                    source, where, str(track_file), "expected a track folder holding track.yaml"
-                )
-            )
+        track_file = _track_file(track_path, base_dir, source)
         load_env_config(config=track_file)  # its own problems, named in its own file
         merged = deep_merge(read_yaml(track_file) or {}, sections)
-        kwargs["config"] = str(track_file.resolve())
+        kwargs["config"] = str(track_file)
     env_config = parse_env_config(merged, source, prefix="env")
     return Experiment(config, source, env_config, {**kwargs, **sections})
 
 
-def _absolute_images(sections: dict[str, Any], base_dir: Path) -> dict[str, Any]:
+def _track_file(value: object, base_dir: Path, source: str) -> Path:
+    """``env.environment``: a track folder or its track.yaml, relative to the experiment."""
+    where = f"env.{ENV_FOLDER_KEY}"
+    if not isinstance(value, str):
+        raise ConfigError(
+            Problem(source, where, value, "expected a track folder or track.yaml path")
+        )
+    try:
+        path = (base_dir / value).resolve()
+        if path.is_dir():
+            path = path / TRACK_FILE
+        found = path.is_file()
+    except (OSError, ValueError):  # a name the file system cannot hold (too long, NUL byte)
+        found = False
+    if not found:
+        raise ConfigError(
+            Problem(source, where, value, "expected a track folder holding track.yaml")
+        )
+    return path
+
+
+def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> dict[str, Any]:
     """Inline track images are relative to the experiment file: make them absolute."""
     for key in ("track", "tracks"):
         tracks = sections.get(key)
@@ -83,10 +89,22 @@ def _absolute_images(sections: dict[str, Any], base_dir: Path) -> dict[str, Any]
             [tracks] if isinstance(tracks, Mapping) else tracks if isinstance(tracks, list) else []
         )
         resolved = []
-        for entry in entries:
+        for index, entry in enumerate(entries):
             if isinstance(entry, Mapping) and isinstance(entry.get("image"), str):
-                entry = {**entry, "image": str((base_dir / entry["image"]).resolve())}
+                entry = {
+                    **entry,
+                    "image": _absolute(
+                        entry["image"], base_dir, source, f"env.{key}[{index}].image"
+                    ),
+                }
             resolved.append(entry)
         if entries:
             sections = {**sections, key: resolved[0] if isinstance(tracks, Mapping) else resolved}
     return sections
+
+
+def _absolute(image: str, base_dir: Path, source: str, where: str) -> str:
+    try:
+        return str((base_dir / image).resolve())
+    except (OSError, ValueError):
+        raise ConfigError(Problem(source, where, image, "expected an image file name")) from None

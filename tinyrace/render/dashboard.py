@@ -60,8 +60,9 @@ class Dashboard:
                 region = strip[:, first : first + patch.shape[1]]
                 np.maximum(region, patch[:, : region.shape[1]], out=region)
         mask, x0, y0 = _text_mask(f"{score:04d}", self.width, self.height)
-        region = strip[y0 - self.top : y0 - self.top + mask.shape[0], x0 : x0 + mask.shape[1]]
-        np.maximum(region, mask[:, :, None], out=region)
+        top = max(y0 - self.top, 0)
+        region = strip[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
+        np.maximum(region, mask[: region.shape[0], : region.shape[1], None], out=region)
 
     def _bar(self, kind: str, place: int, steps: int, color: tuple) -> tuple[int, np.ndarray]:
         key = (kind, place, steps)
@@ -107,7 +108,7 @@ def _text_mask(text: str, width: int, height: int) -> tuple[np.ndarray, int, int
         mask, text, (1, th + 1), cv2.FONT_HERSHEY_SIMPLEX, scale, 255, thickness, cv2.LINE_AA
     )
     cx, cy = 60 * sx, height - height * 2.5 / 40
-    x0 = int(np.clip(round(cx - mask.shape[1] / 2), 0, width - mask.shape[1]))
-    y0 = int(np.clip(round(cy - mask.shape[0] / 2), 0, height - mask.shape[0]))
+    x0 = max(0, min(round(cx - mask.shape[1] / 2), width - mask.shape[1]))  # huge scores: cut
+    y0 = max(0, min(round(cy - mask.shape[0] / 2), height - mask.shape[0]))
     mask.setflags(write=False)
     return mask, x0, y0

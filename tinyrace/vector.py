@@ -1,0 +1,431 @@
+"""BatchVectorEnv: several envs per worker process, one message per worker per step.
+
+Gymnasium's ``AsyncVectorEnv`` runs one env per process and pays a pipe round trip
+and some pickling per env and step, about as long as a tinyrace step itself. Here,
+as in EnvPool, each worker steps a contiguous slice of the envs per message: the
+parent sends each worker one batch of actions, the workers write observations
+straight into shared memory and answer with their rewards, terminations,
+truncations and infos.
+
+Results are those of ``gymnasium.vector.SyncVectorEnv(env_fns)``: next-step
+autoreset, ``reset(seed=s)`` seeds env ``i`` with ``s + i``, infos merged with the
+same ``_key`` masks. ``render()`` returns the envs' frames as a tuple, like
+``SyncVectorEnv``. An exception in a worker is raised again in the parent, with
+the worker's traceback as a note (PEP 678); the vector env stays usable. An
+exception that does not survive pickling arrives as ``RuntimeError("<Type>: <message>")``.
+
+Example:
+    >>> from tinyrace.vector import make_batch
+    >>> envs = make_batch("tinyrace/CarRacing-v0", num_envs=8, workers=2)
+    >>> observations, infos = envs.reset(seed=0)
+    >>> observations.shape
+    (8, 96, 96, 3)
+    >>> envs.close()
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import multiprocessing
+import pickle
+import signal
+import traceback
+from collections.abc import Callable, Sequence
+from copy import deepcopy
+from multiprocessing.connection import Connection
+from multiprocessing.reduction import ForkingPickler
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.spaces import Box, Discrete, MultiBinary, MultiDiscrete
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import (
+    CloudpickleWrapper,
+    batch_space,
+    create_shared_memory,
+    iterate,
+    read_from_shared_memory,
+    write_to_shared_memory,
+)
+
+CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
+CLOSED = "closed"  # a worker's last answer
+ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
+
+
+class BatchVectorEnv(VectorEnv):
+    """``len(env_fns)`` envs in ``workers`` processes, each stepping a contiguous slice.
+
+    Args:
+        env_fns: functions that make the envs; with ``context="spawn"`` they are sent
+            with cloudpickle, so the env ids they make must be importable there
+            (``"tinyrace:tinyrace/CarRacing-v0"`` or ``make_batch`` do that).
+        workers: processes to run the envs in (at most one per env).
+        context: ``multiprocessing`` start method; ``None`` for the platform default.
+        copy: return a copy of the observations (else views of the shared memory,
+            overwritten by the next step), as ``SyncVectorEnv``'s ``copy``.
+    """
+
+    def __init__(
+        self,
+        env_fns: Sequence[Callable[[], gym.Env]],
+        workers: int = 2,
+        context: str | None = None,
+        copy: bool = True,
+    ):
+        env_fns = list(env_fns)
+        if not env_fns:
+            raise ValueError("BatchVectorEnv needs at least one env function")
+        if workers < 1:
+            raise ValueError(f"workers must be >= 1, got {workers}")
+        self.env_fns, self.copy = env_fns, copy
+        self.num_envs = len(env_fns)
+        self.autoreset_mode = AutoresetMode.NEXT_STEP
+        self._pipes: list[Connection] = []
+        self._processes: list[multiprocessing.process.BaseProcess] = []
+        # The shared memory must exist before the workers start, so the spaces come from
+        # an env made here (as AsyncVectorEnv does).
+        probe = env_fns[0]()
+        self.metadata = {**probe.metadata, "autoreset_mode": self.autoreset_mode}
+        self.render_mode = probe.render_mode
+        self.single_observation_space = probe.observation_space
+        self.single_action_space = probe.action_space
+        probe.close()
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+
+        ctx = multiprocessing.get_context(context)
+        self._buffer = create_shared_memory(self.single_observation_space, self.num_envs, ctx)
+        self._observations = read_from_shared_memory(
+            self.single_observation_space, self._buffer, self.num_envs
+        )
+        bounds = np.linspace(0, self.num_envs, min(workers, self.num_envs) + 1).astype(int)
+        self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds)]
+        for number, envs in enumerate(self._slices):
+            parent, child = ctx.Pipe()
+            fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
+            process = ctx.Process(
+                target=_work,
+                args=(child, parent, fns, envs.start, self._buffer),
+                name=f"BatchVectorEnv-worker-{number}",
+                daemon=True,
+            )
+            process.start()
+            child.close()
+            self._pipes.append(parent)
+            self._processes.append(process)
+        try:
+            self._check_spaces(self._receive_all())
+        except Exception:  # e.g. an env that cannot be made in a worker
+            self.close()
+            raise
+
+    def _check_spaces(self, replies: list[list[tuple[gym.Space, gym.Space]]]) -> None:
+        """Every env must have the first env's spaces, as in SyncVectorEnv."""
+        expected = (self.single_observation_space, self.single_action_space)
+        for index, spaces in enumerate(_flat(replies)):
+            if spaces != expected:
+                raise RuntimeError(
+                    f"env {index} has the spaces {spaces}, env 0 has {expected}: "
+                    "a BatchVectorEnv's envs must share their observation and action spaces"
+                )
+
+    # -- gymnasium API ----------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | Sequence[int | None] | None = None, options: dict | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        """Reset every env (or those in ``options["reset_mask"]``), as SyncVectorEnv does."""
+        if seed is None:
+            seed = [None] * self.num_envs
+        elif isinstance(seed, int):
+            seed = [seed + i for i in range(self.num_envs)]
+        if len(seed) != self.num_envs:
+            raise ValueError(
+                f"If seeds are passed as a list the length must match num_envs={self.num_envs} "
+                f"but got length={len(seed)}."
+            )
+        mask = np.ones(self.num_envs, dtype=np.bool_)
+        if options is not None and "reset_mask" in options:
+            options = dict(options)  # unlike SyncVectorEnv, leave the caller's dict alone
+            mask = _check_reset_mask(options.pop("reset_mask"), self.num_envs)
+        replies = self._exchange("reset", [(seed[s], options, mask[s]) for s in self._slices])
+        infos: dict[str, Any] = {}
+        for index, info in enumerate(_flat(replies)):
+            if info is not None:  # None: not in the reset mask
+                infos = self._add_info(infos, info, index)
+        return self._observations_out(), infos
+
+    def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Step every env; an env whose episode ended at the last step is reset instead."""
+        replies = self._exchange("step", [(batch,) for batch in self._split_actions(actions)])
+        # the workers' slices are contiguous and in order: flattened, item i is env i's
+        rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
+        infos: dict[str, Any] = {}
+        for index, info in enumerate(env_infos):
+            infos = self._add_info(infos, info, index)
+        return (
+            self._observations_out(),
+            np.array(rewards, dtype=np.float64),
+            np.array(terminated, dtype=np.bool_),
+            np.array(truncated, dtype=np.bool_),
+            infos,
+        )
+
+    def render(self) -> tuple[Any, ...]:
+        """The frames of the envs, as a tuple (``SyncVectorEnv.render``)."""
+        return self.call("render")
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+        """Call method ``name`` of every env (or read the attribute); a tuple of results."""
+        replies = self._exchange("call", [(name, args, kwargs)] * len(self._slices))
+        return tuple(_flat(replies))
+
+    def get_attr(self, name: str) -> tuple[Any, ...]:
+        """Attribute ``name`` of every env."""
+        return self.call(name)
+
+    def set_attr(self, name: str, values: Any) -> None:
+        """Set attribute ``name`` of every env: one value for all or a list of one per env."""
+        if not isinstance(values, list | tuple):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(
+                "Values must be a list or tuple with length equal to the number of environments. "
+                f"Got `{len(values)}` values for {self.num_envs} environments."
+            )
+        self._exchange("set_attr", [(name, values[s]) for s in self._slices])
+
+    @property
+    def np_random_seed(self) -> tuple[int, ...]:
+        """The seeds of the envs' random generators."""
+        return self.get_attr("np_random_seed")
+
+    @property
+    def np_random(self) -> tuple[np.random.Generator, ...]:
+        """Copies of the envs' random generators."""
+        return self.get_attr("np_random")
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the envs, stop the workers (terminating any that hang), free the memory."""
+        for pipe in self._pipes:
+            with contextlib.suppress(OSError):  # a worker that is gone already
+                pipe.send(("close", ()))
+        for pipe, process in zip(self._pipes, self._processes, strict=True):
+            _await_close(pipe)
+            pipe.close()
+            process.join(CLOSE_TIMEOUT)
+            if process.is_alive():
+                process.terminate()
+                process.join()
+        self._pipes, self._processes = [], []
+        self._observations = self._buffer = None  # the shared memory goes with its last view
+
+    def __del__(self) -> None:
+        if not self.closed and hasattr(self, "_pipes"):
+            self.close()
+
+    # -- messages ---------------------------------------------------------------------------
+    def _exchange(self, command: str, args: list[tuple]) -> list[Any]:
+        """Send each worker its command and arguments; every worker's answer, in order."""
+        if self.closed:
+            raise gym.error.ClosedEnvironmentError("BatchVectorEnv was closed")
+        # all pickled first: an argument that cannot be pickled leaves the pipes in step
+        messages = [ForkingPickler.dumps((command, worker_args)) for worker_args in args]
+        for pipe, message in zip(self._pipes, messages, strict=True):
+            with contextlib.suppress(OSError):  # a dead worker: reported by _receive_all
+                pipe.send_bytes(message)
+        return self._receive_all()
+
+    def _receive_all(self) -> list[Any]:
+        """Every worker's answer, in order; the first worker's exception is raised here."""
+        replies = []
+        for number, pipe in enumerate(self._pipes):
+            try:
+                replies.append(pipe.recv())
+            except (EOFError, OSError):  # no answer will ever come
+                process = self._processes[number]
+                self.close()
+                raise RuntimeError(
+                    f"BatchVectorEnv worker {number} (envs {_show(self._slices[number])}) "
+                    f"died without an answer (exit code {process.exitcode})"
+                ) from None
+            except BaseException:  # e.g. Ctrl-C: the pipes would be out of step
+                self.close()
+                raise
+        for number, (ok, result) in enumerate(replies):
+            if not ok:
+                raise _rebuild_error(result, number, self._slices[number])
+        return [result for _, result in replies]
+
+    def _split_actions(self, actions: Any) -> list[Any]:
+        """One batch per worker: an array slice for array spaces, else a list of actions."""
+        if isinstance(self.single_action_space, ARRAY_ACTIONS):
+            batch = np.asarray(actions)
+        else:
+            batch = list(iterate(self.action_space, actions))
+        if len(batch) != self.num_envs:
+            raise ValueError(f"expected actions for {self.num_envs} envs, got {len(batch)}")
+        return [batch[s] for s in self._slices]
+
+    def _observations_out(self) -> Any:
+        return deepcopy(self._observations) if self.copy else self._observations
+
+
+def make_batch(
+    id: str, num_envs: int, workers: int = 2, *, context: str | None = None, **kwargs: Any
+) -> BatchVectorEnv:
+    """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``."""
+    maker = _Maker(id, kwargs)
+    return BatchVectorEnv([maker] * num_envs, workers=workers, context=context)
+
+
+class _Maker:
+    """``gym.make(id, **kwargs)``; pickled by reference to this module, which registers
+    tinyrace's ids when a spawned worker imports it."""
+
+    def __init__(self, id: str, kwargs: dict[str, Any]):
+        self.id, self.kwargs = id, kwargs
+
+    def __call__(self) -> gym.Env:
+        return gym.make(self.id, **self.kwargs)
+
+
+def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
+    """``options["reset_mask"]``, checked as SyncVectorEnv does."""
+    if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
+        raise TypeError(f"`options['reset_mask']` must be a numpy array of bools, got {mask!r}")
+    if mask.shape != (num_envs,) or not mask.any():
+        raise ValueError(
+            f"`options['reset_mask']` must have shape `({num_envs},)` and a True value, got {mask}"
+        )
+    return mask
+
+
+def _flat(per_worker: Sequence[list]) -> list:
+    return list(itertools.chain.from_iterable(per_worker))
+
+
+def _show(envs: slice) -> str:
+    return f"{envs.start}-{envs.stop - 1}" if envs.stop - envs.start > 1 else str(envs.start)
+
+
+def _rebuild_error(
+    error: tuple[str, str, str, bytes | None], number: int, envs: slice
+) -> Exception:
+    """The worker's exception (or a RuntimeError naming it), its traceback as a note."""
+    name, message, trace, pickled = error
+    rebuilt: Exception | None = None
+    with contextlib.suppress(Exception):
+        rebuilt = pickle.loads(pickled) if pickled is not None else None
+    if rebuilt is None or str(rebuilt) != message:  # exceptions whose args are not the message
+        rebuilt = RuntimeError(f"{name}: {message}")
+    rebuilt.add_note(f"raised in BatchVectorEnv worker {number} (envs {_show(envs)}):\n{trace}")
+    return rebuilt
+
+
+# -- the worker process -------------------------------------------------------------------------
+class _Slice:
+    """One worker's envs: envs ``first``, ``first + 1``, ... of the vector env."""
+
+    def __init__(self, env_fns: list[Callable[[], gym.Env]], first: int, buffer: Any):
+        self.envs = [fn() for fn in env_fns]
+        self.first, self.buffer = first, buffer
+        self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
+
+    def spaces(self) -> list[tuple[gym.Space, gym.Space]]:
+        return [(env.observation_space, env.action_space) for env in self.envs]
+
+    def reset(self, seeds: list, options: dict | None, mask: np.ndarray) -> list[dict | None]:
+        infos: list[dict | None] = []
+        for j, env in enumerate(self.envs):
+            if not mask[j]:
+                infos.append(None)
+                continue
+            observation, info = env.reset(seed=seeds[j], options=options)
+            self._write(j, observation)
+            self.autoreset[j] = False
+            infos.append(info)
+        return infos
+
+    def step(self, actions: Any) -> tuple[list[float], list[bool], list[bool], list[dict]]:
+        n = len(self.envs)
+        rewards = np.zeros(n, dtype=np.float64)
+        terminated, truncated = np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_)
+        infos = []
+        for j, env in enumerate(self.envs):
+            if self.autoreset[j]:  # the episode ended at the last step: reward 0, not done
+                observation, info = env.reset()
+            else:
+                observation, rewards[j], terminated[j], truncated[j], info = env.step(actions[j])
+            self._write(j, observation)
+            infos.append(info)
+        self.autoreset = terminated | truncated
+        # cast by numpy as SyncVectorEnv's arrays do; sent as lists, which pickle faster
+        return rewards.tolist(), terminated.tolist(), truncated.tolist(), infos
+
+    def call(self, name: str, args: tuple, kwargs: dict) -> list[Any]:
+        results = []
+        for env in self.envs:
+            attribute = env.get_wrapper_attr(name)
+            results.append(attribute(*args, **kwargs) if callable(attribute) else attribute)
+        return results
+
+    def set_attr(self, name: str, values: Sequence[Any]) -> None:
+        for env, value in zip(self.envs, values, strict=True):
+            env.set_wrapper_attr(name, value)
+
+    def close(self) -> None:
+        for env in self.envs:
+            env.close()
+
+    def _write(self, j: int, observation: Any) -> None:
+        space = self.envs[j].observation_space
+        write_to_shared_memory(space, self.first + j, observation, self.buffer)
+
+
+def _work(pipe: Connection, parent: Connection, env_fns: list, first: int, buffer: Any) -> None:
+    """A worker's loop: build the envs, then answer ``(command, args)`` until "close"."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    parent.close()
+    try:
+        envs = _Slice(env_fns, first, buffer)
+    except Exception as error:
+        pipe.send((False, _describe(error)))
+        return
+    pipe.send((True, envs.spaces()))
+    while True:
+        try:
+            command, args = pipe.recv()
+        except EOFError:  # the parent is gone
+            break
+        if command == "close":
+            envs.close()
+            pipe.send((True, CLOSED))
+            break
+        try:
+            pipe.send((True, getattr(envs, command)(*args)))
+        except Exception as error:
+            pipe.send((False, _describe(error)))
+
+
+def _describe(error: Exception) -> tuple[str, str, str, bytes | None]:
+    """(type name, message, traceback text, the pickled exception or None)."""
+    try:
+        pickled: bytes | None = pickle.dumps(error)
+    except Exception:
+        pickled = None
+    return type(error).__name__, str(error), traceback.format_exc(), pickled
+
+
+def _await_close(pipe: Connection) -> None:
+    """Read answers until the worker confirms "close" (answers to an interrupted command
+    may come first), it exits, or CLOSE_TIMEOUT passes."""
+    try:
+        while pipe.poll(CLOSE_TIMEOUT):
+            _, result = pipe.recv()
+            if isinstance(result, str) and result == CLOSED:
+                return
+    except (EOFError, OSError):
+        return
