@@ -24,7 +24,8 @@ machine's conditions. Measured:
   a reset and 200 steps; beside a process that only imports gymnasium, numpy,
   cv2 and pymunk;
 - ``SyncVectorEnv`` and ``AsyncVectorEnv`` (2 envs, 2 workers) env-steps/s of
-  ``tinyrace/CarRacing-v0`` against one env's steps/s.
+  ``tinyrace/CarRacing-v0`` against one env's steps/s, and tinyrace's
+  ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step).
 
 It prints the targets with PASS/FAIL, then the figures behind them, and writes
 every figure as JSON. Memory is in MB of 10^6 bytes. ``profile_step.py`` shows
@@ -54,13 +55,14 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
-from report import BIG, EXAMPLE_TRACKS, SMALL, TARGETS, report
+from report import BIG, EXAMPLE_TRACKS, SMALL, TARGETS, print_table, ratio_row, report
 from stepping import SEED, Stepper, interleave, quiet_gym_warnings, time_resets, unavailable
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = ROOT / "benchmarks" / "results" / "latest.json"
 RSS_STEPS = 200
 GENERATED_SIZES = {SMALL: (1000, 1000), BIG: (6000, 3000)}  # (width, height) [px]
+BATCH_ENVS = 8  # envs of the BatchVectorEnv case, in 2 workers
 
 FRONT = {"id": "front", "resolution": [120, 160], "roi": [360, 480]}
 ONE_CAMERA = [FRONT]
@@ -193,19 +195,35 @@ def measure_image_tracks(budget: Budget, generated_dir: Path) -> dict[str, Any]:
 
 
 def measure_vector(budget: Budget) -> dict[str, Any]:
-    """Env-steps/s of one env, SyncVectorEnv(2) and AsyncVectorEnv(2 workers), interleaved."""
+    """Env-steps/s of one env, SyncVectorEnv(2), AsyncVectorEnv(2 workers) and
+    BatchVectorEnv(8 envs, 2 workers), interleaved."""
+    from tinyrace.vector import BatchVectorEnv  # here: the RSS baseline must not import tinyrace
+
     makers = [make_tinyrace, make_tinyrace]
     steppers = {"single": Stepper(make_tinyrace())}
     results: dict[str, Any] = {}
-    for name, vector_class in (
-        ("sync_2", gym.vector.SyncVectorEnv),
-        ("async_2", gym.vector.AsyncVectorEnv),
+    for name, make_vector, batch in (
+        ("sync_2", lambda: gym.vector.SyncVectorEnv(makers), 2),
+        ("async_2", lambda: gym.vector.AsyncVectorEnv(makers), 2),
+        ("batch_2x8", lambda: BatchVectorEnv([make_tinyrace] * BATCH_ENVS, workers=2), BATCH_ENVS),
     ):
         try:
-            steppers[name] = Stepper(vector_class(makers), batch=2, auto_reset=True)
+            steppers[name] = Stepper(make_vector(), batch=batch, auto_reset=True)
         except Exception as error:
             results[name] = unavailable(error)
     return {**timed(steppers, budget), **results}
+
+
+def report_batch(results: dict[str, Any]) -> None:
+    """BatchVectorEnv's ratio to one env, for information (``report.TARGETS`` has no entry)."""
+    vector = results["vector"]
+    row = ratio_row(
+        f"BatchVectorEnv(2 workers, {BATCH_ENVS} envs) vs one env",
+        vector.get("batch_2x8"),
+        vector.get("single"),
+        TARGETS["async_ratio"],
+    )
+    print_table("Informational", ["measure", "value", "target", "result"], [row])
 
 
 def timed(steppers: dict[str, Stepper], budget: Budget) -> dict[str, Any]:
@@ -340,6 +358,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     results = run(QUICK if args.quick else FULL)
     report(results, RSS_STEPS)
+    report_batch(results)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"\nwrote {args.out}")

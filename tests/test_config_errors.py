@@ -164,3 +164,15 @@ def test_bad_reset_options(tmp_path):
             env.reset(options=options)
         assert caught.value.problems[0].path == key
         assert allowed in str(caught.value)
+
+
+def test_config_errors_pickle_with_their_problems():
+    """Vector envs carry a worker's ConfigError to the parent by pickling it."""
+    import pickle
+
+    from tinyrace.errors import ConfigError, Problem
+
+    error = ConfigError([Problem("t.yaml", "sim.fps", -1, "expected a number >= 1")])
+    again = pickle.loads(pickle.dumps(error))
+    assert type(again) is ConfigError
+    assert again.problems == error.problems and str(again) == str(error)

@@ -39,6 +39,10 @@ class ConfigError(ValueError):
         )
         super().__init__(head + ":\n  " + "\n  ".join(lines))
 
+    def __reduce__(self):
+        """Pickle by the problems, so the error crosses process boundaries (vector envs)."""
+        return ConfigError, (self.problems,)
+
 
 def config_error(source: str, path: str, value: object, allowed: str) -> ConfigError:
     """Shorthand for a ConfigError with a single problem."""

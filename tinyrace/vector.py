@@ -11,8 +11,15 @@ Results are those of ``gymnasium.vector.SyncVectorEnv(env_fns)``: next-step
 autoreset, ``reset(seed=s)`` seeds env ``i`` with ``s + i``, infos merged with the
 same ``_key`` masks. ``render()`` returns the envs' frames as a tuple, like
 ``SyncVectorEnv``. An exception in a worker is raised again in the parent, with
-the worker's traceback as a note (PEP 678); the vector env stays usable. An
+the worker's traceback as a note (PEP 678), once every worker has answered; the
+vector env stays usable, with the envs that stepped before the error stepped (as
+in SyncVectorEnv, though here that includes every other worker's envs). An
 exception that does not survive pickling arrives as ``RuntimeError("<Type>: <message>")``.
+A worker that dies closes the vector env and raises a RuntimeError naming it.
+
+Between commands a worker polls its pipe for ``WORKER_SPIN`` before it sleeps
+(yielding its core to any other process meanwhile): a training loop that calls
+``step`` again within that time skips the worker's wake-up.
 
 Example:
     >>> from tinyrace.vector import make_batch
@@ -26,10 +33,13 @@ Example:
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import multiprocessing
+import os
 import pickle
 import signal
+import time
 import traceback
 from collections.abc import Callable, Sequence
 from copy import deepcopy
@@ -39,7 +49,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.spaces import Box, Discrete, MultiBinary, MultiDiscrete
+from gymnasium.spaces import Box, Dict, Discrete, MultiBinary, MultiDiscrete
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import (
     CloudpickleWrapper,
@@ -51,7 +61,11 @@ from gymnasium.vector.utils import (
 )
 
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
+# [s] a worker polls for its next command this long before it sleeps: waking a sleeping
+# process on another core costs 0.1-0.6 ms on a virtual machine, as much as a few env steps
+WORKER_SPIN = 0.0005
 CLOSED = "closed"  # a worker's last answer
+_yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # no sched_yield on Windows
 ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
 
 
@@ -103,12 +117,13 @@ class BatchVectorEnv(VectorEnv):
         )
         bounds = np.linspace(0, self.num_envs, min(workers, self.num_envs) + 1).astype(int)
         self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds)]
+        memory = (self._buffer, self.single_observation_space, self.num_envs)
         for number, envs in enumerate(self._slices):
             parent, child = ctx.Pipe()
             fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
             process = ctx.Process(
                 target=_work,
-                args=(child, parent, fns, envs.start, self._buffer),
+                args=(child, parent, fns, envs.start, memory),
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
             )
@@ -277,19 +292,13 @@ def make_batch(
     id: str, num_envs: int, workers: int = 2, *, context: str | None = None, **kwargs: Any
 ) -> BatchVectorEnv:
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``."""
-    maker = _Maker(id, kwargs)
+    maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv([maker] * num_envs, workers=workers, context=context)
 
 
-class _Maker:
-    """``gym.make(id, **kwargs)``; pickled by reference to this module, which registers
-    tinyrace's ids when a spawned worker imports it."""
-
-    def __init__(self, id: str, kwargs: dict[str, Any]):
-        self.id, self.kwargs = id, kwargs
-
-    def __call__(self) -> gym.Env:
-        return gym.make(self.id, **self.kwargs)
+def _make(id: str, kwargs: dict[str, Any]) -> gym.Env:
+    # pickled by reference to this module: a spawned worker imports tinyrace, registering its ids
+    return gym.make(id, **kwargs)
 
 
 def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
@@ -329,10 +338,16 @@ def _rebuild_error(
 class _Slice:
     """One worker's envs: envs ``first``, ``first + 1``, ... of the vector env."""
 
-    def __init__(self, env_fns: list[Callable[[], gym.Env]], first: int, buffer: Any):
+    def __init__(self, env_fns: list, first: int, memory: tuple[Any, gym.Space, int]):
         self.envs = [fn() for fn in env_fns]
-        self.first, self.buffer = first, buffer
+        self.first = first
+        self.buffer, self.space, num_envs = memory
         self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
+        # Boxes (and Dicts of them) are written through views made once: several times
+        # faster than write_to_shared_memory, which takes a new view of all memory per call.
+        spaces = self.space.values() if isinstance(self.space, Dict) else [self.space]
+        plain = all(isinstance(space, Box) for space in spaces)
+        self.views = read_from_shared_memory(self.space, self.buffer, num_envs) if plain else None
 
     def spaces(self) -> list[tuple[gym.Space, gym.Space]]:
         return [(env.observation_space, env.action_space) for env in self.envs]
@@ -381,21 +396,28 @@ class _Slice:
             env.close()
 
     def _write(self, j: int, observation: Any) -> None:
-        space = self.envs[j].observation_space
-        write_to_shared_memory(space, self.first + j, observation, self.buffer)
+        index = self.first + j
+        if self.views is None:
+            write_to_shared_memory(self.space, index, observation, self.buffer)
+        elif isinstance(self.views, dict):
+            for key, view in self.views.items():
+                view[index] = observation[key]
+        else:
+            self.views[index] = observation
 
 
-def _work(pipe: Connection, parent: Connection, env_fns: list, first: int, buffer: Any) -> None:
+def _work(pipe: Connection, parent: Connection, env_fns: list, first: int, memory: tuple) -> None:
     """A worker's loop: build the envs, then answer ``(command, args)`` until "close"."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
     try:
-        envs = _Slice(env_fns, first, buffer)
+        envs = _Slice(env_fns, first, memory)
     except Exception as error:
         pipe.send((False, _describe(error)))
         return
     pipe.send((True, envs.spaces()))
     while True:
+        _poll(pipe, WORKER_SPIN)
         try:
             command, args = pipe.recv()
         except EOFError:  # the parent is gone
@@ -408,6 +430,13 @@ def _work(pipe: Connection, parent: Connection, env_fns: list, first: int, buffe
             pipe.send((True, getattr(envs, command)(*args)))
         except Exception as error:
             pipe.send((False, _describe(error)))
+
+
+def _poll(pipe: Connection, seconds: float) -> None:
+    """Return when ``pipe`` has data or after ``seconds``, yielding the core meanwhile."""
+    deadline = time.perf_counter() + seconds
+    while not pipe.poll() and time.perf_counter() < deadline:
+        _yield_core()
 
 
 def _describe(error: Exception) -> tuple[str, str, str, bytes | None]:
