@@ -36,11 +36,7 @@ import contextlib
 import functools
 import itertools
 import multiprocessing
-import os
 import pickle
-import signal
-import time
-import traceback
 from collections.abc import Callable, Sequence
 from copy import deepcopy
 from multiprocessing.connection import Connection
@@ -49,7 +45,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.spaces import Box, Dict, Discrete, MultiBinary, MultiDiscrete
+from gymnasium.spaces import Box, Discrete, MultiBinary, MultiDiscrete
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import (
     CloudpickleWrapper,
@@ -57,15 +53,11 @@ from gymnasium.vector.utils import (
     create_shared_memory,
     iterate,
     read_from_shared_memory,
-    write_to_shared_memory,
 )
 
+from tinyrace.vector.worker import CLOSED, work
+
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
-# [s] a worker polls for its next command this long before it sleeps: waking a sleeping
-# process on another core costs 0.1-0.6 ms on a virtual machine, as much as a few env steps
-WORKER_SPIN = 0.0005
-CLOSED = "closed"  # a worker's last answer
-_yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # no sched_yield on Windows
 ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
 
 
@@ -122,7 +114,7 @@ class BatchVectorEnv(VectorEnv):
             parent, child = ctx.Pipe()
             fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
             process = ctx.Process(
-                target=_work,
+                target=work,
                 args=(child, parent, fns, envs.start, memory),
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
@@ -335,119 +327,6 @@ def _rebuild_error(
 
 
 # -- the worker process -------------------------------------------------------------------------
-class _Slice:
-    """One worker's envs: envs ``first``, ``first + 1``, ... of the vector env."""
-
-    def __init__(self, env_fns: list, first: int, memory: tuple[Any, gym.Space, int]):
-        self.envs = [fn() for fn in env_fns]
-        self.first = first
-        self.buffer, self.space, num_envs = memory
-        self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
-        # Boxes (and Dicts of them) are written through views made once: several times
-        # faster than write_to_shared_memory, which takes a new view of all memory per call.
-        spaces = self.space.values() if isinstance(self.space, Dict) else [self.space]
-        plain = all(isinstance(space, Box) for space in spaces)
-        self.views = read_from_shared_memory(self.space, self.buffer, num_envs) if plain else None
-
-    def spaces(self) -> list[tuple[gym.Space, gym.Space]]:
-        return [(env.observation_space, env.action_space) for env in self.envs]
-
-    def reset(self, seeds: list, options: dict | None, mask: np.ndarray) -> list[dict | None]:
-        infos: list[dict | None] = []
-        for j, env in enumerate(self.envs):
-            if not mask[j]:
-                infos.append(None)
-                continue
-            observation, info = env.reset(seed=seeds[j], options=options)
-            self._write(j, observation)
-            self.autoreset[j] = False
-            infos.append(info)
-        return infos
-
-    def step(self, actions: Any) -> tuple[list[float], list[bool], list[bool], list[dict]]:
-        n = len(self.envs)
-        rewards = np.zeros(n, dtype=np.float64)
-        terminated, truncated = np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_)
-        infos = []
-        for j, env in enumerate(self.envs):
-            if self.autoreset[j]:  # the episode ended at the last step: reward 0, not done
-                observation, info = env.reset()
-            else:
-                observation, rewards[j], terminated[j], truncated[j], info = env.step(actions[j])
-            self._write(j, observation)
-            infos.append(info)
-        self.autoreset = terminated | truncated
-        # cast by numpy as SyncVectorEnv's arrays do; sent as lists, which pickle faster
-        return rewards.tolist(), terminated.tolist(), truncated.tolist(), infos
-
-    def call(self, name: str, args: tuple, kwargs: dict) -> list[Any]:
-        results = []
-        for env in self.envs:
-            attribute = env.get_wrapper_attr(name)
-            results.append(attribute(*args, **kwargs) if callable(attribute) else attribute)
-        return results
-
-    def set_attr(self, name: str, values: Sequence[Any]) -> None:
-        for env, value in zip(self.envs, values, strict=True):
-            env.set_wrapper_attr(name, value)
-
-    def close(self) -> None:
-        for env in self.envs:
-            env.close()
-
-    def _write(self, j: int, observation: Any) -> None:
-        index = self.first + j
-        if self.views is None:
-            write_to_shared_memory(self.space, index, observation, self.buffer)
-        elif isinstance(self.views, dict):
-            for key, view in self.views.items():
-                view[index] = observation[key]
-        else:
-            self.views[index] = observation
-
-
-def _work(pipe: Connection, parent: Connection, env_fns: list, first: int, memory: tuple) -> None:
-    """A worker's loop: build the envs, then answer ``(command, args)`` until "close"."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    parent.close()
-    try:
-        envs = _Slice(env_fns, first, memory)
-    except Exception as error:
-        pipe.send((False, _describe(error)))
-        return
-    pipe.send((True, envs.spaces()))
-    while True:
-        _poll(pipe, WORKER_SPIN)
-        try:
-            command, args = pipe.recv()
-        except EOFError:  # the parent is gone
-            break
-        if command == "close":
-            envs.close()
-            pipe.send((True, CLOSED))
-            break
-        try:
-            pipe.send((True, getattr(envs, command)(*args)))
-        except Exception as error:
-            pipe.send((False, _describe(error)))
-
-
-def _poll(pipe: Connection, seconds: float) -> None:
-    """Return when ``pipe`` has data or after ``seconds``, yielding the core meanwhile."""
-    deadline = time.perf_counter() + seconds
-    while not pipe.poll() and time.perf_counter() < deadline:
-        _yield_core()
-
-
-def _describe(error: Exception) -> tuple[str, str, str, bytes | None]:
-    """(type name, message, traceback text, the pickled exception or None)."""
-    try:
-        pickled: bytes | None = pickle.dumps(error)
-    except Exception:
-        pickled = None
-    return type(error).__name__, str(error), traceback.format_exc(), pickled
-
-
 def _await_close(pipe: Connection) -> None:
     """Read answers until the worker confirms "close" (answers to an interrupted command
     may come first), it exits, or CLOSE_TIMEOUT passes."""
