@@ -88,7 +88,6 @@ def accelerate(on_road: bool, steps: int = 25) -> float:
         car.control(0.0, 1.0, 0.0)
         car.apply_forces(1 / 50, [on_road] * 4)
         space.step(1 / 50)
-        car.after_step(1 / 50)
     return car.speed
 
 

@@ -42,8 +42,3 @@ class ConfigError(ValueError):
     def __reduce__(self):
         """Pickle by the problems, so the error crosses process boundaries (vector envs)."""
         return ConfigError, (self.problems,)
-
-
-def config_error(source: str, path: str, value: object, allowed: str) -> ConfigError:
-    """Shorthand for a ConfigError with a single problem."""
-    return ConfigError(Problem(source, path, value, allowed))

@@ -97,7 +97,6 @@ class ImageEpisode:
 
     def _sense(self, dt: float) -> StepFacts:
         contacts = self.world.step(dt)
-        self.car.after_step(dt)
         facts = StepFacts()
         if contacts.obstacle_cells:
             candidates = {int(self.track.cell_obstacles[i]) for i in contacts.obstacle_cells}

@@ -89,7 +89,6 @@ class ProceduralEpisode:
         on_road = [bool(tiles) for tiles in contacts.wheel_tiles]
         self.car.apply_forces(dt, on_road)
         self.world.step(dt)
-        self.car.after_step(dt)
         facts = self._visit(contacts.new_tile_touches)
         facts.wheels_on_grass = sum(not tiles for tiles in contacts.wheel_tiles)
         x, y = self.car.body.position

@@ -78,9 +78,6 @@ class SkidMarks:
         self._next = 0
         self._count = 0
 
-    def __len__(self) -> int:
-        return int(np.count_nonzero(self.lengths))
-
     def start(self, first: tuple, second: tuple, on_grass: bool) -> tuple[int, int]:
         """A new two-point mark (evicting the oldest); returns its handle (slot, serial)."""
         slot = self._next
@@ -245,9 +242,6 @@ class DynamicCar:
             error = self.steer_target - wheel.steer
             rate = math.copysign(min(spec.steer_gain * abs(error), spec.steer_speed), error)
             wheel.steer = min(max(wheel.steer + rate * dt, -spec.steer_limit), spec.steer_limit)
-
-    def after_step(self, dt: float) -> None:
-        """Nothing to correct: ``apply_forces`` already set this step's velocities."""
 
     def _track_skid(self, index: int, wheel: Wheel, on_road: bool) -> None:
         """Skid marks: polylines where the tyre force exceeds twice the friction limit."""

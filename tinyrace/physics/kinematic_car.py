@@ -69,9 +69,6 @@ class KinematicCar:
         self.body.velocity = (speed * math.cos(direction), speed * math.sin(direction))
         self.body.angular_velocity = turn_rate
 
-    def after_step(self, dt: float) -> None:
-        """Nothing to correct: the bicycle has no slip and no speed cap."""
-
     @property
     def pose(self) -> tuple[float, float, float]:
         x, y = self.body.position

@@ -19,17 +19,6 @@ import numpy as np
 Painter = Callable[[np.ndarray, np.ndarray], None]
 
 
-def affine(scale_x: float, scale_y: float, angle: float, origin: tuple[float, float]) -> np.ndarray:
-    """2x3 matrix: rotate world offsets by ``angle``, scale, then translate by ``origin``."""
-    cos_a, sin_a = np.cos(angle), np.sin(angle)
-    return np.array(
-        [
-            [scale_x * cos_a, -scale_x * sin_a, origin[0]],
-            [scale_y * sin_a, scale_y * cos_a, origin[1]],
-        ]
-    )
-
-
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
     """The affine ``outer ∘ inner`` (apply inner first)."""
     result = outer[:, :2] @ inner
@@ -140,7 +129,3 @@ class GroundTexture:
         painter(self.levels[0], self.to_pixels[0])
         for level in range(1, len(self.levels)):
             self.levels[level] = None
-
-    @property
-    def nbytes(self) -> int:
-        return sum(level.nbytes for level in self.levels if level is not None)
