@@ -130,7 +130,7 @@ def target_rows(results: dict[str, Any]) -> list[list[str]]:
 def step_rows(results: dict[str, Any]) -> list[list[str]]:
     """Every timing: section, case, steps/s with and without resets, round spread, resets."""
     rows = []
-    for section in ("throughput", "image_tracks", "vector"):
+    for section in ("throughput", "image_tracks", "vector", "vector_ceiling"):
         for name, entry in results[section].items():
             if rate_of(entry) is None:
                 rows.append([section, name, why_missing(entry), "", "", "", ""])

@@ -25,7 +25,10 @@ machine's conditions. Measured:
   cv2 and pymunk;
 - ``SyncVectorEnv`` and ``AsyncVectorEnv`` (2 envs, 2 workers) env-steps/s of
   ``tinyrace/CarRacing-v0`` against one env's steps/s, and tinyrace's
-  ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step).
+  ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step);
+- beside them, the ceiling: ``AsyncVectorEnv`` (2 workers) of a stand-in env that only
+  busy-waits for the step time of tinyrace (and of CarRacing-v3) measured in this run,
+  against one such stand-in.
 
 It prints the targets with PASS/FAIL, then the figures behind them, and writes
 every figure as JSON. Memory is in MB of 10^6 bytes. ``profile_step.py`` shows
@@ -55,7 +58,17 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
-from report import BIG, EXAMPLE_TRACKS, SMALL, TARGETS, print_table, ratio_row, report
+from report import (
+    BIG,
+    EXAMPLE_TRACKS,
+    SMALL,
+    TARGETS,
+    print_table,
+    rate_of,
+    ratio_row,
+    report,
+)
+from standin import StandIn
 from stepping import SEED, Stepper, interleave, quiet_gym_warnings, time_resets, unavailable
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -214,16 +227,59 @@ def measure_vector(budget: Budget) -> dict[str, Any]:
     return {**timed(steppers, budget), **results}
 
 
-def report_batch(results: dict[str, Any]) -> None:
-    """BatchVectorEnv's ratio to one env, for information (``report.TARGETS`` has no entry)."""
-    vector = results["vector"]
-    row = ratio_row(
-        f"BatchVectorEnv(2 workers, {BATCH_ENVS} envs) vs one env",
-        vector.get("batch_2x8"),
-        vector.get("single"),
-        TARGETS["async_ratio"],
-    )
-    print_table("Informational", ["measure", "value", "target", "result"], [row])
+def measure_vector_ceiling(budget: Budget, throughput: dict[str, Any]) -> dict[str, Any]:
+    """One stand-in env and AsyncVectorEnv(2) of them, for the step times of tinyrace and of
+    CarRacing-v3 measured in this run: what AsyncVectorEnv makes of a step that long here."""
+    spaces = make_tinyrace()
+    observation_space, action_space = spaces.observation_space, spaces.action_space
+    spaces.close()
+    results: dict[str, Any] = {}
+    steppers: dict[str, Stepper] = {}
+    step_seconds: dict[str, float] = {}
+    for name in ("tinyrace", "carracing_v3"):
+        rate = rate_of(throughput.get(name), "step_only_per_s")
+        if rate is None:
+            results[f"{name}_single"] = f"unavailable: no step time of {name} in this run"
+            continue
+        seconds = 1.0 / rate
+        step_seconds[f"{name}_single"] = step_seconds[f"{name}_async_2"] = seconds
+
+        def make(seconds: float = seconds) -> StandIn:
+            return StandIn(seconds, observation_space, action_space)
+
+        steppers[f"{name}_single"] = Stepper(make())
+        steppers[f"{name}_async_2"] = Stepper(
+            gym.vector.AsyncVectorEnv([make, make]), batch=2, auto_reset=True
+        )
+    timings = timed(steppers, budget)
+    for case, timing in timings.items():
+        timing["stand_in_step_seconds"] = step_seconds[case]
+    return {**timings, **results}
+
+
+def report_informational(results: dict[str, Any]) -> None:
+    """Ratios with no target of their own, beside the AsyncVectorEnv target they explain."""
+    vector, ceiling = results["vector"], results["vector_ceiling"]
+    rows = [
+        ratio_row(
+            f"BatchVectorEnv(2 workers, {BATCH_ENVS} envs) vs one env",
+            vector.get("batch_2x8"),
+            vector.get("single"),
+            TARGETS["async_ratio"],
+        )
+    ]
+    for name, label in (("tinyrace", "tinyrace"), ("carracing_v3", "CarRacing-v3")):
+        single = ceiling.get(f"{name}_single")
+        step = f" ({single['stand_in_step_seconds'] * 1e6:,.0f} us)" if rate_of(single) else ""
+        rows.append(
+            ratio_row(
+                f"AsyncVectorEnv(2) vs one, stand-in env with {label}'s step{step}",
+                ceiling.get(f"{name}_async_2"),
+                ceiling.get(f"{name}_single"),
+                TARGETS["async_ratio"],
+            )
+        )
+    print_table("Informational", ["measure", "value", "target", "result"], rows)
 
 
 def timed(steppers: dict[str, Stepper], budget: Budget) -> dict[str, Any]:
@@ -343,6 +399,12 @@ def run(budget: Budget) -> dict[str, Any]:
         results["reset"] = guarded("reset time", measure_reset, budget)
         results["image_tracks"] = guarded("image tracks", measure_image_tracks, budget, generated)
         results["vector"] = guarded("vector envs", measure_vector, budget)
+        results["vector_ceiling"] = guarded(
+            "vector env ceiling (stand-in envs)",
+            measure_vector_ceiling,
+            budget,
+            results["throughput"],
+        )
         results["rss"] = guarded("peak RSS (fresh processes)", measure_rss, generated)
     return results
 
@@ -358,7 +420,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     results = run(QUICK if args.quick else FULL)
     report(results, RSS_STEPS)
-    report_batch(results)
+    report_informational(results)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"\nwrote {args.out}")
