@@ -27,8 +27,8 @@ machine's conditions. Measured:
   ``tinyrace/CarRacing-v0`` against one env's steps/s, and tinyrace's
   ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step);
 - beside them, the ceiling: ``AsyncVectorEnv`` (2 workers) of a stand-in env that only
-  busy-waits for the step time of tinyrace (and of CarRacing-v3) measured in this run,
-  against one such stand-in.
+  busy-waits, against one such stand-in, for three step times from this run: tinyrace's,
+  the longest one that meets the 30x-CarRacing-v3 target, and CarRacing-v3's.
 
 It prints the targets with PASS/FAIL, then the figures behind them, and writes
 every figure as JSON. Memory is in MB of 10^6 bytes. ``profile_step.py`` shows
@@ -228,21 +228,28 @@ def measure_vector(budget: Budget) -> dict[str, Any]:
 
 
 def measure_vector_ceiling(budget: Budget, throughput: dict[str, Any]) -> dict[str, Any]:
-    """One stand-in env and AsyncVectorEnv(2) of them, for the step times of tinyrace and of
-    CarRacing-v3 measured in this run: what AsyncVectorEnv makes of a step that long here."""
+    """One stand-in env and AsyncVectorEnv(2) of them, for step times measured in this run:
+    what AsyncVectorEnv makes of a step that long here, whatever the env does in it.
+
+    The step times: tinyrace's, the longest that still meets the ``vs_carracing_v3``
+    target (CarRacing-v3's divided by it), and CarRacing-v3's.
+    """
+    tinyrace = rate_of(throughput.get("tinyrace"), "step_only_per_s")
+    v3 = rate_of(throughput.get("carracing_v3"), "step_only_per_s")
+    if tinyrace is None or v3 is None:
+        return {"error": "unavailable: no step times of tinyrace and CarRacing-v3 in this run"}
+    step_seconds = {
+        "tinyrace": 1.0 / tinyrace,
+        "at_v3_target": 1.0 / (v3 * TARGETS["vs_carracing_v3"]),
+        "carracing_v3": 1.0 / v3,
+    }
     spaces = make_tinyrace()
     observation_space, action_space = spaces.observation_space, spaces.action_space
     spaces.close()
-    results: dict[str, Any] = {}
     steppers: dict[str, Stepper] = {}
-    step_seconds: dict[str, float] = {}
-    for name in ("tinyrace", "carracing_v3"):
-        rate = rate_of(throughput.get(name), "step_only_per_s")
-        if rate is None:
-            results[f"{name}_single"] = f"unavailable: no step time of {name} in this run"
-            continue
-        seconds = 1.0 / rate
-        step_seconds[f"{name}_single"] = step_seconds[f"{name}_async_2"] = seconds
+    case_seconds: dict[str, float] = {}
+    for name, seconds in step_seconds.items():
+        case_seconds[f"{name}_single"] = case_seconds[f"{name}_async_2"] = seconds
 
         def make(seconds: float = seconds) -> StandIn:
             return StandIn(seconds, observation_space, action_space)
@@ -253,8 +260,8 @@ def measure_vector_ceiling(budget: Budget, throughput: dict[str, Any]) -> dict[s
         )
     timings = timed(steppers, budget)
     for case, timing in timings.items():
-        timing["stand_in_step_seconds"] = step_seconds[case]
-    return {**timings, **results}
+        timing["stand_in_step_seconds"] = case_seconds[case]
+    return timings
 
 
 def report_informational(results: dict[str, Any]) -> None:
@@ -268,14 +275,19 @@ def report_informational(results: dict[str, Any]) -> None:
             TARGETS["async_ratio"],
         )
     ]
-    for name, label in (("tinyrace", "tinyrace"), ("carracing_v3", "CarRacing-v3")):
+    labels = {
+        "tinyrace": "tinyrace's",
+        "at_v3_target": f"1/{TARGETS['vs_carracing_v3']:g} of CarRacing-v3's",
+        "carracing_v3": "CarRacing-v3's",
+    }
+    for name, label in labels.items():
         single = ceiling.get(f"{name}_single")
         step = f" ({single['stand_in_step_seconds'] * 1e6:,.0f} us)" if rate_of(single) else ""
         rows.append(
             ratio_row(
-                f"AsyncVectorEnv(2) vs one, stand-in env with {label}'s step{step}",
+                f"AsyncVectorEnv(2) vs one, stand-in step = {label}{step}",
                 ceiling.get(f"{name}_async_2"),
-                ceiling.get(f"{name}_single"),
+                single,
                 TARGETS["async_ratio"],
             )
         )
