@@ -57,6 +57,7 @@ import cv2
 import gymnasium as gym
 import numpy as np
 import yaml
+from tinyrace.examples import TRACKS_DIR
 
 from report import (
     BIG,
@@ -158,7 +159,7 @@ def image_track_cases(generated_dir: Path) -> dict[str, Callable[[], gym.Env]]:
     """Every image-track case by name: example tracks x (1, 3) cameras, and generated tracks."""
     cases: dict[str, Callable[[], gym.Env]] = {}
     for name in EXAMPLE_TRACKS:
-        folder = ROOT / "example_tracks" / name
+        folder = TRACKS_DIR / name
         cases[f"{name}_1cam"] = lambda f=folder: make_image_track(f, ONE_CAMERA)
         cases[f"{name}_3cam"] = lambda f=folder: make_image_track(f, THREE_CAMERAS)
     for name in GENERATED_SIZES:
@@ -312,7 +313,7 @@ def measure_rss(generated_dir: Path) -> dict[str, Any]:
         "envpool": {"kind": "envpool"},
     }
     for name in EXAMPLE_TRACKS:
-        kinds[name] = {"kind": "image", "folder": str(ROOT / "example_tracks" / name)}
+        kinds[name] = {"kind": "image", "folder": str(TRACKS_DIR / name)}
     for name in GENERATED_SIZES:
         kinds[name] = {"kind": "image", "folder": str(generated_dir / name)}
     results: dict[str, Any] = {name: rss_in_subprocess(spec) for name, spec in kinds.items()}

@@ -34,9 +34,10 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_TRACK = ROOT / "example_tracks" / "formula_student"
+DEFAULT_TRACK = TRACKS_DIR / "formula_student"
 PAGE = os.sysconf("SC_PAGE_SIZE")  # [bytes]
 WARMUP = 50_000  # [steps] before the first RSS reading
 

@@ -17,10 +17,11 @@ import numpy as np
 import yaml
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR
 
 ENV_ID = "tinyrace/TinyRace-v0"
 ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = ROOT / "example_tracks"
+EXAMPLES = TRACKS_DIR
 
 BGR = {
     "black": (0, 0, 0),

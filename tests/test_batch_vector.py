@@ -24,6 +24,7 @@ from gymnasium.vector.utils import batch_space
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.errors import ConfigError
+from tinyrace.examples import TRACKS_DIR
 from tinyrace.vector import BatchVectorEnv, make_batch
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,7 +38,7 @@ FACTORIES = {
     "image_two_cameras": functools.partial(
         gym.make,
         "tinyrace/TinyRace-v0",
-        environment=str(ROOT / "example_tracks" / "formula_student"),
+        environment=str(TRACKS_DIR / "formula_student"),
         cameras=CAMERAS,
         sim={"step_limit": EPISODE},
     ),

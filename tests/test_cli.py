@@ -12,12 +12,13 @@ import pytest
 
 from tinyrace import cli
 from tinyrace.config.reference import END, START, markdown
+from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_run_a_config(tmp_path: Path, capsys):
-    config = ROOT / "configs" / "carolo_cup.yaml"
+    config = CONFIGS_DIR / "carolo_cup.yaml"
     code = cli.main(
         ["run", str(config), "--episodes", "1", "--no-video", "--quiet", "--out", str(tmp_path)]
     )
@@ -30,12 +31,12 @@ def test_run_a_config(tmp_path: Path, capsys):
 
 def test_run_without_arguments_finds_the_default_experiment(monkeypatch, tmp_path: Path):
     monkeypatch.chdir(tmp_path)  # no configs/ here: the checkout's default is used
-    assert cli.default_experiment() == ROOT / "configs" / "carracing.yaml"
+    assert cli.default_experiment() == CONFIGS_DIR / "carracing.yaml"
 
 
 def test_python_dash_m_runs_the_command():
     done = subprocess.run(
-        [sys.executable, "-m", "tinyrace", "validate", str(ROOT / "configs" / "carracing.yaml")],
+        [sys.executable, "-m", "tinyrace", "validate", str(CONFIGS_DIR / "carracing.yaml")],
         capture_output=True,
         text=True,
         timeout=120,
@@ -46,8 +47,8 @@ def test_python_dash_m_runs_the_command():
 @pytest.mark.parametrize(
     "path",
     [
-        *sorted((ROOT / "example_tracks").glob("*/track.yaml")),
-        *sorted((ROOT / "configs").glob("*.yaml")),
+        *sorted((TRACKS_DIR).glob("*/track.yaml")),
+        *sorted((CONFIGS_DIR).glob("*.yaml")),
     ],
     ids=lambda p: f"{p.parent.name}/{p.name}",
 )
@@ -79,7 +80,8 @@ def test_validate_reports_image_problems(tmp_path: Path, capsys):
 
 
 @pytest.mark.parametrize(
-    "target", ["procedural", "example_tracks/formula_student", "configs/carracing.yaml"]
+    "target",
+    ["procedural", "tinyrace/data/tracks/formula_student", "tinyrace/data/configs/carracing.yaml"],
 )
 def test_show_writes_a_picture(target: str, tmp_path: Path, monkeypatch):
     monkeypatch.chdir(ROOT)

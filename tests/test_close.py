@@ -16,9 +16,10 @@ import numpy as np
 import pytest
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
-TRACK = str(ROOT / "example_tracks" / "carolo_cup")
+TRACK = str(TRACKS_DIR / "carolo_cup")
 MAKERS = {
     "procedural": lambda mode: gym.make("tinyrace/CarRacing-v0", render_mode=mode),
     "image": lambda mode: gym.make("tinyrace/TinyRace-v0", environment=TRACK, render_mode=mode),

@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
-TRACK = str(ROOT / "example_tracks" / "formula_student")
+TRACK = str(TRACKS_DIR / "formula_student")
 TWO_CAMERAS = [
     {"id": "front", "resolution": [30, 40], "roi": [360, 480]},
     {"id": "rear", "resolution": [20, 20], "roi": [200, 200], "yaw": 180, "position": [150, 0]},

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -24,6 +23,7 @@ from tinyrace.drivers import (
     run_episode,
     speed_profile,
 )
+from tinyrace.examples import TRACKS_DIR
 
 LAP_SEEDS = range(5)
 
@@ -152,7 +152,7 @@ def test_speed_profile_limits_by_curvature_and_braking() -> None:
 
 
 # -- image tracks ----------------------------------------------------------------------------
-EXAMPLES = Path(__file__).resolve().parents[1] / "example_tracks"
+EXAMPLES = TRACKS_DIR
 
 
 def test_order_path_follows_a_drawn_loop_from_the_pose() -> None:

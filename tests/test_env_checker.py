@@ -16,12 +16,13 @@ from gymnasium.utils.env_checker import check_env
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.env import TinyRaceEnv
+from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 from tinyrace.experiment import load_experiment
 
 ROOT = Path(__file__).resolve().parents[1]
 IDS = sorted(k for k in gym.registry if k.startswith("tinyrace/"))
-TRACKS = sorted(p.parent for p in (ROOT / "example_tracks").glob("*/track.yaml"))
-CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
+TRACKS = sorted(p.parent for p in (TRACKS_DIR).glob("*/track.yaml"))
+CONFIGS = sorted((CONFIGS_DIR).glob("*.yaml"))
 
 
 @pytest.fixture(autouse=True)

@@ -12,10 +12,11 @@ import cv2
 import pytest
 
 from tinyrace.errors import ConfigError
+from tinyrace.examples import CONFIGS_DIR
 from tinyrace.experiment import experiment_from_dict, load_experiment, run_experiment
 
 ROOT = Path(__file__).resolve().parents[1]
-CONFIGS = sorted((ROOT / "configs").glob("*.yaml"))
+CONFIGS = sorted((CONFIGS_DIR).glob("*.yaml"))
 IMAGE_CONFIGS = ("formula_student", "segmented", "carolo_cup")
 
 
@@ -44,7 +45,7 @@ def test_the_shipped_configs_are_the_documented_ones():
 
 
 def test_multi_camera_has_three_or_more_cameras_one_looking_back():
-    cameras = load_experiment(ROOT / "configs" / "multi_camera.yaml").env_config.cameras
+    cameras = load_experiment(CONFIGS_DIR / "multi_camera.yaml").env_config.cameras
     assert len(cameras) >= 3
     assert any(abs(abs(c.yaw) - 180) < 1e-9 for c in cameras)
 
@@ -61,7 +62,7 @@ def test_every_config_runs_a_few_steps(path: Path, tmp_path: Path):
 
 def test_results_files_and_videos(tmp_path: Path):
     experiment = shortened(
-        ROOT / "configs" / "formula_student.yaml", episodes=2, max_steps=40, video=True
+        CONFIGS_DIR / "formula_student.yaml", episodes=2, max_steps=40, video=True
     )
     result = run_experiment(experiment, tmp_path, show_progress=False)
     rows = list(csv.DictReader((result.run_dir / "episodes.csv").open()))
@@ -75,7 +76,7 @@ def test_results_files_and_videos(tmp_path: Path):
 
 
 def test_a_camera_view_video_has_the_camera_size(tmp_path: Path):
-    experiment = shortened(ROOT / "configs" / "segmented.yaml", max_steps=5, video=True)
+    experiment = shortened(CONFIGS_DIR / "segmented.yaml", max_steps=5, video=True)
     result = run_experiment(experiment, tmp_path, show_progress=False)
     video = cv2.VideoCapture(result.episodes[0].video)
     assert (video.get(cv2.CAP_PROP_FRAME_WIDTH), video.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (160, 120)
@@ -83,7 +84,7 @@ def test_a_camera_view_video_has_the_camera_size(tmp_path: Path):
 
 def test_the_centreline_driver_finishes_carracing_laps(tmp_path: Path):
     """Issue 4: mean return >= 850 over 5 seeds on the default experiment."""
-    experiment = shortened(ROOT / "configs" / "carracing.yaml", episodes=5, max_steps=1000)
+    experiment = shortened(CONFIGS_DIR / "carracing.yaml", episodes=5, max_steps=1000)
     result = run_experiment(experiment, tmp_path, show_progress=False)
     assert result.summary["episode_return"]["mean"] >= 850
     assert all(e.end == "lap_finished" and e.laps == 1 for e in result.episodes)
@@ -92,7 +93,7 @@ def test_the_centreline_driver_finishes_carracing_laps(tmp_path: Path):
 @pytest.mark.parametrize("name", IMAGE_CONFIGS)
 def test_the_centreline_driver_keeps_to_image_tracks(name: str, tmp_path: Path):
     """Issue 4: mean |cte| under half the track width, step_limit reached without a done."""
-    experiment = shortened(ROOT / "configs" / f"{name}.yaml", max_steps=None)
+    experiment = shortened(CONFIGS_DIR / f"{name}.yaml", max_steps=None)
     result = run_experiment(experiment, tmp_path, show_progress=False)
     (episode,) = result.episodes
     car = experiment.env_config.car
@@ -135,7 +136,7 @@ def test_bad_experiments_name_the_key(raw: dict, path: str, value: str, tmp_path
 
 
 def test_a_view_that_is_no_camera_is_refused(tmp_path: Path):
-    raw = {"env": {"environment": "example_tracks/segmented"}, "output": {"view": "roof"}}
+    raw = {"env": {"environment": "tinyrace/data/tracks/segmented"}, "output": {"view": "roof"}}
     experiment = experiment_from_dict(raw, "exp.yaml", ROOT)
     with pytest.raises(ConfigError, match=r"output\.view.*front_camera"):
         run_experiment(experiment, tmp_path, show_progress=False)

@@ -17,9 +17,10 @@ import pytest
 from gymnasium.error import InvalidAction
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
-TRACK = str(ROOT / "example_tracks" / "formula_student")
+TRACK = str(TRACKS_DIR / "formula_student")
 LONG_RUN_STEPS = 20_000
 PROCEDURAL_TOP_SPEED = 100.0  # [u/s] CarRacing's Box2D cap: 2 u per step at 50 steps/s
 

@@ -34,6 +34,7 @@ from hypothesis.control import currently_in_test_context
 from tinyrace.config.schema import EnvConfig
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 from tinyrace.experiment import experiment_from_dict, load_experiment
 from tinyrace.experiment.schema import ExperimentConfig
 
@@ -65,7 +66,7 @@ class Workspace:
 
 def _shrink_track(name: str, target: Path) -> dict:
     """An example track folder at 1/SHRINK scale: same keys, same colours, small image."""
-    source = ROOT / "example_tracks" / name
+    source = TRACKS_DIR / name
     raw = yaml.safe_load((source / "track.yaml").read_text())
     image = cv2.imread(str(source / raw["tracks"][0]["image"]), cv2.IMREAD_COLOR)
     small = cv2.resize(
@@ -134,7 +135,7 @@ def _broken_images(folder: Path) -> dict[str, str]:
 @pytest.fixture(scope="module")
 def workspace(tmp_path_factory: pytest.TempPathFactory) -> Workspace:
     root = tmp_path_factory.mktemp("hardening")
-    tracks = {name: root / "example_tracks" / name for name in EXAMPLE_NAMES}
+    tracks = {name: root / "tracks" / name for name in EXAMPLE_NAMES}
     bases: dict[str, dict] = {name: _shrink_track(name, tracks[name]) for name in EXAMPLE_NAMES}
     bases["procedural"] = {}
     bases["procedural_cameras"] = {
@@ -146,10 +147,10 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Workspace:
         **copy.deepcopy(bases["formula_student"]),
         "car": {"model": "dynamic"},
     }
-    # experiments keep their relative track folders: ../example_tracks/<name> from configs/
+    # experiments keep their relative track folders: ../tracks/<name> from configs/
     (root / "configs").mkdir()
     experiments = {
-        path.stem: _shrunk_experiment(path) for path in sorted((ROOT / "configs").glob("*.yaml"))
+        path.stem: _shrunk_experiment(path) for path in sorted((CONFIGS_DIR).glob("*.yaml"))
     }
     return Workspace(root, tracks, bases, experiments, _broken_images(root / "images"))
 
@@ -556,7 +557,7 @@ YAML_DAMAGE = [
     how=st.sampled_from(["insert", "truncate", "bytes"]),
 )
 def test_damaged_yaml_text_works_or_is_a_config_error(workspace, base, cut, damage, binary, how):
-    folder = workspace.tracks.get(base, workspace.root / "example_tracks" / "formula_student")
+    folder = workspace.tracks.get(base, workspace.root / "tracks" / "formula_student")
     text = yaml.safe_dump(workspace.bases[base], sort_keys=False).encode()
     at = int(cut * len(text))
     if how == "insert":

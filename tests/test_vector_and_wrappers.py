@@ -30,9 +30,10 @@ from gymnasium.wrappers import (
 )
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
-TRACK = str(ROOT / "example_tracks" / "segmented")
+TRACK = str(TRACKS_DIR / "segmented")
 CAMERAS = [
     {"id": "front", "resolution": [30, 40], "roi": [360, 480]},
     {"id": "rear", "resolution": [20, 24], "roi": [200, 240], "yaw": 180, "position": [150, 0]},

@@ -9,9 +9,6 @@ from pathlib import Path
 
 from tinyrace.errors import ConfigError
 
-DEFAULT_EXPERIMENT = Path("configs") / "carracing.yaml"
-_REPO = Path(__file__).resolve().parents[1]  # the checkout, for editable installs
-
 
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
@@ -61,12 +58,11 @@ def _parser() -> argparse.ArgumentParser:
 
 
 # -- run ---------------------------------------------------------------------------------------
-def default_experiment() -> Path | None:
-    """configs/carracing.yaml in the working directory, else in the checkout tinyrace runs from."""
-    for root in (Path.cwd(), _REPO):
-        if (root / DEFAULT_EXPERIMENT).is_file():
-            return root / DEFAULT_EXPERIMENT
-    return None
+def default_experiment() -> Path:
+    """The shipped CarRacing experiment (package data, found from any folder)."""
+    from tinyrace.examples import DEFAULT_EXPERIMENT
+
+    return DEFAULT_EXPERIMENT
 
 
 def _run(args: argparse.Namespace) -> int:
