@@ -15,10 +15,10 @@ import pymunk
 
 from tinyrace.actions import ActionSpec
 from tinyrace.cars.base import Car, Pose
+from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.kinematic_car import KinematicCar
 from tinyrace.tracks.base import Track
 
 CarBuilder = Callable[[pymunk.Space, Pose, CarConfig, Track], Car]
