@@ -3,9 +3,14 @@
 Importing tinyrace registers its Gymnasium environments and does nothing else.
 """
 
+from importlib.metadata import PackageNotFoundError, version
+
 from gymnasium.envs.registration import register, registry
 
-__version__ = "0.1.0"
+try:
+    __version__ = version("tinyrace")  # one source: pyproject.toml, through the metadata
+except PackageNotFoundError:  # a source tree that was never installed
+    __version__ = "0+unknown"
 
 if "tinyrace/CarRacing-v0" not in registry:
     register(

@@ -23,6 +23,7 @@ from tinyrace.config.schema import (
     TrackConfig,
 )
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.examples import find_track, track_names
 
 __all__ = [
     "CameraConfig",
@@ -89,10 +90,14 @@ def _read_source(
         if not isinstance(environment, (str, Path)):
             allowed = "expected a track folder (a path)"
             raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
-        folder = Path(environment)
+        folder = find_track(environment)  # a path that exists wins over a shipped track's name
         config = folder / TRACK_FILE
         if not _safely(config.is_file):
-            missing = "no such folder" if not _safely(folder.is_dir) else f"{config} does not exist"
+            missing = (
+                f"no such folder; shipped tracks: {', '.join(track_names())}"
+                if not _safely(folder.is_dir)
+                else f"{config} does not exist"
+            )
             allowed = f"expected a track folder holding {TRACK_FILE} ({missing})"
             raise ConfigError(Problem(str(config), "environment", str(environment), allowed))
     if config is None:
