@@ -16,7 +16,12 @@ if "tinyrace/CarRacing-v0" not in registry:
     register(
         id="tinyrace/CarRacing-v0",
         entry_point="tinyrace.carracing:CarRacingEnv",
+        vector_entry_point="tinyrace.vector:make_carracing_vec",  # the batched vector env
         max_episode_steps=1000,
         reward_threshold=900,
     )
-    register(id="tinyrace/TinyRace-v0", entry_point="tinyrace.env:TinyRaceEnv")
+    register(
+        id="tinyrace/TinyRace-v0",
+        entry_point="tinyrace.env:TinyRaceEnv",
+        vector_entry_point="tinyrace.vector:make_tinyrace_vec",
+    )

@@ -153,6 +153,9 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if image and not config.cameras:
         allowed = "an image track needs at least one camera (id, resolution, roi, position)"
         parser.problem(f"{at}cameras", [], allowed)
+    if config.observation == "box" and len(config.cameras) > 1:
+        ids = [c.id for c in config.cameras]
+        parser.problem(f"{at}observation", "box", f"box needs exactly one camera, not {ids}")
     ids = [c.id for c in config.cameras]
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
