@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from tinyrace.errors import ConfigError
+from tinyrace.examples import find_example, find_experiment
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -27,12 +28,15 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
+    from tinyrace import __version__
+
     parser = argparse.ArgumentParser(prog="tinyrace", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"tinyrace {__version__}")
     commands = parser.add_subparsers(dest="command")
     run = commands.add_parser(
         "run", help="run an experiment file (default: configs/carracing.yaml)"
     )
-    run.add_argument("experiment", nargs="?", help="experiment YAML")
+    run.add_argument("experiment", nargs="?", help="experiment YAML or a shipped config's name")
     run.add_argument("--out", help="directory for run directories (overrides output.dir)")
     run.add_argument("--episodes", type=int, help="override the number of episodes")
     run.add_argument("--no-video", action="store_true", help="write no videos")
@@ -41,10 +45,12 @@ def _parser() -> argparse.ArgumentParser:
     validate = commands.add_parser(
         "validate", help="check a track folder, track.yaml or experiment"
     )
-    validate.add_argument("path")
+    validate.add_argument("path", help="a path, or a shipped config's or track's name")
     validate.set_defaults(handler=_validate)
     show = commands.add_parser("show", help="save a picture of a track")
-    show.add_argument("path", help="track folder, track.yaml, experiment, or 'procedural'")
+    show.add_argument(
+        "path", help="track folder, track.yaml, experiment, a shipped name, or 'procedural'"
+    )
     show.add_argument("--seed", type=int, default=0, help="procedural tracks: which seed's track")
     show.add_argument("-o", "--output", help="PNG file (default: <name>.png)")
     show.set_defaults(handler=_show)
@@ -54,7 +60,19 @@ def _parser() -> argparse.ArgumentParser:
     )
     play.add_argument("--seed", type=int, default=None)
     play.set_defaults(handler=_play)
+    _examples_parser(commands)
     return parser
+
+
+def _examples_parser(commands) -> None:
+    examples = commands.add_parser(
+        "examples", help="list the shipped tracks and configs; copy one out to edit"
+    )
+    examples.set_defaults(handler=_examples)
+    actions = examples.add_subparsers(dest="action")
+    copy = actions.add_parser("copy", help="copy a shipped track and/or config (never overwrites)")
+    copy.add_argument("name", help="a name from `tinyrace examples`")
+    copy.add_argument("dir", nargs="?", default=".", help="where to copy it (default: here)")
 
 
 # -- run ---------------------------------------------------------------------------------------
@@ -75,7 +93,7 @@ def _run(args: argparse.Namespace) -> int:
         run_experiment,
     )
 
-    path = Path(args.experiment) if args.experiment else default_experiment()
+    path = find_experiment(args.experiment) if args.experiment else default_experiment()
     if path is None:
         print(
             "tinyrace: no configs/carracing.yaml here; running the built-in CarRacing experiment",
@@ -99,11 +117,27 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- examples ----------------------------------------------------------------------------------
+def _examples(args: argparse.Namespace) -> int:
+    from tinyrace.examples import copy_example, examples
+
+    if args.action == "copy":
+        for target in copy_example(args.name, Path(args.dir)):
+            print(f"copied {args.name} to {target}")
+        return 0
+    shown = examples()
+    width = max(len(e.name) for e in shown)
+    for example in shown:
+        print(f"{example.kind:<6}  {example.name:<{width}}  {example.summary}")
+    print("run one: tinyrace run NAME; copy one out to edit: tinyrace examples copy NAME [DIR]")
+    return 0
+
+
 # -- validate ----------------------------------------------------------------------------------
 def _validate(args: argparse.Namespace) -> int:
     from tinyrace.validate import validate_path
 
-    problems, summary = validate_path(Path(args.path))
+    problems, summary = validate_path(find_example(args.path))
     for problem in problems:
         print(problem)
     if problems:
@@ -119,7 +153,8 @@ def _show(args: argparse.Namespace) -> int:
 
     from tinyrace.validate import picture
 
-    image, name = picture(args.path, args.seed)
+    target = args.path if args.path == "procedural" else str(find_example(args.path))
+    image, name = picture(target, args.seed)
     output = Path(args.output or f"{name}.png")
     output.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
@@ -137,7 +172,7 @@ def _play(args: argparse.Namespace) -> int:
         return 2
     from tinyrace.play import play
 
-    return play(args.path, args.seed)
+    return play(args.path and str(find_example(args.path)), args.seed)
 
 
 def _play_missing() -> str | None:
