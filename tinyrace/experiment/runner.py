@@ -62,8 +62,11 @@ def run_experiment(
         _check_view(experiment, env)
         driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
-        run_dir = new_run_dir(Path(out_root or config.output.dir), experiment.name)
-        return _Run(experiment, env, driver, run_dir, progress).all()
+        root = Path(out_root or config.output.dir)
+        made_root = not root.exists()
+        run = _Run(experiment, env, driver, new_run_dir(root, experiment.name), progress)
+        run.made_root = made_root
+        return run.all()
     finally:
         env.close()
 
@@ -84,6 +87,7 @@ class _Run:
         self.limit = self.config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
         self.results: list[EpisodeResult] = []
         self.tracks: dict[str, dict[str, Any]] = {}
+        self.made_root = False  # the parent folder was made for this run
         progress.limit = progress.limit or self.limit
 
     def all(self) -> RunResult:
@@ -181,6 +185,8 @@ class _Run:
         """No finished episode: leave nothing behind; else keep what finished."""
         if not self.results:
             shutil.rmtree(self.run_dir, ignore_errors=True)
+            if self.made_root and not any(self.run_dir.parent.iterdir()):
+                self.run_dir.parent.rmdir()  # made for this run only
         else:
             self._write(None, error=f"{type(exc).__name__}: {exc}")
 
