@@ -26,7 +26,9 @@ def test_run_a_config(tmp_path: Path, capsys):
     assert code == 0
     assert "return" in out and "|cte|" in out and "episode_return" in out  # table and summary
     (run_dir,) = tmp_path.iterdir()
-    assert {p.name for p in run_dir.iterdir()} == {"results.json", "episodes.csv"}
+    names = {p.name for p in run_dir.iterdir()}
+    assert {"results.json", "episodes.csv", "report.html", "episode_000_trace.csv"} <= names
+    assert not any(name.endswith((".mp4", ".webm")) for name in names)  # --no-video
 
 
 def test_run_without_arguments_finds_the_default_experiment(monkeypatch, tmp_path: Path):
