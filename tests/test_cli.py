@@ -19,9 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_run_a_config(tmp_path: Path, capsys):
     config = CONFIGS_DIR / "carolo_cup.yaml"
-    code = cli.main(
-        ["run", str(config), "--episodes", "1", "--no-video", "--quiet", "--out", str(tmp_path)]
-    )
+    code = cli.main(["run", str(config), "--episodes", "1", "--no-video", "--out", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 0
     assert "return" in out and "|cte|" in out and "episode_return" in out  # table and summary
