@@ -3,6 +3,7 @@ with a ConfigError naming the file, before they are read whole or built into obj
 
 from __future__ import annotations
 
+import itertools
 import os
 from pathlib import Path
 
@@ -14,8 +15,9 @@ from tinyrace import cli
 from tinyrace.config.yaml_file import MAX_DEPTH, MAX_VALUES, MAX_YAML_BYTES, read_yaml
 from tinyrace.errors import ConfigError
 
+LEVELS = "abcdefghi"  # each level lists the one before ten times: 10**9 values expanded
 BOMB = "a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
-    f"{b}: &{b} [{', '.join([f'*{a}'] * 10)}]\n" for a, b in zip("abcdefgh", "bcdefghi")
+    f"{b}: &{b} [{', '.join([f'*{a}'] * 10)}]\n" for a, b in itertools.pairwise(LEVELS)
 )
 
 
