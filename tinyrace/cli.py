@@ -119,7 +119,12 @@ def _parser() -> argparse.ArgumentParser:
         "path", help="track folder, track.yaml, experiment, a shipped name, or 'procedural'"
     )
     show.add_argument("--seed", type=int, default=0, help="procedural tracks: which seed's track")
-    show.add_argument("-o", "--output", help="PNG file (default: <name>.png)")
+    show.add_argument("-o", "--output", help="PNG file (default: <name>.png in this folder)")
+    show.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing file or write into a track folder (never over an input)",
+    )
     show.set_defaults(handler=_show)
     play = commands.add_parser("play", help="drive with the keyboard in a window")
     play.add_argument(
@@ -257,11 +262,13 @@ def _validate(args: argparse.Namespace) -> int:
 def _show(args: argparse.Namespace) -> int:
     import cv2
 
-    from tinyrace.validate import picture
+    from tinyrace.validate import check_output, picture
 
     target = args.path if args.path == "procedural" else str(find_example(args.path))
-    image, name = picture(target, args.seed)
-    output = Path(args.output or f"{name}.png")
+    shown = picture(target, args.seed)
+    image = shown.image
+    output = Path(args.output or f"{shown.name}.png")
+    check_output(output, shown.inputs, args.force)
     output.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
         print(f"tinyrace: could not write {output} (use a .png path)", file=sys.stderr)
