@@ -43,7 +43,8 @@ def _config_env(path: Path) -> Callable[[], gym.Env]:
         sections = dict((yaml.safe_load(path.read_text()) or {}).get("env") or {})
         folder = sections.pop("environment", None)
         if folder is not None:
-            sections["environment"] = str((path.parent / folder).resolve())
+            beside = path.parent / folder  # a folder relative to the config, else a shipped name
+            sections["environment"] = str(beside.resolve()) if beside.exists() else folder
         return gym.make("tinyrace/TinyRace-v0", render_mode="rgb_array", **sections)
 
     return make
