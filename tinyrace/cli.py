@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from tinyrace.errors import ConfigError
+from tinyrace.examples import find_example, find_experiment
 
 
 class UsageError(Exception):
@@ -82,13 +83,16 @@ def _count(low: int, what: str):
 
 
 def _parser() -> argparse.ArgumentParser:
+    from tinyrace import __version__
+
     parser = _Parser(prog="tinyrace", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"tinyrace {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     commands = parser.add_subparsers(dest="command")
     run = commands.add_parser(
         "run", help="run an experiment file (default: configs/carracing.yaml)"
     )
-    run.add_argument("experiment", nargs="?", help="experiment YAML")
+    run.add_argument("experiment", nargs="?", help="experiment YAML or a shipped config's name")
     run.add_argument(
         "-o", "--out", help="folder for run folders (overrides output.dir; default: ./runs)"
     )
@@ -108,12 +112,19 @@ def _parser() -> argparse.ArgumentParser:
     validate = commands.add_parser(
         "validate", help="check a track folder, track.yaml or experiment"
     )
-    validate.add_argument("path")
+    validate.add_argument("path", help="a path, or a shipped config's or track's name")
     validate.set_defaults(handler=_validate)
     show = commands.add_parser("show", help="save a picture of a track")
-    show.add_argument("path", help="track folder, track.yaml, experiment, or 'procedural'")
+    show.add_argument(
+        "path", help="track folder, track.yaml, experiment, a shipped name, or 'procedural'"
+    )
     show.add_argument("--seed", type=int, default=0, help="procedural tracks: which seed's track")
-    show.add_argument("-o", "--output", help="PNG file (default: <name>.png)")
+    show.add_argument("-o", "--output", help="PNG file (default: <name>.png in this folder)")
+    show.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing file or write into a track folder (never over an input)",
+    )
     show.set_defaults(handler=_show)
     play = commands.add_parser("play", help="drive with the keyboard in a window")
     play.add_argument(
@@ -121,9 +132,21 @@ def _parser() -> argparse.ArgumentParser:
     )
     play.add_argument("--seed", type=int, default=None)
     play.set_defaults(handler=_play)
+    _examples_parser(commands)
     for command in commands.choices.values():  # also after the command: tinyrace run --debug
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS)
     return parser
+
+
+def _examples_parser(commands) -> None:
+    examples = commands.add_parser(
+        "examples", help="list the shipped tracks and configs; copy one out to edit"
+    )
+    examples.set_defaults(handler=_examples)
+    actions = examples.add_subparsers(dest="action")
+    copy = actions.add_parser("copy", help="copy a shipped track and/or config (never overwrites)")
+    copy.add_argument("name", help="a name from `tinyrace examples`")
+    copy.add_argument("dir", nargs="?", default=".", help="where to copy it (default: here)")
 
 
 # -- run ---------------------------------------------------------------------------------------
@@ -137,7 +160,8 @@ def default_experiment() -> Path:
 def _run(args: argparse.Namespace) -> int:
     from tinyrace.experiment import load_experiment, print_report, run_experiment
 
-    experiment = _overridden(load_experiment(Path(args.experiment or default_experiment())), args)
+    path = find_experiment(args.experiment) if args.experiment else default_experiment()
+    experiment = _overridden(load_experiment(path), args)
     out = _out_folder(args.out)
     config = experiment.config
     if not (args.quiet or args.json):
@@ -204,11 +228,27 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- examples ----------------------------------------------------------------------------------
+def _examples(args: argparse.Namespace) -> int:
+    from tinyrace.examples import copy_example, examples
+
+    if args.action == "copy":
+        for target in copy_example(args.name, Path(args.dir)):
+            print(f"copied {args.name} to {target}")
+        return 0
+    shown = examples()
+    width = max(len(e.name) for e in shown)
+    for example in shown:
+        print(f"{example.kind:<6}  {example.name:<{width}}  {example.summary}")
+    print("run one: tinyrace run NAME; copy one out to edit: tinyrace examples copy NAME [DIR]")
+    return 0
+
+
 # -- validate ----------------------------------------------------------------------------------
 def _validate(args: argparse.Namespace) -> int:
     from tinyrace.validate import validate_path
 
-    problems, summary = validate_path(Path(args.path))
+    problems, summary = validate_path(find_example(args.path))
     for problem in problems:
         print(problem)
     if problems:
@@ -222,10 +262,13 @@ def _validate(args: argparse.Namespace) -> int:
 def _show(args: argparse.Namespace) -> int:
     import cv2
 
-    from tinyrace.validate import picture
+    from tinyrace.validate import check_output, picture
 
-    image, name = picture(args.path, args.seed)
-    output = Path(args.output or f"{name}.png")
+    target = args.path if args.path == "procedural" else str(find_example(args.path))
+    shown = picture(target, args.seed)
+    image = shown.image
+    output = Path(args.output or f"{shown.name}.png")
+    check_output(output, shown.inputs, args.force)
     output.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
         print(f"tinyrace: could not write {output} (use a .png path)", file=sys.stderr)
@@ -242,7 +285,7 @@ def _play(args: argparse.Namespace) -> int:
         return 2
     from tinyrace.play import play
 
-    return play(args.path, args.seed)
+    return play(args.path and str(find_example(args.path)), args.seed)
 
 
 def _play_missing() -> str | None:
