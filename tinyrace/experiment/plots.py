@@ -50,13 +50,16 @@ def trajectories(
         cv2.line(image, a, b, LAP_LINE, 2 * scale, cv2.LINE_AA)
     speeds = [p.speed[np.isfinite(p.speed)] for p in paths]
     top = max([float(s.max()) for s in speeds if len(s)] + [1e-9])
+    labels: list[tuple[int, int]] = []  # where labels went: same starts stack their labels
     for path in paths:
-        _draw_path(image, path, top, scale)
+        _draw_path(image, path, top, scale, labels)
     _speed_bar(image, top, unit)
     return image
 
 
-def _draw_path(image: np.ndarray, path: Path2D, top: float, scale: int) -> None:
+def _draw_path(
+    image: np.ndarray, path: Path2D, top: float, scale: int, labels: list[tuple[int, int]]
+) -> None:
     ok = np.isfinite(path.points).all(axis=1)
     points, colors = path.points[ok], speed_colors(path.speed[ok], top)
     pixels = np.round(points).astype(np.int32)
@@ -69,7 +72,11 @@ def _draw_path(image: np.ndarray, path: Path2D, top: float, scale: int) -> None:
         return
     cv2.circle(image, tuple(pixels[0]), 6 * scale, START, -1, cv2.LINE_AA)
     cv2.circle(image, tuple(pixels[0]), 6 * scale, (0, 0, 0), 1, cv2.LINE_AA)
-    _text(image, path.label, (pixels[0][0] + 8 * scale, pixels[0][1] - 6 * scale), 0.5 * scale)
+    at = (int(pixels[0][0]) + 8 * scale, int(pixels[0][1]) - 6 * scale)
+    while any(abs(at[0] - x) < 40 * scale and abs(at[1] - y) < 16 * scale for x, y in labels):
+        at = (at[0], at[1] + 18 * scale)
+    labels.append(at)
+    _text(image, path.label, at, 0.5 * scale)
     if path.crashed:
         x, y, r = int(pixels[-1][0]), int(pixels[-1][1]), 9 * scale
         cv2.line(image, (x - r, y - r), (x + r, y + r), CRASH, 3 * scale, cv2.LINE_AA)
