@@ -224,7 +224,14 @@ def _report(args: argparse.Namespace) -> int:
             f"argument run_dir: {args.run_dir!r} is no run folder "
             "(expected a folder holding results.json and episodes.csv)"
         )
-    print(f"wrote {rebuild_report(run_dir)}")
+    try:
+        path = rebuild_report(run_dir)
+    except (ValueError, KeyError, TypeError) as exc:  # results.json or episodes.csv edited
+        raise UsageError(
+            f"argument run_dir: cannot read the run in {args.run_dir!r} "
+            f"({type(exc).__name__}: {exc})"
+        ) from exc
+    print(f"wrote {path}")
     return 0
 
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from numpy.typing import ArrayLike
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 INK = (40, 40, 40)  # RGB: axes and text
@@ -66,8 +67,8 @@ def _draw_path(
     for k in range(1, len(pixels)):
         color = tuple(int(c) for c in colors[k])
         cv2.line(image, tuple(pixels[k - 1]), tuple(pixels[k]), color, 2 * scale, cv2.LINE_AA)
-    for k in np.flatnonzero(path.hits[ok]):
-        cv2.circle(image, tuple(pixels[k]), 4 * scale, HIT, scale, cv2.LINE_AA)
+    for hit in np.flatnonzero(path.hits[ok]):
+        cv2.circle(image, tuple(pixels[hit]), 4 * scale, HIT, scale, cv2.LINE_AA)
     if len(pixels) == 0:
         return
     cv2.circle(image, tuple(pixels[0]), 6 * scale, START, -1, cv2.LINE_AA)
@@ -113,7 +114,7 @@ class Axes:
     x_range: tuple[float, float]
     y_range: tuple[float, float]
 
-    def pixel(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    def pixel(self, x: ArrayLike, y: ArrayLike) -> np.ndarray:
         (x0, x1), (y0, y1) = self.x_range, self.y_range
         px = self.left + (np.asarray(x, float) - x0) / (x1 - x0) * self.width
         py = self.top + self.height - (np.asarray(y, float) - y0) / (y1 - y0) * self.height

@@ -21,14 +21,15 @@ def save_track_picture(
     picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox, py = y * sy + oy), the
     start pose and, on procedural tracks, the lap line (two points) in track units.
     """
-    episode = env.unwrapped.episode
+    episode: Any = env.episode  # ProceduralEpisode or ImageEpisode
     procedural = env.config.kind == "procedural"
     key = f"seed{seed}" if procedural else f"track{episode.track_index}"
     if key in known:
         return key, known[key]
     if procedural:
         track = episode.track
-        image, frame = procedural_ground(track, episode.colors, env.config.tracks[0].playfield)
+        playfield = episode.track_config.playfield  # [u]
+        image, frame = procedural_ground(track, episode.colors, playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
     else:
