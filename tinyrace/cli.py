@@ -161,6 +161,11 @@ def _run(args: argparse.Namespace) -> int:
     from tinyrace.experiment import load_experiment, print_report, run_experiment
 
     path = find_experiment(args.experiment) if args.experiment else default_experiment()
+    if path.is_dir() or path.name == "track.yaml":
+        raise UsageError(
+            f"argument experiment: {str(path)!r} is a track, not an experiment; name it in an "
+            "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
+        )
     experiment = _overridden(load_experiment(path), args)
     out = _out_folder(args.out)
     config = experiment.config
