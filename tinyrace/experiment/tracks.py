@@ -28,8 +28,7 @@ def save_track_picture(
         return key, known[key]
     if procedural:
         track = episode.track
-        playfield = episode.track_config.playfield  # [u]
-        image, frame = procedural_ground(track, episode.colors, playfield)
+        image, frame = procedural_ground(track, episode.colors, env.config.tracks[0].playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
     else:
