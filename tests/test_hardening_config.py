@@ -156,6 +156,15 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Workspace:
 
 
 # -- mutations -----------------------------------------------------------------------------
+# YAML 1.1 reads NEL, LS and PS as line breaks even inside a written key, so a key made of
+# them is not the key the file holds; new keys are drawn without them.
+_YAML_BREAKS = "\x85\u2028\u2029"
+
+
+def key_text(**sizes: int) -> st.SearchStrategy[str]:
+    return st.text(st.characters(exclude_characters=_YAML_BREAKS), **sizes)
+
+
 Path_ = tuple  # a key path into a raw mapping: keys and list indices
 
 
@@ -208,7 +217,7 @@ PYTHON_ONLY = [
 NESTED_JUNK = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=6),
     lambda inner: (
-        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner, max_size=3)
+        st.lists(inner, max_size=3) | st.dictionaries(key_text(max_size=6), inner, max_size=3)
     ),
     max_leaves=8,
 )
@@ -225,7 +234,7 @@ def mutation(junk: st.SearchStrategy, images: bool) -> st.SearchStrategy:
     options = [
         st.tuples(st.just("set"), where, junk),
         st.tuples(st.just("delete"), where),
-        st.tuples(st.just("add"), where, st.text(min_size=1, max_size=8), junk),
+        st.tuples(st.just("add"), where, key_text(min_size=1, max_size=8), junk),
         st.tuples(st.just("number"), where, st.sampled_from(NUMBER_TWEAKS)),
         st.tuples(st.just("bound"), where, st.sampled_from(BOUNDS)),
         st.tuples(st.just("type"), where, st.sampled_from(TRACK_TYPES)),
