@@ -19,7 +19,7 @@ import math
 import os
 import re
 import typing
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -308,15 +308,19 @@ def _bound(meta: Mapping[str, Any] | None, which: str, current: Any) -> Any:
 def _tweak(value: Any, how: str) -> Any:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return value
-    return {
-        "negate": -value,
-        "zero": 0,
-        "half": value / 2,
-        "float": float(value),
-        "string": str(value),
-        "times_1e6": value * 1_000_000,
-        "plus_half": value + 0.5,
-    }[how]
+    tweaks: dict[str, Callable[[Any], Any]] = {  # lazy: a huge int overflows float()
+        "negate": lambda v: -v,
+        "zero": lambda v: 0,
+        "half": lambda v: v / 2,
+        "float": float,
+        "string": str,
+        "times_1e6": lambda v: v * 1_000_000,
+        "plus_half": lambda v: v + 0.5,
+    }
+    try:
+        return tweaks[how](value)
+    except OverflowError:
+        return str(value)  # still a hostile value: a number written as text
 
 
 # A bound that is valid but only costs memory: a 20000 x 20000 black plane is 1.6 GB.
