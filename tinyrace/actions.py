@@ -10,7 +10,9 @@ complex or object arrays), NaN, infinity or a value outside the space raises
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
@@ -30,7 +32,7 @@ DISCRETE_CONTROLS = (
 class ActionSpec:
     """How actions look for one car: the gymnasium space and how to read an action."""
 
-    space: spaces.Space
+    space: spaces.Box | spaces.Discrete
     kind: str  # "discrete", "dynamic" ([steer, gas, brake]) or "kinematic" ([steer])
 
     @classmethod
@@ -46,6 +48,10 @@ class ActionSpec:
         if isinstance(self.space, spaces.Box):  # plain floats: cheaper to compare per step
             bounds = list(zip(self.space.low.tolist(), self.space.high.tolist(), strict=True))
             object.__setattr__(self, "_bounds", bounds)
+
+    _bounds: list[tuple[float, float]] = dataclasses.field(
+        default_factory=list, init=False, repr=False, compare=False
+    )  # Box bounds as floats
 
     def read(self, action: object) -> tuple[float, ...]:
         """The controls of a valid action: (steer, gas, brake) or (steer,)."""
@@ -66,6 +72,7 @@ class ActionSpec:
             action = action.item()
         if not isinstance(action, (int, np.integer)) or isinstance(action, (bool, np.bool_)):
             raise InvalidAction(f"action {action!r} is not an integer of {self.space}")
+        assert isinstance(self.space, spaces.Discrete)
         if not 0 <= action < self.space.n:
             raise InvalidAction(f"action {action!r} is outside {self.space}")
         return int(action)
@@ -80,12 +87,13 @@ class ActionSpec:
         if array.shape != self.space.shape:
             raise InvalidAction(f"action of shape {array.shape} does not fit {self.space}")
         # bounds before the cast: a float64 beyond float32's range would warn as it became inf
+        assert isinstance(self.space, spaces.Box)
         if not (np.all(array >= self.space.low) and np.all(array <= self.space.high)):
             raise InvalidAction(f"action {array.tolist()} is outside {self.space} (NaN included)")
         return array.astype(np.float32, copy=False)
 
 
-def _as_array(action: object, space: spaces.Space) -> np.ndarray:
+def _as_array(action: object, space: spaces.Space[Any]) -> np.ndarray:
     try:
         return np.asarray(action)
     except (TypeError, ValueError) as exc:

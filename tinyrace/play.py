@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -44,7 +45,7 @@ def _env(target: str | None) -> TinyRaceEnv:
     return TinyRaceEnv(config=load_any(Path(target)), render_mode="human")
 
 
-def _read_keys(pygame):
+def _read_keys(pygame: Any) -> tuple[Any, bool, bool]:
     quit_requested = reset = False
     for event in pygame.event.get():
         if event.type == pygame.QUIT or (
@@ -56,7 +57,7 @@ def _read_keys(pygame):
     return pygame.key.get_pressed(), quit_requested, reset
 
 
-def _action(env: TinyRaceEnv, keys, pygame) -> np.ndarray | int:
+def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
     steer = float(keys[pygame.K_RIGHT]) - float(keys[pygame.K_LEFT])
     if env.action_space.shape == (1,):
         return np.array([steer], np.float32)

@@ -8,12 +8,15 @@ sub-pixel information.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Any
 
 import cv2
 import numpy as np
 
 from tinyrace.cars.dynamic import DynamicCar
 
+RGB = tuple[int, int, int]
+Bar = tuple[str, int, int, RGB]  # (v or h, place, length in 1/(8 factor) units, colour)
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)
 
@@ -31,8 +34,8 @@ class Dashboard:
         self.top = round(height - 5 * height / 40)  # first row of the bar
         self.factor = supersample
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
-        self._patches: dict[tuple, tuple[int, np.ndarray]] = {}
-        self._shown: tuple | None = None  # what the strip holds now
+        self._patches: dict[tuple[str, int, int], tuple[int, np.ndarray]] = {}
+        self._shown: tuple[Any, ...] | None = None  # what the strip holds now
 
     def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
         wheels, sign, q = car.wheels, car.steer_sign, 8 * self.factor  # q: steps per layout unit
@@ -51,7 +54,7 @@ class Dashboard:
             self._redraw(bars, int(score))
         image[self.top :] = self.strip
 
-    def _redraw(self, bars: tuple, score: int) -> None:
+    def _redraw(self, bars: tuple[Bar, ...], score: int) -> None:
         strip = self.strip
         strip[:] = 0
         for kind, place, steps, color in bars:
@@ -64,7 +67,7 @@ class Dashboard:
         region = strip[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
         np.maximum(region, mask[: region.shape[0], : region.shape[1], None], out=region)
 
-    def _bar(self, kind: str, place: int, steps: int, color: tuple) -> tuple[int, np.ndarray]:
+    def _bar(self, kind: str, place: int, steps: int, color: RGB) -> tuple[int, np.ndarray]:
         key = (kind, place, steps)
         cached = self._patches.get(key)
         if cached is None:
@@ -73,7 +76,7 @@ class Dashboard:
         return cached
 
     def _render_bar(
-        self, kind: str, place: int, value: float, color: tuple
+        self, kind: str, place: int, value: float, color: RGB
     ) -> tuple[int, np.ndarray]:
         """Draw one bar at ``factor`` x into a strip-high patch; return (first column, patch)."""
         f = self.factor
