@@ -18,7 +18,9 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import InvalidAction
 
-# CarRacing's Discrete(5): nothing, right, left, gas, brake -> (steer, gas, brake).
+# CarRacing's Discrete(5): action index -> (steer -1..1 [+ right], gas 0..1, brake 0..1),
+# each a fraction of full lock, full throttle and full brake.
+NOTHING, RIGHT, LEFT, GAS, BRAKE = range(5)  # the action indices
 DISCRETE_CONTROLS = (
     (0.0, 0.0, 0.0),
     (0.6, 0.0, 0.0),
@@ -40,7 +42,7 @@ class ActionSpec:
         if model == "kinematic":
             return cls(spaces.Box(-1.0, 1.0, (1,), np.float32), "kinematic")
         if actions == "discrete":
-            return cls(spaces.Discrete(5), "discrete")
+            return cls(spaces.Discrete(len(DISCRETE_CONTROLS)), "discrete")
         low, high = np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32)
         return cls(spaces.Box(low, high, dtype=np.float32), "dynamic")
 

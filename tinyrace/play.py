@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from tinyrace.actions import BRAKE, GAS, LEFT, NOTHING, RIGHT
 from tinyrace.env import TinyRaceEnv
 from tinyrace.validate import load_any
 
@@ -63,5 +64,15 @@ def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
         return np.array([steer], np.float32)
     gas, brake = float(keys[pygame.K_UP]), 0.8 * float(keys[pygame.K_DOWN])
     if env.config.car.actions == "discrete":
-        return 3 if gas else 4 if brake else 1 if steer > 0 else 2 if steer < 0 else 0
+        return (
+            GAS
+            if gas
+            else BRAKE
+            if brake
+            else RIGHT
+            if steer > 0
+            else LEFT
+            if steer < 0
+            else NOTHING
+        )
     return np.array([steer, gas, brake], np.float32)

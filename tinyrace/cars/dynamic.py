@@ -53,6 +53,8 @@ class DynamicCarSpec:
     steer_speed: float = 3.0  # [rad/s] max steering motor speed
     steer_limit: float = 0.4  # [rad] front wheel lock
     max_translation: float = 2.0  # [u per step] Box2D's speed cap, kept for identical top speed
+    spin_floor: float = 5.0  # [rad/s] added to |spin| where the engine's torque is divided by it
+    skid_ratio: float = 2.0  # a tyre skids (draws a mark) beyond this multiple of its grip
 
 
 @dataclass
@@ -211,7 +213,11 @@ class DynamicCar:
         """Engine and brake act on the wheel's spin."""
         spec = self.spec
         wheel.omega += (
-            dt * spec.engine_power * wheel.gas / spec.wheel_moment / (abs(wheel.omega) + 5.0)
+            dt
+            * spec.engine_power
+            * wheel.gas
+            / spec.wheel_moment
+            / (abs(wheel.omega) + spec.spin_floor)
         )
         if wheel.brake >= spec.brake_lock:
             wheel.omega = 0.0
@@ -233,7 +239,7 @@ class DynamicCar:
         f = (rim - v_forward) * self.spec.slip_gain
         p = -v_side * self.spec.slip_gain
         total = math.hypot(f, p)
-        wheel.skidding = total > 2.0 * limit
+        wheel.skidding = total > self.spec.skid_ratio * limit
         if total > limit:
             f, p = f * limit / total, p * limit / total
         return f, p
