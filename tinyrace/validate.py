@@ -9,6 +9,7 @@ import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
+from tinyrace.episodes.image import ImageCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -75,6 +76,7 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
+    assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 
 
