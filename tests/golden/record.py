@@ -42,8 +42,9 @@ def _config_env(path: Path) -> Callable[[], gym.Env]:
     def make() -> gym.Env:
         sections = dict((yaml.safe_load(path.read_text()) or {}).get("env") or {})
         folder = sections.pop("environment", None)
-        if folder is not None:
-            sections["environment"] = str((path.parent / folder).resolve())
+        if folder is not None:  # a folder beside the config wins over a shipped track's name
+            local = path.parent / folder
+            sections["environment"] = str(local.resolve()) if local.exists() else folder
         return gym.make("tinyrace/TinyRace-v0", render_mode="rgb_array", **sections)
 
     return make
