@@ -162,6 +162,8 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     for i, track in enumerate(config.tracks):
         if track.type == "procedural":
             _check_texture_side(track, parser, f"{at}tracks[{i}]")
+        elif not track.spawns:
+            parser.problem(f"{at}tracks[{i}].spawns", [], "expected at least one start pose")
 
 
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB

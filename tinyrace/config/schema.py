@@ -13,6 +13,7 @@ from types import MappingProxyType
 from typing import Any, Literal, Union
 
 from tinyrace.config.colors import Color
+from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 
 
 def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
@@ -228,6 +229,31 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class FilesConfig:
+    """``files``: how far the files a config names may reach, and how large they may be.
+
+    Fixed bounds, not knobs: a YAML file is at most 1 MiB, nests at most 32 levels and expands
+    (aliases included) to at most 200,000 values; a key may appear once per mapping; FIFOs and
+    devices are refused. Overview frames are at most 32 Mpx (a larger one is downscaled
+    further) and all cameras together at most 4096 x 4096 px.
+    """
+
+    max_image_pixels: int = knob(
+        DEFAULT_MAX_IMAGE_PIXELS,
+        "a track image larger than this (width * height, read from its header) is refused "
+        "before it is decoded",
+        "px",
+        low=1,
+        high=400_000_000,
+    )
+    paths_outside_folder: bool = knob(
+        False,
+        "let image and data paths leave the config's folder: absolute paths, '..' and "
+        "symlinks out of it (refused by default; a NUL byte is always refused)",
+    )
+
+
+@dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
 
@@ -243,6 +269,7 @@ class EnvConfig:
         aliases=("camera",),
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
+    files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
 
     @property
     def kind(self) -> str:
