@@ -35,6 +35,8 @@ def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
 
 
 REQUIRED = dataclasses.MISSING
+MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
+MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together
 
 
 @dataclass(frozen=True)
@@ -54,7 +56,8 @@ class SimConfig:
     )
     overview_downscale: float = knob(
         1.0,
-        "divide the track image size by this in the overview (rgb_array/human render)",
+        "divide the track image size by this in the overview (rgb_array/human render); "
+        "the overview is at most 32 Mpx whatever this says",
         low=0.05,
         high=100,
     )

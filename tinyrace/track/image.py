@@ -104,7 +104,7 @@ def _read_rgbx(
     """Read and binarise the image (PNG/JPEG/PGM; RGB, RGBA or grey) as RGBx, within bounds."""
     try:
         if track.image is None:
-            return _plane(track.plane_size, files.max_image_pixels, source, where), []
+            return _plane(track.plane_size), []
         # Paths a file names stay in its folder; a dict's or kwargs' are the programmer's own.
         confined = not source.startswith("<") and not files.paths_outside_folder
         path = inside_folder(track.image, base_dir, not confined, source, f"{where}.image")
@@ -117,12 +117,9 @@ def _read_rgbx(
     return rgbx, []
 
 
-def _plane(size: tuple[int, int], max_pixels: int, source: str, where: str) -> np.ndarray:
-    """The black plane of a track without an image, within the pixel cap."""
+def _plane(size: tuple[int, int]) -> np.ndarray:
+    """The black plane of a track without an image (its size is capped by the config check)."""
     height, width = size
-    if height * width > max_pixels:
-        allowed = f"expected at most {max_pixels:,} px (files.max_image_pixels)"
-        raise ConfigError(Problem(source, f"{where}.plane_size", list(size), allowed))
     plane = np.zeros((height, width, 4), np.uint8)
     plane[:, :, 3] = 255
     return plane
