@@ -14,7 +14,7 @@ import numpy as np
 from tinyrace.drivers import Driver, load_driver
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.experiment.load import Experiment
+from tinyrace.experiment.load import Experiment, importable_from
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.report import EpisodeResult, summary, summary_text, table, write_files
 
@@ -60,7 +60,8 @@ def run_experiment(
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
     _check_view(experiment, env)
-    driver = _driver(config.driver, config.driver_args, experiment.source)
+    with importable_from(experiment.folder):  # own drivers sit beside the experiment file
+        driver = _driver(config.driver, config.driver_args, experiment.source)
     limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
     progress = Progress(config.episodes, enabled=show_progress)
     results = []
