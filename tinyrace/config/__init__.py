@@ -161,12 +161,25 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
         parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
+    _check_obstacle_colors(config.reward_design, parser, at)
     for i, track in enumerate(config.tracks):
         if track.type == "procedural":
             _check_texture_side(track, parser, f"{at}tracks[{i}]")
         else:
             _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
     _check_camera_pixels(config.cameras, parser, at)
+
+
+def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:
+    """An obstacle in the trajectory's colour could never be hit: its pixels are taken out."""
+    cte = reward.cross_track_error
+    for i, obstacle in enumerate(reward.color_obstacles):
+        if cte.use_cte and obstacle.color == cte.trajectory_color:
+            allowed = (
+                "expected a colour other than cross_track_error.trajectory_color (trajectory "
+                "pixels are taken out of the picture, so this obstacle could never be hit)"
+            )
+            parser.problem(f"{at}reward_design.color_obstacles[{i}].color", obstacle.color, allowed)
 
 
 def _check_image_track(track: ImageTrackConfig, files: FilesConfig, parser: Parser, at: str):
