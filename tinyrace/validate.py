@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
@@ -37,13 +39,38 @@ def build_course(loaded: LoadedConfig):
 
 
 def validate_path(path: Path) -> tuple[list[str], str]:
-    """Every problem found (as lines), or none and a one-line summary."""
+    """Every problem found (as lines), or none and a one-line summary.
+
+    What passes has been built, reset (seed 0) and stepped once, as ``gym.make`` and
+    ``tinyrace run`` would: they read the config through the same functions.
+    """
     try:
         loaded = load_any(path)
-        build_course(loaded)
+        try_one_step(loaded)
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
     return [], describe(loaded.config)
+
+
+def try_one_step(loaded: LoadedConfig) -> None:
+    """Build the env of ``loaded``, reset it with seed 0 and take one neutral step."""
+    from tinyrace.env import TinyRaceEnv
+
+    env = TinyRaceEnv(config=loaded)
+    try:
+        env.reset(seed=0)
+        env.step(neutral_action(env.action_space))
+    finally:
+        env.close()
+
+
+def neutral_action(space: gym.Space) -> Any:
+    """The action nearest to 'do nothing': 0 clipped into a Box, the first of a Discrete."""
+    if isinstance(space, gym.spaces.Discrete):
+        return space.start
+    if isinstance(space, gym.spaces.Box):
+        return np.clip(np.zeros(space.shape), space.low, space.high).astype(space.dtype)
+    return space.sample()  # another kind of space: any valid action
 
 
 def describe(config: EnvConfig) -> str:
