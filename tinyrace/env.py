@@ -46,7 +46,8 @@ class TinyRaceEnv(gym.Env):
 
     ## Observation Space
     With no cameras configured on a procedural track: CarRacing's 96x96x3 RGB
-    view. Otherwise a Dict of uint8 RGB images keyed by camera id.
+    view. Otherwise a Dict of uint8 RGB images keyed by camera id, or with
+    ``observation: box`` and one camera, that camera's image as a plain Box.
 
     ## Rewards
     Named terms from ``reward_design`` (see ``tinyrace.rewards``), reported in
@@ -88,6 +89,8 @@ class TinyRaceEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
         self._actions = ActionSpec.for_car(self.config.car.model, self.config.car.actions)
         self.action_space = self._actions.space
+        box = self.config.observation == "box" and len(self.config.cameras) == 1
+        self._box_camera = self.config.cameras[0].id if box else None
         self.observation_space = self._observation_space()
         self._shaping = (
             _checked_shaping(cte_shaping)
@@ -101,9 +104,12 @@ class TinyRaceEnv(gym.Env):
         if not self.config.cameras:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
-        return spaces.Dict(
-            {c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras}
-        )
+        images = {
+            c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras
+        }
+        if self._box_camera is not None:  # ``observation: box``: the one camera's image alone
+            return images[self._box_camera]
+        return spaces.Dict(images)
 
     # -- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -165,7 +171,8 @@ class TinyRaceEnv(gym.Env):
         return observation, reward, reason is not None, truncated, info
 
     def _observe(self):
-        return self.episode.observe(self.t, self.score)
+        observation = self.episode.observe(self.t, self.score)
+        return observation if self._box_camera is None else observation[self._box_camera]
 
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()

@@ -6,6 +6,7 @@ from tinyrace.experiment.load import (
     is_experiment,
     load_experiment,
 )
+from tinyrace.experiment.report import rebuild_report, write_report
 from tinyrace.experiment.runner import RunResult, print_report, run_experiment
 from tinyrace.experiment.schema import ExperimentConfig, OutputConfig
 
@@ -18,5 +19,7 @@ __all__ = [
     "is_experiment",
     "load_experiment",
     "print_report",
+    "rebuild_report",
     "run_experiment",
+    "write_report",
 ]

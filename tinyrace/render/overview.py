@@ -14,7 +14,7 @@ import numpy as np
 
 from tinyrace.config import Color
 from tinyrace.config.schema import MAX_FRAME_PIXELS
-from tinyrace.track.image import ImageTrack
+from tinyrace.tracks.image import ImageTrack
 
 FOOTPRINT_COLOR = (255, 64, 64)  # RGB
 CAR_COLOR = (204, 0, 0)

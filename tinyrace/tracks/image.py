@@ -20,7 +20,7 @@ from tinyrace.config.image_file import read_image_bgr
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.track.nearest import NearestPoint
+from tinyrace.tracks.nearest import NearestPoint
 
 THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
 CELL = 32  # [px] side of the obstacle broad-phase cells
