@@ -121,7 +121,7 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     """Refuse to write where the user's files are.
 
     Never over a file the command read (even with ``force``); without ``force``, never over
-    an existing file and never into a track folder (one holding a track.yaml).
+    an existing file and never into a track folder (one holding a track.yaml) or below one.
     """
     where = "-o/--output"
     resolved = output.resolve()
@@ -135,9 +135,12 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     if resolved.exists() or resolved.is_symlink():
         allowed = "a path that does not exist yet (or --force to replace the file)"
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
-    if (resolved.parent / TRACK_FILE).exists():
+    track_folders = [p.parent for p in inputs if p.name == TRACK_FILE]
+    track_folders += [f for f in resolved.parents if (f / TRACK_FILE).is_file()]
+    inside = next((f for f in track_folders if resolved.is_relative_to(f)), None)
+    if inside is not None:
         allowed = (
-            f"a path outside a track folder ({resolved.parent} holds {TRACK_FILE}): "
+            f"a path outside the track folder {inside} (it holds {TRACK_FILE}): "
             "give -o elsewhere, or --force"
         )
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))

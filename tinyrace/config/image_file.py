@@ -18,7 +18,7 @@ import numpy as np
 from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
 
-DEFAULT_MAX_IMAGE_PIXELS = 50_000_000  # [px] width * height; about 7000 x 7000
+DEFAULT_MAX_IMAGE_PIXELS = 36_000_000  # [px] width * height, 6000 x 6000: loads in about 2 s
 MAX_IMAGE_BYTES = 1 << 30  # [bytes] an image file (1 GiB); the pixel cap usually binds first
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
