@@ -144,7 +144,7 @@ class Campaign:
             worker.send(case)
         outcomes = [worker.receive() for worker, _ in zip(self.workers, cases, strict=False)]
         self.counts[kind] += len(cases)
-        self.outcomes.update(o["outcome"] for o in outcomes)
+        self.outcomes.update(f"{kind} {o['outcome']}" for o in outcomes)
         return outcomes
 
     def close(self) -> None:
@@ -305,7 +305,8 @@ def write_yaml_case(folder: Path, text: str | bytes) -> None:
 # -- images ------------------------------------------------------------------------------------
 @st.composite
 def valid_image(draw) -> tuple[str, bytes]:
-    height, width = draw(st.integers(1, 300)), draw(st.integers(1, 300))
+    side = st.integers(1, 300) if draw(st.booleans()) else st.integers(160, 300)  # holds spawns
+    height, width = draw(side), draw(side)
     channels = draw(st.sampled_from([1, 3, 4]))
     ext = draw(st.sampled_from([".png", ".jpg", ".pgm"]))
     dtype = np.uint16 if ext == ".png" and draw(st.booleans()) else np.uint8
@@ -364,7 +365,7 @@ def hostile_image(draw) -> tuple[str, bytes]:
 @st.composite
 def image_config(draw) -> str:
     config = yaml.safe_load(BASE_TEXT)
-    if draw(st.booleans()):
+    if draw(st.integers(0, 3)) == 0:
         config["files"] = {"max_image_pixels": draw(st.integers(1, 400_000_000))}
     if draw(st.integers(0, 5)) == 0:  # a black plane instead of the image
         side = st.integers(16, 20000)

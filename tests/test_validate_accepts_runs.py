@@ -140,3 +140,14 @@ def test_the_one_point_lap_found_by_a_sweep():
         env.step(np.array([0.0, 1.0, 0.0], np.float32))
     except ConfigError as exc:  # no lap: said so, naming the knobs
         assert "tracks[0]" in str(exc)
+
+
+def test_validate_refuses_a_view_that_is_no_camera(tmp_path: Path):
+    folder = _folder(tmp_path)
+    experiment = tmp_path / "exp.yaml"
+    experiment.write_text(
+        yaml.safe_dump({"env": {"environment": "."}, "output": {"view": "roof"}, "episodes": 1})
+    )
+    problems, _ = validate_path(experiment)
+    assert folder == tmp_path and len(problems) == 1
+    assert "output.view" in problems[0] and "front" in problems[0]

@@ -64,7 +64,17 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
         merged = deep_merge(read_yaml(track_file) or {}, sections)
         kwargs["config"] = str(track_file)
     env_config = parse_env_config(merged, source, prefix="env")
+    check_view(config, env_config, source)
     return Experiment(config, source, env_config, {**kwargs, **sections}, base_dir)
+
+
+def check_view(config: ExperimentConfig, env_config: EnvConfig, source: str) -> None:
+    """``output.view`` is ``default`` or one of the env's camera ids (checked at validate)."""
+    view = config.output.view
+    ids = [c.id for c in env_config.cameras]
+    if view != "default" and view not in ids:
+        allowed = f"default or a camera id: {', '.join(ids) or '(this env has no cameras)'}"
+        raise ConfigError(Problem(source, "output.view", view, allowed))
 
 
 def check_driver(spec: str, folder: Path, source: str) -> None:
