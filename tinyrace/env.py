@@ -12,23 +12,23 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from tinyrace.actions import ActionSpec
 from tinyrace.config import EnvConfig, load_env_config
-from tinyrace.episodes.image import ImageCourse
-from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralCourse
+from tinyrace.episodes.procedural import OBSERVATION_SIZE
+from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.render.texture import GroundTexture
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
+from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.birdseye_camera import BirdseyeCamera
+from tinyrace.sensors.registry import sensor_type
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
 RESET_SOURCE = "<reset options>"
-COURSES = {"procedural": ProceduralCourse, "image": ImageCourse}  # by track type
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
-_NO_LAP = (
-    "expected knobs that close a lap: a smaller radius, a longer detail_step "
-    "or a larger turn_rate (the track generator found no closed lap)"
-)
 
 
 class TinyRaceEnv(gym.Env):
@@ -80,17 +80,20 @@ class TinyRaceEnv(gym.Env):
                     f"expected one of: {', '.join(RENDER_MODES)} or None",
                 )
             )
-        self.config: EnvConfig = loaded.config
+        parts = prepare(loaded)
+        self.config: EnvConfig = parts.config
         self.render_mode = render_mode
         self.verbose = verbose
-        self.course = COURSES[self.config.kind](self.config, loaded.base_dir, loaded.source)
-        self._source = loaded.source  # for errors found at reset
+        self.track_source = parts.source
+        self.course = parts.course
         self.dt = 1.0 / self.config.sim.fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
-        self._actions = ActionSpec.for_car(self.config.car.model, self.config.car.actions)
+        self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
-        box = self.config.observation == "box" and len(self.config.cameras) == 1
-        self._box_camera = self.config.cameras[0].id if box else None
+        self._ground = EpisodeGround()
+        self.sensors = _cameras(self.config, SensorContext(self.config, self._ground))
+        box = self.config.observation == "box" and len(self.sensors) == 1
+        self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
         self._shaping = (
             _checked_shaping(cte_shaping)
@@ -98,36 +101,29 @@ class TinyRaceEnv(gym.Env):
             else shaping_from_config(self.config.reward_design)
         )
         self.episode = None
+        self.layout: Track | None = None  # the episode's track, as sensors see it
         self._window: Window | None = None
 
     def _observation_space(self) -> spaces.Space:
-        if not self.config.cameras:
+        if not self.sensors:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
-        images = {
-            c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras
-        }
         if self._box_camera is not None:  # ``observation: box``: the one camera's image alone
-            return images[self._box_camera]
-        return spaces.Dict(images)
+            return self.sensors[0].space
+        return spaces.Dict({sensor.id: sensor.space for sensor in self.sensors})
 
     # -- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         options = _check_options(options, self.config.kind)
-        try:
-            self.episode = self.course.new_episode(self.np_random, options)
-        except RuntimeError as exc:  # the procedural generator closed no lap with these knobs
-            if self.config.kind != "procedural":
-                raise
-            t = self.config.tracks[0]
-            knobs = {"radius": t.radius, "detail_step": t.detail_step, "turn_rate": t.turn_rate}
-            raise ConfigError(Problem(self._source, "tracks[0]", knobs, _NO_LAP)) from exc
-        if self.verbose and self.config.kind == "procedural":  # as CarRacing-v3 reports it
-            track = self.episode.track
-            print(
-                f"Track generation: {track.attempts} attempt(s) -> {len(track.tiles)}-tiles track"
-            )
+        draw = self.track_source.draw(self.np_random, options)
+        self.episode = self.course.new_episode(draw)
+        self._ground.episode, self.layout = self.episode, draw.track
+        for sensor in self.sensors:
+            sensor.reset(draw.track)
+        if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
+            attempts = getattr(draw.track.detail, "attempts", 1)
+            print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
@@ -171,8 +167,20 @@ class TinyRaceEnv(gym.Env):
         return observation, reward, reason is not None, truncated, info
 
     def _observe(self):
-        observation = self.episode.observe(self.t, self.score)
+        if not self.sensors:  # CarRacing's view
+            return self.episode.observe(self.t, self.score)
+        snapshot = self.snapshot()
+        observation = {
+            sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
+            for sensor in self.sensors
+        }
         return observation if self._box_camera is None else observation[self._box_camera]
+
+    def snapshot(self) -> Snapshot:
+        """A copy of the world's state now (what sensors and pictures read)."""
+        if self.episode is None:
+            raise ResetNeeded("call reset() before reading a snapshot")
+        return Snapshot(self.t, self.steps, (self.episode.car.state(),))
 
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()
@@ -202,13 +210,26 @@ class TinyRaceEnv(gym.Env):
             return None
         if self.episode is None:
             raise ResetNeeded("call reset() before render()")
-        frame = self.episode.frame(self.render_mode, self.t, self.score)
+        frame = self.episode.frame(self.render_mode, self.t, self.score, self._camera_views())
         if self.render_mode != "human":
             return frame
         if self._window is None:
             self._window = Window("tinyrace", self.metadata["render_fps"])
         self._window.show(frame, realtime=self.config.sim.render_realtime)
         return None
+
+    def _camera_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each camera's image and track window now, for the overview picture."""
+        if not self.sensors:
+            return []
+        snapshot = self.snapshot()
+        return [
+            (
+                camera.observe(snapshot, self.layout, self.np_random),
+                camera.window(snapshot, self.layout),
+            )
+            for camera in self.sensors
+        ]
 
     def close(self):
         if self._window is not None:
@@ -219,6 +240,22 @@ class TinyRaceEnv(gym.Env):
         state = self.__dict__.copy()
         state["_window"] = None  # a window belongs to this process
         return state
+
+
+class EpisodeGround:
+    """The cameras' ground: the current episode's texture (CarRacing repaints visited tiles)."""
+
+    def __init__(self) -> None:
+        self.episode: Any = None
+
+    def texture(self, track: Track) -> GroundTexture:
+        return self.episode.ground_texture()
+
+
+def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
+    """tinycarlo's ``cameras:`` list, each entry a ``birdseye_camera`` sensor."""
+    camera_type = sensor_type("birdseye_camera", "<registry>", "cameras")
+    return [camera_type.build(entry, context) for entry in config.cameras]
 
 
 def _check_options(options: dict | None, kind: str) -> dict:

@@ -11,6 +11,7 @@ import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
+from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
 COMMAND_LINE = "<command line>"  # the source named by errors in command-line arguments
@@ -31,11 +32,9 @@ def load_any(path: Path) -> LoadedConfig:
     return load_env_config(config=path)
 
 
-def build_course(loaded: LoadedConfig):
-    """Load everything the env would load at construction (images included)."""
-    from tinyrace.env import COURSES
-
-    return COURSES[loaded.config.kind](loaded.config, loaded.base_dir, loaded.source)
+def build_course(loaded: LoadedConfig) -> Parts:
+    """Load everything the env would load at construction (images included), as it does."""
+    return prepare(loaded)
 
 
 def validate_path(path: Path) -> tuple[list[str], str]:
@@ -46,10 +45,11 @@ def validate_path(path: Path) -> tuple[list[str], str]:
     """
     try:
         loaded = load_any(path)
+        parts = build_course(loaded)  # the same parts the env is made of
         try_one_step(loaded)
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
-    return [], describe(loaded.config)
+    return [], describe(parts.config)
 
 
 def try_one_step(loaded: LoadedConfig) -> None:
@@ -103,8 +103,8 @@ def picture(target: str, seed: int) -> Picture:
     inputs = input_files(path, loaded)
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
-    course = build_course(loaded)
-    return Picture(image_picture(loaded.config, course.tracks[0]), name, inputs)
+    parts = build_course(loaded)
+    return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 
 
 def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:

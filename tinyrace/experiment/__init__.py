@@ -1,5 +1,6 @@
 """YAML experiments: an env, a driver, episodes; run end to end by ``tinyrace run``."""
 
+from tinyrace.config.experiment import ExperimentConfig, OutputConfig
 from tinyrace.experiment.load import (
     Experiment,
     experiment_from_dict,
@@ -8,7 +9,6 @@ from tinyrace.experiment.load import (
 )
 from tinyrace.experiment.report import rebuild_report, write_report
 from tinyrace.experiment.runner import RunResult, print_report, run_experiment
-from tinyrace.experiment.schema import ExperimentConfig, OutputConfig
 
 __all__ = [
     "Experiment",

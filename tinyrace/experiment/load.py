@@ -11,11 +11,11 @@ from pathlib import Path
 from typing import Any
 
 from tinyrace.config import TRACK_FILE, EnvConfig, load_env_config, parse_env_config
+from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.paths import inside_folder
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import shipped_track
-from tinyrace.experiment.schema import ExperimentConfig
 
 ENV_FOLDER_KEY = "environment"  # inside ``env``: a track folder or track.yaml
 
