@@ -48,7 +48,7 @@ def read_text(path: Path, limit: int = MAX_YAML_BYTES) -> str:
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        allowed = f"expected UTF-8 text (byte {exc.start} is not)"
+        allowed = f"the file is unreadable: expected UTF-8 text (byte {exc.start} is not)"
         raise ConfigError(Problem(source, "", source, allowed)) from None
 
 
