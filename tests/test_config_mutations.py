@@ -156,13 +156,14 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Workspace:
 
 
 # -- mutations -----------------------------------------------------------------------------
-# YAML 1.1 reads NEL, LS and PS as line breaks even inside a written key, so a key made of
-# them is not the key the file holds; new keys are drawn without them.
+# YAML 1.1 reads NEL, LS and PS as line breaks even inside a written key, and PyYAML writes
+# but cannot read back a lone surrogate, so such a key is not the key the file holds; new
+# keys are drawn without them.
 _YAML_BREAKS = "\x85\u2028\u2029"
 
 
 def key_text(**sizes: int) -> st.SearchStrategy[str]:
-    return st.text(st.characters(exclude_characters=_YAML_BREAKS), **sizes)
+    return st.text(st.characters(exclude_characters=_YAML_BREAKS, exclude_categories=("Cs",)), **sizes)
 
 
 Path_ = tuple  # a key path into a raw mapping: keys and list indices
@@ -405,6 +406,7 @@ CROSS_RULES = [
     r"tracks\[\d+\]\.pixels_per_unit",  # the ground texture's side (playfield * ppu)
     r"car\.actions",  # discrete actions need the dynamic car
     r"reward_design\.color_obstacles",  # colour obstacles need an image track
+    r"reward_design\.color_obstacles\[\d+\]\.color",  # the trajectory's colour: never hit
     r"reward_design\.cross_track_error\.trajectory_color",  # colour absent from the image
     r"environment",  # the track folder of an experiment
 ]
