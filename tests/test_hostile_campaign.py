@@ -73,6 +73,8 @@ class Worker:
         self.stop()
         env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{WORKER.parent}"}
         env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", PYTHONUNBUFFERED="1")
+        for name in ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY"):  # `play` opens no window
+            env.pop(name, None)  # (.ci/run exports SDL's dummy driver, which would play on)
         self.process = subprocess.Popen(
             [sys.executable, str(WORKER), str(MEMORY), str(SECONDS)],
             stdin=subprocess.PIPE,
