@@ -31,10 +31,10 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import tinyrace
 from tinyrace.config.yaml_file import MAX_YAML_BYTES
 from tinyrace.env import RESET_OPTIONS
 
-ROOT = Path(__file__).resolve().parents[1]
 WORKER = Path(__file__).with_name("hostile_worker.py")
 MEMORY = 2 << 30  # [bytes] address space of a worker (its imports take about 300 MiB)
 SECONDS = 5  # [s] each case ends within this, or it fails
@@ -71,7 +71,8 @@ class Worker:
 
     def _start(self) -> None:
         self.stop()
-        env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{WORKER.parent}"}
+        here = Path(tinyrace.__file__).resolve().parents[1]  # the tinyrace this test imported
+        env = {**os.environ, "PYTHONPATH": f"{here}{os.pathsep}{WORKER.parent}"}
         env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", PYTHONUNBUFFERED="1")
         self.process = subprocess.Popen(
             [sys.executable, str(WORKER), str(MEMORY), str(SECONDS)],
