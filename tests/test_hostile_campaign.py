@@ -93,7 +93,11 @@ class Worker:
         """The case's outcome; 'died' or 'hung' when the worker gave none."""
         outcome = self._receive(SECONDS + 20)  # the alarm cannot stop a long C call
         if outcome is None:
-            hung = self.process.poll() is None
+            try:
+                self.process.wait(timeout=2)  # it closed its pipe: it is exiting
+                hung = False
+            except subprocess.TimeoutExpired:
+                hung = True
             self._start()
             return {"outcome": "hung" if hung else "died"}
         if outcome["outcome"] in ("timeout", "memory", "crash"):
@@ -477,6 +481,19 @@ def campaign():
     shutil.rmtree(root, ignore_errors=True)
 
 
+@pytest.mark.parametrize(
+    "action, outcome", [("allocate", "memory"), ("sleep", "timeout"), ("die", "died")]
+)
+def test_the_workers_report_memory_hangs_and_deaths(campaign: Campaign, action, outcome):
+    worker = campaign.workers[0]
+    restarts = worker.restarts
+    worker.send({"kind": "probe", "args": {"action": action}})
+    assert worker.receive()["outcome"] == outcome
+    assert worker.restarts == restarts + 1  # a fresh worker for the next case
+    worker.send({"kind": "probe", "args": {"action": "nothing"}})
+    assert worker.receive() == {"outcome": "ok"}
+
+
 def check_config_outcome(outcome: dict[str, Any], folder: Path) -> None:
     """validate and gym.make agree; every problem names a file of the case."""
     assert outcome["outcome"] in ("ok", "config_error"), outcome
@@ -490,12 +507,13 @@ def check_config_outcome(outcome: dict[str, Any], folder: Path) -> None:
 
 
 def test_hostile_campaign(campaign: Campaign, capsys):
+    restarts_before = sum(w.restarts for w in campaign.workers)
     run_yaml(campaign)
     run_images(campaign)
     run_argv(campaign)
     run_options(campaign)
     total = sum(campaign.counts.values())
-    restarts = sum(w.restarts for w in campaign.workers)
+    restarts = sum(w.restarts for w in campaign.workers) - restarts_before
     summary = ", ".join(f"{kind} {n}" for kind, n in campaign.counts.items())
     with capsys.disabled():
         print(
