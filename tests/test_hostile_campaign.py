@@ -428,7 +428,8 @@ NUMBERS = st.integers(-(2**70), 2**70).map(str) | st.sampled_from(["0", "-1", "1
 
 @st.composite
 def command_line(draw) -> list[str]:
-    command = draw(st.sampled_from(["validate", "show", "show", "run", "play", "garbage"]))
+    commands = ["validate", "show", "show", "run", "play", "report", "examples", "garbage"]
+    command = draw(st.sampled_from(commands))
     if command == "validate":
         return ["validate", draw(st.sampled_from(PATHS))]
     if command == "show":
@@ -445,8 +446,11 @@ def command_line(draw) -> list[str]:
         argv = ["run", experiment, "--no-video", "--quiet"]
         argv += ["--episodes", draw(st.sampled_from(["1", "0", "-3", "x", "1e9"]))]
         return [*argv, "--out", draw(st.sampled_from(["out", "mine.png", "/dev/null"]))]
-    if command == "play":
-        return ["play", draw(st.sampled_from(PATHS))]
+    if command in ("play", "report"):
+        return [command, draw(st.sampled_from(PATHS))]
+    if command == "examples":
+        name = draw(st.sampled_from(["formula_student", "carracing", "nope", ""]))
+        return ["examples", "copy", name, draw(st.sampled_from(PATHS + OUTPUTS))]
     return draw(st.lists(st.text(max_size=20), max_size=4))
 
 
@@ -587,8 +591,8 @@ def run_argv(campaign: Campaign) -> None:
             replaced = _forced_output(argv)  # the one file the user asked to replace
             kept = {name: digest for name, digest in old.items() if name != replaced}
             assert unchanged(kept, after), (argv, "an input file changed")
-            if argv[:1] == ["show"] and "--force" not in argv:
-                assert set(after) == set(old), (argv, "show wrote into a track folder")
+            if argv[:1] in (["show"], ["report"], ["validate"]) and "--force" not in argv:
+                assert set(after) == set(old), (argv, "it wrote into a track folder")
             shutil.rmtree(folder)
 
     check()
