@@ -149,7 +149,7 @@ class Campaign:
             worker.send(case)
         outcomes = [worker.receive() for worker, _ in zip(self.workers, cases, strict=False)]
         self.counts[kind] += len(cases)
-        self.outcomes.update(f"{kind} {o['outcome']}" for o in outcomes)
+        self.outcomes.update(f"{kind} {o['outcome']} {o.get('code', '')}".strip() for o in outcomes)
         return outcomes
 
     def close(self) -> None:
@@ -585,6 +585,8 @@ def run_argv(campaign: Campaign) -> None:
             assert outcome["outcome"] == "exit", (argv, outcome)
             assert isinstance(outcome["code"], int), (argv, outcome)
             assert "Traceback" not in outcome["stderr"], (argv, outcome)
+            if outcome["code"] == 1:  # 1 is validate's "problems found", else an internal error
+                assert argv[:1] == ["validate"], (argv, outcome)
             if outcome["code"] != 0:
                 assert (outcome["stderr"] + outcome["stdout"]).strip(), (argv, outcome)  # why
             after = digests(folder)

@@ -224,7 +224,7 @@ def _report(args: argparse.Namespace) -> int:
     from tinyrace.experiment import rebuild_report
 
     run_dir = Path(args.run_dir)
-    if not ((run_dir / "results.json").is_file() and (run_dir / "episodes.csv").is_file()):
+    if not (_is_file(run_dir / "results.json") and _is_file(run_dir / "episodes.csv")):
         raise UsageError(
             f"argument run_dir: {args.run_dir!r} is no run folder "
             "(expected a folder holding results.json and episodes.csv)"
@@ -238,6 +238,14 @@ def _report(args: argparse.Namespace) -> int:
         ) from exc
     print(f"wrote {path}")
     return 0
+
+
+def _is_file(path: Path) -> bool:
+    """``Path.is_file``, but False for names the system refuses (too long, a NUL byte)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 # -- examples ----------------------------------------------------------------------------------
