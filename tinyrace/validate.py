@@ -11,6 +11,7 @@ import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
+from tinyrace.episodes.image import ImageCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -64,7 +65,7 @@ def try_one_step(loaded: LoadedConfig) -> None:
         env.close()
 
 
-def neutral_action(space: gym.Space) -> Any:
+def neutral_action(space: gym.Space[Any]) -> Any:
     """The action nearest to 'do nothing': 0 clipped into a Box, the first of a Discrete."""
     if isinstance(space, gym.spaces.Discrete):
         return space.start
@@ -104,6 +105,7 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
+    assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 
 
