@@ -97,7 +97,21 @@ def options_case(env_name: str, folder: str | None, options: Any) -> dict[str, A
     return {"outcome": "ok"}
 
 
-CASES = {"config": config_case, "argv": argv_case, "options": options_case}
+def probe_case(action: str) -> dict[str, Any]:
+    """Misbehaviour on purpose, to show the campaign sees it: too much memory, a hang, a death."""
+    import time
+
+    if action == "allocate":
+        block = bytearray(resource.getrlimit(resource.RLIMIT_AS)[0])
+        return {"outcome": "ok", "size": len(block)}
+    if action == "sleep":
+        time.sleep(3600)
+    if action == "die":
+        os._exit(3)
+    return {"outcome": "ok"}
+
+
+CASES = {"config": config_case, "argv": argv_case, "options": options_case, "probe": probe_case}
 
 
 def _run(case: dict[str, Any], seconds: int) -> dict[str, Any]:

@@ -31,10 +31,10 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import tinyrace
 from tinyrace.config.yaml_file import MAX_YAML_BYTES
 from tinyrace.env import RESET_OPTIONS
 
-ROOT = Path(__file__).resolve().parents[1]
 WORKER = Path(__file__).with_name("hostile_worker.py")
 MEMORY = 2 << 30  # [bytes] address space of a worker (its imports take about 300 MiB)
 SECONDS = 5  # [s] each case ends within this, or it fails
@@ -71,7 +71,8 @@ class Worker:
 
     def _start(self) -> None:
         self.stop()
-        env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{WORKER.parent}"}
+        here = Path(tinyrace.__file__).resolve().parents[1]  # the tinyrace this test imported
+        env = {**os.environ, "PYTHONPATH": f"{here}{os.pathsep}{WORKER.parent}"}
         env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", PYTHONUNBUFFERED="1")
         for name in ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY"):  # `play` opens no window
             env.pop(name, None)  # (.ci/run exports SDL's dummy driver, which would play on)
@@ -94,7 +95,11 @@ class Worker:
         """The case's outcome; 'died' or 'hung' when the worker gave none."""
         outcome = self._receive(SECONDS + 20)  # the alarm cannot stop a long C call
         if outcome is None:
-            hung = self.process.poll() is None
+            try:
+                self.process.wait(timeout=2)  # it closed its pipe: it is exiting
+                hung = False
+            except subprocess.TimeoutExpired:
+                hung = True
             self._start()
             return {"outcome": "hung" if hung else "died"}
         if outcome["outcome"] in ("timeout", "memory", "crash"):
@@ -146,7 +151,7 @@ class Campaign:
             worker.send(case)
         outcomes = [worker.receive() for worker, _ in zip(self.workers, cases, strict=False)]
         self.counts[kind] += len(cases)
-        self.outcomes.update(f"{kind} {o['outcome']}" for o in outcomes)
+        self.outcomes.update(f"{kind} {o['outcome']} {o.get('code', '')}".strip() for o in outcomes)
         return outcomes
 
     def close(self) -> None:
@@ -274,7 +279,25 @@ def damaged_text(draw) -> str:
     return text
 
 
+@st.composite
+def benign_text(draw) -> str | bytes:
+    """The same config written differently: it must load as the base does."""
+    form = draw(st.sampled_from(["crlf", "bom", "flow", "merge", "anchor", "comments"]))
+    if form == "crlf":
+        return BASE_TEXT.replace("\n", "\r\n")
+    if form == "bom":
+        return b"\xef\xbb\xbf" + BASE_TEXT.encode()
+    if form == "flow":
+        return yaml.safe_dump(BASE, default_flow_style=True, width=draw(st.integers(20, 200)))
+    if form == "merge":
+        return BASE_TEXT.replace("car:\n", "car:\n  <<: {wheelbase: 5, velocity: 60}\n", 1)
+    if form == "anchor":
+        return BASE_TEXT.replace("sim:\n", "sim: &s\n", 1)
+    return "".join(f"{line}  # note\n" if line.strip() else "\n" for line in BASE_TEXT.split("\n"))
+
+
 YAML_TEXT = st.one_of(
+    benign_text(),
     alias_bomb(),
     deep_nesting(),
     duplicate_keys(),
@@ -407,7 +430,8 @@ NUMBERS = st.integers(-(2**70), 2**70).map(str) | st.sampled_from(["0", "-1", "1
 
 @st.composite
 def command_line(draw) -> list[str]:
-    command = draw(st.sampled_from(["validate", "show", "show", "run", "play", "garbage"]))
+    commands = ["validate", "show", "show", "run", "play", "report", "examples", "garbage"]
+    command = draw(st.sampled_from(commands))
     if command == "validate":
         return ["validate", draw(st.sampled_from(PATHS))]
     if command == "show":
@@ -424,8 +448,11 @@ def command_line(draw) -> list[str]:
         argv = ["run", experiment, "--no-video", "--quiet"]
         argv += ["--episodes", draw(st.sampled_from(["1", "0", "-3", "x", "1e9"]))]
         return [*argv, "--out", draw(st.sampled_from(["out", "mine.png", "/dev/null"]))]
-    if command == "play":
-        return ["play", draw(st.sampled_from(PATHS))]
+    if command in ("play", "report"):
+        return [command, draw(st.sampled_from(PATHS))]
+    if command == "examples":
+        name = draw(st.sampled_from(["formula_student", "carracing", "nope", ""]))
+        return ["examples", "copy", name, draw(st.sampled_from(PATHS + OUTPUTS))]
     return draw(st.lists(st.text(max_size=20), max_size=4))
 
 
@@ -460,6 +487,19 @@ def campaign():
     shutil.rmtree(root, ignore_errors=True)
 
 
+@pytest.mark.parametrize(
+    "action, outcome", [("allocate", "memory"), ("sleep", "timeout"), ("die", "died")]
+)
+def test_the_workers_report_memory_hangs_and_deaths(campaign: Campaign, action, outcome):
+    worker = campaign.workers[0]
+    restarts = worker.restarts
+    worker.send({"kind": "probe", "args": {"action": action}})
+    assert worker.receive()["outcome"] == outcome
+    assert worker.restarts == restarts + 1  # a fresh worker for the next case
+    worker.send({"kind": "probe", "args": {"action": "nothing"}})
+    assert worker.receive() == {"outcome": "ok"}
+
+
 def check_config_outcome(outcome: dict[str, Any], folder: Path) -> None:
     """validate and gym.make agree; every problem names a file of the case."""
     assert outcome["outcome"] in ("ok", "config_error"), outcome
@@ -473,12 +513,13 @@ def check_config_outcome(outcome: dict[str, Any], folder: Path) -> None:
 
 
 def test_hostile_campaign(campaign: Campaign, capsys):
+    restarts_before = sum(w.restarts for w in campaign.workers)
     run_yaml(campaign)
     run_images(campaign)
     run_argv(campaign)
     run_options(campaign)
     total = sum(campaign.counts.values())
-    restarts = sum(w.restarts for w in campaign.workers)
+    restarts = sum(w.restarts for w in campaign.workers) - restarts_before
     summary = ", ".join(f"{kind} {n}" for kind, n in campaign.counts.items())
     with capsys.disabled():
         print(
@@ -486,6 +527,8 @@ def test_hostile_campaign(campaign: Campaign, capsys):
             f"worker restarts {restarts}; derandomized {IN_CI}"
         )
     assert total >= MIN_CASES
+    for kind in ("yaml", "image", "options"):  # not a campaign of refusals only
+        assert campaign.outcomes[f"{kind} ok"] > 0, campaign.outcomes
 
 
 def _config_cases(campaign: Campaign, kind: str, writers: list) -> None:
@@ -544,14 +587,16 @@ def run_argv(campaign: Campaign) -> None:
             assert outcome["outcome"] == "exit", (argv, outcome)
             assert isinstance(outcome["code"], int), (argv, outcome)
             assert "Traceback" not in outcome["stderr"], (argv, outcome)
+            if outcome["code"] == 1:  # 1 is validate's "problems found", else an internal error
+                assert argv[:1] == ["validate"], (argv, outcome)
             if outcome["code"] != 0:
                 assert (outcome["stderr"] + outcome["stdout"]).strip(), (argv, outcome)  # why
             after = digests(folder)
             replaced = _forced_output(argv)  # the one file the user asked to replace
             kept = {name: digest for name, digest in old.items() if name != replaced}
             assert unchanged(kept, after), (argv, "an input file changed")
-            if argv[:1] == ["show"] and "--force" not in argv:
-                assert set(after) == set(old), (argv, "show wrote into a track folder")
+            if argv[:1] in (["show"], ["report"], ["validate"]) and "--force" not in argv:
+                assert set(after) == set(old), (argv, "it wrote into a track folder")
             shutil.rmtree(folder)
 
     check()

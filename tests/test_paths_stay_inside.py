@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 import yaml
 
+import tinyrace
 from tinyrace import cli
 from tinyrace.config.paths import OPT_IN_KEY
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError
 from tinyrace.experiment import load_experiment
 
-ROOT = Path(__file__).resolve().parents[1]
 CAMERA = {"id": "front", "resolution": [12, 16], "roi": [24, 32]}
 
 
@@ -124,7 +124,8 @@ def test_own_driver_imports_from_the_experiment_folder_as_the_console_script(tmp
     # -P: like a console script, the current folder is not on sys.path
     main = "import sys; from tinyrace.cli import main; sys.exit(main())"
     argv = ["run", str(experiment), "--quiet", "--out", str(work / "runs")]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    here = Path(tinyrace.__file__).resolve().parents[1]  # the tinyrace this test imported
+    env = {**os.environ, "PYTHONPATH": str(here)}
     done = subprocess.run(
         [sys.executable, "-P", "-c", main, *argv],
         cwd=work,

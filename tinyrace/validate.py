@@ -125,7 +125,21 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     Never over a file the command read (even with ``force``); without ``force``, never over
     an existing file and never into a track folder (one holding a track.yaml) or below one.
     """
+    try:
+        _check_output(output, inputs, force)
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte, no permission
+        allowed = f"a path the system can write ({type(exc).__name__}: {exc})"
+        raise ConfigError(Problem(COMMAND_LINE, "-o/--output", str(output), allowed)) from None
+
+
+PICTURE_SUFFIXES = (".png", ".jpg", ".jpeg")
+
+
+def _check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     where = "-o/--output"
+    if output.suffix.lower() not in PICTURE_SUFFIXES:
+        allowed = f"a picture file name ending in {', '.join(PICTURE_SUFFIXES)}"
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
     resolved = output.resolve()
     if resolved in inputs:
         allowed = "a path that is not one of the files this command reads: choose another -o"
