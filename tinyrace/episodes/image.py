@@ -8,16 +8,16 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.config import EnvConfig
 from tinyrace.episodes import StepFacts
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.kinematic_car import KinematicCar
-from tinyrace.physics.world import World
 from tinyrace.render.overview import Overview
-from tinyrace.render.roi_camera import RoiCamera
 from tinyrace.render.texture import GroundTexture
-from tinyrace.track.image import ImageTrack, load_image_track, touched_obstacles
+from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.tracks.image import ImageTrack, load_image_track, touched_obstacles
+from tinyrace.world.world import World
 
 _ALL_ROAD = (True, True, True, True)  # image tracks have no grass: full grip everywhere
 

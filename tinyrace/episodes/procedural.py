@@ -7,16 +7,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
 from tinyrace.episodes import StepFacts
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.world import World
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.procedural_ground import GroundColors, GroundPainter, repaint_tile
-from tinyrace.render.roi_camera import RoiCamera
 from tinyrace.render.texture import GroundTexture
-from tinyrace.track.procedural import ProceduralTrackParams, generate_track
+from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.tracks.procedural import ProceduralTrackParams, generate_track
+from tinyrace.world.world import World
 
 VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
 OBSERVATION_SIZE = (96, 96)  # [px] (w, h) CarRacing's state_pixels

@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from tinyrace.render.texture import GroundTexture, transform_points
-from tinyrace.track.procedural import ProceduralTrack
+from tinyrace.tracks.procedural import ProceduralTrack
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px precision
 LEVEL_ALIGN = 64  # texture sides are multiples of this: levels of detail halve exactly

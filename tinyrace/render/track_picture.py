@@ -12,8 +12,8 @@ from gymnasium.utils import seeding
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.procedural import config_colors, draw_colors, track_params
 from tinyrace.render.procedural_ground import GroundPainter
-from tinyrace.track.image import ImageTrack
-from tinyrace.track.procedural import generate_track
+from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.procedural import generate_track
 
 MAX_SIDE = 1600  # [px] longest side of a picture
 SPAWN_COLOR = (255, 60, 60)  # RGB

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pymunk
 
-from tinyrace.physics.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
+from tinyrace.world.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
 
 SIZE = 0.02  # [u per model unit] CarRacing's car model scale
 

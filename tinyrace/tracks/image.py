@@ -17,7 +17,7 @@ import numpy as np
 
 from tinyrace.config import Color, EnvConfig, ImageTrackConfig
 from tinyrace.errors import Problem
-from tinyrace.track.nearest import NearestPoint
+from tinyrace.tracks.nearest import NearestPoint
 
 THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
 CELL = 32  # [px] side of the obstacle broad-phase cells
