@@ -160,7 +160,7 @@ class ImageCourse:
                 world = World()
                 world.add_obstacle_cells(track.cells)
                 self.prepared.append(
-                    PreparedTrack(track, GroundTexture.from_image(track.image), world)
+                    PreparedTrack(track, GroundTexture.from_image(track.image, exact_colors=True), world)
                 )
         if problems:
             raise ConfigError(problems)
