@@ -1,0 +1,99 @@
+"""Cone detection core: the track's cones in range and field of view, in the car's frame.
+
+Car frame: x ahead, y to the left [track units]. Detections come nearest first as a
+fixed-size array of rows (x, y, class) padded with zeros, plus a count. Classes: 1 blue,
+2 yellow, 3 orange (0 marks padding). Noise, misses and false positives are drawn from the
+generator given, in a fixed order, so that the same seed gives the same detections.
+
+On picture tracks the cones are the connected components of the cone colours
+(``cones_from_picture``), found once per track.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+CONE_CLASSES = ("blue", "yellow", "orange")  # class id = index + 1; 0 is padding
+
+
+@dataclass(frozen=True)
+class ConeNoise:
+    """How imperfect the detector is."""
+
+    position_std: float = 0.0  # [track units] Gaussian noise on x and y of each detection
+    miss_probability: float = 0.0  # chance that a visible cone is not reported
+    false_positives: float = 0.0  # mean count per observation (Poisson) of made-up cones
+
+
+def to_car_frame(points: np.ndarray, pose: tuple[float, float, float], y_down: bool) -> np.ndarray:
+    """(N, 2) track points -> (N, 2) car frame (x ahead, y left) of a car at ``pose``
+    (heading counter-clockwise on y-up tracks, clockwise on y-down image tracks)."""
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    dx, dy = points[:, 0] - x, points[:, 1] - y
+    ahead = dx * c + dy * s
+    left = dx * s - dy * c if y_down else dy * c - dx * s
+    return np.stack([ahead, left], axis=1)
+
+
+def detect(
+    cones: np.ndarray,
+    pose: tuple[float, float, float],
+    y_down: bool,
+    max_range: float,
+    fov: float,
+    capacity: int,
+    noise: ConeNoise,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, int]:
+    """((capacity, 3) float32 rows x, y, class, count) of ``cones`` (K, 3: x, y, class id
+    1-3 [track units]) seen from ``pose`` within ``max_range`` [track units] and ``fov`` [rad]
+    centred ahead. Extra detections beyond ``capacity`` (the farthest) are dropped."""
+    local = to_car_frame(cones[:, :2], pose, y_down)
+    seen = _visible(local, max_range, fov)
+    found = np.column_stack([local[seen], cones[seen, 2]])
+    if noise.miss_probability > 0:
+        found = found[rng.random(len(found)) >= noise.miss_probability]
+    if noise.position_std > 0:
+        found[:, :2] += rng.normal(0.0, noise.position_std, (len(found), 2))
+    if noise.false_positives > 0:
+        found = np.concatenate([found, _false_positives(rng, noise, max_range, fov)])
+    order = np.argsort(np.hypot(found[:, 0], found[:, 1]), kind="stable")[:capacity]
+    rows = np.zeros((capacity, 3), np.float32)
+    rows[: len(order)] = found[order]
+    return rows, len(order)
+
+
+def _visible(local: np.ndarray, max_range: float, fov: float) -> np.ndarray:
+    distance = np.hypot(local[:, 0], local[:, 1])
+    bearing = np.abs(np.arctan2(local[:, 1], local[:, 0]))
+    return (distance <= max_range) & (bearing <= fov / 2)
+
+
+def _false_positives(
+    rng: np.random.Generator, noise: ConeNoise, max_range: float, fov: float
+) -> np.ndarray:
+    """Made-up cones spread evenly over the visible sector, of random classes."""
+    count = int(rng.poisson(noise.false_positives))
+    distance = max_range * np.sqrt(rng.random(count))  # even over the sector's area
+    bearing = (rng.random(count) - 0.5) * min(fov, 2 * math.pi)
+    classes = rng.integers(1, len(CONE_CLASSES) + 1, count)
+    return np.column_stack([distance * np.cos(bearing), distance * np.sin(bearing), classes])
+
+
+def cones_from_picture(picture: np.ndarray, colors: dict[int, tuple[int, int, int]]) -> np.ndarray:
+    """(K, 3) x, y [px] (centroid) and class id of each connected blob of a cone colour in
+    an RGBx ``picture``; ``colors`` maps class id -> RGB colour."""
+    packed = picture.view(np.uint32)[:, :, 0]
+    found = [np.zeros((0, 3))]
+    for class_id, rgb in colors.items():
+        word = np.array([*rgb, 255], np.uint8).view(np.uint32)[0]
+        mask = ((packed | np.uint32(0xFF000000)) == word).astype(np.uint8)
+        count, _, _, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        centres = centroids[1:count]
+        found.append(np.column_stack([centres, np.full(len(centres), class_id)]))
+    return np.concatenate(found)

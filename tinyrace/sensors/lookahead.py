@@ -1,0 +1,104 @@
+"""Lookahead core: the next points of a reference line in the car's frame, with curvature.
+
+The line is resampled once per track on a fine grid of arc length (``ReferenceLine``) with
+its curvature at every grid point (from the circle through the points one ``spacing``
+before and after, so that a polyline's corners do not spike it). Each observation finds the
+car's arc length near the previous one (a window of the grid, not the whole line) and reads
+the K points ``spacing`` apart ahead of it by linear interpolation on the grid.
+
+Car frame: x ahead, y to the left [track units]; curvature [1/track unit] is positive for a
+left turn, on y-up and y-down tracks alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tinyrace.sensors.cones import to_car_frame
+
+FINE = 8  # grid points per spacing
+WINDOW = 64  # grid points searched either side of the previous match
+
+
+@dataclass(frozen=True, eq=False)
+class ReferenceLine:
+    """A line resampled every ``step`` [track units] along its arc length."""
+
+    points: np.ndarray  # (M, 2) [track units]
+    curvature: np.ndarray  # (M,) [1/track unit], + left turn in the track's own frame
+    step: float  # [track units] between grid points
+    closed: bool
+
+    @classmethod
+    def build(cls, line: np.ndarray, closed: bool, spacing: float, y_down: bool):
+        """Resample ``line`` (N, 2) for lookahead points ``spacing`` [track units] apart."""
+        line = np.asarray(line, np.float64)
+        if closed:
+            line = np.vstack([line, line[:1]])
+        s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+        intervals = max(round(s[-1] / (spacing / FINE)), 2)
+        count = intervals if closed else intervals + 1
+        grid = np.linspace(0.0, s[-1], count, endpoint=not closed)
+        points = np.stack([np.interp(grid, s, line[:, 0]), np.interp(grid, s, line[:, 1])], 1)
+        step = s[-1] / intervals
+        curvature = _menger(points, FINE, closed) * (-1.0 if y_down else 1.0)
+        return cls(points, curvature, step, closed)
+
+    def nearest(self, x: float, y: float, near: int | None) -> int:
+        """Index of the grid point nearest (x, y), searched around ``near`` when given."""
+        if near is None:
+            candidates = np.arange(len(self.points))
+        else:
+            candidates = np.arange(near - WINDOW, near + WINDOW + 1)
+            candidates = candidates % len(self.points) if self.closed else candidates
+            candidates = candidates[(candidates >= 0) & (candidates < len(self.points))]
+        d = self.points[candidates] - (x, y)
+        return int(candidates[np.argmin(np.einsum("ij,ij->i", d, d))])
+
+
+def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
+    """Signed curvature of the circle through each point and the points ``offset`` before
+    and after it (+ counter-clockwise in the points' frame)."""
+    index = np.arange(len(points))
+    if closed:
+        before, after = (
+            points[(index - offset) % len(points)],
+            points[(index + offset) % len(points)],
+        )
+    else:
+        before = points[np.clip(index - offset, 0, len(points) - 1)]
+        after = points[np.clip(index + offset, 0, len(points) - 1)]
+    a, b = points - before, after - points
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    lengths = np.hypot(*a.T) * np.hypot(*b.T) * np.hypot(*(after - before).T)
+    return np.divide(2 * cross, lengths, out=np.zeros(len(points)), where=lengths > 0)
+
+
+def lookahead(
+    line: ReferenceLine,
+    index: int,
+    pose: tuple[float, float, float],
+    y_down: bool,
+    count: int,
+    spacing: float,
+) -> np.ndarray:
+    """(count, 3) float32 rows x, y [track units, car frame] and curvature [1/track unit] of
+    the points ``spacing``, 2 ``spacing``, ... ahead of grid point ``index`` along the line
+    (an open line stops at its end)."""
+    targets = index + np.arange(1, count + 1) * (spacing / line.step)
+    m = len(line.points)
+    if line.closed:
+        targets %= m
+    else:
+        targets = np.minimum(targets, m - 1)
+    low = targets.astype(np.int64)
+    high = (low + 1) % m if line.closed else np.minimum(low + 1, m - 1)
+    frac = (targets - low)[:, None]
+    points = line.points[low] * (1 - frac) + line.points[high] * frac
+    curvature = line.curvature[low] * (1 - frac[:, 0]) + line.curvature[high] * frac[:, 0]
+    rows = np.empty((count, 3), np.float32)
+    rows[:, :2] = to_car_frame(points, pose, y_down)
+    rows[:, 2] = curvature
+    return rows

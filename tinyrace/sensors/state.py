@@ -1,0 +1,58 @@
+"""State core: the car's own motion as one float32 vector, in the car's frame.
+
+Car frame: x ahead, y to the left; angles and rates are positive to the left
+(counter-clockwise seen from above) on y-up and y-down tracks alike. Components, in order:
+
+| name | unit | meaning |
+|---|---|---|
+| speed_long | track units/s | body velocity along the car's heading |
+| speed_lat | track units/s | body velocity to the car's left |
+| yaw_rate | rad/s | turn rate, + left |
+| steer | rad | front-wheel angle, + left |
+| wheel_speed_{fl,fr,rl,rr} | track units/s | rim speed (spin x radius), dynamic car only |
+| slip_{fl,fr,rl,rr} | track units/s | rim speed less body speed along the wheel, dynamic car |
+| x, y | track units | reference point, with ``pose`` |
+| heading | rad | in the track's own convention, wrapped to [-pi, pi), with ``pose`` |
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tinyrace.world.snapshot import CarState
+
+WHEELS = ("fl", "fr", "rl", "rr")
+MOTION = ("speed_long", "speed_lat", "yaw_rate", "steer")
+
+
+def fields(wheels: bool, pose: bool) -> tuple[str, ...]:
+    """Names of the vector's components, in order."""
+    names = MOTION
+    if wheels:
+        names += tuple(f"wheel_speed_{w}" for w in WHEELS) + tuple(f"slip_{w}" for w in WHEELS)
+    if pose:
+        names += ("x", "y", "heading")
+    return names
+
+
+def state_vector(car: CarState, y_down: bool, wheels: bool, pose: bool) -> np.ndarray:
+    """The components named by ``fields(wheels, pose)`` for ``car``, float32."""
+    x, y, heading = car.pose
+    vx, vy = car.velocity
+    c, s = math.cos(heading), math.sin(heading)
+    turn = -1.0 if y_down else 1.0  # y-down headings grow clockwise: left is negative
+    speed_long = vx * c + vy * s
+    speed_lat = turn * (vy * c - vx * s)
+    values = [speed_long, speed_lat, turn * car.yaw_rate, turn * car.steer]
+    if wheels:
+        rims = [w.omega * w.radius for w in car.wheels]
+        ground = [
+            speed_long * math.cos(turn * w.steer) + speed_lat * math.sin(turn * w.steer)
+            for w in car.wheels
+        ]
+        values += rims + [rim - g for rim, g in zip(rims, ground, strict=True)]
+    if pose:
+        values += [x, y, (heading + math.pi) % (2 * math.pi) - math.pi]
+    return np.array(values, np.float32)
