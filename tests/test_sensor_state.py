@@ -13,16 +13,15 @@ from tinyrace.world.snapshot import CarState, WheelState
 
 def _car(pose, velocity, yaw_rate=0.0, steer=0.0, wheels=()):
     return CarState(
-        "dynamic",
-        pose,
-        velocity,
-        math.hypot(*velocity),
-        yaw_rate,
-        steer,
-        (0.0, 0.0),
-        (0.0, 0.0),
-        (1.0, 1.0),
-        wheels,
+        model="dynamic",
+        pose=pose,
+        velocity=velocity,
+        yaw_rate=yaw_rate,
+        steer=steer,
+        front_axle=(0.0, 0.0),
+        rear_axle=(0.0, 0.0),
+        footprint=(1.0, 1.0),
+        wheels=wheels,
     )
 
 
