@@ -227,6 +227,10 @@ class RewardConfig:
     )
 
 
+# The sensor entries need knob() above; they live in their own module.
+from tinyrace.config.sensors import SensorConfig  # noqa: E402
+
+
 @dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
@@ -243,6 +247,11 @@ class EnvConfig:
         aliases=("camera",),
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
+    sensors: tuple[SensorConfig, ...] = knob(
+        (),
+        "more observation sensors by type (perspective_camera, lidar, state, lookahead, "
+        "cones), each under its id in the Dict observation beside the cameras",
+    )
 
     @property
     def kind(self) -> str:
