@@ -16,6 +16,13 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from gymnasium import spaces
+
+from tinyrace.config import EnvConfig
+from tinyrace.config.sensors import ConesConfig
+from tinyrace.sensors.common import PerTrack, Unsupported, car_length
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 CONE_CLASSES = ("blue", "yellow", "orange")  # class id = index + 1; 0 is padding
 
@@ -97,3 +104,61 @@ def cones_from_picture(picture: np.ndarray, colors: dict[int, tuple[int, int, in
         centres = centroids[1:count]
         found.append(np.column_stack([centres, np.full(len(centres), class_id)]))
     return np.concatenate(found)
+
+
+class ConesSensor:
+    """``type: cones``: {"cones": (N, 3) float32 rows x, y [track units, car frame: ahead,
+    left] and class (1 blue, 2 yellow, 3 orange; 0 padding), "count": how many rows are used}."""
+
+    def __init__(self, config: ConesConfig, max_range: float):
+        self.config = config
+        self.max_range = max_range  # [track units]
+        self.noise = ConeNoise(config.position_std, config.miss_probability, config.false_positives)
+        n = config.max_cones
+        self.space = spaces.Dict(
+            {
+                "cones": spaces.Box(-np.inf, np.inf, (n, 3), np.float32),
+                "count": spaces.Discrete(n + 1),
+            }
+        )
+        self._cones = PerTrack()  # (K, 3) per track
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        self.cones = self._cones.get(track, self._track_cones)
+
+    def _track_cones(self, track: Track) -> np.ndarray:
+        if track.picture is None or len(track.cones):
+            return np.asarray(track.cones, np.float64)
+        c = self.config
+        colors = {
+            k + 1: rgb for k, rgb in enumerate((c.blue_color, c.yellow_color, c.orange_color))
+        }
+        return cones_from_picture(track.picture, {k: v for k, v in colors.items() if v is not None})
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> dict:
+        car = snapshot.car
+        x, y = car.front_axle
+        rows, count = detect(
+            self.cones,
+            (x, y, car.pose[2]),
+            track.y_down,
+            self.max_range,
+            math.radians(self.config.fov),
+            self.config.max_cones,
+            self.noise,
+            rng,
+        )
+        return {"cones": rows, "count": count}
+
+
+def build(config: ConesConfig, env: EnvConfig) -> ConesSensor:
+    """The cone detector: picture tracks (cones are blobs of the cone colours) or any track
+    whose source lists cones."""
+    if env.kind == "procedural":
+        raise Unsupported("expected a track with cones (an image track with cone colours)")
+    max_range = config.max_range if config.max_range is not None else 10 * car_length(env)
+    return ConesSensor(config, max_range)

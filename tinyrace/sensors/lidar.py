@@ -18,6 +18,21 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from gymnasium import spaces
+
+from tinyrace.config import EnvConfig
+from tinyrace.config.sensors import LidarConfig
+from tinyrace.sensors.common import (
+    PerTrack,
+    car_length,
+    color_mask,
+    fill_boxes,
+    fill_quads,
+    grid,
+    mount,
+)
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 MIN_STEP = 0.5  # [cells] smallest step of a free beam: near walls it keeps beams moving
 OVERSHOOT = 1.5  # [cells] a tip enters a blocking cell less than this far past its edge
@@ -152,3 +167,82 @@ def add_noise(
     if dropout > 0:
         noisy[rng.random(noisy.shape) < dropout] = max_range
     return np.clip(noisy, 0.0, max_range, out=noisy)
+
+
+def blocking_map(
+    track: Track, blocks: tuple[str, ...], cell: float, cone_colors: tuple
+) -> DistanceField:
+    """The distance field of what ``blocks`` names on ``track``, ``cell`` [track units] per
+    cell: off_road (outside the road surfaces, on tracks that have them), walls, obstacles
+    (picture tracks' obstacle colours), cones (listed cones, or the picture's cone colours)."""
+    to_cells, (w, h), cell = grid(track, cell)
+    blocking = np.zeros((h, w), np.uint8)
+    roads = [s.quads for s in track.surfaces if s.name == "road"]
+    if "off_road" in blocks and roads:
+        blocking[:] = 1
+        for quads in roads:
+            fill_quads(blocking, to_cells, quads, 0)
+    if "walls" in blocks:
+        fill_boxes(blocking, to_cells, track.walls, 1)
+    if "cones" in blocks and len(track.cones):
+        for x, y, _ in track.cones:
+            cx, cy = to_cells @ (x, y, 1.0)
+            cv2.circle(blocking, (round(cx), round(cy)), 0, 1, -1)
+    if track.picture is not None:
+        colors = [tuple(layer.color) for layer in track.obstacles] if "obstacles" in blocks else []
+        colors += list(cone_colors) if "cones" in blocks else []
+        picture_mask = np.zeros(track.picture.shape[:2], bool)
+        for rgb in colors:
+            picture_mask |= color_mask(track.picture, rgb)
+        if picture_mask.shape != blocking.shape:
+            picture_mask = cv2.resize(picture_mask.view(np.uint8), (w, h), cv2.INTER_NEAREST) > 0
+        blocking |= picture_mask.view(np.uint8) if picture_mask.dtype == bool else picture_mask
+    return distance_field(blocking.astype(bool), to_cells)
+
+
+class LidarSensor:
+    """``type: lidar``: (beams,) float32 ranges [track units], rightmost beam first."""
+
+    def __init__(self, config: LidarConfig, max_range: float, cell: float, cone_colors: tuple):
+        self.config = config
+        self.max_range = max_range  # [track units]
+        self.cell = cell  # [track units]
+        self.cone_colors = cone_colors
+        self.angles = beam_angles(config.beams, math.radians(config.fov))  # [rad] + left
+        self.space = spaces.Box(0.0, max_range, (config.beams,), np.float32)
+        self._fields = PerTrack()
+        self.field: DistanceField | None = None
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        c = self.config
+        self.field = self._fields.get(
+            track, lambda t: blocking_map(t, c.blocks, self.cell, self.cone_colors)
+        )
+
+    def origin(self, snapshot: Snapshot, track: Track) -> tuple[float, float]:
+        """[track units] where the beams start."""
+        car = snapshot.car
+        ahead, left = self.config.position
+        return mount(car.front_axle, car.pose[2], track.y_down, ahead, left)
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        heading = snapshot.car.pose[2]
+        beams = directions(self.angles, heading, track.y_down)
+        ranges = cast(self.field, self.origin(snapshot, track), beams, self.max_range)
+        c = self.config
+        if c.range_std > 0 or c.dropout > 0:
+            ranges = add_noise(ranges, rng, c.range_std, c.dropout, self.max_range)
+        return ranges
+
+
+def build(config: LidarConfig, env: EnvConfig) -> LidarSensor:
+    """The lidar of ``config``; null knobs scale with the car (see LidarConfig)."""
+    length = car_length(env)
+    max_range = config.max_range if config.max_range is not None else 10 * length
+    cell = config.cell if config.cell is not None else (1.0 if env.kind == "image" else length / 8)
+    cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
+    return LidarSensor(config, max_range, cell, cone_colors)

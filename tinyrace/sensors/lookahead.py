@@ -12,11 +12,18 @@ left turn, on y-up and y-down tracks alike.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from gymnasium import spaces
 
+from tinyrace.config import EnvConfig
+from tinyrace.config.sensors import LookaheadConfig
+from tinyrace.sensors.common import PerTrack, Unsupported, car_length
 from tinyrace.sensors.cones import to_car_frame
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 FINE = 8  # grid points per spacing
 WINDOW = 64  # grid points searched either side of the previous match
@@ -102,3 +109,88 @@ def lookahead(
     rows[:, :2] = to_car_frame(points, pose, y_down)
     rows[:, 2] = curvature
     return rows
+
+
+def order_points(
+    pixels: np.ndarray, start: tuple[float, float, float], spacing: float
+) -> tuple[np.ndarray, bool]:
+    """An unordered set of line pixels (K, 2) as a polyline from the one nearest ``start``
+    (x, y, heading), setting off along the heading; closed when its ends meet.
+
+    The pixels are first merged into one point per ``spacing`` cell; then each next point is
+    the nearest unused one ahead (greedy), within 3 cells.
+    """
+    cells = np.floor(np.asarray(pixels, np.float64) / spacing).astype(np.int64)
+    _, inverse = np.unique(cells, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    sums = np.zeros((inverse.max() + 1, 2))
+    np.add.at(sums, inverse, pixels)
+    points = sums / np.bincount(inverse)[:, None]
+    x, y, heading = start
+    first = int(np.argmin(np.hypot(points[:, 0] - x, points[:, 1] - y)))
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    order, used = [first], np.zeros(len(points), bool)
+    used[first] = True
+    while True:
+        here = points[order[-1]]
+        d = points - here
+        distance = np.hypot(d[:, 0], d[:, 1])
+        ahead = (d @ direction) > -0.25 * distance  # no turning back on the first pick
+        candidates = ~used & (distance <= 3 * spacing) & (ahead if len(order) == 1 else True)
+        if not candidates.any():
+            break
+        nxt = int(np.argmin(np.where(candidates, distance, np.inf)))
+        order.append(nxt)
+        used[nxt] = True
+    line = points[order]
+    closed = len(line) > 3 and np.hypot(*(line[-1] - line[0])) <= 3 * spacing
+    return line, bool(closed)
+
+
+class LookaheadSensor:
+    """``type: lookahead``: (K, 3) float32 rows x, y [track units, car frame: ahead, left]
+    and curvature [1/track unit, + left] of the reference line ahead of the front axle."""
+
+    def __init__(self, config: LookaheadConfig, spacing: float):
+        self.config = config
+        self.spacing = spacing  # [track units]
+        self.space = spaces.Box(-np.inf, np.inf, (config.points, 3), np.float32)
+        self._lines = PerTrack()
+        self._line: ReferenceLine | None = None
+        self._index: int | None = None
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        self._line = self._lines.get(track, self._build_line)
+        self._index = None
+
+    def _build_line(self, track: Track) -> ReferenceLine:
+        if track.centerline is not None:
+            return ReferenceLine.build(track.centerline, True, self.spacing, track.y_down)
+        layer = next(layer for layer in track.layers if layer.role == "trajectory")
+        line, closed = order_points(layer.points, track.spawns[0], self.spacing / 2)
+        return ReferenceLine.build(line, closed, self.spacing, track.y_down)
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        car = snapshot.car
+        x, y = car.front_axle
+        self._index = self._line.nearest(x, y, self._index)
+        pose = (x, y, car.pose[2])
+        return lookahead(
+            self._line, self._index, pose, track.y_down, self.config.points, self.spacing
+        )
+
+
+def build(config: LookaheadConfig, env: EnvConfig) -> LookaheadSensor:
+    """The lookahead sensor: needs a reference line (a procedural centreline, or an image
+    track's trajectory colour with cross_track_error.use_cte)."""
+    if env.kind == "image" and not env.reward_design.cross_track_error.use_cte:
+        raise Unsupported(
+            "expected reward_design.cross_track_error.use_cte: true (with its "
+            "trajectory_color) on an image track: lookahead follows that trajectory"
+        )
+    spacing = config.spacing if config.spacing is not None else car_length(env)
+    return LookaheadSensor(config, spacing)

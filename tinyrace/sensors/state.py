@@ -20,8 +20,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from gymnasium import spaces
 
-from tinyrace.world.snapshot import CarState
+from tinyrace.config import EnvConfig
+from tinyrace.config.sensors import StateConfig
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import CarState, Snapshot
 
 WHEELS = ("fl", "fr", "rl", "rr")
 MOTION = ("speed_long", "speed_lat", "yaw_rate", "steer")
@@ -56,3 +60,33 @@ def state_vector(car: CarState, y_down: bool, wheels: bool, pose: bool) -> np.nd
     if pose:
         values += [x, y, (heading + math.pi) % (2 * math.pi) - math.pi]
     return np.array(values, np.float32)
+
+
+class StateSensor:
+    """``type: state``: the controlled car's motion (see the module's table), float32."""
+
+    def __init__(self, config: StateConfig, wheels: bool, y_down: bool):
+        self.config = config
+        self.wheels = wheels
+        self.y_down = y_down
+        self.fields = fields(wheels, config.pose)
+        low = np.full(len(self.fields), -np.inf, np.float32)
+        high = np.full(len(self.fields), np.inf, np.float32)
+        if config.pose:  # the heading is wrapped
+            low[-1], high[-1] = -math.pi, math.pi
+        self.space = spaces.Box(low, high, dtype=np.float32)
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        self.y_down = track.y_down
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        return state_vector(snapshot.car, self.y_down, self.wheels, self.config.pose)
+
+
+def build(config: StateConfig, env: EnvConfig) -> StateSensor:
+    """The state sensor of ``config``: wheel speeds and slips when the car models wheels."""
+    return StateSensor(config, wheels=env.car.model == "dynamic", y_down=env.kind == "image")
