@@ -8,6 +8,7 @@ import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
+from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError
 
 
@@ -26,21 +27,18 @@ def load_any(path: Path) -> LoadedConfig:
     return load_env_config(config=path)
 
 
-def build_course(loaded: LoadedConfig):
-    """Load everything the env would load at construction (images included)."""
-    from tinyrace.env import COURSES
-
-    return COURSES[loaded.config.kind](loaded.config, loaded.base_dir, loaded.source)
+def build_course(loaded: LoadedConfig) -> Parts:
+    """Load everything the env would load at construction (images included), as it does."""
+    return prepare(loaded)
 
 
 def validate_path(path: Path) -> tuple[list[str], str]:
     """Every problem found (as lines), or none and a one-line summary."""
     try:
-        loaded = load_any(path)
-        build_course(loaded)
+        parts = build_course(load_any(path))
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
-    return [], describe(loaded.config)
+    return [], describe(parts.config)
 
 
 def describe(config: EnvConfig) -> str:
@@ -62,5 +60,5 @@ def picture(target: str, seed: int) -> tuple[np.ndarray, str]:
     name = (path if path.is_dir() or path.name != TRACK_FILE else path.parent).stem
     if loaded.config.kind == "procedural":
         return procedural_picture(loaded.config, seed), f"{name}-seed{seed}"
-    course = build_course(loaded)
-    return image_picture(loaded.config, course.tracks[0]), name
+    parts = build_course(loaded)
+    return image_picture(parts.config, parts.course.tracks[0]), name

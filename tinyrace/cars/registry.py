@@ -55,6 +55,14 @@ def _build_kinematic(space: pymunk.Space, pose: Pose, config: CarConfig, track: 
     )
 
 
+def _dynamic_actions(config: CarConfig) -> ActionSpec:
+    return ActionSpec.for_car("dynamic", config.actions)
+
+
+def _kinematic_actions(config: CarConfig) -> ActionSpec:
+    return ActionSpec.for_car("kinematic", config.actions)
+
+
 CAR_MODELS: dict[str, CarModel] = {
     "dynamic": CarModel(
         name="dynamic",
@@ -62,7 +70,7 @@ CAR_MODELS: dict[str, CarModel] = {
         default_for=frozenset({"procedural"}),
         action_kinds=frozenset({"continuous", "discrete"}),
         build=_build_dynamic,
-        actions=lambda car: ActionSpec.for_car("dynamic", car.actions),
+        actions=_dynamic_actions,
         doc="CarRacing-v3's rear-wheel-drive car with tyre slip",
     ),
     "kinematic": CarModel(
@@ -71,7 +79,7 @@ CAR_MODELS: dict[str, CarModel] = {
         default_for=frozenset({"image"}),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic,
-        actions=lambda car: ActionSpec.for_car("kinematic", car.actions),
+        actions=_kinematic_actions,
         doc="tinycarlo's constant-speed kinematic bicycle",
     ),
 }

@@ -157,9 +157,7 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
             allowed = "sensor ids must be unique and differ from the camera ids"
             parser.problem(f"{at}sensors[{i}].id", sensor.id, allowed)
         ids.append(sensor.id)
-    model = config.car.model or ("kinematic" if image else "dynamic")
-    if config.car.actions == "discrete" and model != "dynamic":
-        parser.problem(f"{at}car.actions", "discrete", "discrete actions need car.model: dynamic")
+    # the car model and its actions are checked by tinyrace.cars.registry
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
@@ -188,9 +186,6 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     sim = config.sim
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if procedural else 30.0)
-    car = config.car
-    if car.model is None:
-        car = dataclasses.replace(car, model="dynamic" if procedural else "kinematic")
     reward = config.reward_design
     reward = dataclasses.replace(
         reward,
@@ -198,7 +193,7 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
         time_penalty=_default(reward.time_penalty, 0.1 if procedural else 0.0),
         out_of_bounds_penalty=_default(reward.out_of_bounds_penalty, 100.0 if procedural else 0.0),
     )
-    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
+    return dataclasses.replace(config, sim=sim, reward_design=reward)
 
 
 def _default(value: float | None, default: float) -> float:

@@ -10,10 +10,9 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
-from tinyrace.episodes.procedural import config_colors, draw_colors, track_params
 from tinyrace.render.procedural_ground import GroundPainter
 from tinyrace.tracks.image import ImageTrack
-from tinyrace.tracks.procedural import generate_track
+from tinyrace.tracks.procedural_source import ProceduralSource
 
 MAX_SIDE = 1600  # [px] longest side of a picture
 SPAWN_COLOR = (255, 60, 60)  # RGB
@@ -23,11 +22,10 @@ _FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 def procedural_picture(config: EnvConfig, seed: int) -> np.ndarray:
     """The track CarRacing would draw for ``seed``, north up, with the start and tile 0."""
-    track_config = config.tracks[0]
+    source = ProceduralSource(config)
     rng = seeding.np_random(seed)[0]  # what reset(seed=seed) gives the env
-    colors = draw_colors(rng) if track_config.domain_randomize else config_colors(track_config)
-    track = generate_track(rng, track_params(track_config))
-    playfield = track_config.playfield
+    track, colors = source.draw(rng, {}).track.detail, source.colors  # the env's reset order
+    playfield = source.config.playfield
     ppu = MAX_SIDE / (2 * playfield)
     texture = GroundPainter(playfield).paint(track, colors, ppu)
     image = np.ascontiguousarray(cv2.cvtColor(texture.levels[0], cv2.COLOR_RGBA2RGB)[::-1])
