@@ -16,6 +16,7 @@ def _car(pose, velocity, yaw_rate=0.0, steer=0.0, wheels=()):
         model="dynamic",
         pose=pose,
         velocity=velocity,
+        speed=math.hypot(*velocity),
         yaw_rate=yaw_rate,
         steer=steer,
         front_axle=(0.0, 0.0),
