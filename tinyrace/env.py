@@ -17,6 +17,8 @@ from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
+from tinyrace.sensors.registry import build_sensors
+from tinyrace.world.snapshot import Snapshot
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
@@ -81,18 +83,20 @@ class TinyRaceEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
+        self.sensors = build_sensors(self.config, loaded.source)
         self.observation_space = self._observation_space()
         self._shaping = cte_shaping or shaping_from_config(self.config.reward_design)
         self.episode = None
         self._window: Window | None = None
 
     def _observation_space(self) -> spaces.Space:
-        if not self.config.cameras:
+        if not self.config.cameras and not self.sensors:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
-        return spaces.Dict(
-            {c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras}
-        )
+        cameras = {
+            c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras
+        }
+        return spaces.Dict({**cameras, **{s.id: s.space for s in self.sensors}})
 
     # -- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -100,6 +104,9 @@ class TinyRaceEnv(gym.Env):
         options = _check_options(options)
         draw = self.track_source.draw(self.np_random, options)
         self.episode = self.course.new_episode(draw)
+        self._track = draw.track
+        for sensor in self.sensors:
+            sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
             attempts = getattr(draw.track.detail, "attempts", 1)
             print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
@@ -116,7 +123,11 @@ class TinyRaceEnv(gym.Env):
         observation = self._observe()
         if self.render_mode == "human":
             self.render()
-        return observation, self._info({})
+        info = self._info({})
+        labels = {s.id: s.labels for s in self.sensors if getattr(s, "labels", ())}
+        if labels:
+            info["sensor_labels"] = labels  # classes cameras: label -> name
+        return observation, info
 
     def step(self, action):
         if self.episode is None:
@@ -146,7 +157,13 @@ class TinyRaceEnv(gym.Env):
         return observation, reward, reason is not None, truncated, info
 
     def _observe(self):
-        return self.episode.observe(self.t, self.score)
+        if not self.sensors:
+            return self.episode.observe(self.t, self.score)
+        observation = self.episode.observe(self.t, self.score) if self.config.cameras else {}
+        snapshot = Snapshot(self.t, self.steps, (self.episode.car.state(),))
+        for sensor in self.sensors:
+            observation[sensor.id] = sensor.observe(snapshot, self._track, self.np_random)
+        return observation
 
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()

@@ -108,18 +108,18 @@ def cones_from_picture(picture: np.ndarray, colors: dict[int, tuple[int, int, in
 
 class ConesSensor:
     """``type: cones``: {"cones": (N, 3) float32 rows x, y [track units, car frame: ahead,
-    left] and class (1 blue, 2 yellow, 3 orange; 0 padding), "count": how many rows are used}."""
+    left], within max_range (noise clipped), and class (1 blue, 2 yellow, 3 orange; 0 padding),
+    "count": how many rows are used}."""
 
     def __init__(self, config: ConesConfig, max_range: float):
         self.config = config
         self.max_range = max_range  # [track units]
         self.noise = ConeNoise(config.position_std, config.miss_probability, config.false_positives)
         n = config.max_cones
+        high = np.tile(np.array([max_range, max_range, len(CONE_CLASSES)], np.float32), (n, 1))
+        low = high * [-1, -1, 0]
         self.space = spaces.Dict(
-            {
-                "cones": spaces.Box(-np.inf, np.inf, (n, 3), np.float32),
-                "count": spaces.Discrete(n + 1),
-            }
+            {"cones": spaces.Box(low, high, dtype=np.float32), "count": spaces.Discrete(n + 1)}
         )
         self._cones = PerTrack()  # (K, 3) per track
 
@@ -152,7 +152,8 @@ class ConesSensor:
             self.noise,
             rng,
         )
-        return {"cones": rows, "count": count}
+        box = self.space["cones"]
+        return {"cones": np.clip(rows, box.low, box.high, out=rows), "count": count}
 
 
 def build(config: ConesConfig, env: EnvConfig) -> ConesSensor:

@@ -18,10 +18,12 @@ Car frame: x ahead, y to the left; angles and rates are positive to the left
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
 
+from tinyrace.cars.dynamic import DynamicCarSpec
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import StateConfig
 from tinyrace.tracks.base import Track
@@ -62,18 +64,46 @@ def state_vector(car: CarState, y_down: bool, wheels: bool, pose: bool) -> np.nd
     return np.array(values, np.float32)
 
 
+@dataclass(frozen=True)
+class Limits:
+    """Bounds of the vector's components that the car model cannot pass."""
+
+    speed: float  # [track units/s] top speed (the dynamic car's per-step travel cap)
+    yaw_rate: float  # [rad/s]
+    steer: float  # [rad] full lock
+
+    def bounds(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high) float32 per component; wheel rims may spin up to 10x the top speed;
+        x and y are unbounded."""
+        by_name = {"speed_long": self.speed, "speed_lat": self.speed, "yaw_rate": self.yaw_rate}
+        by_name.update(steer=self.steer, heading=math.pi, x=np.inf, y=np.inf)
+        high = np.array(
+            [by_name.get(n, 10 * self.speed) for n in names], np.float32
+        )  # wheel_speed_*, slip_*
+        return -high, high
+
+
+def limits(env: EnvConfig) -> Limits:
+    """The configured car's limits: top speed, yaw rate and steering lock."""
+    fps = env.sim.fps or 50.0
+    car = env.car
+    if car.model == "kinematic":
+        lock = math.radians(car.max_steering_angle)
+        return Limits(car.velocity, car.velocity * math.tan(lock) / car.wheelbase, lock)
+    scale = car.pixels_per_unit if env.kind == "image" else 1.0
+    spec = DynamicCarSpec()
+    return Limits(spec.max_translation * scale * fps, 2 * math.pi * fps, spec.steer_limit)
+
+
 class StateSensor:
     """``type: state``: the controlled car's motion (see the module's table), float32."""
 
-    def __init__(self, config: StateConfig, wheels: bool, y_down: bool):
+    def __init__(self, config: StateConfig, wheels: bool, y_down: bool, bounds: Limits):
         self.config = config
         self.wheels = wheels
         self.y_down = y_down
         self.fields = fields(wheels, config.pose)
-        low = np.full(len(self.fields), -np.inf, np.float32)
-        high = np.full(len(self.fields), np.inf, np.float32)
-        if config.pose:  # the heading is wrapped
-            low[-1], high[-1] = -math.pi, math.pi
+        low, high = bounds.bounds(self.fields)
         self.space = spaces.Box(low, high, dtype=np.float32)
 
     @property
@@ -84,9 +114,11 @@ class StateSensor:
         self.y_down = track.y_down
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
-        return state_vector(snapshot.car, self.y_down, self.wheels, self.config.pose)
+        vector = state_vector(snapshot.car, self.y_down, self.wheels, self.config.pose)
+        return np.clip(vector, self.space.low, self.space.high, out=vector)
 
 
 def build(config: StateConfig, env: EnvConfig) -> StateSensor:
     """The state sensor of ``config``: wheel speeds and slips when the car models wheels."""
-    return StateSensor(config, wheels=env.car.model == "dynamic", y_down=env.kind == "image")
+    wheels = env.car.model == "dynamic"
+    return StateSensor(config, wheels, y_down=env.kind == "image", bounds=limits(env))
