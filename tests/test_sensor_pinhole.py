@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tinyrace.sensors.pinhole import Pinhole, render, world_to_car
+from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, world_to_car
 
 PX_PER_UNIT = 20.0  # texture resolution of the test ground
 SIDE = 60.0  # [u] the test ground spans [-30, 30] on both axes, y up
@@ -76,7 +76,7 @@ def test_marking_corners_land_on_the_pinhole_formula(y_down):
     to_ground = WORLD_TO_GROUND * [[1, 1, 1], [1, -1, 1]] if y_down else WORLD_TO_GROUND
     world = _car_to_world(front, heading, y_down, CORNERS)
     ground = _ground_with_dots(world, to_ground)
-    image = render(camera, ground, to_ground, world_to_car(front, heading, y_down), (0,) * 4)
+    image = render(camera, ground, to_ground, car_to_world(front, heading, y_down), (0,) * 4)
     errors = _errors(_blob_centres(image), _pitch_only_formula(camera, CORNERS))
     assert errors.max() <= 1.0
 
@@ -93,7 +93,7 @@ def test_turned_camera_finds_points_where_project_puts_them():
     front, heading = (-5.0, 4.0), 2.1
     world = _car_to_world(front, heading, False, CORNERS)
     ground = _ground_with_dots(world, WORLD_TO_GROUND)
-    image = render(camera, ground, WORLD_TO_GROUND, world_to_car(front, heading, False), (0,) * 4)
+    image = render(camera, ground, WORLD_TO_GROUND, car_to_world(front, heading, False), (0,) * 4)
     expected = camera.project(np.column_stack([CORNERS, np.zeros(len(CORNERS))]))
     assert _errors(_blob_centres(image), expected).max() <= 1.0
 
@@ -130,7 +130,7 @@ def test_sky_colour_fills_the_sky():
         camera,
         ground,
         np.array([[1.0, 0, 50], [0, 1.0, 50]]),
-        world_to_car((0, 0), 0, True),
+        car_to_world((0, 0), 0, True),
         (1, 2, 3),
     )
     assert (image[:15] == (1, 2, 3)).all() and (image[-1] == 50).all()

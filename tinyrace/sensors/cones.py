@@ -60,9 +60,28 @@ def detect(
     """((capacity, 3) float32 rows x, y, class, count) of ``cones`` (K, 3: x, y, class id
     1-3 [track units]) seen from ``pose`` within ``max_range`` [track units] and ``fov`` [rad]
     centred ahead. Extra detections beyond ``capacity`` (the farthest) are dropped."""
-    local = to_car_frame(cones[:, :2], pose, y_down)
-    seen = _visible(local, max_range, fov)
-    found = np.column_stack([local[seen], cones[seen, 2]])
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    rotation = np.array([[c, s], [s, -c]] if y_down else [[c, -s], [s, c]])
+    local = (cones[:, :2] - (x, y)) @ rotation  # ahead, left
+    squared = np.einsum("ij,ij->i", local, local)
+    # within the fov: the bearing's cosine is at least cos(fov / 2), i.e. x >= cos * distance
+    seen = np.flatnonzero(
+        (squared <= max_range * max_range)
+        & (local[:, 0] >= math.cos(min(fov, 2 * math.pi) / 2) * np.sqrt(squared))
+    )
+    if noise.miss_probability > 0 or noise.position_std > 0 or noise.false_positives > 0:
+        return _noisy(local[seen], cones[seen, 2], capacity, noise, rng, max_range, fov)
+    order = seen[np.argsort(squared[seen], kind="stable")[:capacity]]
+    rows = np.zeros((capacity, 3), np.float32)
+    rows[: len(order), :2] = local[order]
+    rows[: len(order), 2] = cones[order, 2]
+    return rows, len(order)
+
+
+def _noisy(local, classes, capacity, noise, rng, max_range, fov) -> tuple[np.ndarray, int]:
+    """Misses, position noise and false positives, drawn from ``rng`` in that order."""
+    found = np.column_stack([local, classes])
     if noise.miss_probability > 0:
         found = found[rng.random(len(found)) >= noise.miss_probability]
     if noise.position_std > 0:
@@ -72,13 +91,8 @@ def detect(
     order = np.argsort(np.hypot(found[:, 0], found[:, 1]), kind="stable")[:capacity]
     rows = np.zeros((capacity, 3), np.float32)
     rows[: len(order)] = found[order]
+    rows[:, :2] = np.clip(rows[:, :2], -max_range, max_range)  # noise may push past the range
     return rows, len(order)
-
-
-def _visible(local: np.ndarray, max_range: float, fov: float) -> np.ndarray:
-    distance = np.hypot(local[:, 0], local[:, 1])
-    bearing = np.abs(np.arctan2(local[:, 1], local[:, 0]))
-    return (distance <= max_range) & (bearing <= fov / 2)
 
 
 def _false_positives(
@@ -152,8 +166,7 @@ class ConesSensor:
             self.noise,
             rng,
         )
-        box = self.space["cones"]
-        return {"cones": np.clip(rows, box.low, box.high, out=rows), "count": count}
+        return {"cones": rows, "count": count}
 
 
 def build(config: ConesConfig, env: EnvConfig) -> ConesSensor:

@@ -34,17 +34,23 @@ from tinyrace.sensors.common import (
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
-MIN_STEP = 0.5  # [cells] smallest step of a free beam: near walls it keeps beams moving
-OVERSHOOT = 1.5  # [cells] a tip enters a blocking cell less than this far past its edge
+MIN_STEP = 1.0  # [cells] smallest step of a free beam: near walls it keeps beams moving
+STEP_CAP = 127.5  # [cells] largest step (uint8 half cells)
+OVERSHOOT = 2.0  # [cells] a tip enters a blocking cell less than this far past its edge
 BISECTIONS = 3  # rounds that halve the overshoot bracket: error <= OVERSHOOT / 8
 CHECK_EVERY = 4  # rounds between checks whether every beam has stopped
 
 
 @dataclass(frozen=True, eq=False)
 class DistanceField:
-    """Marching steps of one blocking map: 0 in blocking cells, >= MIN_STEP elsewhere."""
+    """Marching steps of one blocking map: 0 in blocking cells, >= MIN_STEP elsewhere.
 
-    steps: np.ndarray  # (H, W) float32 [cells]
+    Steps are stored in half cells as uint8 (a quarter of float32's bytes: the samples of a
+    scan land all over the map, and a smaller map stays in the caches), rounded down so
+    that they stay safe; a step is at most STEP_CAP cells.
+    """
+
+    steps: np.ndarray  # (H, W) uint8 [half cells]
     to_cells: np.ndarray  # 2x3 affine: track units -> cell coordinates
     cells_per_unit: float  # [cells per track unit]
 
@@ -62,8 +68,9 @@ def distance_field(blocking: np.ndarray, to_cells: np.ndarray) -> DistanceField:
     """
     free = np.where(blocking, 0, 255).astype(np.uint8)
     distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)  # [cells]
-    steps = np.maximum(distance - 0.5, MIN_STEP).astype(np.float32)
-    steps[blocking] = 0.0
+    halves = np.floor(2 * np.clip(distance - 0.5, MIN_STEP, STEP_CAP))
+    steps = halves.astype(np.uint8)
+    steps[blocking] = 0
     scale = math.sqrt(abs(np.linalg.det(to_cells[:, :2])))
     return DistanceField(steps, np.asarray(to_cells, np.float64), scale)
 
@@ -117,9 +124,9 @@ def _march(steps, start, dx, dy, limit, max_rounds) -> np.ndarray:
 
 
 def _sample(steps: np.ndarray, px: np.ndarray, py: np.ndarray) -> np.ndarray:
-    """The step in the cell under each tip (nearest cell); 0 outside the map."""
+    """The step [cells] in the cell under each tip (nearest cell); 0 outside the map."""
     found = cv2.remap(steps, px[None], py[None], cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT)
-    return found[0]
+    return found[0] * np.float32(0.5)
 
 
 def _refine(steps, start, dx, dy, t) -> np.ndarray:

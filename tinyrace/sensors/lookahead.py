@@ -4,7 +4,8 @@ The line is resampled once per track on a fine grid of arc length (``ReferenceLi
 its curvature at every grid point (from the circle through the points one ``spacing``
 before and after, so that a polyline's corners do not spike it). Each observation finds the
 car's arc length near the previous one (a window of the grid, not the whole line) and reads
-the K points ``spacing`` apart ahead of it by linear interpolation on the grid.
+the K points ``spacing`` apart ahead of it off the grid (the spacing is rounded to a whole
+number of grid steps: within 1/(16 x grid points) of the one asked for).
 
 Car frame: x ahead, y to the left [track units]; curvature [1/track unit] is positive for a
 left turn, on y-up and y-down tracks alike.
@@ -13,7 +14,6 @@ left turn, on y-up and y-down tracks alike.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
@@ -21,26 +21,29 @@ from gymnasium import spaces
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.sensors.common import PerTrack, Unsupported, car_length
-from tinyrace.sensors.cones import to_car_frame
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
 FINE = 8  # grid points per spacing
-WINDOW = 64  # grid points searched either side of the previous match
+WINDOW = 16  # grid points searched either side of the previous match (2 spacings)
 
 
-@dataclass(frozen=True, eq=False)
 class ReferenceLine:
-    """A line resampled every ``step`` [track units] along its arc length."""
+    """A line resampled on a grid of arc length, ``FINE`` grid steps per lookahead spacing;
+    ``table`` rows: x, y [track units] and curvature [1/track unit, + left turn]."""
 
-    points: np.ndarray  # (M, 2) [track units]
-    curvature: np.ndarray  # (M,) [1/track unit], + left turn in the track's own frame
-    step: float  # [track units] between grid points
-    closed: bool
+    def __init__(self, table: np.ndarray, step: float, closed: bool):
+        self.table = table  # (M, 3)
+        self.points = table[:, :2]
+        self.step = step  # [track units] between grid points
+        self.closed = closed
+        self._window = np.arange(-WINDOW, WINDOW + 1)
+        self._ahead: dict[int, np.ndarray] = {}
 
     @classmethod
     def build(cls, line: np.ndarray, closed: bool, spacing: float, y_down: bool):
-        """Resample ``line`` (N, 2) for lookahead points ``spacing`` [track units] apart."""
+        """Resample ``line`` (N, 2) for lookahead points about ``spacing`` [track units]
+        apart: the spacing is rounded so that the line holds a whole number of grid steps."""
         line = np.asarray(line, np.float64)
         if closed:
             line = np.vstack([line, line[:1]])
@@ -49,20 +52,36 @@ class ReferenceLine:
         count = intervals if closed else intervals + 1
         grid = np.linspace(0.0, s[-1], count, endpoint=not closed)
         points = np.stack([np.interp(grid, s, line[:, 0]), np.interp(grid, s, line[:, 1])], 1)
-        step = s[-1] / intervals
         curvature = _menger(points, FINE, closed) * (-1.0 if y_down else 1.0)
-        return cls(points, curvature, step, closed)
+        return cls(np.column_stack([points, curvature]), s[-1] / intervals, closed)
+
+    @property
+    def spacing(self) -> float:
+        """[track units] between lookahead points."""
+        return FINE * self.step
 
     def nearest(self, x: float, y: float, near: int | None) -> int:
-        """Index of the grid point nearest (x, y), searched around ``near`` when given."""
-        if near is None:
-            candidates = np.arange(len(self.points))
-        else:
-            candidates = np.arange(near - WINDOW, near + WINDOW + 1)
-            candidates = candidates % len(self.points) if self.closed else candidates
-            candidates = candidates[(candidates >= 0) & (candidates < len(self.points))]
-        d = self.points[candidates] - (x, y)
-        return int(candidates[np.argmin(np.einsum("ij,ij->i", d, d))])
+        """Index of the grid point nearest (x, y), searched around ``near`` when given (and
+        along the whole line when the best of that window is at its edge)."""
+        m = len(self.points)
+        if near is not None:
+            candidates = near + self._window
+            candidates = candidates % m if self.closed else np.clip(candidates, 0, m - 1)
+            d = self.points[candidates] - (x, y)
+            best = int(np.argmin(np.einsum("ij,ij->i", d, d)))
+            if 0 < best < 2 * WINDOW:
+                return int(candidates[best])
+        d = self.points - (x, y)
+        return int(np.argmin(np.einsum("ij,ij->i", d, d)))
+
+    def ahead(self, index: int, count: int) -> np.ndarray:
+        """(count, 3) table rows 1, 2, ... spacings after grid point ``index``."""
+        offsets = self._ahead.get(count)
+        if offsets is None:
+            offsets = self._ahead[count] = FINE * np.arange(1, count + 1)
+        rows = index + offsets
+        m = len(self.table)
+        return self.table[rows % m if self.closed else np.minimum(rows, m - 1)]
 
 
 def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
@@ -70,10 +89,8 @@ def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
     and after it (+ counter-clockwise in the points' frame)."""
     index = np.arange(len(points))
     if closed:
-        before, after = (
-            points[(index - offset) % len(points)],
-            points[(index + offset) % len(points)],
-        )
+        before = points[(index - offset) % len(points)]
+        after = points[(index + offset) % len(points)]
     else:
         before = points[np.clip(index - offset, 0, len(points) - 1)]
         after = points[np.clip(index + offset, 0, len(points) - 1)]
@@ -84,31 +101,19 @@ def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
 
 
 def lookahead(
-    line: ReferenceLine,
-    index: int,
-    pose: tuple[float, float, float],
-    y_down: bool,
-    count: int,
-    spacing: float,
+    line: ReferenceLine, index: int, pose: tuple[float, float, float], y_down: bool, count: int
 ) -> np.ndarray:
-    """(count, 3) float32 rows x, y [track units, car frame] and curvature [1/track unit] of
-    the points ``spacing``, 2 ``spacing``, ... ahead of grid point ``index`` along the line
-    (an open line stops at its end)."""
-    targets = index + np.arange(1, count + 1) * (spacing / line.step)
-    m = len(line.points)
-    if line.closed:
-        targets %= m
-    else:
-        targets = np.minimum(targets, m - 1)
-    low = targets.astype(np.int64)
-    high = (low + 1) % m if line.closed else np.minimum(low + 1, m - 1)
-    frac = (targets - low)[:, None]
-    points = line.points[low] * (1 - frac) + line.points[high] * frac
-    curvature = line.curvature[low] * (1 - frac[:, 0]) + line.curvature[high] * frac[:, 0]
-    rows = np.empty((count, 3), np.float32)
-    rows[:, :2] = to_car_frame(points, pose, y_down)
-    rows[:, 2] = curvature
-    return rows
+    """(count, 3) float32 rows x, y [track units, car frame: ahead, left] and curvature
+    [1/track unit] of the points one, two, ... ``line.spacing`` ahead of grid point
+    ``index`` (an open line stops at its end)."""
+    rows = line.ahead(index, count)
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    rotation = np.array([[c, s], [s, -c]] if y_down else [[c, -s], [s, c]])
+    out = np.empty((count, 3), np.float32)
+    out[:, :2] = (rows[:, :2] - (x, y)) @ rotation
+    out[:, 2] = rows[:, 2]
+    return out
 
 
 def order_points(
@@ -179,9 +184,7 @@ class LookaheadSensor:
         x, y = car.front_axle
         self._index = self._line.nearest(x, y, self._index)
         pose = (x, y, car.pose[2])
-        return lookahead(
-            self._line, self._index, pose, track.y_down, self.config.points, self.spacing
-        )
+        return lookahead(self._line, self._index, pose, track.y_down, self.config.points)
 
 
 def build(config: LookaheadConfig, env: EnvConfig) -> LookaheadSensor:

@@ -25,7 +25,7 @@ from tinyrace.sensors.common import (
     paint_colors,
     paint_labels,
 )
-from tinyrace.sensors.pinhole import Pinhole, render, world_to_car
+from tinyrace.sensors.pinhole import Pinhole, car_to_world, render
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -71,7 +71,7 @@ class PerspectiveCamera:
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
-        placed = world_to_car(car.front_axle, car.pose[2], track.y_down)
+        placed = car_to_world(car.front_axle, car.pose[2], track.y_down)
         if self.config.format == "classes":
             return render(
                 self.pinhole,

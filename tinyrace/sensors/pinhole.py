@@ -60,6 +60,11 @@ class Pinhole:
         extrinsic = np.column_stack([axes[:, 0], axes[:, 1], -axes @ camera])
         return self.intrinsics @ extrinsic
 
+    @cached_property
+    def image_to_ground(self) -> np.ndarray:
+        """The inverse of ``ground_to_image``."""
+        return np.linalg.inv(self.ground_to_image)
+
     def project(self, points: np.ndarray) -> np.ndarray:
         """(N, 2) pixels of (N, 3) car-frame points (ahead, right, up); in front of the camera."""
         relative = np.asarray(points, np.float64) - np.asarray(self.position)
@@ -82,6 +87,22 @@ class Pinhole:
             missed |= far > self.max_range
         return missed
 
+    def sky_fill(self, sky: tuple[int, ...], channels: tuple[int, ...]):
+        """(fill, where) that paint the sky by one ``np.copyto``; made once per colour."""
+        key = (sky, channels)
+        cache = self.__dict__.setdefault("_sky_fills", {})
+        if key not in cache:
+            cache[key] = _sky_fill(self.sky, sky, channels)
+        return cache[key]
+
+
+def _sky_fill(sky_mask: np.ndarray, sky: tuple[int, ...], channels: tuple[int, ...]):
+    """A constant image of the sky colour and the mask that selects it (copyto's where)."""
+    fill = np.empty((*sky_mask.shape, *channels), np.uint8)
+    fill[:] = sky
+    where = sky_mask[..., None] if channels else sky_mask
+    return fill, where
+
 
 def world_to_car(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
     """(3x3) track point -> car frame (ahead, right) for a car at ``front`` with ``heading``
@@ -92,28 +113,41 @@ def world_to_car(front: tuple[float, float], heading: float, y_down: bool) -> np
     return np.array([[fx, fy, -(x * fx + y * fy)], [rx, ry, -(x * rx + y * ry)], [0, 0, 1]])
 
 
+def car_to_world(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
+    """(3x3) car frame (ahead, right) -> track point: the inverse of ``world_to_car``."""
+    fx, fy = math.cos(heading), math.sin(heading)
+    rx, ry = (-fy, fx) if y_down else (fy, -fx)
+    return np.array([[fx, rx, front[0]], [fy, ry, front[1]], [0, 0, 1]])
+
+
 def render(
     camera: Pinhole,
     ground: np.ndarray,
     world_to_ground: np.ndarray,
-    world_to_car_: np.ndarray,
+    placed: np.ndarray,
     sky: tuple[int, ...],
     interpolation: int = cv2.INTER_LINEAR,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
     """The camera image: ``ground`` (a texture, any channels) whose pixel coordinates are
-    ``world_to_ground`` (2x3) of the track, seen from a car placed by ``world_to_car_`` (3x3);
-    sky pixels set to ``sky`` (one value per channel)."""
-    ground_to_world = np.vstack([cv2.invertAffineTransform(world_to_ground), [0, 0, 1]])
-    homography = camera.ground_to_image @ world_to_car_ @ ground_to_world
+    ``world_to_ground`` (2x3) of the track, seen from a car placed by ``placed`` (3x3, car
+    frame -> track: ``car_to_world``);
+    sky pixels set to ``sky`` (one value per channel of ``ground``)."""
+    # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
+    # the homography's last row
+    image_to_car = camera.image_to_ground
+    image_to_texture = np.empty((3, 3))
+    image_to_texture[:2] = world_to_ground @ (placed @ image_to_car)
+    image_to_texture[2] = image_to_car[2]
     image = cv2.warpPerspective(
         ground,
-        np.linalg.inv(homography),
+        image_to_texture,
         camera.size,
         dst=out,
         flags=interpolation | cv2.WARP_INVERSE_MAP,
         borderMode=cv2.BORDER_CONSTANT,
         borderValue=0,
     )
-    image[camera.sky] = sky
+    fill, where = camera.sky_fill(sky, ground.shape[2:])
+    np.copyto(image, fill, where=where)
     return image
