@@ -25,6 +25,7 @@ import math
 import time
 from typing import Any
 
+import cv2
 import gymnasium as gym
 import numpy as np
 from tinyrace.examples import TRACKS_DIR
@@ -66,12 +67,18 @@ CASES: dict[str, dict[str, Any]] = {
 }
 
 
-def f1tenth_scan(field, origin, beams: np.ndarray, max_range: float, eps: float = 1e-4):
+def f1tenth_distance(field) -> np.ndarray:
+    """F1TENTH's map preparation: the Euclidean distance transform [cells] of the occupied
+    cells (here the lidar's own blocking cells), once per map."""
+    free = np.where(field.steps == 0, 0, 255).astype(np.uint8)
+    return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+
+
+def f1tenth_scan(field, distance, origin, beams: np.ndarray, max_range: float, eps: float = 1e-4):
     """Ranges [track units] by F1TENTH's method, one Python loop per beam: march by the
-    distance to the nearest occupied cell (the distance transform) until it is below
-    ``eps`` cells or the range is passed."""
-    distance = np.maximum(field.steps - 0.5, 0.0)  # back to cells to the nearest obstacle
-    distance[field.steps == 0] = 0.0
+    distance to the nearest occupied cell until it is below ``eps`` cells (the tip is in an
+    occupied cell) or the range is passed; on the same cells, so within about a cell of
+    tinyrace's ranges."""
     height, width = distance.shape
     ox, oy = field.to_cells @ (origin[0], origin[1], 1.0)
     linear = field.to_cells[:, :2] / field.cells_per_unit
@@ -128,7 +135,7 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
     env.reset(seed=SEED)
     samples: dict[str, list[float]] = {}
     lidar = next(s for s in raw.sensors if isinstance(s, LidarSensor))
-    reference_seconds, reference_error = 0.0, 0.0
+    reference_seconds, differences = 0.0, []
     for step in range(steps):
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())
         if terminated or truncated:
@@ -141,11 +148,12 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         if step < reference_steps:
             origin = lidar.origin(snapshot, raw._track)
             beams = directions(lidar.angles, snapshot.car.pose[2], raw._track.y_down)
+            distance = f1tenth_distance(lidar.field)  # once per map in F1TENTH: not timed
             began = time.perf_counter()
-            ranges = f1tenth_scan(lidar.field, origin, beams, lidar.max_range)
+            ranges = f1tenth_scan(lidar.field, distance, origin, beams, lidar.max_range)
             reference_seconds += time.perf_counter() - began
             ours = lidar.observe(snapshot, raw._track, rng)
-            reference_error = max(reference_error, float(np.abs(ranges - ours).max()))
+            differences.append(np.abs(ranges - ours))
     env.close()
     micros = {k: 1e6 * float(np.median(v)) for k, v in samples.items()}
     means = {k: 1e6 * float(np.mean(v)) for k, v in samples.items()}
@@ -156,7 +164,10 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         "us_per_step": micros,
         "us_per_step_mean": means,
         "lidar_cell": cell,
-        "lidar_max_abs_difference_to_reference": reference_error,
+        # beams that clip the corner of a cell may hit it in one method and not the other
+        "lidar_beams_within_a_cell_of_reference": float(
+            np.mean(np.concatenate(differences) <= cell)
+        ),
     }
 
 

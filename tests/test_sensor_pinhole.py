@@ -134,3 +134,12 @@ def test_sky_colour_fills_the_sky():
         (1, 2, 3),
     )
     assert (image[:15] == (1, 2, 3)).all() and (image[-1] == 50).all()
+
+
+def test_sky_of_a_rolled_camera_follows_its_mask():
+    camera = Pinhole((40, 30), math.radians(90), (0, 0, 1.0), roll=math.radians(30))
+    assert camera.sky.any() and not camera.sky.all(axis=1).all()
+    ground = np.full((100, 100, 3), 50, np.uint8)
+    to_ground = np.array([[1.0, 0, 50], [0, 1.0, 50]])
+    image = render(camera, ground, to_ground, car_to_world((0, 0), 0, True), (1, 2, 3))
+    np.testing.assert_array_equal(np.all(image == (1, 2, 3), axis=-1), camera.sky)

@@ -87,21 +87,14 @@ class Pinhole:
             missed |= far > self.max_range
         return missed
 
-    def sky_fill(self, sky: tuple[int, ...], channels: tuple[int, ...]):
-        """(fill, where) that paint the sky by one ``np.copyto``; made once per colour."""
-        key = (sky, channels)
-        cache = self.__dict__.setdefault("_sky_fills", {})
-        if key not in cache:
-            cache[key] = _sky_fill(self.sky, sky, channels)
-        return cache[key]
-
-
-def _sky_fill(sky_mask: np.ndarray, sky: tuple[int, ...], channels: tuple[int, ...]):
-    """A constant image of the sky colour and the mask that selects it (copyto's where)."""
-    fill = np.empty((*sky_mask.shape, *channels), np.uint8)
-    fill[:] = sky
-    where = sky_mask[..., None] if channels else sky_mask
-    return fill, where
+    @cached_property
+    def sky_pixels(self) -> tuple[int, np.ndarray]:
+        """The sky as the number of whole top rows, and the flat indices of the rest."""
+        full = self.sky.all(axis=1)
+        rows = int(np.argmin(full)) if not full.all() else len(full)
+        rest = self.sky.copy()
+        rest[:rows] = False
+        return rows, np.flatnonzero(rest)
 
 
 def world_to_car(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
@@ -148,6 +141,8 @@ def render(
         borderMode=cv2.BORDER_CONSTANT,
         borderValue=0,
     )
-    fill, where = camera.sky_fill(sky, ground.shape[2:])
-    np.copyto(image, fill, where=where)
+    rows, flat = camera.sky_pixels
+    image[:rows] = sky  # whole rows of sky (a level camera): one slice
+    if len(flat):
+        image.reshape(-1, *image.shape[2:])[flat] = sky
     return image
