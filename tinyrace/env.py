@@ -160,7 +160,7 @@ class TinyRaceEnv(gym.Env):
         if not self.sensors:
             return self.episode.observe(self.t, self.score)
         observation = self.episode.observe(self.t, self.score) if self.config.cameras else {}
-        snapshot = Snapshot(self.t, self.steps, (self.episode.car.state(),))
+        snapshot = self.snapshot()
         for sensor in self.sensors:
             observation[sensor.id] = sensor.observe(snapshot, self._track, self.np_random)
         return observation
@@ -169,6 +169,12 @@ class TinyRaceEnv(gym.Env):
         info = self.episode.info()
         info["reward_terms"] = terms
         return info
+
+    def snapshot(self) -> Snapshot:
+        """What sensors and pictures read now: the time, the step and the car's state."""
+        if self.episode is None:
+            raise ResetNeeded("call reset() before taking a snapshot")
+        return Snapshot(self.t, self.steps, (self.episode.car.state(),))
 
     @property
     def track(self):

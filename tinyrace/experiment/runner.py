@@ -17,6 +17,7 @@ from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.load import Experiment
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.report import EpisodeResult, summary, summary_text, table, write_files
+from tinyrace.render.sensor_view import sensor_view
 
 DEFAULT_MAX_STEPS = 1000  # when neither the experiment nor the env sets a limit (CarRacing's)
 
@@ -137,6 +138,8 @@ def _driver(spec: str, args: dict, source: str) -> Driver:
 
 
 def _frame(env: TinyRaceEnv, observation, view: str) -> np.ndarray:
+    if view == "sensors":
+        return sensor_view(env).render(env.snapshot(), env._track, observation)
     return env.render() if view == "default" else observation[view]
 
 
@@ -145,16 +148,27 @@ def _write_frame(writer, path: Path, frame: np.ndarray, env: TinyRaceEnv, config
         fps = config.output.fps or env.config.sim.fps
         size = (frame.shape[1], frame.shape[0])
         writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
-    writer.write(cv2.cvtColor(frame, cv2.COLOR_RGB2BGR))
+    code = cv2.COLOR_GRAY2BGR if frame.ndim == 2 else cv2.COLOR_RGB2BGR  # gray / classes images
+    writer.write(cv2.cvtColor(frame, code))
     return writer
 
 
 def _check_view(experiment: Experiment, env: TinyRaceEnv) -> None:
     view = experiment.config.output.view
     ids = [c.id for c in env.config.cameras]
+    ids += [
+        s.id for s in env.sensors if getattr(s, "space", None) is not None and _is_image(s.space)
+    ]
+    if view == "sensors" and env.sensors:
+        return
     if view != "default" and view not in ids:
-        allowed = f"default or a camera id: {', '.join(ids) or '(this env has no cameras)'}"
+        allowed = f"default, sensors (with sensors) or an image id: {', '.join(ids) or '(none)'}"
         raise ConfigError(Problem(experiment.source, "output.view", view, allowed))
+
+
+def _is_image(space) -> bool:
+    shape = getattr(space, "shape", None) or ()
+    return getattr(space, "dtype", None) == np.uint8 and len(shape) in (2, 3)
 
 
 def _video_path(run_dir: Path, episode: int, config) -> Path | None:

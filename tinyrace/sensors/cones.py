@@ -131,7 +131,7 @@ class ConesSensor:
         self.noise = ConeNoise(config.position_std, config.miss_probability, config.false_positives)
         n = config.max_cones
         high = np.tile(np.array([max_range, max_range, len(CONE_CLASSES)], np.float32), (n, 1))
-        low = high * [-1, -1, 0]
+        low = (high * [-1, -1, 0]).astype(np.float32)
         self.space = spaces.Dict(
             {"cones": spaces.Box(low, high, dtype=np.float32), "count": spaces.Discrete(n + 1)}
         )

@@ -26,6 +26,7 @@ from tinyrace.world.snapshot import Snapshot
 
 FINE = 8  # grid points per spacing
 WINDOW = 16  # grid points searched either side of the previous match (2 spacings)
+REACH = 4  # the observation's x and y saturate at this many times K spacings
 
 
 class ReferenceLine:
@@ -154,12 +155,17 @@ def order_points(
 
 class LookaheadSensor:
     """``type: lookahead``: (K, 3) float32 rows x, y [track units, car frame: ahead, left]
-    and curvature [1/track unit, + left] of the reference line ahead of the front axle."""
+    and curvature [1/track unit, + left] of the reference line ahead of the front axle.
+    Bounds: x and y within +-4 K spacings (saturating), curvature within +-16 / spacing."""
 
     def __init__(self, config: LookaheadConfig, spacing: float):
         self.config = config
         self.spacing = spacing  # [track units]
-        self.space = spaces.Box(-np.inf, np.inf, (config.points, 3), np.float32)
+        # points saturate at REACH x K spacings per axis (a car that far off the line has no
+        # use for them); curvature at that of a circle through three points one step apart
+        reach = REACH * config.points * spacing  # [track units]
+        high = np.tile(np.array([reach, reach, 2 * FINE / spacing], np.float32), (config.points, 1))
+        self.space = spaces.Box(-high, high, dtype=np.float32)
         self._lines = PerTrack()
         self._line: ReferenceLine | None = None
         self._index: int | None = None
@@ -184,7 +190,8 @@ class LookaheadSensor:
         x, y = car.front_axle
         self._index = self._line.nearest(x, y, self._index)
         pose = (x, y, car.pose[2])
-        return lookahead(self._line, self._index, pose, track.y_down, self.config.points)
+        rows = lookahead(self._line, self._index, pose, track.y_down, self.config.points)
+        return np.clip(rows, self.space.low, self.space.high, out=rows)
 
 
 def build(config: LookaheadConfig, env: EnvConfig) -> LookaheadSensor:
