@@ -98,20 +98,10 @@ def f1tenth_scan(field, distance, origin, beams: np.ndarray, max_range: float, e
     return ranges
 
 
-def _cameras(episode) -> list:
-    cameras = episode.cameras
-    return cameras() if callable(cameras) else cameras
-
-
 def _probes(raw, snapshot: Snapshot, rng: np.random.Generator) -> list:
-    """(id, call) of every sensor's observe and every bird's-eye camera's render."""
-    track, car = raw._track, snapshot.car
-    probes = [(s.id, functools.partial(s.observe, snapshot, track, rng)) for s in raw.sensors]
-    for camera in _cameras(raw.episode):
-        probes.append(
-            (camera.config.id, functools.partial(camera.render, car.front_axle, car.pose[2]))
-        )
-    return probes
+    """(id, call) of every sensor's observe (the bird's-eye cameras are sensors too)."""
+    track = raw.layout
+    return [(s.id, functools.partial(s.observe, snapshot, track, rng)) for s in raw.sensors]
 
 
 def _fastest(call) -> float:
@@ -146,13 +136,13 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         for probe_id, probe in probes[shift:] + probes[:shift]:
             samples.setdefault(probe_id, []).append(_fastest(probe))
         if step < reference_steps:
-            origin = lidar.origin(snapshot, raw._track)
-            beams = directions(lidar.angles, snapshot.car.pose[2], raw._track.y_down)
+            origin = lidar.origin(snapshot, raw.layout)
+            beams = directions(lidar.angles, snapshot.car.pose[2], raw.layout.y_down)
             distance = f1tenth_distance(lidar.field)  # once per map in F1TENTH: not timed
             began = time.perf_counter()
             ranges = f1tenth_scan(lidar.field, distance, origin, beams, lidar.max_range)
             reference_seconds += time.perf_counter() - began
-            ours = lidar.observe(snapshot, raw._track, rng)
+            ours = lidar.observe(snapshot, raw.layout, rng)
             differences.append(np.abs(ranges - ours))
     env.close()
     micros = {k: 1e6 * float(np.median(v)) for k, v in samples.items()}

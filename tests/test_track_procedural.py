@@ -8,8 +8,8 @@ import inspect
 
 import numpy as np
 import pytest
-from tinyrace.tracks import procedural
 
+from tinyrace.tracks import procedural
 from tinyrace.tracks.procedural import ProceduralTrack, ProceduralTrackParams, generate_track
 
 PARITY_SEEDS = range(100)

@@ -23,6 +23,7 @@ from tinyrace.config.schema import (
     TrackConfig,
 )
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.examples import find_track, track_names
 
 __all__ = [
     "CameraConfig",
@@ -89,10 +90,14 @@ def _read_source(
         if not isinstance(environment, (str, Path)):
             allowed = "expected a track folder (a path)"
             raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
-        folder = Path(environment)
+        folder = find_track(environment)  # a path that exists wins over a shipped track's name
         config = folder / TRACK_FILE
         if not _safely(config.is_file):
-            missing = "no such folder" if not _safely(folder.is_dir) else f"{config} does not exist"
+            missing = (
+                f"no such folder; shipped tracks: {', '.join(track_names())}"
+                if not _safely(folder.is_dir)
+                else f"{config} does not exist"
+            )
             allowed = f"expected a track folder holding {TRACK_FILE} ({missing})"
             raise ConfigError(Problem(str(config), "environment", str(environment), allowed))
     if config is None:
@@ -148,6 +153,9 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if image and not config.cameras and not config.sensors:
         allowed = "an image track needs at least one camera (id, resolution, roi, position)"
         parser.problem(f"{at}cameras", [], allowed)
+    if config.observation == "box" and len(config.cameras) > 1:
+        ids = [c.id for c in config.cameras]
+        parser.problem(f"{at}observation", "box", f"box needs exactly one camera, not {ids}")
     ids = [c.id for c in config.cameras]
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:

@@ -7,33 +7,12 @@ loader validates against it and the README's YAML reference is generated from it
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
-from types import MappingProxyType
-from typing import Any, Literal, Union
+from dataclasses import dataclass
+from typing import Literal, Union
 
 from tinyrace.config.colors import Color
-
-
-def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
-    """A config field with its documentation, unit and validation rules.
-
-    rules: low / high (inclusive bounds), low_open (strict lower bound),
-    binary (colour channels 0 or 255), aliases (other accepted key names).
-    """
-    meta = {"doc": doc, "unit": unit, **rules}
-    if isinstance(default, (list, dict, set)):
-        raise TypeError("use tuples or MappingProxyType for defaults")
-    if default is dataclasses.MISSING:
-        return field(metadata=meta)
-    if dataclasses.is_dataclass(default):
-        return field(default_factory=lambda: default, metadata=meta)
-    if isinstance(default, MappingProxyType):  # a free-form mapping: a fresh dict per instance
-        return field(default_factory=lambda: dict(default), metadata=meta)
-    return field(default=default, metadata=meta)
-
-
-REQUIRED = dataclasses.MISSING
+from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.sensors import SensorConfig
 
 
 @dataclass(frozen=True)
@@ -227,10 +206,6 @@ class RewardConfig:
     )
 
 
-# The sensor entries need knob() above; they live in their own module.
-from tinyrace.config.sensors import SensorConfig  # noqa: E402
-
-
 @dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
@@ -245,6 +220,11 @@ class EnvConfig:
         "observation cameras (a mapping or a list); none on a procedural track: "
         "CarRacing's 96x96 view as a Box",
         aliases=("camera",),
+    )
+    observation: Literal["dict", "box"] = knob(
+        "dict",
+        "dict: camera images keyed by id; box: the one camera's image as a plain Box, so "
+        "image wrappers (GrayscaleObservation, ResizeObservation, ...) apply directly",
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
     sensors: tuple[SensorConfig, ...] = knob(

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Literal, Union
 
 from tinyrace.config.colors import Color
-from tinyrace.config.schema import REQUIRED, knob
+from tinyrace.config.knobs import REQUIRED, knob
 
 CameraFormat = Literal["rgb", "gray", "classes"]
 LENGTH = "track units"

@@ -40,7 +40,7 @@ def mount(
 
 
 @dataclass(frozen=True, eq=False)
-class Ground:
+class GroundImage:
     """A whole-track image (colours RGBx, or labels) and the track -> pixel affine."""
 
     image: np.ndarray
@@ -108,34 +108,34 @@ def _picture_colors(picture: np.ndarray) -> list[tuple[int, int, int]]:
     return [(255 * (c >> 2 & 1), 255 * (c >> 1 & 1), 255 * (c & 1)) for c in codes.tolist()]
 
 
-def paint_labels(track: Track, table, pixels_per_unit: float) -> Ground:
+def paint_labels(track: Track, table, pixels_per_unit: float) -> GroundImage:
     """The track's ground as uint8 labels (positions in ``label_table``)."""
     if track.picture is not None:
         labels = np.zeros(track.picture.shape[:2], np.uint8)
         for label, (_, rgb) in enumerate(table):
             if rgb is not None:
                 labels[color_mask(track.picture, rgb)] = label
-        return Ground(labels, np.array([[1.0, 0, 0], [0, 1.0, 0]]))
+        return GroundImage(labels, np.array([[1.0, 0, 0], [0, 1.0, 0]]))
     to_pixels, (w, h), _ = grid(track, 1.0 / pixels_per_unit)
     labels = np.zeros((h, w), np.uint8)
     for surface in track.surfaces:
         if surface.name == "road":
             fill_quads(labels, to_pixels, surface.quads, 1)
-    return Ground(labels, to_pixels)
+    return GroundImage(labels, to_pixels)
 
 
-def paint_colors(track: Track, pixels_per_unit: float) -> Ground:
+def paint_colors(track: Track, pixels_per_unit: float) -> GroundImage:
     """The track's ground as RGBx colours: the picture, or the palette's background with
     the surfaces drawn in their palette colours."""
     if track.picture is not None:
-        return Ground(track.picture, np.array([[1.0, 0, 0], [0, 1.0, 0]]))
+        return GroundImage(track.picture, np.array([[1.0, 0, 0], [0, 1.0, 0]]))
     to_pixels, (w, h), _ = grid(track, 1.0 / pixels_per_unit)
     image = np.zeros((h, w, 4), np.uint8)
     image[:] = (*_rgb(track.palette.get("background", (0, 0, 0))), 255)
     for surface in track.surfaces:
         color = track.palette.get(surface.name, (128, 128, 128))
         fill_quads(image, to_pixels, surface.quads, (*_rgb(color), 255))
-    return Ground(image, to_pixels)
+    return GroundImage(image, to_pixels)
 
 
 def _rgb(color) -> tuple[int, int, int]:

@@ -18,8 +18,8 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import ConesConfig
+from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import PerTrack, Unsupported, car_length
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -169,9 +169,10 @@ class ConesSensor:
         return {"cones": rows, "count": count}
 
 
-def build(config: ConesConfig, env: EnvConfig) -> ConesSensor:
+def build(config: ConesConfig, context: SensorContext) -> ConesSensor:
     """The cone detector: picture tracks (cones are blobs of the cone colours) or any track
     whose source lists cones."""
+    env = context.env
     if env.kind == "procedural":
         raise Unsupported("expected a track with cones (an image track with cone colours)")
     max_range = config.max_range if config.max_range is not None else 10 * car_length(env)

@@ -20,8 +20,8 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import LidarConfig
+from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     PerTrack,
     car_length,
@@ -246,8 +246,9 @@ class LidarSensor:
         return ranges
 
 
-def build(config: LidarConfig, env: EnvConfig) -> LidarSensor:
+def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     """The lidar of ``config``; null knobs scale with the car (see LidarConfig)."""
+    env = context.env
     length = car_length(env)
     max_range = config.max_range if config.max_range is not None else 10 * length
     cell = config.cell if config.cell is not None else (1.0 if env.kind == "image" else length / 8)

@@ -18,8 +18,8 @@ import math
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import LookaheadConfig
+from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import PerTrack, Unsupported, car_length
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -194,9 +194,10 @@ class LookaheadSensor:
         return np.clip(rows, self.space.low, self.space.high, out=rows)
 
 
-def build(config: LookaheadConfig, env: EnvConfig) -> LookaheadSensor:
+def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:
     """The lookahead sensor: needs a reference line (a procedural centreline, or an image
     track's trajectory colour with cross_track_error.use_cte)."""
+    env = context.env
     if env.kind == "image" and not env.reward_design.cross_track_error.use_cte:
         raise Unsupported(
             "expected reward_design.cross_track_error.use_cte: true (with its "

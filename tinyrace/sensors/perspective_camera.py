@@ -15,14 +15,14 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import PerspectiveCameraConfig
+from tinyrace.sensors.base import Ground as EpisodeGround
+from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
-    Ground,
+    GroundImage,
     PerTrack,
     car_length,
     label_table,
-    paint_colors,
     paint_labels,
 )
 from tinyrace.sensors.pinhole import Pinhole, car_to_world, render
@@ -36,8 +36,15 @@ SKY_LABEL = 255  # the ``classes`` label of pixels above the horizon or beyond m
 class PerspectiveCamera:
     """A pinhole camera fixed to the car's front axle."""
 
-    def __init__(self, config: PerspectiveCameraConfig, length: float, pixels_per_unit: float):
+    def __init__(
+        self,
+        config: PerspectiveCameraConfig,
+        length: float,
+        pixels_per_unit: float,
+        episode_ground: EpisodeGround,
+    ):
         self.config = config
+        self.episode_ground = episode_ground  # the cameras' shared texture of the episode
         h, w = config.resolution
         x, y, z = config.position or (0.0, 0.0, DEFAULT_HEIGHT * length)
         self.pinhole = Pinhole(
@@ -53,7 +60,7 @@ class PerspectiveCamera:
         shape = (h, w, 3) if config.format == "rgb" else (h, w)
         self.space = spaces.Box(0, 255, shape, np.uint8)
         self._grounds = PerTrack()
-        self.ground: Ground | None = None
+        self.ground: GroundImage | None = None
         self.labels: tuple[str, ...] = ()
 
     @property
@@ -61,13 +68,15 @@ class PerspectiveCamera:
         return self.config.id
 
     def reset(self, track: Track) -> None:
-        self.ground, self.labels = self._grounds.get(track, self._paint)
-
-    def _paint(self, track: Track) -> tuple[Ground, tuple[str, ...]]:
         if self.config.format == "classes":
-            table = label_table(track)
-            return paint_labels(track, table, self.pixels_per_unit), tuple(n for n, _ in table)
-        return paint_colors(track, self.pixels_per_unit), ()
+            self.ground, self.labels = self._grounds.get(track, self._paint_labels)
+        else:  # the episode's own ground (CarRacing's tiles and grass, or the picture)
+            texture = self.episode_ground.texture(track)
+            self.ground = GroundImage(texture.image(0), texture.to_pixels[0])
+
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+        table = label_table(track)
+        return paint_labels(track, table, self.pixels_per_unit), tuple(n for n, _ in table)
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
@@ -87,10 +96,11 @@ class PerspectiveCamera:
         return cv2.cvtColor(rgbx, code)
 
 
-def build(config: PerspectiveCameraConfig, env: EnvConfig) -> PerspectiveCamera:
+def build(config: PerspectiveCameraConfig, context: SensorContext) -> PerspectiveCamera:
     """The camera of ``config``; tracks without a picture are drawn at the procedural
     track's ``pixels_per_unit`` (8 px per car length on other sources)."""
+    env = context.env
     length = car_length(env)
     track = env.tracks[0]
     ppu = getattr(track, "pixels_per_unit", None) or 8.0 / length
-    return PerspectiveCamera(config, length, ppu)
+    return PerspectiveCamera(config, length, ppu, context.ground)

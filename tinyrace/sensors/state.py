@@ -26,6 +26,7 @@ from gymnasium import spaces
 from tinyrace.cars.dynamic import DynamicCarSpec
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import StateConfig
+from tinyrace.sensors.base import SensorContext
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import CarState, Snapshot
 
@@ -118,7 +119,8 @@ class StateSensor:
         return np.clip(vector, self.space.low, self.space.high, out=vector)
 
 
-def build(config: StateConfig, env: EnvConfig) -> StateSensor:
+def build(config: StateConfig, context: SensorContext) -> StateSensor:
     """The state sensor of ``config``: wheel speeds and slips when the car models wheels."""
+    env = context.env
     wheels = env.car.model == "dynamic"
     return StateSensor(config, wheels, y_down=env.kind == "image", bounds=limits(env))

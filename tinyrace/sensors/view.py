@@ -13,7 +13,7 @@ import math
 import cv2
 import numpy as np
 
-from tinyrace.sensors.common import Ground, PerTrack, car_length, paint_colors
+from tinyrace.sensors.common import GroundImage, PerTrack, car_length, paint_colors
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -36,7 +36,9 @@ class SensorView:
 
     def render(self, snapshot: Snapshot, track: Track, observation: dict) -> np.ndarray:
         """(SIZE, SIZE + images, 3) uint8 RGB."""
-        ground: Ground = self._grounds.get(track, lambda t: paint_colors(t, self.pixels_per_unit))
+        ground: GroundImage = self._grounds.get(
+            track, lambda t: paint_colors(t, self.pixels_per_unit)
+        )
         car = snapshot.car
         to_view = self._car_to_view()  # car frame (ahead, left) -> view px
         world_to_car = _world_to_car(car.front_axle, car.pose[2], track.y_down)
