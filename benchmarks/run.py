@@ -5,6 +5,7 @@ Usage::
     python benchmarks/run.py                   # a few seconds per case (about 2 minutes)
     python benchmarks/run.py --quick           # smoke run (under a minute)
     python benchmarks/run.py --out FILE.json   # default: benchmarks/results/latest.json
+    python benchmarks/run.py --sensors         # only the per-sensor costs (sensors.json)
 
 Every case steps one env with seeded random actions (drawn up front, so drawing
 them is not timed) and takes the observation of every step; an env whose
@@ -69,6 +70,7 @@ from report import (
     ratio_row,
     report,
 )
+from sensors import measure_sensors, print_sensors
 from standin import StandIn
 from stepping import SEED, Stepper, interleave, quiet_gym_warnings, time_resets, unavailable
 
@@ -418,21 +420,42 @@ def run(budget: Budget) -> dict[str, Any]:
             results["throughput"],
         )
         results["rss"] = guarded("peak RSS (fresh processes)", measure_rss, generated)
+        results["sensors"] = guarded("sensors", measure_sensors_for, budget)
     return results
+
+
+def measure_sensors_for(budget: Budget) -> dict[str, Any]:
+    """Per-sensor cost (benchmarks/sensors.py): more steps for a longer budget."""
+    return measure_sensors(steps=500 if budget is QUICK else 2000, reference_steps=5)
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smoke run, under a minute")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON file to write")
+    parser.add_argument("--sensors", action="store_true", help="only the per-sensor costs")
     parser.add_argument("--rss-child", help=argparse.SUPPRESS)  # internal: one RSS process
     args = parser.parse_args(argv)
     if args.rss_child:
         rss_child(json.loads(args.rss_child))
         return
+    if args.sensors:
+        with quiet_gym_warnings():
+            results = {
+                "machine": machine(),
+                "sensors": measure_sensors_for(QUICK if args.quick else FULL),
+            }
+        print_sensors(results["sensors"])
+        out = args.out.with_name("sensors.json") if args.out == DEFAULT_OUT else args.out
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(results, indent=2) + "\n")
+        print(f"\nwrote {out}")
+        return
     results = run(QUICK if args.quick else FULL)
     report(results, RSS_STEPS)
     report_informational(results)
+    if "error" not in results["sensors"]:
+        print_sensors(results["sensors"])
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"\nwrote {args.out}")

@@ -22,7 +22,7 @@ from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
-from tinyrace.sensors.registry import sensor_type
+from tinyrace.sensors.registry import build_sensors, sensor_type
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.image import ImageTrack
 from tinyrace.tracks.procedural import ProceduralTrack
@@ -97,7 +97,8 @@ class TinyRaceEnv(gym.Env):
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
         self._ground = EpisodeGround()
-        self.sensors = _cameras(self.config, SensorContext(self.config, self._ground))
+        context = SensorContext(self.config, self._ground)
+        self.sensors = _cameras(self.config, context) + build_sensors(context, loaded.source)
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
@@ -145,7 +146,11 @@ class TinyRaceEnv(gym.Env):
         observation = self._observe()
         if self.render_mode == "human":
             self.render()
-        return observation, self._info({})
+        info = self._info({})
+        labels = {s.id: s.labels for s in self.sensors if getattr(s, "labels", ())}
+        if labels:
+            info["sensor_labels"] = labels  # classes cameras: names by label
+        return observation, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         episode = self.episode

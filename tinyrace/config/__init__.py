@@ -155,7 +155,7 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if not config.tracks:
         parser.problem(f"{at}tracks", [], "expected at least one track")
     image = "image" in kinds
-    if image and not config.cameras:
+    if image and not config.cameras and not config.sensors:
         allowed = "an image track needs at least one camera (id, resolution, roi, position)"
         parser.problem(f"{at}cameras", [], allowed)
     if config.observation == "box" and len(config.cameras) > 1:
@@ -165,6 +165,11 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
             parser.problem(f"{at}cameras[{i}].id", cam_id, "camera ids must be unique")
+    for i, sensor in enumerate(config.sensors):
+        if sensor.id in ids:
+            allowed = "sensor ids must be unique and differ from the camera ids"
+            parser.problem(f"{at}sensors[{i}].id", sensor.id, allowed)
+        ids.append(sensor.id)
     # the car model and its actions are checked by tinyrace.cars.registry
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]

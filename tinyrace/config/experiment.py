@@ -28,7 +28,9 @@ class OutputConfig:
     video: bool = knob(True, "write one mp4 per episode")
     view: str = knob(
         "default",
-        "what the video shows: default (CarRacing's view / the track overview) or a camera id",
+        "what the video shows: default (CarRacing's view / the track overview), sensors (a "
+        "map of the lidar rays, cones and lookahead, the perspective views beside it) or the "
+        "id of a camera or image sensor",
     )
     fps: float | None = knob(
         None, "video frame rate; null: the simulation's fps", "Hz", low=1, high=1000

@@ -7,34 +7,14 @@ loader validates against it and the README's YAML reference is generated from it
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass, field
-from types import MappingProxyType
-from typing import Any, Literal, Union
+from dataclasses import dataclass
+from typing import Literal, Union
 
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
+from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.sensors import SensorConfig
 
-
-def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
-    """A config field with its documentation, unit and validation rules.
-
-    rules: low / high (inclusive bounds), low_open (strict lower bound),
-    binary (colour channels 0 or 255), aliases (other accepted key names).
-    """
-    meta = {"doc": doc, "unit": unit, **rules}
-    if isinstance(default, (list, dict, set)):
-        raise TypeError("use tuples or MappingProxyType for defaults")
-    if default is dataclasses.MISSING:
-        return field(metadata=meta)
-    if dataclasses.is_dataclass(default):
-        return field(default_factory=lambda: default, metadata=meta)
-    if isinstance(default, MappingProxyType):  # a free-form mapping: a fresh dict per instance
-        return field(default_factory=lambda: dict(default), metadata=meta)
-    return field(default=default, metadata=meta)
-
-
-REQUIRED = dataclasses.MISSING
 MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
 MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together
 
@@ -278,6 +258,11 @@ class EnvConfig:
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
     files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
+    sensors: tuple[SensorConfig, ...] = knob(
+        (),
+        "more observation sensors by type (perspective_camera, lidar, state, lookahead, "
+        "cones), each under its id in the Dict observation beside the cameras",
+    )
 
     @property
     def kind(self) -> str:

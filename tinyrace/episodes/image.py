@@ -144,7 +144,11 @@ class ImageCourse:
             track: ImageTrack = layout.detail
             world = World()
             world.add_obstacle_cells(track.cells)
-            self.prepared.append(PreparedTrack(track, GroundTexture.from_image(track.image), world))
+            self.prepared.append(
+                PreparedTrack(
+                    track, GroundTexture.from_image(track.image, exact_colors=True), world
+                )
+            )
 
     @property
     def tracks(self) -> list[ImageTrack]:

@@ -26,6 +26,7 @@ from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
 from tinyrace.experiment.tracks import save_track_picture
 from tinyrace.experiment.video import open_video
+from tinyrace.sensors.view import sensor_view
 
 DEFAULT_MAX_STEPS = 1000  # when neither the experiment nor the env sets a limit (CarRacing's)
 
@@ -159,7 +160,11 @@ class _Run:
 
     def _frame(self, observation: Any) -> np.ndarray:
         view = self.config.output.view
-        return self.env.render() if view == "default" else observation[view]
+        if view == "sensors":
+            env = self.env
+            return sensor_view(env).render(env.snapshot(), env.layout, observation)
+        frame = self.env.render() if view == "default" else observation[view]
+        return frame if frame.ndim == 3 else np.repeat(frame[..., None], 3, axis=2)  # gray
 
     def _track_picture(self, seed: int) -> str:
         key, entry = save_track_picture(self.env, seed, self.run_dir, self.tracks)
@@ -204,10 +209,18 @@ def _driver(spec: str, args: dict, source: str) -> Driver:
 
 def _check_view(experiment: Experiment, env: TinyRaceEnv) -> None:
     view = experiment.config.output.view
-    ids = [c.id for c in env.config.cameras]
+    ids = [s.id for s in env.sensors if _is_image(s.space)]  # cameras and image sensors
+    if view == "sensors" and env.config.sensors:
+        return
     if view != "default" and view not in ids:
-        allowed = f"default or a camera id: {', '.join(ids) or '(this env has no cameras)'}"
+        allowed = f"default, sensors (with sensors:) or an image id: {', '.join(ids) or '(none)'}"
         raise ConfigError(Problem(experiment.source, "output.view", view, allowed))
+
+
+def _is_image(space) -> bool:
+    """A Box of uint8 pixels, (H, W) or (H, W, 3)."""
+    shape = getattr(space, "shape", None) or ()
+    return getattr(space, "dtype", None) == np.uint8 and len(shape) in (2, 3)
 
 
 def new_run_dir(root: Path, name: str) -> Path:

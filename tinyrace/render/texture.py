@@ -50,6 +50,11 @@ class GroundTexture:
     sizes: list[tuple[int, int]]  # per level: (w, h)
     border: tuple[int, int, int] = (0, 0, 0)  # colour outside the texture
     interpolation: int = cv2.INTER_LINEAR
+    # Sample level 0 only: no pixel is ever averaged with its neighbours before the warp, so
+    # the inside of a marking keeps its exact colour however far a camera zooms out (as
+    # tinycarlo's crop-and-resize camera does). Picture tracks need it; their colours mean
+    # things. Off: pick the level that matches the camera's scale (smooth, no aliasing).
+    exact_colors: bool = False
 
     @classmethod
     def from_image(
@@ -58,6 +63,7 @@ class GroundTexture:
         to_pixels: np.ndarray | None = None,
         border: tuple[int, int, int] = (0, 0, 0),
         min_side: int = 64,
+        exact_colors: bool = False,
     ) -> GroundTexture:
         """An RGBx image (world->pixel affine ``to_pixels``, identity if None) and its levels."""
         if to_pixels is None:
@@ -69,7 +75,8 @@ class GroundTexture:
             half = ((pw + 1) // 2, (ph + 1) // 2)
             sizes.append(half)
             matrices.append(to_pixels * [[half[0] / w], [half[1] / h]])
-        return cls([image] + [None] * (len(sizes) - 1), matrices, sizes, border)
+        levels: list[np.ndarray | None] = [image, *[None] * (len(sizes) - 1)]
+        return cls(levels, matrices, sizes, border, exact_colors=exact_colors)
 
     def image(self, level: int) -> np.ndarray:
         """The pixels of ``level``, made on first use by halving the level above it
@@ -88,7 +95,10 @@ class GroundTexture:
         self._scratch: dict[tuple[int, int], np.ndarray] = {}  # 4-channel warp targets by size
 
     def level_for(self, out_pixels_per_unit: float) -> int:
-        """The smallest level that still has at least one texture pixel per output pixel."""
+        """The smallest level that still has at least one texture pixel per output pixel
+        (always 0 with ``exact_colors``)."""
+        if self.exact_colors:
+            return 0
         level = 0
         while level + 1 < len(self.levels) and self.scales[level + 1] >= out_pixels_per_unit:
             level += 1

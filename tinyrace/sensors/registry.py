@@ -8,7 +8,8 @@ from __future__ import annotations
 from tinyrace.config import CameraConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.sensors import birdseye_camera
-from tinyrace.sensors.base import SensorType
+from tinyrace.sensors.base import Sensor, SensorContext, SensorType
+from tinyrace.sensors.common import Unsupported
 
 SENSOR_TYPES: dict[str, SensorType] = {}
 
@@ -36,3 +37,53 @@ register(
         doc="a top-down camera fixed to the car (tinycarlo's cameras: list)",
     )
 )
+
+
+def _register_built_in() -> None:
+    from tinyrace.config import sensors as configs
+    from tinyrace.sensors import cones, lidar, lookahead, perspective_camera, state
+
+    for name, config, module, kinds, doc in (
+        (
+            "perspective_camera",
+            configs.PerspectiveCameraConfig,
+            perspective_camera,
+            None,
+            "a pinhole camera on the car: the ground by one perspective warp, sky above",
+        ),
+        ("lidar", configs.LidarConfig, lidar, None, "planar ranges by ray marching a distance map"),
+        ("state", configs.StateConfig, state, None, "speeds, yaw rate, steering, wheels, pose"),
+        (
+            "lookahead",
+            configs.LookaheadConfig,
+            lookahead,
+            None,
+            "the next points of the reference line, with curvature",
+        ),
+        ("cones", configs.ConesConfig, cones, frozenset({"image"}), "cones in range, padded"),
+    ):
+        register(SensorType(name, config, module.build, kinds, doc))
+
+
+_register_built_in()
+
+
+def build_sensors(context: SensorContext, source: str) -> list[Sensor]:
+    """The sensors of the env config's ``sensors:`` list, in order; a ConfigError lists every
+    entry that cannot work with this config (its type, its track kind, or its knobs)."""
+    config = context.env
+    built, problems = [], []
+    for i, entry in enumerate(config.sensors):
+        kind = sensor_type(entry.type, source, f"sensors[{i}].type")
+        if kind.track_kinds is not None and config.kind not in kind.track_kinds:
+            kinds = ", ".join(sorted(kind.track_kinds))
+            allowed = f"a {entry.type} sensor works on track kinds: {kinds}"
+            problems.append(Problem(source, f"sensors[{i}].type", entry.type, allowed))
+            continue
+        try:
+            built.append(kind.build(entry, context))
+        except Unsupported as exc:
+            problems.append(Problem(source, f"sensors[{i}]", entry.type, str(exc)))
+    if problems:
+        raise ConfigError(problems)
+    return built

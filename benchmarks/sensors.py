@@ -1,0 +1,201 @@
+"""What each sensor type adds to a step, measured in one run beside bird's-eye cameras.
+
+An env drives with seeded random actions; after every step, each sensor (and each
+bird's-eye camera) observes the same snapshot and its ``observe`` (``render``) is timed
+on its own, so that every figure of a track kind shares the same steps and the same
+machine conditions; the order rotates each step. On a shared machine other processes
+pre-empt this one at random, so each probe is timed REPEATS times per step and the fastest
+kept; a figure is the median over the steps of those, in µs (the mean is kept too).
+
+Also timed: a reference lidar in the style of F1TENTH's gym (its ``ScanSimulator2D``:
+a Euclidean distance transform of the occupied cells, then per beam a loop that steps
+by the distance to the nearest obstacle until it is below a small epsilon or past the
+range). F1TENTH's gym is not on PyPI and its loop is compiled with numba there; here it is
+reimplemented in plain Python, on the same map and beams as tinyrace's lidar.
+
+Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
+costs no more than a 96x96 bird's-eye camera; a 120x160 perspective camera no more than
+1.5x a 120x160 bird's-eye camera.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from typing import Any
+
+import cv2
+import gymnasium as gym
+import numpy as np
+from tinyrace.examples import TRACKS_DIR
+from tinyrace.sensors.lidar import LidarSensor, directions
+from tinyrace.world.snapshot import Snapshot
+
+SEED = 0
+REPEATS = 3  # timings per probe and step; the fastest is kept
+STATE_BUDGET = 20.0  # [µs per step] state, lookahead and cones each
+LIDAR_PER_CAMERA = 1.0  # 1080-beam lidar / 96x96 bird's-eye camera
+PERSPECTIVE_PER_CAMERA = 1.5  # 120x160 perspective / 120x160 bird's-eye camera
+
+SENSORS = [
+    {"id": "state", "type": "state"},
+    {"id": "lookahead", "type": "lookahead", "points": 10},
+    {"id": "lidar_1080", "type": "lidar", "beams": 1080},
+    {"id": "perspective_120x160", "type": "perspective_camera", "resolution": [120, 160]},
+]
+CASES: dict[str, dict[str, Any]] = {
+    "procedural": {
+        "config": {
+            "cameras": [
+                {"id": "birdseye_96x96", "resolution": [96, 96], "roi": [40, 40]},
+                {"id": "birdseye_120x160", "resolution": [120, 160], "roi": [40, 53.3]},
+            ],
+            "sensors": SENSORS,
+        },
+    },
+    "formula_student": {
+        "environment": str(TRACKS_DIR / "formula_student"),
+        "config": {
+            "cameras": [
+                {"id": "birdseye_96x96", "resolution": [96, 96], "roi": [360, 360]},
+                {"id": "birdseye_120x160", "resolution": [120, 160], "roi": [360, 480]},
+            ],
+            "sensors": [*SENSORS, {"id": "cones", "type": "cones"}],
+        },
+    },
+}
+
+
+def f1tenth_distance(field) -> np.ndarray:
+    """F1TENTH's map preparation: the Euclidean distance transform [cells] of the occupied
+    cells (here the lidar's own blocking cells), once per map."""
+    free = np.where(field.steps == 0, 0, 255).astype(np.uint8)
+    return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+
+
+def f1tenth_scan(field, distance, origin, beams: np.ndarray, max_range: float, eps: float = 1e-4):
+    """Ranges [track units] by F1TENTH's method, one Python loop per beam: march by the
+    distance to the nearest occupied cell until it is below ``eps`` cells (the tip is in an
+    occupied cell) or the range is passed; on the same cells, so within about a cell of
+    tinyrace's ranges."""
+    height, width = distance.shape
+    ox, oy = field.to_cells @ (origin[0], origin[1], 1.0)
+    linear = field.to_cells[:, :2] / field.cells_per_unit
+    limit = max_range * field.cells_per_unit
+    ranges = np.empty(len(beams), np.float32)
+    for i, (dx, dy) in enumerate(beams @ linear.T):
+        t = 0.0
+        while t < limit:
+            col, row = round(ox + t * dx), round(oy + t * dy)
+            if not (0 <= row < height and 0 <= col < width):
+                break
+            d = float(distance[row, col])
+            if d < eps:
+                break
+            t += d
+        ranges[i] = min(t, limit) / field.cells_per_unit
+    return ranges
+
+
+def _probes(raw, snapshot: Snapshot, rng: np.random.Generator) -> list:
+    """(id, call) of every sensor's observe (the bird's-eye cameras are sensors too)."""
+    track = raw.layout
+    return [(s.id, functools.partial(s.observe, snapshot, track, rng)) for s in raw.sensors]
+
+
+def _fastest(call) -> float:
+    """[s] the fastest of REPEATS calls."""
+    best = math.inf
+    for _ in range(REPEATS):
+        began = time.perf_counter()
+        call()
+        best = min(best, time.perf_counter() - began)
+    return best
+
+
+def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
+    """Mean µs per step of each sensor and camera of ``CASES[name]`` over ``steps`` steps."""
+    case = CASES[name]
+    kwargs = {"environment": case["environment"]} if "environment" in case else {}
+    env = gym.make("tinyrace/TinyRace-v0", **kwargs, **case["config"])
+    raw = env.unwrapped
+    env.action_space.seed(SEED)
+    rng = np.random.default_rng(SEED)
+    env.reset(seed=SEED)
+    samples: dict[str, list[float]] = {}
+    lidar = next(s for s in raw.sensors if isinstance(s, LidarSensor))
+    reference_seconds, differences = 0.0, []
+    for step in range(steps):
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        if terminated or truncated:
+            env.reset()
+        snapshot = Snapshot(raw.t, raw.steps, (raw.episode.car.state(),))
+        probes = _probes(raw, snapshot, rng)
+        shift = step % len(probes)
+        for probe_id, probe in probes[shift:] + probes[:shift]:
+            samples.setdefault(probe_id, []).append(_fastest(probe))
+        if step < reference_steps:
+            origin = lidar.origin(snapshot, raw.layout)
+            beams = directions(lidar.angles, snapshot.car.pose[2], raw.layout.y_down)
+            distance = f1tenth_distance(lidar.field)  # once per map in F1TENTH: not timed
+            began = time.perf_counter()
+            ranges = f1tenth_scan(lidar.field, distance, origin, beams, lidar.max_range)
+            reference_seconds += time.perf_counter() - began
+            ours = lidar.observe(snapshot, raw.layout, rng)
+            differences.append(np.abs(ranges - ours))
+    env.close()
+    micros = {k: 1e6 * float(np.median(v)) for k, v in samples.items()}
+    means = {k: 1e6 * float(np.mean(v)) for k, v in samples.items()}
+    micros["f1tenth_reference_lidar_1080"] = 1e6 * reference_seconds / max(reference_steps, 1)
+    cell = 1.0 / lidar.field.cells_per_unit
+    return {
+        "steps": steps,
+        "us_per_step": micros,
+        "us_per_step_mean": means,
+        "lidar_cell": cell,
+        # beams that clip the corner of a cell may hit it in one method and not the other
+        "lidar_beams_within_a_cell_of_reference": float(
+            np.mean(np.concatenate(differences) <= cell)
+        ),
+    }
+
+
+def measure_sensors(steps: int = 2000, reference_steps: int = 20) -> dict[str, Any]:
+    """Every case, and the budget checks."""
+    results = {name: measure_case(name, steps, reference_steps) for name in CASES}
+    for result in results.values():
+        us = result["us_per_step"]
+        result["checks"] = {
+            **{
+                f"{k} <= {STATE_BUDGET:g} us": us[k] <= STATE_BUDGET
+                for k in ("state", "lookahead", "cones")
+                if k in us
+            },
+            "lidar_1080 <= birdseye_96x96": us["lidar_1080"]
+            <= LIDAR_PER_CAMERA * us["birdseye_96x96"],
+            "perspective_120x160 <= 1.5 x birdseye_120x160": us["perspective_120x160"]
+            <= PERSPECTIVE_PER_CAMERA * us["birdseye_120x160"],
+        }
+    return results
+
+
+def print_sensors(results: dict[str, Any]) -> None:
+    """The per-sensor table and the budget checks."""
+    for name, result in results.items():
+        if "error" in result:
+            print(f"\nSensors on {name}: {result['error']}")
+            continue
+        print(f"\nSensors on {name} (median us per step over {result['steps']} steps)")
+        for key, value in sorted(result["us_per_step"].items(), key=lambda kv: kv[1]):
+            print(f"  {key:32s} {value:10.1f}")
+        error = result["lidar_max_abs_difference_to_reference"]
+        print(
+            f"  lidar vs reference: max |difference| {error:.3g} (cell {result['lidar_cell']:.3g})"
+        )
+        for check, passed in result["checks"].items():
+            print(f"  {'PASS' if passed else 'FAIL'}  {check}")
+
+
+if __name__ == "__main__":
+    print_sensors(measure_sensors())

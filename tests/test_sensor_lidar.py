@@ -1,0 +1,106 @@
+"""Lidar core against geometry: a circular wall and a square room, noise and dropout."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tinyrace.sensors.lidar import add_noise, beam_angles, cast, directions, distance_field
+
+SIZE = 401  # cells per side of the test maps
+
+
+def _dirs(angles) -> np.ndarray:
+    """Unit vectors of world angles [rad] on a y-up map."""
+    return directions(np.asarray(angles, np.float64), 0.0, y_down=False)
+
+
+def _centres(cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Track coordinates of every cell centre, and the track -> cell affine (origin at the map
+    centre, y up, ``cell`` track units per cell)."""
+    half = (SIZE - 1) / 2
+    to_cells = np.array([[1 / cell, 0, half], [0, -1 / cell, half]])
+    cols, rows = np.meshgrid(np.arange(SIZE), np.arange(SIZE))
+    return (cols - half) * cell, (half - rows) * cell, to_cells
+
+
+@pytest.mark.parametrize("cell", [0.05, 1.0])
+@pytest.mark.parametrize("radius_cells", [30, 150])
+def test_circular_wall_from_its_centre(cell, radius_cells):
+    x, y, to_cells = _centres(cell)
+    radius = radius_cells * cell
+    blocking = np.hypot(x, y) >= radius
+    field = distance_field(blocking, to_cells)
+    angles = np.linspace(-math.pi, math.pi, 1080, endpoint=False)
+    ranges = cast(field, (0.0, 0.0), _dirs(angles), max_range=10 * radius)
+    assert ranges.dtype == np.float32 and ranges.shape == (1080,)
+    tolerance = max(cell, 0.01 * radius)
+    assert np.abs(ranges - radius).max() <= tolerance
+
+
+@pytest.mark.parametrize("origin", [(0.0, 0.0), (12.3, -30.7), (-55.0, 48.0)])
+def test_square_room_gives_the_analytic_ranges(origin):
+    cell = 0.5
+    x, y, to_cells = _centres(cell)
+    half_side = 80.25  # walls at |x| = |y| = 80.25: the edges of the cells centred on 80.5
+    blocking = (np.abs(x) > half_side) | (np.abs(y) > half_side)
+    field = distance_field(blocking, to_cells)
+    angles = np.linspace(-math.pi, math.pi, 720, endpoint=False)
+    ranges = cast(field, origin, _dirs(angles), max_range=1000.0)
+    c, s = np.cos(angles), np.sin(angles)
+    ox, oy = origin
+    with np.errstate(divide="ignore"):
+        tx = np.where(c > 0, (half_side - ox) / c, (-half_side - ox) / c)
+        ty = np.where(s > 0, (half_side - oy) / s, (-half_side - oy) / s)
+    expected = np.minimum(np.abs(tx), np.abs(ty))
+    assert np.abs(ranges - expected).max() <= cell
+
+
+def test_beyond_max_range_reports_max_range_and_inside_a_wall_zero():
+    x, _, to_cells = _centres(1.0)
+    blocking = np.abs(x) >= 100
+    field = distance_field(blocking, to_cells)
+    ranges = cast(field, (0.0, 0.0), _dirs([0.0, math.pi / 2, math.pi]), max_range=50.0)
+    np.testing.assert_array_equal(ranges, [50.0, 50.0, 50.0])
+    assert cast(field, (150.0, 0.0), _dirs([0.0]), max_range=50.0)[0] == 0.0
+
+
+def test_a_flipped_map_measures_the_same_distances():
+    """y-down maps (image tracks): the affine's flip must not change ranges."""
+    cell = 1.0
+    x, _, to_cells = _centres(cell)
+    blocking = x >= 60.5
+    down = to_cells * [[1], [-1]] + [[0, 0, 0], [0, 0, SIZE - 1]]
+    beams = _dirs([0.0, 0.5])
+    up = cast(distance_field(blocking, to_cells), (0, 0), beams, 500.0)
+    flipped = cast(distance_field(blocking[::-1], down), (0, 0), beams, 500.0)
+    np.testing.assert_allclose(up, flipped, atol=1e-4)
+    assert abs(up[0] - 60.0) <= cell and abs(up[1] - 60.0 / math.cos(0.5)) <= cell
+
+
+def test_beam_angles_cover_the_fov_rightmost_first():
+    angles = beam_angles(5, math.pi)
+    np.testing.assert_allclose(angles, [-math.pi / 2, -math.pi / 4, 0, math.pi / 4, math.pi / 2])
+    full = beam_angles(4, 2 * math.pi)
+    np.testing.assert_allclose(full, [-math.pi, -math.pi / 2, 0, math.pi / 2])
+
+
+def test_noise_and_dropout_follow_the_generator():
+    ranges = np.full(20000, 10.0, np.float32)
+    a = add_noise(ranges, np.random.default_rng(3), std=0.1, dropout=0.2, max_range=30.0)
+    b = add_noise(ranges, np.random.default_rng(3), std=0.1, dropout=0.2, max_range=30.0)
+    np.testing.assert_array_equal(a, b)
+    dropped = a == 30.0
+    assert 0.18 < dropped.mean() < 0.22
+    assert abs(np.std(a[~dropped]) - 0.1) < 0.01 and abs(np.mean(a[~dropped]) - 10.0) < 0.01
+    clean = add_noise(ranges, np.random.default_rng(3), std=0.0, dropout=0.0, max_range=30.0)
+    np.testing.assert_array_equal(clean, ranges)
+
+
+def test_directions_turn_with_the_heading_and_the_image_convention():
+    up = directions(np.array([0.0, math.pi / 2]), math.pi / 2, y_down=False)
+    np.testing.assert_allclose(up, [[0, 1], [-1, 0]], atol=1e-12)  # + left: counter-clockwise
+    down = directions(np.array([math.pi / 2]), 0.0, y_down=True)
+    np.testing.assert_allclose(down, [[0, -1]], atol=1e-12)  # left of +x is up the image

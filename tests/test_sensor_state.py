@@ -1,0 +1,50 @@
+"""State core: speeds, rates and wheel slip in the car's frame on both track conventions."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tinyrace.sensors.state import fields, state_vector
+from tinyrace.world.snapshot import CarState, WheelState
+
+
+def _car(pose, velocity, yaw_rate=0.0, steer=0.0, wheels=()):
+    return CarState(
+        model="dynamic",
+        pose=pose,
+        velocity=velocity,
+        speed=math.hypot(*velocity),
+        yaw_rate=yaw_rate,
+        steer=steer,
+        front_axle=(0.0, 0.0),
+        rear_axle=(0.0, 0.0),
+        footprint=(1.0, 1.0),
+        wheels=wheels,
+    )
+
+
+@pytest.mark.parametrize("y_down", [False, True])
+def test_speeds_in_the_car_frame(y_down):
+    heading = 0.7
+    ahead = (math.cos(heading), math.sin(heading))
+    left = (-ahead[1], ahead[0]) if not y_down else (ahead[1], -ahead[0])
+    velocity = (3 * ahead[0] + 2 * left[0], 3 * ahead[1] + 2 * left[1])
+    turn = -1 if y_down else 1  # a track-frame rate of +0.5 is a left turn on y-up only
+    vector = state_vector(_car((1, 2, heading), velocity, 0.5, 0.1), y_down, False, False)
+    np.testing.assert_allclose(vector, [3, 2, turn * 0.5, turn * 0.1], rtol=1e-6)
+
+
+def test_wheel_speeds_and_slip_and_pose():
+    wheels = tuple(WheelState(omega, 0.0, 0.5) for omega in (10, 10, 12, 8))
+    car = _car((5.0, 6.0, 3 * math.pi), (4.0 * -1, 0.0), wheels=wheels)  # heading pi: -x
+    vector = state_vector(car, False, True, True)
+    names = fields(True, True)
+    assert len(vector) == len(names) == 4 + 8 + 3 and vector.dtype == np.float32
+    value = dict(zip(names, vector, strict=True))
+    assert value["speed_long"] == pytest.approx(4.0)
+    assert [value[f"wheel_speed_{w}"] for w in ("fl", "fr", "rl", "rr")] == [5, 5, 6, 4]
+    assert [value[f"slip_{w}"] for w in ("fl", "fr", "rl", "rr")] == pytest.approx([1, 1, 2, 0])
+    assert value["heading"] == pytest.approx(-math.pi) and (value["x"], value["y"]) == (5, 6)

@@ -1,0 +1,157 @@
+"""The ``sensors:`` entries: one dataclass per sensor type, told apart by ``type``.
+
+Lengths are in the track's unit (u on the procedural track, px on picture tracks, m on
+metric ones). A null length means "scaled to the car": so many car lengths (rear to front
+axle), which fits every track unit. The car frame is x ahead, y to the left, z up; angles
+are positive to the left (counter-clockwise seen from above).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Union
+
+from tinyrace.config.colors import Color
+from tinyrace.config.knobs import REQUIRED, knob
+
+CameraFormat = Literal["rgb", "gray", "classes"]
+LENGTH = "track units"
+_ID = "observation key of this sensor"
+_FORMAT = (
+    "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the track's "
+    "layers (never blended; the table is in info['sensor_labels'])"
+)
+
+
+def _type(name: str):
+    return knob(name, "sensor type")
+
+
+@dataclass(frozen=True)
+class PerspectiveCameraConfig:
+    """``sensors[i]`` of ``type: perspective_camera``: a pinhole camera on the car."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["perspective_camera"] = _type("perspective_camera")
+    resolution: tuple[int, int] = knob(
+        (120, 160), "[y, x] output image size", "px", low=1, high=4096
+    )
+    position: tuple[float, float, float] | None = knob(
+        None,
+        "[x, y, z] from the front axle's middle: ahead, left, up (null: [0, 0, 0.4] car lengths)",
+        LENGTH,
+    )
+    yaw: float = knob(0.0, "turn from straight ahead, + left", "deg", low=-360, high=360)
+    pitch: float = knob(20.0, "tilt toward the ground, + down", "deg", low=-89, high=89)
+    roll: float = knob(
+        0.0,
+        "turn about the optical axis, + clockwise as the camera sees",
+        "deg",
+        low=-180,
+        high=180,
+    )
+    fov: float = knob(90.0, "horizontal field of view", "deg", low=1, high=170)
+    max_range: float | None = knob(
+        None,
+        "ground farther than this (from the camera's foot) is sky (null: no limit)",
+        LENGTH,
+        low=0,
+        low_open=True,
+    )
+    format: CameraFormat = knob("rgb", _FORMAT)
+    sky_color: Color = knob(
+        Color.rgb(135, 206, 235), "colour above the horizon and beyond max_range"
+    )
+
+
+@dataclass(frozen=True)
+class LidarConfig:
+    """``sensors[i]`` of ``type: lidar``: a planar scanner; float32 ranges, rightmost beam first."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["lidar"] = _type("lidar")
+    beams: int = knob(1080, "number of beams", low=1, high=20000)
+    fov: float = knob(270.0, "field of view, centred ahead", "deg", low=1, high=360)
+    max_range: float | None = knob(
+        None,
+        "range of a beam that hits nothing (null: 10 car lengths)",
+        LENGTH,
+        low=0,
+        low_open=True,
+    )
+    position: tuple[float, float] = knob(
+        (0.0, 0.0), "[x, y] from the middle of the front axle: ahead, left", LENGTH
+    )
+    range_std: float = knob(0.0, "std of Gaussian range noise", LENGTH, low=0)
+    dropout: float = knob(0.0, "chance that a beam returns max_range", low=0, high=1)
+    blocks: tuple[Literal["off_road", "walls", "obstacles", "cones"], ...] = knob(
+        ("off_road", "walls", "obstacles", "cones"),
+        "what stops a beam: off_road (beyond the road surfaces), walls, obstacles (colour "
+        "obstacles of picture tracks), cones",
+    )
+    cell: float | None = knob(
+        None,
+        "cell size of the distance map built once per track (null: 1 on picture tracks, "
+        "otherwise 1/40 car length)",
+        LENGTH,
+        low=0,
+        low_open=True,
+    )
+
+
+@dataclass(frozen=True)
+class StateConfig:
+    """``sensors[i]`` of ``type: state``: the car's motion in its own frame, float32."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["state"] = _type("state")
+    pose: bool = knob(False, "append x, y [track units] and heading [rad]")
+
+
+@dataclass(frozen=True)
+class LookaheadConfig:
+    """``sensors[i]`` of ``type: lookahead``: next points of the reference line, car frame."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["lookahead"] = _type("lookahead")
+    points: int = knob(10, "how many points (K)", low=1, high=1000)
+    spacing: float | None = knob(
+        None,
+        "distance between points along the line (null: 1 car length)",
+        LENGTH,
+        low=0,
+        low_open=True,
+    )
+
+
+@dataclass(frozen=True)
+class ConesConfig:
+    """``sensors[i]`` of ``type: cones``: cones in range, car frame, nearest first."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["cones"] = _type("cones")
+    max_cones: int = knob(32, "rows of the padded array", low=1, high=4096)
+    max_range: float | None = knob(
+        None, "farthest cone reported (null: 10 car lengths)", LENGTH, low=0, low_open=True
+    )
+    fov: float = knob(180.0, "field of view, centred ahead", "deg", low=1, high=360)
+    position_std: float = knob(0.0, "std of Gaussian noise on x and y", LENGTH, low=0)
+    miss_probability: float = knob(0.0, "chance that a visible cone is not reported", low=0, high=1)
+    false_positives: float = knob(
+        0.0, "mean count of made-up cones per observation", low=0, high=1000
+    )
+    blue_color: Color | None = knob(
+        Color.rgb(0, 0, 255), "picture tracks: colour of blue cones", binary=True
+    )
+    yellow_color: Color | None = knob(
+        Color.rgb(255, 255, 0), "picture tracks: colour of yellow cones", binary=True
+    )
+    orange_color: Color | None = knob(
+        None, "picture tracks: colour of orange cones (null: none)", binary=True
+    )
+
+
+SensorConfig = Union[  # noqa: UP007 (read at runtime)
+    PerspectiveCameraConfig, LidarConfig, StateConfig, LookaheadConfig, ConesConfig
+]
+SENSOR_CONFIGS = (PerspectiveCameraConfig, LidarConfig, StateConfig, LookaheadConfig, ConesConfig)

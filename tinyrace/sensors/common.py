@@ -1,0 +1,166 @@
+"""What several sensor types share: the car's nominal size, mounts in the car frame, and
+the ground of a track drawn as colours or as class labels.
+
+Car frame: x ahead, y to the left [track units]; headings follow the track's convention
+(counter-clockwise on y-up tracks, clockwise on y-down picture tracks).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from tinyrace.cars.dynamic import SIZE, WHEEL_POSITIONS
+from tinyrace.config import EnvConfig
+from tinyrace.tracks.base import Track
+
+_SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px
+MAX_MAP_SIDE = 4096  # [cells] largest side of a map a sensor draws of a whole track
+
+
+def car_length(config: EnvConfig) -> float:
+    """[track units] rear to front axle of the configured car, known before any reset."""
+    car = config.car
+    if car.model == "kinematic":
+        return car.wheelbase
+    wheelbase = (WHEEL_POSITIONS[0][1] - WHEEL_POSITIONS[2][1]) * SIZE  # [u]
+    return wheelbase * (car.pixels_per_unit if config.kind == "image" else 1.0)
+
+
+def mount(
+    front: tuple[float, float], heading: float, y_down: bool, ahead: float, left: float
+) -> tuple[float, float]:
+    """The track point ``ahead`` and ``left`` [track units] of the front axle's middle."""
+    c, s = math.cos(heading), math.sin(heading)
+    lx, ly = (s, -c) if y_down else (-s, c)
+    return front[0] + ahead * c + left * lx, front[1] + ahead * s + left * ly
+
+
+@dataclass(frozen=True, eq=False)
+class GroundImage:
+    """A whole-track image (colours RGBx, or labels) and the track -> pixel affine."""
+
+    image: np.ndarray
+    to_pixels: np.ndarray  # 2x3
+
+
+def grid(track: Track, cell: float) -> tuple[np.ndarray, tuple[int, int], float]:
+    """The track -> cell affine of a map covering ``track.bounds``, its (w, h), and the cell
+    size [track units] used (grown so that no side passes MAX_MAP_SIDE)."""
+    x0, y0, x1, y1 = track.bounds
+    cell = max(cell, (x1 - x0) / MAX_MAP_SIDE, (y1 - y0) / MAX_MAP_SIDE)
+    size = (math.ceil((x1 - x0) / cell), math.ceil((y1 - y0) / cell))
+    to_cells = np.array([[1 / cell, 0, -x0 / cell - 0.5], [0, 1 / cell, -y0 / cell - 0.5]])
+    return to_cells, size, cell
+
+
+def fill_quads(image: np.ndarray, to_pixels: np.ndarray, quads: np.ndarray, value) -> None:
+    """Fill (N, 4, 2) track-unit quads with ``value``, no antialiasing (labels stay pure)."""
+    if len(quads) == 0:
+        return
+    flat = np.asarray(quads, np.float64).reshape(-1, 1, 2)
+    pixels = cv2.transform(flat, to_pixels).reshape(-1, 4, 2)
+    fixed = np.round(pixels * (1 << _SUBPIXEL_BITS)).astype(np.int32)
+    cv2.fillPoly(image, list(fixed), value, lineType=cv2.LINE_8, shift=_SUBPIXEL_BITS)
+
+
+def fill_boxes(image: np.ndarray, to_pixels: np.ndarray, boxes: np.ndarray, value) -> None:
+    """Fill (N, 4) axis-aligned boxes x0, y0, x1, y1 [track units] with ``value``."""
+    if len(boxes) == 0:
+        return
+    b = np.asarray(boxes, np.float64)
+    quads = np.stack([b[:, [0, 1]], b[:, [2, 1]], b[:, [2, 3]], b[:, [0, 3]]], axis=1)
+    fill_quads(image, to_pixels, quads, value)
+
+
+def color_mask(picture: np.ndarray, rgb: tuple[int, int, int]) -> np.ndarray:
+    """(H, W) bool: the pixels of an RGBx picture that have colour ``rgb``."""
+    packed = picture.view(np.uint32)[:, :, 0] | np.uint32(0xFF000000)
+    return packed == np.array([*rgb, 255], np.uint8).view(np.uint32)[0]
+
+
+def label_table(track: Track) -> tuple[tuple[str, tuple[int, int, int] | None], ...]:
+    """Class labels of ``track``'s ground, label = position: background, road, then every
+    obstacle colour, then the picture's other colours (markings), brightest last."""
+    table: list[tuple[str, tuple[int, int, int] | None]] = [("background", None), ("road", None)]
+    named = set()
+    for layer in track.obstacles:
+        table.append((f"{layer.name} #{_hex(layer.color)}", tuple(layer.color)))
+        named.add(tuple(layer.color))
+    if track.picture is not None:
+        for rgb in _picture_colors(track.picture):
+            if rgb not in named and rgb != (0, 0, 0):
+                table.append((f"marking #{_hex(rgb)}", rgb))
+    return tuple(table)
+
+
+def _hex(rgb) -> str:
+    return "".join(f"{int(c):02x}" for c in rgb)
+
+
+def _picture_colors(picture: np.ndarray) -> list[tuple[int, int, int]]:
+    """The distinct colours of a binarised picture (each channel 0 or 255), in order."""
+    bits = (picture[:, :, :3] > 127).astype(np.uint8)
+    codes = np.unique(bits[:, :, 0] * 4 + bits[:, :, 1] * 2 + bits[:, :, 2])
+    return [(255 * (c >> 2 & 1), 255 * (c >> 1 & 1), 255 * (c & 1)) for c in codes.tolist()]
+
+
+def paint_labels(track: Track, table, pixels_per_unit: float) -> GroundImage:
+    """The track's ground as uint8 labels (positions in ``label_table``)."""
+    if track.picture is not None:
+        labels = np.zeros(track.picture.shape[:2], np.uint8)
+        for label, (_, rgb) in enumerate(table):
+            if rgb is not None:
+                labels[color_mask(track.picture, rgb)] = label
+        return GroundImage(labels, np.array([[1.0, 0, 0], [0, 1.0, 0]]))
+    to_pixels, (w, h), _ = grid(track, 1.0 / pixels_per_unit)
+    labels = np.zeros((h, w), np.uint8)
+    for surface in track.surfaces:
+        if surface.name == "road":
+            fill_quads(labels, to_pixels, surface.quads, 1)
+    return GroundImage(labels, to_pixels)
+
+
+def paint_colors(track: Track, pixels_per_unit: float) -> GroundImage:
+    """The track's ground as RGBx colours: the picture, or the palette's background with
+    the surfaces drawn in their palette colours."""
+    if track.picture is not None:
+        return GroundImage(track.picture, np.array([[1.0, 0, 0], [0, 1.0, 0]]))
+    to_pixels, (w, h), _ = grid(track, 1.0 / pixels_per_unit)
+    image = np.zeros((h, w, 4), np.uint8)
+    image[:] = (*_rgb(track.palette.get("background", (0, 0, 0))), 255)
+    for surface in track.surfaces:
+        color = track.palette.get(surface.name, (128, 128, 128))
+        fill_quads(image, to_pixels, surface.quads, (*_rgb(color), 255))
+    return GroundImage(image, to_pixels)
+
+
+def _rgb(color) -> tuple[int, int, int]:
+    return tuple(round(float(c)) for c in color)  # type: ignore[return-value]
+
+
+class Unsupported(ValueError):
+    """A sensor entry that cannot work with this env config; the message says what can."""
+
+
+class PerTrack:
+    """What a sensor computes once per track (distance maps, cone lists, lines).
+
+    Picture tracks last the env's life and each keeps its entry; a track that is made anew
+    at every reset (procedural) keeps only the newest. Entries hold their track, so that
+    an id is never reused while its entry lives.
+    """
+
+    def __init__(self) -> None:
+        self._entries: dict[int, tuple[Track, object]] = {}
+
+    def get(self, track: Track, make):
+        entry = self._entries.get(id(track))
+        if entry is None or entry[0] is not track:
+            if track.kind == "procedural":
+                self._entries.clear()
+            entry = self._entries[id(track)] = (track, make(track))
+        return entry[1]

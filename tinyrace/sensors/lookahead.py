@@ -1,0 +1,207 @@
+"""Lookahead core: the next points of a reference line in the car's frame, with curvature.
+
+The line is resampled once per track on a fine grid of arc length (``ReferenceLine``) with
+its curvature at every grid point (from the circle through the points one ``spacing``
+before and after, so that a polyline's corners do not spike it). Each observation finds the
+car's arc length near the previous one (a window of the grid, not the whole line) and reads
+the K points ``spacing`` apart ahead of it off the grid (the spacing is rounded to a whole
+number of grid steps: within 1/(16 x grid points) of the one asked for).
+
+Car frame: x ahead, y to the left [track units]; curvature [1/track unit] is positive for a
+left turn, on y-up and y-down tracks alike.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from gymnasium import spaces
+
+from tinyrace.config.sensors import LookaheadConfig
+from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.common import PerTrack, Unsupported, car_length
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
+
+FINE = 8  # grid points per spacing
+WINDOW = 16  # grid points searched either side of the previous match (2 spacings)
+REACH = 4  # the observation's x and y saturate at this many times K spacings
+
+
+class ReferenceLine:
+    """A line resampled on a grid of arc length, ``FINE`` grid steps per lookahead spacing;
+    ``table`` rows: x, y [track units] and curvature [1/track unit, + left turn]."""
+
+    def __init__(self, table: np.ndarray, step: float, closed: bool):
+        self.table = table  # (M, 3)
+        self.points = table[:, :2]
+        self.step = step  # [track units] between grid points
+        self.closed = closed
+        self._window = np.arange(-WINDOW, WINDOW + 1)
+        self._ahead: dict[int, np.ndarray] = {}
+
+    @classmethod
+    def build(cls, line: np.ndarray, closed: bool, spacing: float, y_down: bool):
+        """Resample ``line`` (N, 2) for lookahead points about ``spacing`` [track units]
+        apart: the spacing is rounded so that the line holds a whole number of grid steps."""
+        line = np.asarray(line, np.float64)
+        if closed:
+            line = np.vstack([line, line[:1]])
+        s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+        intervals = max(round(s[-1] / (spacing / FINE)), 2)
+        count = intervals if closed else intervals + 1
+        grid = np.linspace(0.0, s[-1], count, endpoint=not closed)
+        points = np.stack([np.interp(grid, s, line[:, 0]), np.interp(grid, s, line[:, 1])], 1)
+        curvature = _menger(points, FINE, closed) * (-1.0 if y_down else 1.0)
+        return cls(np.column_stack([points, curvature]), s[-1] / intervals, closed)
+
+    @property
+    def spacing(self) -> float:
+        """[track units] between lookahead points."""
+        return FINE * self.step
+
+    def nearest(self, x: float, y: float, near: int | None) -> int:
+        """Index of the grid point nearest (x, y), searched around ``near`` when given (and
+        along the whole line when the best of that window is at its edge)."""
+        m = len(self.points)
+        if near is not None:
+            candidates = near + self._window
+            candidates = candidates % m if self.closed else np.clip(candidates, 0, m - 1)
+            d = self.points[candidates] - (x, y)
+            best = int(np.argmin(np.einsum("ij,ij->i", d, d)))
+            if 0 < best < 2 * WINDOW:
+                return int(candidates[best])
+        d = self.points - (x, y)
+        return int(np.argmin(np.einsum("ij,ij->i", d, d)))
+
+    def ahead(self, index: int, count: int) -> np.ndarray:
+        """(count, 3) table rows 1, 2, ... spacings after grid point ``index``."""
+        offsets = self._ahead.get(count)
+        if offsets is None:
+            offsets = self._ahead[count] = FINE * np.arange(1, count + 1)
+        rows = index + offsets
+        m = len(self.table)
+        return self.table[rows % m if self.closed else np.minimum(rows, m - 1)]
+
+
+def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
+    """Signed curvature of the circle through each point and the points ``offset`` before
+    and after it (+ counter-clockwise in the points' frame)."""
+    index = np.arange(len(points))
+    if closed:
+        before = points[(index - offset) % len(points)]
+        after = points[(index + offset) % len(points)]
+    else:
+        before = points[np.clip(index - offset, 0, len(points) - 1)]
+        after = points[np.clip(index + offset, 0, len(points) - 1)]
+    a, b = points - before, after - points
+    cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    lengths = np.hypot(*a.T) * np.hypot(*b.T) * np.hypot(*(after - before).T)
+    return np.divide(2 * cross, lengths, out=np.zeros(len(points)), where=lengths > 0)
+
+
+def lookahead(
+    line: ReferenceLine, index: int, pose: tuple[float, float, float], y_down: bool, count: int
+) -> np.ndarray:
+    """(count, 3) float32 rows x, y [track units, car frame: ahead, left] and curvature
+    [1/track unit] of the points one, two, ... ``line.spacing`` ahead of grid point
+    ``index`` (an open line stops at its end)."""
+    rows = line.ahead(index, count)
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    rotation = np.array([[c, s], [s, -c]] if y_down else [[c, -s], [s, c]])
+    out = np.empty((count, 3), np.float32)
+    out[:, :2] = (rows[:, :2] - (x, y)) @ rotation
+    out[:, 2] = rows[:, 2]
+    return out
+
+
+def order_points(
+    pixels: np.ndarray, start: tuple[float, float, float], spacing: float
+) -> tuple[np.ndarray, bool]:
+    """An unordered set of line pixels (K, 2) as a polyline from the one nearest ``start``
+    (x, y, heading), setting off along the heading; closed when its ends meet.
+
+    The pixels are first merged into one point per ``spacing`` cell; then each next point is
+    the nearest unused one ahead (greedy), within 3 cells.
+    """
+    cells = np.floor(np.asarray(pixels, np.float64) / spacing).astype(np.int64)
+    _, inverse = np.unique(cells, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    sums = np.zeros((inverse.max() + 1, 2))
+    np.add.at(sums, inverse, pixels)
+    points = sums / np.bincount(inverse)[:, None]
+    x, y, heading = start
+    first = int(np.argmin(np.hypot(points[:, 0] - x, points[:, 1] - y)))
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    order, used = [first], np.zeros(len(points), bool)
+    used[first] = True
+    while True:
+        here = points[order[-1]]
+        d = points - here
+        distance = np.hypot(d[:, 0], d[:, 1])
+        ahead = (d @ direction) > -0.25 * distance  # no turning back on the first pick
+        candidates = ~used & (distance <= 3 * spacing) & (ahead if len(order) == 1 else True)
+        if not candidates.any():
+            break
+        nxt = int(np.argmin(np.where(candidates, distance, np.inf)))
+        order.append(nxt)
+        used[nxt] = True
+    line = points[order]
+    closed = len(line) > 3 and np.hypot(*(line[-1] - line[0])) <= 3 * spacing
+    return line, bool(closed)
+
+
+class LookaheadSensor:
+    """``type: lookahead``: (K, 3) float32 rows x, y [track units, car frame: ahead, left]
+    and curvature [1/track unit, + left] of the reference line ahead of the front axle.
+    Bounds: x and y within +-4 K spacings (saturating), curvature within +-16 / spacing."""
+
+    def __init__(self, config: LookaheadConfig, spacing: float):
+        self.config = config
+        self.spacing = spacing  # [track units]
+        # points saturate at REACH x K spacings per axis (a car that far off the line has no
+        # use for them); curvature at that of a circle through three points one step apart
+        reach = REACH * config.points * spacing  # [track units]
+        high = np.tile(np.array([reach, reach, 2 * FINE / spacing], np.float32), (config.points, 1))
+        self.space = spaces.Box(-high, high, dtype=np.float32)
+        self._lines = PerTrack()
+        self._line: ReferenceLine | None = None
+        self._index: int | None = None
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        self._line = self._lines.get(track, self._build_line)
+        self._index = None
+
+    def _build_line(self, track: Track) -> ReferenceLine:
+        if track.centerline is not None:
+            return ReferenceLine.build(track.centerline, True, self.spacing, track.y_down)
+        layer = next(layer for layer in track.layers if layer.role == "trajectory")
+        line, closed = order_points(layer.points, track.spawns[0], self.spacing / 2)
+        return ReferenceLine.build(line, closed, self.spacing, track.y_down)
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        car = snapshot.car
+        x, y = car.front_axle
+        self._index = self._line.nearest(x, y, self._index)
+        pose = (x, y, car.pose[2])
+        rows = lookahead(self._line, self._index, pose, track.y_down, self.config.points)
+        return np.clip(rows, self.space.low, self.space.high, out=rows)
+
+
+def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:
+    """The lookahead sensor: needs a reference line (a procedural centreline, or an image
+    track's trajectory colour with cross_track_error.use_cte)."""
+    env = context.env
+    if env.kind == "image" and not env.reward_design.cross_track_error.use_cte:
+        raise Unsupported(
+            "expected reward_design.cross_track_error.use_cte: true (with its "
+            "trajectory_color) on an image track: lookahead follows that trajectory"
+        )
+    spacing = config.spacing if config.spacing is not None else car_length(env)
+    return LookaheadSensor(config, spacing)

@@ -1,0 +1,106 @@
+"""``type: perspective_camera``: a pinhole camera on the car (see ``sensors/pinhole.py``).
+
+Formats: ``rgb`` (H, W, 3) uint8; ``gray`` (H, W) uint8; ``classes`` (H, W) uint8 labels
+of the track's ground, sampled without interpolation so that no pixel blends two labels.
+Labels (``label_table``): 0 background, 1 road (tracks with road surfaces), then each
+obstacle colour of a picture track, then the picture's other colours (markings); 255 sky.
+The table of the current track is ``labels`` (and ``info['sensor_labels'][id]``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from gymnasium import spaces
+
+from tinyrace.config.sensors import PerspectiveCameraConfig
+from tinyrace.sensors.base import Ground as EpisodeGround
+from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.common import (
+    GroundImage,
+    PerTrack,
+    car_length,
+    label_table,
+    paint_labels,
+)
+from tinyrace.sensors.pinhole import Pinhole, car_to_world, render
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
+
+DEFAULT_HEIGHT = 0.4  # [car lengths] camera height when no position is given
+SKY_LABEL = 255  # the ``classes`` label of pixels above the horizon or beyond max_range
+
+
+class PerspectiveCamera:
+    """A pinhole camera fixed to the car's front axle."""
+
+    def __init__(
+        self,
+        config: PerspectiveCameraConfig,
+        length: float,
+        pixels_per_unit: float,
+        episode_ground: EpisodeGround,
+    ):
+        self.config = config
+        self.episode_ground = episode_ground  # the cameras' shared texture of the episode
+        h, w = config.resolution
+        x, y, z = config.position or (0.0, 0.0, DEFAULT_HEIGHT * length)
+        self.pinhole = Pinhole(
+            (w, h),
+            math.radians(config.fov),
+            (x, -y, z),  # the core's frame: ahead, right, up
+            yaw=-math.radians(config.yaw),  # the core turns + right
+            pitch=math.radians(config.pitch),
+            roll=math.radians(config.roll),
+            max_range=config.max_range,
+        )
+        self.pixels_per_unit = pixels_per_unit  # ground texture of tracks without a picture
+        shape = (h, w, 3) if config.format == "rgb" else (h, w)
+        self.space = spaces.Box(0, 255, shape, np.uint8)
+        self._grounds = PerTrack()
+        self.ground: GroundImage | None = None
+        self.labels: tuple[str, ...] = ()
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        if self.config.format == "classes":
+            self.ground, self.labels = self._grounds.get(track, self._paint_labels)
+        else:  # the episode's own ground (CarRacing's tiles and grass, or the picture)
+            texture = self.episode_ground.texture(track)
+            self.ground = GroundImage(texture.image(0), texture.to_pixels[0])
+
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+        table = label_table(track)
+        return paint_labels(track, table, self.pixels_per_unit), tuple(n for n, _ in table)
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        car = snapshot.car
+        placed = car_to_world(car.front_axle, car.pose[2], track.y_down)
+        if self.config.format == "classes":
+            return render(
+                self.pinhole,
+                self.ground.image,
+                self.ground.to_pixels,
+                placed,
+                (SKY_LABEL,),
+                cv2.INTER_NEAREST,
+            )
+        sky = (*self.config.sky_color, 255)
+        rgbx = render(self.pinhole, self.ground.image, self.ground.to_pixels, placed, sky)
+        code = cv2.COLOR_RGBA2RGB if self.config.format == "rgb" else cv2.COLOR_RGBA2GRAY
+        return cv2.cvtColor(rgbx, code)
+
+
+def build(config: PerspectiveCameraConfig, context: SensorContext) -> PerspectiveCamera:
+    """The camera of ``config``; tracks without a picture are drawn at the procedural
+    track's ``pixels_per_unit`` (8 px per car length on other sources)."""
+    env = context.env
+    length = car_length(env)
+    track = env.tracks[0]
+    ppu = getattr(track, "pixels_per_unit", None) or 8.0 / length
+    return PerspectiveCamera(config, length, ppu, context.ground)

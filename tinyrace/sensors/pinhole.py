@@ -1,0 +1,148 @@
+"""Pinhole camera core: the flat ground seen through a perspective camera on the car.
+
+The ground is the plane z = 0. A pinhole camera at ``position`` = (ahead, right, height)
+from the car's reference point, turned by yaw (+ right), pitch (+ down) and roll (+ clockwise
+as the camera sees it), maps ground points to pixels by one homography; the image is the
+ground texture pushed through it by one ``cv2.warpPerspective``. Pixels whose ray misses the
+ground (above the horizon) or meets it beyond ``max_range`` get the sky colour, from a mask
+that depends on the camera alone and is computed once.
+
+Pixels: u right, v down, a pixel's centre on integer coordinates; the principal point is the
+image centre; the focal length follows from the horizontal field of view.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Pinhole:
+    """A camera's intrinsics and its pose on the car."""
+
+    size: tuple[int, int]  # (width, height) [px]
+    hfov: float  # [rad] horizontal field of view
+    position: tuple[float, float, float]  # [track units] ahead, right, height
+    yaw: float = 0.0  # [rad] + turns the camera to the right
+    pitch: float = 0.0  # [rad] + tilts it down toward the ground
+    roll: float = 0.0  # [rad] + turns it clockwise about its optical axis
+    max_range: float | None = None  # [track units] ground beyond this is sky; None: no limit
+
+    @cached_property
+    def intrinsics(self) -> np.ndarray:
+        """K (3x3): focal length [px] from the fov, principal point at the image centre."""
+        width, height = self.size
+        focal = (width / 2) / math.tan(self.hfov / 2)
+        return np.array([[focal, 0, (width - 1) / 2], [0, focal, (height - 1) / 2], [0, 0, 1]])
+
+    @cached_property
+    def axes(self) -> np.ndarray:
+        """(3, 3) rows: the camera's right, down and optical axes in the car frame
+        (ahead, right, up)."""
+        cy, sy = math.cos(self.yaw), math.sin(self.yaw)
+        cp, sp = math.cos(self.pitch), math.sin(self.pitch)
+        optical = np.array([cp * cy, cp * sy, -sp])
+        right = np.array([-sy, cy, 0.0])
+        down = np.array([-sp * cy, -sp * sy, -cp])
+        cr, sr = math.cos(self.roll), math.sin(self.roll)
+        return np.stack([cr * right + sr * down, -sr * right + cr * down, optical])
+
+    @cached_property
+    def ground_to_image(self) -> np.ndarray:
+        """H (3x3): ground point (ahead, right, 1) in the car frame -> homogeneous pixel."""
+        axes = self.axes
+        camera = np.asarray(self.position, np.float64)
+        extrinsic = np.column_stack([axes[:, 0], axes[:, 1], -axes @ camera])
+        return self.intrinsics @ extrinsic
+
+    @cached_property
+    def image_to_ground(self) -> np.ndarray:
+        """The inverse of ``ground_to_image``."""
+        return np.linalg.inv(self.ground_to_image)
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """(N, 2) pixels of (N, 3) car-frame points (ahead, right, up); in front of the camera."""
+        relative = np.asarray(points, np.float64) - np.asarray(self.position)
+        camera = relative @ self.axes.T  # (N, 3): x right, y down, z along the optical axis
+        pixels = camera @ self.intrinsics.T
+        return pixels[:, :2] / pixels[:, 2:3]
+
+    @cached_property
+    def sky(self) -> np.ndarray:
+        """(H, W) bool: pixels whose ray misses the ground or meets it beyond max_range."""
+        width, height = self.size
+        u, v = np.meshgrid(np.arange(width), np.arange(height))
+        pixels = np.stack([u, v, np.ones_like(u)], axis=-1).astype(np.float64)
+        rays = pixels @ np.linalg.inv(self.intrinsics).T @ self.axes  # car frame
+        down = -rays[..., 2]
+        missed = down <= 1e-12
+        reach = self.position[2] / np.where(missed, 1.0, down)  # ray length to the ground
+        far = np.hypot(rays[..., 0], rays[..., 1]) * reach  # [track units] along the ground
+        if self.max_range is not None:
+            missed |= far > self.max_range
+        return missed
+
+    @cached_property
+    def sky_pixels(self) -> tuple[int, np.ndarray]:
+        """The sky as the number of whole top rows, and the flat indices of the rest."""
+        full = self.sky.all(axis=1)
+        rows = int(np.argmin(full)) if not full.all() else len(full)
+        rest = self.sky.copy()
+        rest[:rows] = False
+        return rows, np.flatnonzero(rest)
+
+
+def world_to_car(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
+    """(3x3) track point -> car frame (ahead, right) for a car at ``front`` with ``heading``
+    (counter-clockwise on y-up tracks, clockwise on y-down image tracks)."""
+    fx, fy = math.cos(heading), math.sin(heading)
+    rx, ry = (-fy, fx) if y_down else (fy, -fx)
+    x, y = front
+    return np.array([[fx, fy, -(x * fx + y * fy)], [rx, ry, -(x * rx + y * ry)], [0, 0, 1]])
+
+
+def car_to_world(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
+    """(3x3) car frame (ahead, right) -> track point: the inverse of ``world_to_car``."""
+    fx, fy = math.cos(heading), math.sin(heading)
+    rx, ry = (-fy, fx) if y_down else (fy, -fx)
+    return np.array([[fx, rx, front[0]], [fy, ry, front[1]], [0, 0, 1]])
+
+
+def render(
+    camera: Pinhole,
+    ground: np.ndarray,
+    world_to_ground: np.ndarray,
+    placed: np.ndarray,
+    sky: tuple[int, ...],
+    interpolation: int = cv2.INTER_LINEAR,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """The camera image: ``ground`` (a texture, any channels) whose pixel coordinates are
+    ``world_to_ground`` (2x3) of the track, seen from a car placed by ``placed`` (3x3, car
+    frame -> track: ``car_to_world``);
+    sky pixels set to ``sky`` (one value per channel of ``ground``)."""
+    # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
+    # the homography's last row
+    image_to_car = camera.image_to_ground
+    image_to_texture = np.empty((3, 3))
+    image_to_texture[:2] = world_to_ground @ (placed @ image_to_car)
+    image_to_texture[2] = image_to_car[2]
+    image = cv2.warpPerspective(
+        ground,
+        image_to_texture,
+        camera.size,
+        dst=out,
+        flags=interpolation | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=0,
+    )
+    rows, flat = camera.sky_pixels
+    image[:rows] = sky  # whole rows of sky (a level camera): one slice
+    if len(flat):
+        image.reshape(-1, *image.shape[2:])[flat] = sky
+    return image
