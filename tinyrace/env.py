@@ -20,7 +20,7 @@ from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.texture import GroundTexture
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
-from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import build_sensors, sensor_type
 from tinyrace.tracks.base import Track
@@ -98,7 +98,10 @@ class TinyRaceEnv(gym.Env):
         self.action_space = self._actions.space
         self._ground = EpisodeGround()
         context = SensorContext(self.config, self._ground)
-        self.sensors = _cameras(self.config, context) + build_sensors(context, loaded.source)
+        self.sensors: list[Sensor] = [
+            *_cameras(self.config, context),
+            *build_sensors(context, loaded.source),
+        ]
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
@@ -147,7 +150,7 @@ class TinyRaceEnv(gym.Env):
         if self.render_mode == "human":
             self.render()
         info = self._info({})
-        labels = {s.id: s.labels for s in self.sensors if getattr(s, "labels", ())}
+        labels = {s.id: s.labels for s in self.sensors if isinstance(s, Labelled) and s.labels}
         if labels:
             info["sensor_labels"] = labels  # classes cameras: names by label
         return observation, info
@@ -235,7 +238,8 @@ class TinyRaceEnv(gym.Env):
 
     def _camera_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """Each camera's image and track window now, for the overview picture."""
-        if not self.sensors:
+        cameras = [s for s in self.sensors if isinstance(s, BirdseyeCamera)]
+        if not cameras:
             return []
         snapshot = self.snapshot()
         return [
@@ -243,7 +247,7 @@ class TinyRaceEnv(gym.Env):
                 camera.observe(snapshot, self.layout, self.np_random),
                 camera.window(snapshot, self.layout),
             )
-            for camera in self.sensors
+            for camera in cameras
         ]
 
     def close(self) -> None:

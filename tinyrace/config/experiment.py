@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from tinyrace.config.schema import knob
+from tinyrace.config.knobs import knob
 
 
 @dataclass(frozen=True)

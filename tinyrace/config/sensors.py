@@ -9,7 +9,7 @@ are positive to the left (counter-clockwise seen from above).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Union
+from typing import Any, Literal, Union
 
 from tinyrace.config.colors import Color
 from tinyrace.config.knobs import REQUIRED, knob
@@ -23,7 +23,7 @@ _FORMAT = (
 )
 
 
-def _type(name: str):
+def _type(name: str) -> Any:
     return knob(name, "sensor type")
 
 

@@ -68,12 +68,18 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
     return Experiment(config, source, env_config, {**kwargs, **sections}, base_dir)
 
 
+_IMAGE_SENSORS = ("birdseye_camera", "perspective_camera")  # their observation is a picture
+
+
 def check_view(config: ExperimentConfig, env_config: EnvConfig, source: str) -> None:
-    """``output.view`` is ``default`` or one of the env's camera ids (checked at validate)."""
+    """``output.view`` is ``default``, ``sensors`` (with a ``sensors:`` list) or the id of
+    one of the env's cameras (checked at validate)."""
     view = config.output.view
     ids = [c.id for c in env_config.cameras]
-    if view != "default" and view not in ids:
-        allowed = f"default or a camera id: {', '.join(ids) or '(this env has no cameras)'}"
+    ids += [s.id for s in env_config.sensors if s.type in _IMAGE_SENSORS]
+    views = ["default", *(["sensors"] if env_config.sensors else []), *ids]
+    if view not in views:
+        allowed = f"one of: {', '.join(views)}"
         raise ConfigError(Problem(source, "output.view", view, allowed))
 
 

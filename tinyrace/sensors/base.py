@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 from gymnasium import spaces
@@ -47,6 +47,17 @@ class Sensor(Protocol):
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> Any:
         """The observation now; noise from ``rng`` only."""
+        ...
+
+
+@runtime_checkable
+class Labelled(Protocol):
+    """A sensor whose observation holds class labels (a ``classes`` camera); ``labels``
+    names them by value for the current track (empty: it observes no labels)."""
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """The name of each label value, by position."""
         ...
 
 

@@ -8,7 +8,9 @@ Car frame: x ahead, y to the left [track units]; headings follow the track's con
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import cv2
 import numpy as np
@@ -19,6 +21,11 @@ from tinyrace.tracks.base import Track
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px
 MAX_MAP_SIDE = 4096  # [cells] largest side of a map a sensor draws of a whole track
+
+RGB = tuple[int, int, int]
+LabelTable = tuple[tuple[str, RGB | None], ...]
+FillValue = int | tuple[int, ...]
+_T = TypeVar("_T")
 
 
 def car_length(config: EnvConfig) -> float:
@@ -57,7 +64,9 @@ def grid(track: Track, cell: float) -> tuple[np.ndarray, tuple[int, int], float]
     return to_cells, size, cell
 
 
-def fill_quads(image: np.ndarray, to_pixels: np.ndarray, quads: np.ndarray, value) -> None:
+def fill_quads(
+    image: np.ndarray, to_pixels: np.ndarray, quads: np.ndarray, value: FillValue
+) -> None:
     """Fill (N, 4, 2) track-unit quads with ``value``, no antialiasing (labels stay pure)."""
     if len(quads) == 0:
         return
@@ -67,7 +76,9 @@ def fill_quads(image: np.ndarray, to_pixels: np.ndarray, quads: np.ndarray, valu
     cv2.fillPoly(image, list(fixed), value, lineType=cv2.LINE_8, shift=_SUBPIXEL_BITS)
 
 
-def fill_boxes(image: np.ndarray, to_pixels: np.ndarray, boxes: np.ndarray, value) -> None:
+def fill_boxes(
+    image: np.ndarray, to_pixels: np.ndarray, boxes: np.ndarray, value: FillValue
+) -> None:
     """Fill (N, 4) axis-aligned boxes x0, y0, x1, y1 [track units] with ``value``."""
     if len(boxes) == 0:
         return
@@ -79,17 +90,19 @@ def fill_boxes(image: np.ndarray, to_pixels: np.ndarray, boxes: np.ndarray, valu
 def color_mask(picture: np.ndarray, rgb: tuple[int, int, int]) -> np.ndarray:
     """(H, W) bool: the pixels of an RGBx picture that have colour ``rgb``."""
     packed = picture.view(np.uint32)[:, :, 0] | np.uint32(0xFF000000)
-    return packed == np.array([*rgb, 255], np.uint8).view(np.uint32)[0]
+    mask: np.ndarray = packed == np.array([*rgb, 255], np.uint8).view(np.uint32)[0]
+    return mask
 
 
-def label_table(track: Track) -> tuple[tuple[str, tuple[int, int, int] | None], ...]:
+def label_table(track: Track) -> LabelTable:
     """Class labels of ``track``'s ground, label = position: background, road, then every
     obstacle colour, then the picture's other colours (markings), brightest last."""
-    table: list[tuple[str, tuple[int, int, int] | None]] = [("background", None), ("road", None)]
-    named = set()
+    table: list[tuple[str, RGB | None]] = [("background", None), ("road", None)]
+    named: set[RGB] = set()
     for layer in track.obstacles:
-        table.append((f"{layer.name} #{_hex(layer.color)}", tuple(layer.color)))
-        named.add(tuple(layer.color))
+        rgb = _rgb(layer.color)
+        table.append((f"{layer.name} #{_hex(rgb)}", rgb))
+        named.add(rgb)
     if track.picture is not None:
         for rgb in _picture_colors(track.picture):
             if rgb not in named and rgb != (0, 0, 0):
@@ -97,7 +110,7 @@ def label_table(track: Track) -> tuple[tuple[str, tuple[int, int, int] | None], 
     return tuple(table)
 
 
-def _hex(rgb) -> str:
+def _hex(rgb: Sequence[float]) -> str:
     return "".join(f"{int(c):02x}" for c in rgb)
 
 
@@ -108,7 +121,7 @@ def _picture_colors(picture: np.ndarray) -> list[tuple[int, int, int]]:
     return [(255 * (c >> 2 & 1), 255 * (c >> 1 & 1), 255 * (c & 1)) for c in codes.tolist()]
 
 
-def paint_labels(track: Track, table, pixels_per_unit: float) -> GroundImage:
+def paint_labels(track: Track, table: LabelTable, pixels_per_unit: float) -> GroundImage:
     """The track's ground as uint8 labels (positions in ``label_table``)."""
     if track.picture is not None:
         labels = np.zeros(track.picture.shape[:2], np.uint8)
@@ -138,15 +151,16 @@ def paint_colors(track: Track, pixels_per_unit: float) -> GroundImage:
     return GroundImage(image, to_pixels)
 
 
-def _rgb(color) -> tuple[int, int, int]:
-    return tuple(round(float(c)) for c in color)  # type: ignore[return-value]
+def _rgb(color: Sequence[float]) -> RGB:
+    r, g, b = (round(float(c)) for c in color[:3])
+    return r, g, b
 
 
 class Unsupported(ValueError):
     """A sensor entry that cannot work with this env config; the message says what can."""
 
 
-class PerTrack:
+class PerTrack(Generic[_T]):
     """What a sensor computes once per track (distance maps, cone lists, lines).
 
     Picture tracks last the env's life and each keeps its entry; a track that is made anew
@@ -155,9 +169,9 @@ class PerTrack:
     """
 
     def __init__(self) -> None:
-        self._entries: dict[int, tuple[Track, object]] = {}
+        self._entries: dict[int, tuple[Track, _T]] = {}
 
-    def get(self, track: Track, make):
+    def get(self, track: Track, make: Callable[[Track], _T]) -> _T:
         entry = self._entries.get(id(track))
         if entry is None or entry[0] is not track:
             if track.kind == "procedural":

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -79,7 +80,15 @@ def detect(
     return rows, len(order)
 
 
-def _noisy(local, classes, capacity, noise, rng, max_range, fov) -> tuple[np.ndarray, int]:
+def _noisy(
+    local: np.ndarray,
+    classes: np.ndarray,
+    capacity: int,
+    noise: ConeNoise,
+    rng: np.random.Generator,
+    max_range: float,
+    fov: float,
+) -> tuple[np.ndarray, int]:
     """Misses, position noise and false positives, drawn from ``rng`` in that order."""
     found = np.column_stack([local, classes])
     if noise.miss_probability > 0:
@@ -135,7 +144,8 @@ class ConesSensor:
         self.space = spaces.Dict(
             {"cones": spaces.Box(low, high, dtype=np.float32), "count": spaces.Discrete(n + 1)}
         )
-        self._cones = PerTrack()  # (K, 3) per track
+        self._cones: PerTrack[np.ndarray] = PerTrack()  # (K, 3) per track
+        self.cones: np.ndarray = np.zeros((0, 3))  # of the current track
 
     @property
     def id(self) -> str:
@@ -153,7 +163,7 @@ class ConesSensor:
         }
         return cones_from_picture(track.picture, {k: v for k, v in colors.items() if v is not None})
 
-    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> dict:
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> dict[str, Any]:
         car = snapshot.car
         x, y = car.front_axle
         rows, count = detect(

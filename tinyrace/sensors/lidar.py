@@ -23,6 +23,7 @@ from gymnasium import spaces
 from tinyrace.config.sensors import LidarConfig
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
+    RGB,
     PerTrack,
     car_length,
     color_mask,
@@ -96,10 +97,18 @@ def cast(
     limit = np.float32(max_range * field.cells_per_unit)  # [cells]
     t = _march(field.steps, start, dx, dy, limit, max_rounds)
     t = _refine(field.steps, start, dx, dy, t)
-    return np.minimum(t, limit) / np.float32(field.cells_per_unit)
+    ranges: np.ndarray = np.minimum(t, limit) / np.float32(field.cells_per_unit)
+    return ranges
 
 
-def _march(steps, start, dx, dy, limit, max_rounds) -> np.ndarray:
+def _march(
+    steps: np.ndarray,
+    start: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    limit: np.float32,
+    max_rounds: int,
+) -> np.ndarray:
     """Distance [cells] each beam travels before it stops in a blocking cell or passes
     ``limit``. Every CHECK_EVERY rounds the beams that stopped leave the working arrays."""
     t_all = np.zeros(len(dx), np.float32)
@@ -126,10 +135,13 @@ def _march(steps, start, dx, dy, limit, max_rounds) -> np.ndarray:
 def _sample(steps: np.ndarray, px: np.ndarray, py: np.ndarray) -> np.ndarray:
     """The step [cells] in the cell under each tip (nearest cell); 0 outside the map."""
     found = cv2.remap(steps, px[None], py[None], cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT)
-    return found[0] * np.float32(0.5)
+    step: np.ndarray = found[0] * np.float32(0.5)
+    return step
 
 
-def _refine(steps, start, dx, dy, t) -> np.ndarray:
+def _refine(
+    steps: np.ndarray, start: np.ndarray, dx: np.ndarray, dy: np.ndarray, t: np.ndarray
+) -> np.ndarray:
     """Bisect each hit back toward the edge of the blocking cell it entered: a tip overshoots
     an edge by less than OVERSHOOT cells."""
     blocked = _sample(steps, start[0] + t * dx, start[1] + t * dy) == 0
@@ -140,7 +152,8 @@ def _refine(steps, start, dx, dy, t) -> np.ndarray:
         hit = _sample(steps, start[0] + mid * dx, start[1] + mid * dy) == 0
         high = np.where(hit, mid, high)
         low = np.where(hit, low, mid)
-    return np.where(blocked, high, t)
+    refined: np.ndarray = np.where(blocked, high, t)
+    return refined
 
 
 def directions(angles: np.ndarray, heading: float, y_down: bool) -> np.ndarray:
@@ -177,7 +190,7 @@ def add_noise(
 
 
 def blocking_map(
-    track: Track, blocks: tuple[str, ...], cell: float, cone_colors: tuple
+    track: Track, blocks: tuple[str, ...], cell: float, cone_colors: tuple[RGB, ...]
 ) -> DistanceField:
     """The distance field of what ``blocks`` names on ``track``, ``cell`` [track units] per
     cell: off_road (outside the road surfaces, on tracks that have them), walls, obstacles
@@ -196,13 +209,15 @@ def blocking_map(
             cx, cy = to_cells @ (x, y, 1.0)
             cv2.circle(blocking, (round(cx), round(cy)), 0, 1, -1)
     if track.picture is not None:
-        colors = [tuple(layer.color) for layer in track.obstacles] if "obstacles" in blocks else []
+        colors = [layer.color for layer in track.obstacles] if "obstacles" in blocks else []
         colors += list(cone_colors) if "cones" in blocks else []
-        picture_mask = np.zeros(track.picture.shape[:2], bool)
+        picture_mask: np.ndarray = np.zeros(track.picture.shape[:2], bool)
         for rgb in colors:
             picture_mask |= color_mask(track.picture, rgb)
         if picture_mask.shape != blocking.shape:
-            picture_mask = cv2.resize(picture_mask.view(np.uint8), (w, h), cv2.INTER_NEAREST) > 0
+            picture_mask = (
+                cv2.resize(picture_mask.view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST) > 0
+            )
         blocking |= picture_mask.view(np.uint8) if picture_mask.dtype == bool else picture_mask
     return distance_field(blocking.astype(bool), to_cells)
 
@@ -210,14 +225,16 @@ def blocking_map(
 class LidarSensor:
     """``type: lidar``: (beams,) float32 ranges [track units], rightmost beam first."""
 
-    def __init__(self, config: LidarConfig, max_range: float, cell: float, cone_colors: tuple):
+    def __init__(
+        self, config: LidarConfig, max_range: float, cell: float, cone_colors: tuple[RGB, ...]
+    ):
         self.config = config
         self.max_range = max_range  # [track units]
         self.cell = cell  # [track units]
         self.cone_colors = cone_colors
         self.angles = beam_angles(config.beams, math.radians(config.fov))  # [rad] + left
         self.space = spaces.Box(0.0, max_range, (config.beams,), np.float32)
-        self._fields = PerTrack()
+        self._fields: PerTrack[DistanceField] = PerTrack()
         self.field: DistanceField | None = None
 
     @property
@@ -239,6 +256,7 @@ class LidarSensor:
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         heading = snapshot.car.pose[2]
         beams = directions(self.angles, heading, track.y_down)
+        assert self.field is not None, "reset() before observe()"
         ranges = cast(self.field, self.origin(snapshot, track), beams, self.max_range)
         c = self.config
         if c.range_std > 0 or c.dropout > 0:

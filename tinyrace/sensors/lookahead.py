@@ -42,7 +42,7 @@ class ReferenceLine:
         self._ahead: dict[int, np.ndarray] = {}
 
     @classmethod
-    def build(cls, line: np.ndarray, closed: bool, spacing: float, y_down: bool):
+    def build(cls, line: np.ndarray, closed: bool, spacing: float, y_down: bool) -> ReferenceLine:
         """Resample ``line`` (N, 2) for lookahead points about ``spacing`` [track units]
         apart: the spacing is rounded so that the line holds a whole number of grid steps."""
         line = np.asarray(line, np.float64)
@@ -98,7 +98,10 @@ def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
     a, b = points - before, after - points
     cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
     lengths = np.hypot(*a.T) * np.hypot(*b.T) * np.hypot(*(after - before).T)
-    return np.divide(2 * cross, lengths, out=np.zeros(len(points)), where=lengths > 0)
+    curvature: np.ndarray = np.divide(
+        2 * cross, lengths, out=np.zeros(len(points)), where=lengths > 0
+    )
+    return curvature
 
 
 def lookahead(
@@ -166,7 +169,7 @@ class LookaheadSensor:
         reach = REACH * config.points * spacing  # [track units]
         high = np.tile(np.array([reach, reach, 2 * FINE / spacing], np.float32), (config.points, 1))
         self.space = spaces.Box(-high, high, dtype=np.float32)
-        self._lines = PerTrack()
+        self._lines: PerTrack[ReferenceLine] = PerTrack()
         self._line: ReferenceLine | None = None
         self._index: int | None = None
 
@@ -182,15 +185,18 @@ class LookaheadSensor:
         if track.centerline is not None:
             return ReferenceLine.build(track.centerline, True, self.spacing, track.y_down)
         layer = next(layer for layer in track.layers if layer.role == "trajectory")
+        assert layer.points is not None, "build() asks the image track to keep them"
         line, closed = order_points(layer.points, track.spawns[0], self.spacing / 2)
         return ReferenceLine.build(line, closed, self.spacing, track.y_down)
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
         x, y = car.front_axle
-        self._index = self._line.nearest(x, y, self._index)
+        line = self._line
+        assert line is not None, "reset() before observe()"
+        self._index = index = line.nearest(x, y, self._index)
         pose = (x, y, car.pose[2])
-        rows = lookahead(self._line, self._index, pose, track.y_down, self.config.points)
+        rows = lookahead(line, index, pose, track.y_down, self.config.points)
         return np.clip(rows, self.space.low, self.space.high, out=rows)
 
 

@@ -59,7 +59,7 @@ class PerspectiveCamera:
         self.pixels_per_unit = pixels_per_unit  # ground texture of tracks without a picture
         shape = (h, w, 3) if config.format == "rgb" else (h, w)
         self.space = spaces.Box(0, 255, shape, np.uint8)
-        self._grounds = PerTrack()
+        self._grounds: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()
         self.ground: GroundImage | None = None
         self.labels: tuple[str, ...] = ()
 
@@ -81,17 +81,19 @@ class PerspectiveCamera:
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
         placed = car_to_world(car.front_axle, car.pose[2], track.y_down)
+        ground = self.ground
+        assert ground is not None, "reset() before observe()"
         if self.config.format == "classes":
             return render(
                 self.pinhole,
-                self.ground.image,
-                self.ground.to_pixels,
+                ground.image,
+                ground.to_pixels,
                 placed,
                 (SKY_LABEL,),
                 cv2.INTER_NEAREST,
             )
         sky = (*self.config.sky_color, 255)
-        rgbx = render(self.pinhole, self.ground.image, self.ground.to_pixels, placed, sky)
+        rgbx = render(self.pinhole, ground.image, ground.to_pixels, placed, sky)
         code = cv2.COLOR_RGBA2RGB if self.config.format == "rgb" else cv2.COLOR_RGBA2GRAY
         return cv2.cvtColor(rgbx, code)
 

@@ -58,7 +58,8 @@ class Pinhole:
         axes = self.axes
         camera = np.asarray(self.position, np.float64)
         extrinsic = np.column_stack([axes[:, 0], axes[:, 1], -axes @ camera])
-        return self.intrinsics @ extrinsic
+        homography: np.ndarray = self.intrinsics @ extrinsic
+        return homography
 
     @cached_property
     def image_to_ground(self) -> np.ndarray:
@@ -70,7 +71,8 @@ class Pinhole:
         relative = np.asarray(points, np.float64) - np.asarray(self.position)
         camera = relative @ self.axes.T  # (N, 3): x right, y down, z along the optical axis
         pixels = camera @ self.intrinsics.T
-        return pixels[:, :2] / pixels[:, 2:3]
+        projected: np.ndarray = pixels[:, :2] / pixels[:, 2:3]
+        return projected
 
     @cached_property
     def sky(self) -> np.ndarray:
@@ -80,7 +82,7 @@ class Pinhole:
         pixels = np.stack([u, v, np.ones_like(u)], axis=-1).astype(np.float64)
         rays = pixels @ np.linalg.inv(self.intrinsics).T @ self.axes  # car frame
         down = -rays[..., 2]
-        missed = down <= 1e-12
+        missed: np.ndarray = down <= 1e-12
         reach = self.position[2] / np.where(missed, 1.0, down)  # ray length to the ground
         far = np.hypot(rays[..., 0], rays[..., 1]) * reach  # [track units] along the ground
         if self.max_range is not None:
@@ -90,7 +92,7 @@ class Pinhole:
     @cached_property
     def sky_pixels(self) -> tuple[int, np.ndarray]:
         """The sky as the number of whole top rows, and the flat indices of the rest."""
-        full = self.sky.all(axis=1)
+        full = np.asarray(self.sky.all(axis=1))
         rows = int(np.argmin(full)) if not full.all() else len(full)
         rest = self.sky.copy()
         rest[:rows] = False

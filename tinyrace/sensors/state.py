@@ -36,7 +36,7 @@ MOTION = ("speed_long", "speed_lat", "yaw_rate", "steer")
 
 def fields(wheels: bool, pose: bool) -> tuple[str, ...]:
     """Names of the vector's components, in order."""
-    names = MOTION
+    names: tuple[str, ...] = MOTION
     if wheels:
         names += tuple(f"wheel_speed_{w}" for w in WHEELS) + tuple(f"slip_{w}" for w in WHEELS)
     if pose:

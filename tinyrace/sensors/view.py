@@ -9,11 +9,20 @@ drawn once per track (``tinyrace.sensors.common``), turned so that the car point
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import Any, Protocol
+from weakref import WeakKeyDictionary
 
 import cv2
 import numpy as np
 
+from tinyrace.config import EnvConfig
+from tinyrace.sensors.base import Sensor
 from tinyrace.sensors.common import GroundImage, PerTrack, car_length, paint_colors
+from tinyrace.sensors.cones import ConesSensor
+from tinyrace.sensors.lidar import LidarSensor
+from tinyrace.sensors.lookahead import LookaheadSensor
+from tinyrace.sensors.perspective_camera import PerspectiveCamera
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -24,21 +33,31 @@ CAR_COLOR = (255, 255, 255)
 CONE_COLORS = {1: (40, 90, 255), 2: (255, 220, 0), 3: (255, 140, 0)}  # by class
 _BITS = 3
 
+Point = Sequence[float] | np.ndarray  # (x, y)
+
+
+class SensorHost(Protocol):
+    """What the view needs of an env: its config and its sensors."""
+
+    config: EnvConfig
+    sensors: list[Sensor]
+
+
+_VIEWS: WeakKeyDictionary[SensorHost, SensorView] = WeakKeyDictionary()  # one per env
+
 
 class SensorView:
     """Draws sensor frames; ``reach`` [track units] from the car to the map's edge."""
 
-    def __init__(self, sensors: list, reach: float, pixels_per_unit: float):
+    def __init__(self, sensors: list[Sensor], reach: float, pixels_per_unit: float):
         self.sensors = sensors
         self.reach = reach
         self.pixels_per_unit = pixels_per_unit  # of the ground drawn for tracks without pictures
-        self._grounds = PerTrack()
+        self._grounds: PerTrack[GroundImage] = PerTrack()
 
-    def render(self, snapshot: Snapshot, track: Track, observation: dict) -> np.ndarray:
+    def render(self, snapshot: Snapshot, track: Track, observation: dict[str, Any]) -> np.ndarray:
         """(SIZE, SIZE + images, 3) uint8 RGB."""
-        ground: GroundImage = self._grounds.get(
-            track, lambda t: paint_colors(t, self.pixels_per_unit)
-        )
+        ground = self._grounds.get(track, lambda t: paint_colors(t, self.pixels_per_unit))
         car = snapshot.car
         to_view = self._car_to_view()  # car frame (ahead, left) -> view px
         world_to_car = _world_to_car(car.front_axle, car.pose[2], track.y_down)
@@ -56,7 +75,9 @@ class SensorView:
             self._draw(frame, sensor, observation.get(sensor.id), snapshot, track, to_view)
         cv2.circle(frame, _px(to_view, (0.0, 0.0)), 4, CAR_COLOR, -1, cv2.LINE_AA, _BITS)
         images = [
-            _picture(observation[s.id], s.config.format) for s in self.sensors if _is_image(s)
+            _picture(observation[s.id], s.config.format)
+            for s in self.sensors
+            if isinstance(s, PerspectiveCamera)
         ]
         return _beside(frame, images)
 
@@ -65,11 +86,18 @@ class SensorView:
         s = SIZE / (2 * self.reach)
         return np.array([[0.0, -s, SIZE / 2], [-s, 0.0, SIZE / 2]])
 
-    def _draw(self, frame, sensor, value, snapshot, track, to_view) -> None:
-        kind = type(sensor).__name__
+    def _draw(
+        self,
+        frame: np.ndarray,
+        sensor: Sensor,
+        value: Any,
+        snapshot: Snapshot,
+        track: Track,
+        to_view: np.ndarray,
+    ) -> None:
         if value is None:
             return
-        if kind == "LidarSensor":
+        if isinstance(sensor, LidarSensor):
             origin = _local(snapshot, track, sensor.origin(snapshot, track))
             ends = origin + value[:, None] * np.stack(
                 [np.cos(sensor.angles), np.sin(sensor.angles)], axis=1
@@ -80,11 +108,11 @@ class SensorView:
                 for end in ends[:: max(1, len(ends) // 180)]
             ]
             cv2.polylines(frame, rays, False, RAY_COLOR, 1, cv2.LINE_AA, _BITS)
-        elif kind == "ConesSensor":
+        elif isinstance(sensor, ConesSensor):
             for x, y, cls in value["cones"][: value["count"]]:
                 color = CONE_COLORS.get(int(cls), (255, 255, 255))
                 cv2.circle(frame, _px(to_view, (x, y)), 5 << _BITS, color, 2, cv2.LINE_AA, _BITS)
-        elif kind == "LookaheadSensor":
+        elif isinstance(sensor, LookaheadSensor):
             for x, y, _ in value:
                 cv2.circle(
                     frame, _px(to_view, (x, y)), 3 << _BITS, LOOKAHEAD_COLOR, -1, cv2.LINE_AA, _BITS
@@ -93,10 +121,11 @@ class SensorView:
 
 def _compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
     """The 2x3 affine ``outer`` after ``inner``."""
-    return outer @ np.vstack([inner, [0.0, 0.0, 1.0]])
+    composed: np.ndarray = outer @ np.vstack([inner, [0.0, 0.0, 1.0]])
+    return composed
 
 
-def _world_to_car(front, heading: float, y_down: bool) -> np.ndarray:
+def _world_to_car(front: Point, heading: float, y_down: bool) -> np.ndarray:
     """(2x3) track point -> car frame (ahead, left)."""
     c, s = math.cos(heading), math.sin(heading)
     lx, ly = (s, -c) if y_down else (-s, c)
@@ -104,19 +133,17 @@ def _world_to_car(front, heading: float, y_down: bool) -> np.ndarray:
     return np.array([[c, s, -(x * c + y * s)], [lx, ly, -(x * lx + y * ly)]])
 
 
-def _local(snapshot: Snapshot, track: Track, point) -> np.ndarray:
+def _local(snapshot: Snapshot, track: Track, point: Point) -> np.ndarray:
     """A track point in the car frame (ahead, left) of the front axle."""
     car = snapshot.car
-    return _world_to_car(car.front_axle, car.pose[2], track.y_down) @ (point[0], point[1], 1.0)
+    to_car = _world_to_car(car.front_axle, car.pose[2], track.y_down)
+    local: np.ndarray = to_car @ (point[0], point[1], 1.0)
+    return local
 
 
-def _px(to_view: np.ndarray, point) -> tuple[int, int]:
+def _px(to_view: np.ndarray, point: Point) -> tuple[int, int]:
     x, y = to_view @ (float(point[0]), float(point[1]), 1.0)
     return round(x * (1 << _BITS)), round(y * (1 << _BITS))
-
-
-def _is_image(sensor) -> bool:
-    return type(sensor).__name__ == "PerspectiveCamera"
 
 
 def _picture(image: np.ndarray, format: str) -> np.ndarray:
@@ -125,7 +152,7 @@ def _picture(image: np.ndarray, format: str) -> np.ndarray:
         return image
     if format == "classes":
         spread = ((image.astype(np.int32) * 47) % 200 + 40).astype(np.uint8)
-        colored = cv2.applyColorMap(spread, cv2.COLORMAP_JET)[..., ::-1].copy()
+        colored: np.ndarray = cv2.applyColorMap(spread, cv2.COLORMAP_JET)[..., ::-1].copy()
         colored[image == 255] = 255
         return colored
     return cv2.cvtColor(image, cv2.COLOR_GRAY2RGB)
@@ -148,13 +175,13 @@ def _beside(frame: np.ndarray, images: list[np.ndarray]) -> np.ndarray:
     return np.concatenate([frame, panel], axis=1)
 
 
-def sensor_view(env) -> SensorView:
+def sensor_view(env: SensorHost) -> SensorView:
     """The env's sensor view, made on first use: the map reaches as far as the farthest
     sensor range (at least 3 car lengths)."""
-    view = getattr(env, "_sensor_view", None)
+    view = _VIEWS.get(env)
     if view is None:
         length = car_length(env.config)
-        ranges = [getattr(s, "max_range", 0.0) or 0.0 for s in env.sensors]
+        ranges = [float(getattr(s, "max_range", 0.0) or 0.0) for s in env.sensors]
         reach = max([3 * length, *[r for r in ranges if r < 100 * length]])
-        view = env._sensor_view = SensorView(env.sensors, reach, 16.0 / length)
+        view = _VIEWS[env] = SensorView(env.sensors, reach, 16.0 / length)
     return view
