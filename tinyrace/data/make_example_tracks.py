@@ -14,6 +14,9 @@ OUT_DIR defaults to the ``tracks/`` folder beside this script. Each track folder
   cones on the right.
 - ``carolo_cup/``: white markings on black, with obstacle boxes in the left lane.
 
+It then runs ``make_metric_tracks.py`` for the tracks in metres (a centreline CSV,
+a cone map, a ROS map with a raceline).
+
 Conventions (tinycarlo's): positions are image pixels, x right and y down;
 heading 0 points along +x and a growing heading turns clockwise on screen.
 Colours are BGR with every channel 0 or 255. Drawing uses ``cv2.LINE_8`` (no
@@ -512,6 +515,10 @@ def main(argv: list[str]) -> None:
     segmented_track(out_dir)
     formula_student_track(out_dir)
     carolo_cup_track(out_dir)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling script, run or imported
+    import make_metric_tracks
+
+    make_metric_tracks.main(out_dir)
 
 
 if __name__ == "__main__":
