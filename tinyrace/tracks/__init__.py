@@ -1,9 +1,8 @@
-"""Track sources in metres: readers of real-world formats and the geometry they share.
+"""Track sources: each turns the config's ``track`` sections into read-only ``Track`` data.
 
-``polyline`` holds closed-loop geometry (arc length, resampling, headings, edges,
-tiles, self-intersection); ``csv_rows`` reads delimited text with line and column
-numbers for errors; ``centerline_csv``, ``cone_map`` and ``ros_map`` read the
-racetrack-database centreline CSV, the Formula Student cone map and the ROS
-map_server map. World frame: metres, x right, y up, headings counter-clockwise
-from +x.
+The contract is in ``tracks/base.py``; the sources by ``track.type`` are listed in
+``tracks/registry.py``. The sources in metres share ``polyline`` (closed-loop geometry),
+``csv_rows`` (delimited text read with line and column numbers for errors) and
+``circuit`` (a closed road with widths and tiles); their readers are ``centerline_csv``,
+``cone_map`` and ``ros_map``.
 """

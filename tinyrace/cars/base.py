@@ -1,0 +1,85 @@
+"""The car contract: what the world steps and what a snapshot of a car holds.
+
+How to add a car model:
+1. Write ``tinyrace/cars/<model>.py`` with a class satisfying ``Car`` (a pymunk body plus
+   its own state; ``control`` takes the controls of one action, ``apply_forces`` moves it
+   for one step, ``state()`` copies what sensors and pictures may read).
+2. Register it in ``tinyrace/cars/registry.py``: a ``CarModel`` entry with its builder,
+   the track kinds it can drive on, the track kinds it is the default for, and its
+   action spaces. That entry is the only place that decides which car a config gets.
+3. Add its name to ``CarConfig.model`` in ``tinyrace/config/schema.py``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:
+    import pymunk
+
+Point = tuple[float, float]  # [track units]
+Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
+
+
+@dataclass(frozen=True)
+class WheelState:
+    """One wheel of a car that models its wheels."""
+
+    omega: float  # [rad/s] spin
+    steer: float  # [rad] steering angle, + turns toward growing heading
+    radius: float  # [track units]
+
+
+@dataclass(frozen=True)
+class CarState:
+    """A copy of one car's state: what sensors and pictures read, never the live body."""
+
+    model: str  # the car model's registry name
+    pose: Pose  # the car's reference point and heading (see ``Car.pose``)
+    velocity: Point  # [track units/s] in the track frame
+    yaw_rate: float  # [rad/s] d(heading)/dt
+    steer: float  # [rad] front-wheel angle, + turns toward growing heading
+    front_axle: Point  # middle of the front axle (where cameras are mounted)
+    rear_axle: Point  # middle of the rear axle
+    footprint: tuple[float, float]  # (length rear to front axle, width) [track units]
+    wheels: tuple[WheelState, ...] = ()  # FL, FR, RL, RR on the dynamic car; () if not modelled
+
+    @property
+    def speed(self) -> float:
+        """[track units/s]"""
+        vx, vy = self.velocity
+        return float((vx * vx + vy * vy) ** 0.5)
+
+
+class Car(Protocol):
+    """One car in a world: controls in, forces out, state readable."""
+
+    @property
+    def body(self) -> pymunk.Body: ...
+
+    def control(self, *controls: float) -> None:
+        """Set the controls of one action (e.g. steer, gas, brake) for the coming steps."""
+
+    def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
+        """Prepare the body for a world step of ``dt`` seconds; ``on_road`` per wheel."""
+
+    @property
+    def pose(self) -> Pose: ...
+
+    @property
+    def speed(self) -> float: ...
+
+    @property
+    def footprint(self) -> tuple[float, float]: ...
+
+    @property
+    def rear_axle(self) -> Point: ...
+
+    @property
+    def front_axle(self) -> Point: ...
+
+    def state(self) -> CarState:
+        """A copy of the car's state now."""
+        ...

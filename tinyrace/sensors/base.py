@@ -1,0 +1,62 @@
+"""The sensor contract: an observation space and ``observe(snapshot, track, rng)``.
+
+A sensor reads a ``Snapshot`` (``tinyrace.world.snapshot``) and the episode's ``Track``
+(``tinyrace.tracks.base``); it never touches the physics. Its randomness (noise,
+dropouts) comes from the ``rng`` it is given: the env's ``np_random``.
+
+How to add a sensor type:
+1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor`` and a builder
+   ``build(entry, env_config) -> Sensor`` taking its own config entry (a dataclass with
+   ``knob()`` fields: units, bounds, docs) and the whole env config.
+2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
+   name (the entry's ``type``), config class, builder and the track kinds it supports.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
+from gymnasium import spaces
+
+if TYPE_CHECKING:
+    from tinyrace.config import EnvConfig
+    from tinyrace.tracks.base import Track
+    from tinyrace.world.snapshot import Snapshot
+
+
+class Sensor(Protocol):
+    """One sensor of the observation: its key, its space, and how it observes."""
+
+    @property
+    def id(self) -> str:
+        """Its key in the Dict observation."""
+        ...
+
+    @property
+    def space(self) -> spaces.Space[Any]:
+        """The observation space of what ``observe`` returns (fixed at construction)."""
+        ...
+
+    def reset(self, track: Track) -> None:
+        """A new episode on ``track``: prepare per-track caches (textures, distance maps)."""
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> Any:
+        """The observation now; noise from ``rng`` only."""
+        ...
+
+
+SensorBuilder = Callable[[Any, "EnvConfig"], Sensor]
+
+
+@dataclass(frozen=True)
+class SensorType:
+    """One registered sensor type."""
+
+    name: str  # the ``type`` of a sensor entry
+    config: type  # dataclass of its entry's knobs
+    build: SensorBuilder
+    track_kinds: frozenset[str] | None = None  # None: every kind
+    doc: str = ""

@@ -1,0 +1,114 @@
+"""The track contract: what every track source produces, and the protocol of a source.
+
+A ``Track`` is read-only data in the track's own unit (``unit``: CarRacing's ``u`` on the
+procedural track, ``px`` on tinycarlo image folders, ``m`` on metric sources), with its
+scale to metres where known. The world builds its static shapes from it (surfaces,
+colour-layer cells, walls, cones), sensors and pictures read it, rewards never see it.
+
+How to add a track source (one new kind of ``track.type``):
+1. Write ``tinyrace/tracks/<kind>.py`` with a class that satisfies ``TrackSource``: its
+   constructor takes ``(config: EnvConfig, base_dir: Path, source: str)``, loads every
+   file once and raises ``ConfigError`` listing every problem; ``draw(rng, options)``
+   returns the ``TrackDraw`` of a new episode, drawing from ``rng`` only.
+2. Add its config dataclass (``type: Literal["<kind>"]``) to ``tinyrace/config/schema.py``.
+3. Register it in ``tinyrace/tracks/registry.py`` (``TRACK_SOURCES``) and list the kind in
+   the ``track_kinds`` of every car model that can drive on it (``tinyrace/cars/registry.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
+Box = tuple[float, float, float, float]  # (x0, y0, x1, y1) [track units]
+RGB = tuple[float, float, float]  # 0-255 per channel
+
+
+def _no_boxes() -> np.ndarray:
+    return np.zeros((0, 4))
+
+
+@dataclass(frozen=True, eq=False)
+class Surface:
+    """Ground of one grip: convex quads (N, 4, 2) [track units], e.g. the road tiles.
+
+    A wheel on no surface is off the road and gets ``Track.off_road_friction``.
+    """
+
+    name: str  # "road", "kerb", ...
+    friction: float  # fraction of the road's friction limit (road 1.0)
+    quads: np.ndarray  # (N, 4, 2) float [track units]
+
+
+@dataclass(frozen=True, eq=False)
+class ColorLayer:
+    """The pixels of one colour of a picture track and what they mean.
+
+    ``cells`` summarises the pixels as boxes for the physics' broad phase (obstacles);
+    ``points`` lists them (trajectories) when the source keeps them.
+    """
+
+    name: str  # e.g. "obstacle 0", "trajectory", "marking"
+    role: str  # "marking" | "obstacle" | "trajectory" | "cone"
+    color: tuple[int, int, int]  # RGB
+    cells: np.ndarray = field(default_factory=_no_boxes)  # (M, 4) boxes [track units]
+    points: np.ndarray | None = None  # (K, 2) pixel coordinates (x, y), when kept
+
+
+@dataclass(frozen=True, eq=False)
+class Track:
+    """One track, as every part above the track sources sees it. Arrays are read-only."""
+
+    kind: str  # the ``track.type`` of the source that made it
+    unit: str  # "u" (CarRacing), "px" (tinycarlo image) or "m"
+    metres_per_unit: float | None  # [m per track unit]; None when the source does not know
+    y_down: bool  # True: x right, y down, heading clockwise on screen (image tracks)
+    bounds: Box  # leaving this box ends the episode (out_of_bounds) [track units]
+    spawns: tuple[Pose, ...]  # start poses; a TrackDraw says which one this episode uses
+    centerline: np.ndarray | None = None  # (N, 2) reference line, point 0 at the start
+    tiles: np.ndarray | None = None  # (N, 4, 2) progress tiles; tile i ends at point i
+    surfaces: tuple[Surface, ...] = ()  # grip by area; nothing here: grip 1 everywhere
+    off_road_friction: float = 1.0  # grip where no surface is (CarRacing's grass: 0.6)
+    layers: tuple[ColorLayer, ...] = ()  # colour meanings of a picture track
+    picture: np.ndarray | None = None  # (H, W, 4) uint8 RGBx of a picture track
+    walls: np.ndarray = field(default_factory=_no_boxes)  # (M, 4) solid boxes [track units]
+    cones: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (K, 3): x, y, class
+    palette: Mapping[str, RGB] = field(default_factory=dict)  # ground colours by name
+    detail: Any = None  # the source's own data (e.g. ProceduralTrack, ImageTrack)
+
+    @property
+    def obstacles(self) -> tuple[ColorLayer, ...]:
+        """The colour layers a car must avoid, in ``reward_design.color_obstacles`` order."""
+        return tuple(layer for layer in self.layers if layer.role == "obstacle")
+
+
+@dataclass(frozen=True, eq=False)
+class TrackDraw:
+    """What a reset drew: the track of the episode, which of its tracks and which spawn."""
+
+    track: Track
+    track_index: int
+    spawn_index: int
+
+    @property
+    def spawn(self) -> Pose:
+        return self.track.spawns[self.spawn_index]
+
+
+class TrackSource(Protocol):
+    """Turns an env config into tracks; made once per env, asked once per reset."""
+
+    kind: str  # the ``track.type`` it reads
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
+        """The track of a new episode, everything random drawn from ``rng`` in a fixed order.
+
+        ``options`` are the reset options (``track``, ``spawn``, ``randomize``); a source
+        draws the same numbers whether or not an option picks the result, so that picking
+        changes nothing else. Raises ConfigError when the config cannot make a track.
+        """
+        ...

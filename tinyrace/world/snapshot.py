@@ -1,0 +1,27 @@
+"""What sensors and pictures read: a copy of the world's state after a step.
+
+Sensors and renderers take a ``Snapshot`` and the episode's ``Track``; they never see
+the pymunk space, so they cannot change it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from tinyrace.cars.base import CarState, WheelState
+
+__all__ = ["CarState", "Snapshot", "WheelState"]
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The world at time ``t``: every car's state (the controlled car first)."""
+
+    t: float  # [s] since reset
+    steps: int  # steps since reset
+    cars: tuple[CarState, ...]
+
+    @property
+    def car(self) -> CarState:
+        """The controlled car."""
+        return self.cars[0]
