@@ -11,24 +11,31 @@ from typing import Any
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
+    METRIC_KINDS,
     CameraConfig,
     CarConfig,
+    CenterlineTrackConfig,
     ColorObstacle,
+    ConeMapTrackConfig,
     CrossTrackErrorConfig,
     EnvConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
+    RosMapTrackConfig,
     SimConfig,
     TrackConfig,
 )
 from tinyrace.errors import ConfigError, Problem
 
 __all__ = [
+    "METRIC_KINDS",
     "CameraConfig",
     "CarConfig",
+    "CenterlineTrackConfig",
     "Color",
     "ColorObstacle",
+    "ConeMapTrackConfig",
     "ConfigError",
     "CrossTrackErrorConfig",
     "EnvConfig",
@@ -36,6 +43,7 @@ __all__ = [
     "LoadedConfig",
     "ProceduralTrackConfig",
     "RewardConfig",
+    "RosMapTrackConfig",
     "SimConfig",
     "TrackConfig",
     "load_env_config",
@@ -152,7 +160,7 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
             parser.problem(f"{at}cameras[{i}].id", cam_id, "camera ids must be unique")
-    model = config.car.model or ("kinematic" if image else "dynamic")
+    model = config.car.model or default_car_model(config.kind if config.tracks else "image")
     if config.car.actions == "discrete" and model != "dynamic":
         parser.problem(f"{at}car.actions", "discrete", "discrete actions need car.model: dynamic")
     if not image and config.reward_design.color_obstacles:
@@ -177,21 +185,43 @@ def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -
         parser.problem(f"{at}.pixels_per_unit", track.pixels_per_unit, allowed)
 
 
+# Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
+# a small racing car's in metres.
+CAR_DEFAULTS = {
+    "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0},  # [px], [px], [px/s]
+    "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0},  # [m], [m], [m/s]
+}
+
+
+def default_car_model(kind: str) -> str:
+    """The car of ``car.model: null`` on a track kind."""
+    if kind == "procedural":
+        return "dynamic"
+    return "kinematic_throttle" if kind in METRIC_KINDS else "kinematic"
+
+
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
     """Fill the ``None`` knobs whose default depends on the track kind."""
     procedural = config.kind == "procedural"
+    carracing_rules = procedural or config.kind in METRIC_KINDS  # tiles, laps, time penalty
     sim = config.sim
     if sim.fps is None:
-        sim = dataclasses.replace(sim, fps=50.0 if procedural else 30.0)
+        sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
     car = config.car
     if car.model is None:
-        car = dataclasses.replace(car, model="dynamic" if procedural else "kinematic")
+        car = dataclasses.replace(car, model=default_car_model(config.kind))
+    sizes = CAR_DEFAULTS["m" if config.kind in METRIC_KINDS else "px"]
+    car = dataclasses.replace(
+        car, **{key: _default(getattr(car, key), value) for key, value in sizes.items()}
+    )
     reward = config.reward_design
     reward = dataclasses.replace(
         reward,
-        tile_progress=_default(reward.tile_progress, 1000.0 if procedural else 0.0),
-        time_penalty=_default(reward.time_penalty, 0.1 if procedural else 0.0),
-        out_of_bounds_penalty=_default(reward.out_of_bounds_penalty, 100.0 if procedural else 0.0),
+        tile_progress=_default(reward.tile_progress, 1000.0 if carracing_rules else 0.0),
+        time_penalty=_default(reward.time_penalty, 0.1 if carracing_rules else 0.0),
+        out_of_bounds_penalty=_default(
+            reward.out_of_bounds_penalty, 100.0 if carracing_rules else 0.0
+        ),
     )
     return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
 

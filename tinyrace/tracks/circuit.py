@@ -58,4 +58,4 @@ class Circuit:
         """(x0, y0, x1, y1) [m] around the road's tiles, grown by ``margin``."""
         corners = self.tiles.reshape(-1, 2)
         (x0, y0), (x1, y1) = corners.min(axis=0), corners.max(axis=0)
-        return x0 - margin, y0 - margin, x1 + margin, y1 + margin
+        return float(x0 - margin), float(y0 - margin), float(x1 + margin), float(y1 + margin)

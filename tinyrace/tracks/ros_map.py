@@ -96,6 +96,29 @@ class OccupancyMap:
             segments.append(np.stack((world, np.roll(world, -1, axis=0)), axis=1))
         return np.concatenate(segments) if segments else np.zeros((0, 2, 2))
 
+    def wall_boxes(self, cell_px: int = 4) -> np.ndarray:
+        """(M, 4) [m] boxes x0, y0, x1, y1 around the occupied cells of each ``cell_px``
+        square of pixels: solid walls for the physics (axis-aligned in the world when the
+        origin's yaw is 0, their bounding boxes otherwise)."""
+        h, w = self.occupied.shape
+        ph, pw = -h % cell_px, -w % cell_px
+        grid = np.pad(self.occupied, ((0, ph), (0, pw)))
+        grid = grid.reshape((h + ph) // cell_px, cell_px, (w + pw) // cell_px, cell_px)
+        rows_hit, cols_hit = grid.any(axis=3), grid.any(axis=1)  # (gy, c, gx), (gy, gx, c)
+        gy, gx = np.nonzero(rows_hit.any(axis=1))
+        if len(gy) == 0:
+            return np.zeros((0, 4))
+        r, c = rows_hit[gy, :, gx], cols_hit[gy, gx, :]
+        top = gy * cell_px + r.argmax(axis=1)
+        bottom = gy * cell_px + cell_px - 1 - r[:, ::-1].argmax(axis=1)
+        left = gx * cell_px + c.argmax(axis=1)
+        right = gx * cell_px + cell_px - 1 - c[:, ::-1].argmax(axis=1)
+        corners = [self.to_world(rows, cols) for rows in (top, bottom) for cols in (left, right)]
+        half = 0.5 * self.info.resolution  # from pixel centres to pixel edges
+        stacked = np.stack(corners)  # (4, M, 2)
+        low, high = stacked.min(axis=0) - half, stacked.max(axis=0) + half
+        return np.column_stack((low, high))
+
 
 def _rotate(points: np.ndarray, angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
