@@ -14,6 +14,7 @@ from gymnasium.error import ResetNeeded
 from tinyrace.actions import ActionSpec
 from tinyrace.config import EnvConfig, load_env_config
 from tinyrace.episodes.image import ImageCourse
+from tinyrace.episodes.metric import MetricCourse
 from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralCourse
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.window import Window
@@ -21,7 +22,13 @@ from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
-COURSES = {"procedural": ProceduralCourse, "image": ImageCourse}  # by track type
+COURSES = {  # by track type
+    "procedural": ProceduralCourse,
+    "image": ImageCourse,
+    "centerline": MetricCourse,
+    "cone_map": MetricCourse,
+    "ros_map": MetricCourse,
+}
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
 _NO_LAP = (
     "expected knobs that close a lap: a smaller radius, a longer detail_step "

@@ -67,6 +67,10 @@ def reward_terms(
     )
     if obstacle_reward:
         terms["obstacles"] = float(obstacle_reward)
+    if facts.cones_hit and config.cone_penalty:
+        terms["cones"] = -config.cone_penalty * facts.cones_hit
+    if facts.wall_hit and config.wall_penalty:
+        terms["walls"] = -config.wall_penalty
     if shaping is not None and facts.cte is not None:
         terms["cte"] = float(shaping(facts.cte))
     return terms
@@ -78,6 +82,8 @@ def ends_episode(facts: StepFacts, config: RewardConfig) -> str | None:
         return "out_of_bounds"
     if any(config.color_obstacles[i].reward == "done" for i in facts.obstacles_hit):
         return "obstacle"
+    if facts.collision_ends:
+        return "collision"
     if facts.lap_finished:
         return "lap_finished"
     return None

@@ -163,6 +163,12 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     model = config.car.model or default_car_model(config.kind if config.tracks else "image")
     if config.car.actions == "discrete" and model != "dynamic":
         parser.problem(f"{at}car.actions", "discrete", "discrete actions need car.model: dynamic")
+    if config.tracks and config.kind in METRIC_KINDS and model == "kinematic":
+        allowed = "tracks in metres take car.model: kinematic_throttle or dynamic"
+        parser.problem(f"{at}car.model", model, allowed)
+    if config.tracks and config.kind not in METRIC_KINDS and model == "kinematic_throttle":
+        allowed = "car.model kinematic_throttle drives on centerline, cone_map and ros_map tracks"
+        parser.problem(f"{at}car.model", model, allowed)
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
@@ -188,8 +194,10 @@ def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -
 # Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
 # a small racing car's in metres.
 CAR_DEFAULTS = {
-    "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0},  # [px], [px], [px/s]
-    "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0},  # [m], [m], [m/s]
+    # [px], [px], [px/s], [px/u]
+    "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0},
+    # [m], [m], [m/s], [m/u]
+    "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0},
 }
 
 

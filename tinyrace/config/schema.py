@@ -251,12 +251,12 @@ class CarConfig:
     max_deceleration: float = knob(
         10.0, "kinematic_throttle: deceleration at full brake", "m/s^2", low=0, low_open=True
     )
-    pixels_per_unit: float = knob(
-        20.0,
-        "dynamic car on an image track: image pixels per CarRacing world unit "
-        "(on metric tracks a world unit is a metre)",
-        "px/u",
-        low=0.1,
+    pixels_per_unit: float | None = knob(
+        None,
+        "dynamic car: track units (image px, or m) per CarRacing world unit, which scales the "
+        "car (null: 20 px/u on image tracks, 1 m/u on metric tracks)",
+        "px/u or m/u",
+        low=0.001,
         high=1000,
     )
 
