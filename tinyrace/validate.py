@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
+from tinyrace.config import METRIC_KINDS, TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
 from tinyrace.errors import ConfigError
 
@@ -53,7 +53,7 @@ def describe(config: EnvConfig) -> str:
 
 def picture(target: str, seed: int) -> tuple[np.ndarray, str]:
     """(RGB picture, name) of a track; ``target`` 'procedural' means CarRacing's track."""
-    from tinyrace.render.track_picture import image_picture, procedural_picture
+    from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
 
     if target == "procedural":
         return procedural_picture(load_env_config().config, seed), f"procedural-seed{seed}"
@@ -63,4 +63,7 @@ def picture(target: str, seed: int) -> tuple[np.ndarray, str]:
     if loaded.config.kind == "procedural":
         return procedural_picture(loaded.config, seed), f"{name}-seed{seed}"
     course = build_course(loaded)
+    if loaded.config.kind in METRIC_KINDS:
+        prepared = course.prepared[0]
+        return metric_picture(prepared.track, prepared.texture), name
     return image_picture(loaded.config, course.tracks[0]), name

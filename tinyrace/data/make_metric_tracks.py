@@ -8,6 +8,7 @@ Usage::
   format (``# x_m,y_m,w_tr_right_m,w_tr_left_m``), width varying from 9 to 13 m.
 - ``autocross/cones.csv``: a small Formula Student autocross as a cone map (blue
   left, yellow right, big orange at the start line, two small orange marks).
+- each folder's ``track.yaml``: the track in one line, and a car of the right size.
 - ``f1tenth_loop/``: a ROS map_server map (``map.yaml``, ``map.png`` at 0.05 m/px)
   of a walled 2.2 m corridor, with an F1TENTH raceline (``raceline.csv``).
 
@@ -163,11 +164,65 @@ def raceline_text(points: np.ndarray, lateral: float = 4.0, top: float = 6.0) ->
     return "\n".join(lines) + "\n"
 
 
+# -- track.yaml of each folder ------------------------------------------------------------------
+TRACK_YAMLS = {
+    "circuit": """\
+# A 2.2 km circuit in the racetrack-database centreline format (metres).
+# Point it at a real circuit instead: file: /path/to/racetrack-database/tracks/Monza.csv
+track: {type: centerline, file: circuit.csv, spacing: 2.0}   # spacing [m] of the tiles
+car:   # a kinematic car with throttle, in metres
+  model: kinematic_throttle
+  wheelbase: 2.5            # [m]
+  track_width: 1.6          # [m]
+  velocity: 30.0            # [m/s] top speed
+  max_acceleration: 6.0     # [m/s^2]
+  max_deceleration: 10.0    # [m/s^2]
+  max_steering_angle: 30.0  # [deg]
+sim: {step_limit: 6000}
+""",
+    "autocross": """\
+# A small Formula Student autocross from a cone map (blue left, yellow right, metres).
+track: {type: cone_map, file: cones.csv, spacing: 0.5, cone_hit_ends_episode: false}
+reward_design: {cone_penalty: 5.0}   # per cone knocked over
+car:   # about a Formula Student car
+  model: kinematic_throttle
+  wheelbase: 1.55           # [m]
+  track_width: 1.2          # [m]
+  velocity: 15.0            # [m/s] top speed
+  max_acceleration: 8.0     # [m/s^2]
+  max_deceleration: 12.0    # [m/s^2]
+  max_steering_angle: 30.0  # [deg]
+sim: {step_limit: 3000}
+""",
+    "f1tenth_loop": """\
+# An F1TENTH-style corridor: a ROS map_server map with a raceline (metres).
+track: {type: ros_map, file: map.yaml, waypoints: raceline.csv, wall_hit_ends_episode: false}
+reward_design: {wall_penalty: 1.0}   # per step touching a wall
+car:   # about an F1TENTH car
+  model: kinematic_throttle
+  wheelbase: 0.33           # [m]
+  track_width: 0.3          # [m]
+  velocity: 5.0             # [m/s] top speed
+  max_acceleration: 9.51    # [m/s^2]
+  max_deceleration: 13.26   # [m/s^2]
+  max_steering_angle: 24.0  # [deg]
+sim: {step_limit: 2000}
+""",
+}
+
+
+def track_yamls(out_dir: Path) -> None:
+    for folder, text in TRACK_YAMLS.items():
+        (out_dir / folder).mkdir(parents=True, exist_ok=True)
+        (out_dir / folder / "track.yaml").write_text(text)
+
+
 def main(out_dir: Path) -> None:
     """Write the three metric examples into ``out_dir``."""
     circuit_csv(out_dir)
     autocross_csv(out_dir)
     f1tenth_map(out_dir)
+    track_yamls(out_dir)
 
 
 if __name__ == "__main__":

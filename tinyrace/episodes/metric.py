@@ -147,7 +147,7 @@ class MetricEpisode:
         self.cte = abs(lateral)
         facts.cte = self.cte
         right, left = circuit.widths[index]
-        self.on_road = -right <= lateral <= left
+        self.on_road = bool(-right <= lateral <= left)
         if not self.on_road:
             return facts
         n = len(self.visited)

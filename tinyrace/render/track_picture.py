@@ -12,8 +12,10 @@ from gymnasium.utils import seeding
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.procedural import config_colors, draw_colors, track_params
 from tinyrace.render.procedural_ground import GroundPainter
+from tinyrace.render.texture import GroundTexture, transform_points
 from tinyrace.track.image import ImageTrack
 from tinyrace.track.procedural import generate_track
+from tinyrace.tracks.metric import MetricTrack
 
 MAX_SIDE = 1600  # [px] longest side of a picture
 SPAWN_COLOR = (255, 60, 60)  # RGB
@@ -68,6 +70,36 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
     if track.trajectory_mask is not None:
         entries.append((cte.trajectory_color, f"trajectory {cte.trajectory_color!r}"))
     entries.append((SPAWN_COLOR, "spawns (index, heading)"))
+    _legend(image, entries)
+    return image
+
+
+def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
+    """A track in metres, north up: the road or map, cones, the reference line, the start."""
+    x0, y0, x1, y1 = track.bounds
+    scale = MAX_SIDE / max(x1 - x0, y1 - y0)  # [px/m]
+    size = (max(round((x1 - x0) * scale), 1), max(round((y1 - y0) * scale), 1))
+    matrix = np.array([[scale, 0.0, -x0 * scale], [0.0, -scale, y1 * scale]])
+    image = texture.warp(matrix, size)
+    entries: list = [(None, f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m")]
+    if track.circuit is not None:
+        line = transform_points(matrix, np.vstack((track.centerline, track.centerline[:1])))
+        cv2.polylines(
+            image, [np.round(line * 16).astype(np.int32)], False, (255, 255, 255), 1, cv2.LINE_AA, 4
+        )
+        circuit = track.circuit
+        entries.append((None, f"{circuit.length:.0f} m, {len(circuit.tiles)} tiles"))
+        entries.append(((255, 255, 255), "reference line"))
+    else:
+        entries.append((None, "no reference line (no waypoints): no laps, no cte"))
+    if len(track.cones):
+        entries.append((None, f"{len(track.cones)} cones"))
+    if len(track.walls):
+        entries.append(((0, 0, 0), f"walls ({len(track.walls)} boxes)"))
+    x, y, heading = track.spawn
+    start = transform_points(matrix, np.array([x, y]))
+    _arrow(image, (start[0], start[1]), (math.cos(heading), -math.sin(heading)), 40)
+    entries.append((SPAWN_COLOR, "start, facing the direction of travel"))
     _legend(image, entries)
     return image
 
