@@ -42,7 +42,7 @@ class SimConfig:
 
     fps: float | None = knob(
         None,
-        "simulation steps per second; null: 50 on procedural tracks, 30 on image tracks",
+        "simulation steps per second; null: 30 on image tracks, 50 on the others",
         "Hz",
         low=1,
         high=1000,
@@ -133,8 +133,9 @@ def _ground_resolution() -> Any:
 
 @dataclass(frozen=True, kw_only=True)
 class CenterlineTrackConfig:
-    """A ``track`` of ``type: centerline``: a closed centreline with widths, in metres
-    (the racetrack-database CSV ``# x_m,y_m,w_tr_right_m,w_tr_left_m``)."""
+    """A ``track`` of ``type: centerline``: a racetrack-database centreline CSV, in metres.
+
+    Rows ``x_m,y_m,w_tr_right_m,w_tr_left_m`` of one closed loop in driving order."""
 
     type: Literal["centerline"] = knob("centerline", "track kind")
     file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
@@ -152,8 +153,9 @@ class CenterlineTrackConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class ConeMapTrackConfig:
-    """A ``track`` of ``type: cone_map``: a Formula Student Driverless simulator cone map CSV
-    (``tag,x,y,direction,x_variance,y_variance,covariance``, in metres)."""
+    """A ``track`` of ``type: cone_map``: a Formula Student Driverless cone map CSV, in metres.
+
+    Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right."""
 
     type: Literal["cone_map"] = knob("cone_map", "track kind")
     file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
@@ -178,8 +180,9 @@ class ConeMapTrackConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class RosMapTrackConfig:
-    """A ``track`` of ``type: ros_map``: a ROS map_server map (YAML + picture, as F1TENTH's),
-    with an optional raceline or waypoint CSV as the reference line."""
+    """A ``track`` of ``type: ros_map``: a ROS map_server map with a raceline, in metres.
+
+    The map YAML and its picture (F1TENTH's maps), and optionally a waypoint CSV."""
 
     type: Literal["ros_map"] = knob("ros_map", "track kind")
     file: str = knob(REQUIRED, "the map YAML, relative to the config's folder")
@@ -328,12 +331,16 @@ class RewardConfig:
     )
     cross_track_error: CrossTrackErrorConfig = knob(CrossTrackErrorConfig(), "image tracks")
     tile_progress: float | None = knob(
-        None, "procedural: reward for visiting every tile once (null: 1000)", "per lap"
+        None,
+        "tracks with tiles: reward for visiting every tile once (null: 1000; 0 on image tracks)",
+        "per lap",
     )
     time_penalty: float | None = knob(
-        None, "subtracted every step (null: 0.1 procedural, 0 image)", "per step"
+        None, "subtracted every step (null: 0 on image tracks, 0.1 on the others)", "per step"
     )
-    off_road_penalty: float = knob(0.0, "procedural: subtracted per wheel on grass", "per step")
+    off_road_penalty: float = knob(
+        0.0, "dynamic car on tiled tracks: subtracted per wheel on grass", "per step"
+    )
     cone_penalty: float = knob(5.0, "cone maps: subtracted per cone knocked over", "per cone")
     wall_penalty: float = knob(
         1.0, "ROS maps: subtracted per step the car touches a wall", "per step"
@@ -341,7 +348,7 @@ class RewardConfig:
     out_of_bounds_penalty: float | None = knob(
         None,
         "subtracted when the car leaves the playfield or image; ends the episode "
-        "(null: 100 procedural, 0 image)",
+        "(null: 0 on image tracks, 100 on the others)",
     )
 
 
