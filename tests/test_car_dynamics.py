@@ -14,7 +14,7 @@ import pymunk
 import pytest
 
 import tinyrace  # noqa: F401
-from tinyrace.physics.dynamic_car import DynamicCar
+from tinyrace.cars.dynamic import DynamicCar
 
 GAS = np.array([0.0, 1.0, 0.0], np.float32)
 BRAKE = np.array([0.0, 0.0, 1.0], np.float32)

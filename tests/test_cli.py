@@ -19,14 +19,14 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_run_a_config(tmp_path: Path, capsys):
     config = CONFIGS_DIR / "carolo_cup.yaml"
-    code = cli.main(
-        ["run", str(config), "--episodes", "1", "--no-video", "--quiet", "--out", str(tmp_path)]
-    )
+    code = cli.main(["run", str(config), "--episodes", "1", "--no-video", "--out", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 0
     assert "return" in out and "|cte|" in out and "episode_return" in out  # table and summary
     (run_dir,) = tmp_path.iterdir()
-    assert {p.name for p in run_dir.iterdir()} == {"results.json", "episodes.csv"}
+    names = {p.name for p in run_dir.iterdir()}
+    assert {"results.json", "episodes.csv", "report.html", "episode_000_trace.csv"} <= names
+    assert not any(name.endswith((".mp4", ".webm")) for name in names)  # --no-video
 
 
 def test_run_without_arguments_finds_the_default_experiment(monkeypatch, tmp_path: Path):

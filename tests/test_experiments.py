@@ -8,12 +8,12 @@ import dataclasses
 import json
 from pathlib import Path
 
-import cv2
+import imageio_ffmpeg
 import pytest
 
 from tinyrace.errors import ConfigError
-from tinyrace.examples import CONFIGS_DIR
-from tinyrace.experiment import experiment_from_dict, load_experiment, run_experiment
+from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
+from tinyrace.experiment import experiment_from_dict, load_experiment, run_experiment, video
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((CONFIGS_DIR).glob("*.yaml"))
@@ -60,6 +60,13 @@ def test_every_config_runs_a_few_steps(path: Path, tmp_path: Path):
     assert result.run_dir.name.startswith(path.stem + "-")
 
 
+def decoded(path: Path) -> tuple[dict, list]:
+    """The metadata (codec, pixel format, size) and every frame of a video, by ffmpeg."""
+    frames = imageio_ffmpeg.read_frames(str(path))
+    meta = next(frames)
+    return meta, list(frames)
+
+
 def test_results_files_and_videos(tmp_path: Path):
     experiment = shortened(
         CONFIGS_DIR / "formula_student.yaml", episodes=2, max_steps=40, video=True
@@ -70,16 +77,51 @@ def test_results_files_and_videos(tmp_path: Path):
     assert all(int(r["steps"]) == 40 and r["end"] == "max_steps" for r in rows)
     summary = json.loads((result.run_dir / "results.json").read_text())["summary"]
     assert {"mean", "std"} <= set(summary["episode_return"])
-    video = cv2.VideoCapture(result.episodes[0].video)  # only the first episode has a video
-    assert video.isOpened() and int(video.get(cv2.CAP_PROP_FRAME_COUNT)) == 40
+    assert result.episodes[0].video == "episode_000.mp4"  # only the first episode has a video
     assert result.episodes[1].video is None
+    meta, frames = decoded(result.run_dir / "episode_000.mp4")
+    assert meta["codec"] == "h264" and meta["pix_fmt"].startswith("yuv420p")
+    assert len(frames) == 41  # the reset and every step, the last one included
+
+
+def test_videos_are_faststart_h264(tmp_path: Path):
+    experiment = shortened(CONFIGS_DIR / "carracing.yaml", max_steps=12, video=True)
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    data = (result.run_dir / "episode_000.mp4").read_bytes()
+    assert data.index(b"moov") < data.index(b"mdat")  # the index first: plays while loading
+    meta, frames = decoded(result.run_dir / "episode_000.mp4")
+    assert meta["codec"] == "h264" and meta["size"] == (600, 400) and len(frames) == 13
+
+
+def test_odd_frame_sizes_are_padded_not_cropped(tmp_path: Path):
+    raw = {
+        "env": {
+            "environment": str(TRACKS_DIR / "segmented"),
+            "cameras": [{"id": "odd", "resolution": [61, 81], "roi": [360, 480]}],
+        },
+        "episodes": 1,
+        "max_steps": 3,
+        "output": {"view": "odd"},
+    }
+    result = run_experiment(experiment_from_dict(raw, "odd.yaml", ROOT), tmp_path, False)
+    meta, frames = decoded(result.run_dir / "episode_000.mp4")
+    assert meta["size"] == (82, 62) and len(frames) == 4
+
+
+def test_without_imageio_ffmpeg_videos_are_vp9_webm(tmp_path: Path, monkeypatch):
+    monkeypatch.setattr(video, "h264_available", lambda: False)
+    experiment = shortened(CONFIGS_DIR / "segmented.yaml", max_steps=7, video=True)
+    result = run_experiment(experiment, tmp_path, show_progress=False)
+    assert result.episodes[0].video == "episode_000.webm"
+    meta, frames = decoded(result.run_dir / "episode_000.webm")
+    assert meta["codec"] == "vp9" and meta["size"] == (160, 120) and len(frames) == 8
 
 
 def test_a_camera_view_video_has_the_camera_size(tmp_path: Path):
     experiment = shortened(CONFIGS_DIR / "segmented.yaml", max_steps=5, video=True)
     result = run_experiment(experiment, tmp_path, show_progress=False)
-    video = cv2.VideoCapture(result.episodes[0].video)
-    assert (video.get(cv2.CAP_PROP_FRAME_WIDTH), video.get(cv2.CAP_PROP_FRAME_HEIGHT)) == (160, 120)
+    meta, frames = decoded(result.run_dir / result.episodes[0].video)
+    assert meta["size"] == (160, 120) and len(frames) == 6
 
 
 def test_the_centreline_driver_finishes_carracing_laps(tmp_path: Path):

@@ -31,12 +31,12 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
 
+from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.schema import EnvConfig
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 from tinyrace.experiment import experiment_from_dict, load_experiment
-from tinyrace.experiment.schema import ExperimentConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE_NAMES = ("segmented", "formula_student", "carolo_cup")

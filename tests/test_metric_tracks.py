@@ -212,10 +212,12 @@ def test_the_throttle_car_accelerates_brakes_caps_speed_and_turns_right_on_posit
 
 @pytest.mark.parametrize("kind", sorted(FOLDERS))
 def test_pictures_show_the_track_and_the_car(kind):
-    env = make(kind, render_mode="rgb_array")
+    env = make(kind, render_mode="rgb_array", cameras=[])
     observation, _ = env.reset(seed=0)
     assert observation.shape == (96, 96, 3)
     assert (observation == (204, 0, 0)).all(axis=2).any()  # the car in the default view
+    front = make(kind).reset(seed=0)[0]["front"]  # the example's camera: the road ahead
+    assert front.shape == (96, 128, 3) and (front == (102, 102, 102)).all(axis=2).mean() > 0.2
     frame = env.render()
     assert frame.ndim == 3 and max(frame.shape[:2]) == 800
     assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 3

@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 from synthetic import BGR, blank, color_mask, make_env, straight, write_track
 
 from tinyrace.config import Color
-from tinyrace.track.image import ImageTrack, touched_obstacles
-from tinyrace.track.nearest import NearestPoint
+from tinyrace.tracks.image import ImageTrack, touched_obstacles
+from tinyrace.tracks.nearest import NearestPoint
 
 WHEELBASE, TRACK_WIDTH = 100, 60  # [px]
 RED_BGR = [0, 0, 255]

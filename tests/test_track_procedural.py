@@ -9,8 +9,8 @@ import inspect
 import numpy as np
 import pytest
 
-from tinyrace.track import procedural
-from tinyrace.track.procedural import ProceduralTrack, ProceduralTrackParams, generate_track
+from tinyrace.tracks import procedural
+from tinyrace.tracks.procedural import ProceduralTrack, ProceduralTrackParams, generate_track
 
 PARITY_SEEDS = range(100)
 RETRY_SEED = 36  # the one seed in 0..99 whose first attempt fails to close in CarRacing-v3

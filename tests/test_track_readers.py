@@ -306,4 +306,3 @@ def test_the_examples_read_without_problems(name):
     else:
         loop = read_loop(path, "t", "k")
         assert 2000 < polyline.perimeter(loop.points) < 2500
-

@@ -3,50 +3,128 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import json
 import os
 import sys
 from pathlib import Path
 
 from tinyrace.errors import ConfigError
+from tinyrace.examples import find_example, find_experiment
+
+
+class UsageError(Exception):
+    """A bad command line: one line on stderr, exit 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``tinyrace: error: ...``), exit 2."""
+
+    def error(self, message: str):  # type: ignore[override]
+        raise UsageError(message)
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit codes: 0 done; 1 problems found (validate) or an internal error; 2 a user error
+    (bad argument, configuration, driver); 130 / 143 a run stopped by SIGINT / SIGTERM."""
     parser = _parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except UsageError as exc:
+        return _user_error(str(exc))
     if args.command is None:
         parser.print_help()
         return 2
     try:
         return args.handler(args)
-    except ConfigError as exc:
-        print(f"tinyrace: {exc}", file=sys.stderr)
-        return 1
+    except (ConfigError, UsageError) as exc:
+        if args.debug:
+            raise
+        return _user_error(_one_line(exc))
     except KeyboardInterrupt:
-        print("\ntinyrace: interrupted", file=sys.stderr)
+        print("tinyrace: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:
+        if args.debug:
+            raise
+        print(
+            f"tinyrace: internal error: {type(exc).__name__}: {exc} (--debug shows where)",
+            file=sys.stderr,
+        )
+        return 1
+
+
+def _user_error(message: str) -> int:
+    print(f"tinyrace: error: {message}", file=sys.stderr)
+    return 2
+
+
+def _one_line(exc: Exception) -> str:
+    if isinstance(exc, ConfigError):
+        problems = [str(p) for p in exc.problems]
+        head = "" if len(problems) == 1 else f"{len(problems)} problems: "
+        return head + "; ".join(problems)
+    return " ".join(str(exc).split())
+
+
+def _count(low: int, what: str):
+    """An argparse type: a whole number >= ``low``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or value < low:
+            raise argparse.ArgumentTypeError(f"got {text!r}; expected {what}")
+        return value
+
+    return parse
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="tinyrace", description=__doc__)
+    from tinyrace import __version__
+
+    parser = _Parser(prog="tinyrace", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"tinyrace {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     commands = parser.add_subparsers(dest="command")
     run = commands.add_parser(
         "run", help="run an experiment file (default: configs/carracing.yaml)"
     )
-    run.add_argument("experiment", nargs="?", help="experiment YAML")
-    run.add_argument("--out", help="directory for run directories (overrides output.dir)")
-    run.add_argument("--episodes", type=int, help="override the number of episodes")
+    run.add_argument("experiment", nargs="?", help="experiment YAML or a shipped config's name")
+    run.add_argument(
+        "-o", "--out", help="folder for run folders (overrides output.dir; default: ./runs)"
+    )
+    run.add_argument(
+        "--episodes", type=_count(1, "a whole number >= 1"), help="override the episodes"
+    )
+    run.add_argument(
+        "--seed", type=_count(0, "a whole number >= 0"), help="override the first seed"
+    )
     run.add_argument("--no-video", action="store_true", help="write no videos")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument("--json", action="store_true", help="print the results summary as JSON")
     run.set_defaults(handler=_run)
+    report = commands.add_parser("report", help="rebuild report.html of a run folder")
+    report.add_argument("run_dir", help="a run folder (holding results.json and episodes.csv)")
+    report.set_defaults(handler=_report)
     validate = commands.add_parser(
         "validate", help="check a track folder, track.yaml or experiment"
     )
-    validate.add_argument("path")
+    validate.add_argument("path", help="a path, or a shipped config's or track's name")
     validate.set_defaults(handler=_validate)
     show = commands.add_parser("show", help="save a picture of a track")
-    show.add_argument("path", help="track folder, track.yaml, experiment, or 'procedural'")
+    show.add_argument(
+        "path", help="track folder, track.yaml, experiment, a shipped name, or 'procedural'"
+    )
     show.add_argument("--seed", type=int, default=0, help="procedural tracks: which seed's track")
-    show.add_argument("-o", "--output", help="PNG file (default: <name>.png)")
+    show.add_argument("-o", "--output", help="PNG file (default: <name>.png in this folder)")
+    show.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an existing file or write into a track folder (never over an input)",
+    )
     show.set_defaults(handler=_show)
     play = commands.add_parser("play", help="drive with the keyboard in a window")
     play.add_argument(
@@ -54,7 +132,21 @@ def _parser() -> argparse.ArgumentParser:
     )
     play.add_argument("--seed", type=int, default=None)
     play.set_defaults(handler=_play)
+    _examples_parser(commands)
+    for command in commands.choices.values():  # also after the command: tinyrace run --debug
+        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS)
     return parser
+
+
+def _examples_parser(commands) -> None:
+    examples = commands.add_parser(
+        "examples", help="list the shipped tracks and configs; copy one out to edit"
+    )
+    examples.set_defaults(handler=_examples)
+    actions = examples.add_subparsers(dest="action")
+    copy = actions.add_parser("copy", help="copy a shipped track and/or config (never overwrites)")
+    copy.add_argument("name", help="a name from `tinyrace examples`")
+    copy.add_argument("dir", nargs="?", default=".", help="where to copy it (default: here)")
 
 
 # -- run ---------------------------------------------------------------------------------------
@@ -66,36 +158,89 @@ def default_experiment() -> Path:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import dataclasses
+    from tinyrace.experiment import load_experiment, print_report, run_experiment
 
-    from tinyrace.experiment import (
-        experiment_from_dict,
-        load_experiment,
-        print_report,
-        run_experiment,
+    path = find_experiment(args.experiment) if args.experiment else default_experiment()
+    experiment = _overridden(load_experiment(path), args)
+    out = _out_folder(args.out)
+    config = experiment.config
+    if not (args.quiet or args.json):
+        what = f"{config.episodes} episodes, driver {config.driver}"
+        print(f"tinyrace: running {experiment.source} ({what})")
+    result = run_experiment(experiment, out, show_progress=not args.quiet)
+    if args.json:
+        print(json.dumps(_json_summary(result), indent=2))
+    elif not args.quiet:
+        print_report(result)
+    if result.interrupted is None:
+        return 0
+    done = len(result.episodes)
+    print(
+        f"tinyrace: interrupted; {done} finished episode(s) written to {result.run_dir}",
+        file=sys.stderr,
     )
+    return 128 + result.interrupted
 
-    path = Path(args.experiment) if args.experiment else default_experiment()
-    if path is None:
-        print(
-            "tinyrace: no configs/carracing.yaml here; running the built-in CarRacing experiment",
-            file=sys.stderr,
-        )
-        experiment = experiment_from_dict({}, "carracing", Path.cwd())
-    else:
-        experiment = load_experiment(path)
+
+def _overridden(experiment, args: argparse.Namespace):
+    """The experiment with the command line's --episodes, --seed and --no-video."""
     config = experiment.config
     if args.episodes is not None:
-        config = dataclasses.replace(config, episodes=max(1, args.episodes))
+        config = dataclasses.replace(config, episodes=args.episodes)
+    if args.seed is not None:
+        config = dataclasses.replace(config, seed=args.seed)
     if args.no_video:
         config = dataclasses.replace(config, output=dataclasses.replace(config.output, video=False))
-    experiment = dataclasses.replace(experiment, config=config)
-    what = f"{config.episodes} episodes, driver {config.driver}"
-    print(f"tinyrace: running {experiment.source} ({what})")
-    result = run_experiment(
-        experiment, Path(args.out) if args.out else None, show_progress=not args.quiet
-    )
-    print_report(result)
+    return dataclasses.replace(experiment, config=config)
+
+
+def _out_folder(out: str | None) -> Path | None:
+    if out is None:
+        return None
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise UsageError(f"argument -o/--out: {out!r} is a file; expected a folder")
+    return path
+
+
+def _json_summary(result) -> dict:
+    from dataclasses import asdict
+
+    return {
+        "run_dir": str(result.run_dir),
+        "interrupted": result.interrupted is not None,
+        "episodes": [asdict(e) for e in result.episodes],
+        "summary": result.summary,
+    }
+
+
+# -- report ------------------------------------------------------------------------------------
+def _report(args: argparse.Namespace) -> int:
+    from tinyrace.experiment import rebuild_report
+
+    run_dir = Path(args.run_dir)
+    if not ((run_dir / "results.json").is_file() and (run_dir / "episodes.csv").is_file()):
+        raise UsageError(
+            f"argument run_dir: {args.run_dir!r} is no run folder "
+            "(expected a folder holding results.json and episodes.csv)"
+        )
+    print(f"wrote {rebuild_report(run_dir)}")
+    return 0
+
+
+# -- examples ----------------------------------------------------------------------------------
+def _examples(args: argparse.Namespace) -> int:
+    from tinyrace.examples import copy_example, examples
+
+    if args.action == "copy":
+        for target in copy_example(args.name, Path(args.dir)):
+            print(f"copied {args.name} to {target}")
+        return 0
+    shown = examples()
+    width = max(len(e.name) for e in shown)
+    for example in shown:
+        print(f"{example.kind:<6}  {example.name:<{width}}  {example.summary}")
+    print("run one: tinyrace run NAME; copy one out to edit: tinyrace examples copy NAME [DIR]")
     return 0
 
 
@@ -103,7 +248,7 @@ def _run(args: argparse.Namespace) -> int:
 def _validate(args: argparse.Namespace) -> int:
     from tinyrace.validate import validate_path
 
-    problems, summary = validate_path(Path(args.path))
+    problems, summary = validate_path(find_example(args.path))
     for problem in problems:
         print(problem)
     if problems:
@@ -117,10 +262,13 @@ def _validate(args: argparse.Namespace) -> int:
 def _show(args: argparse.Namespace) -> int:
     import cv2
 
-    from tinyrace.validate import picture
+    from tinyrace.validate import check_output, picture
 
-    image, name = picture(args.path, args.seed)
-    output = Path(args.output or f"{name}.png")
+    target = args.path if args.path == "procedural" else str(find_example(args.path))
+    shown = picture(target, args.seed)
+    image = shown.image
+    output = Path(args.output or f"{shown.name}.png")
+    check_output(output, shown.inputs, args.force)
     output.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
         print(f"tinyrace: could not write {output} (use a .png path)", file=sys.stderr)
@@ -137,7 +285,7 @@ def _play(args: argparse.Namespace) -> int:
         return 2
     from tinyrace.play import play
 
-    return play(args.path, args.seed)
+    return play(args.path and str(find_example(args.path)), args.seed)
 
 
 def _play_missing() -> str | None:

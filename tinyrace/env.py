@@ -11,29 +11,16 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from tinyrace.actions import ActionSpec
 from tinyrace.config import EnvConfig, load_env_config
-from tinyrace.episodes.image import ImageCourse
-from tinyrace.episodes.metric import MetricCourse
-from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralCourse
+from tinyrace.episodes.procedural import OBSERVATION_SIZE
+from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
-COURSES = {  # by track type
-    "procedural": ProceduralCourse,
-    "image": ImageCourse,
-    "centerline": MetricCourse,
-    "cone_map": MetricCourse,
-    "ros_map": MetricCourse,
-}
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
-_NO_LAP = (
-    "expected knobs that close a lap: a smaller radius, a longer detail_step "
-    "or a larger turn_rate (the track generator found no closed lap)"
-)
 
 
 class TinyRaceEnv(gym.Env):
@@ -51,7 +38,8 @@ class TinyRaceEnv(gym.Env):
 
     ## Observation Space
     With no cameras configured on a procedural track: CarRacing's 96x96x3 RGB
-    view. Otherwise a Dict of uint8 RGB images keyed by camera id.
+    view. Otherwise a Dict of uint8 RGB images keyed by camera id, or with
+    ``observation: box`` and one camera, that camera's image as a plain Box.
 
     ## Rewards
     Named terms from ``reward_design`` (see ``tinyrace.rewards``), reported in
@@ -84,15 +72,18 @@ class TinyRaceEnv(gym.Env):
                     f"expected one of: {', '.join(RENDER_MODES)} or None",
                 )
             )
-        self.config: EnvConfig = loaded.config
+        parts = prepare(loaded)
+        self.config: EnvConfig = parts.config
         self.render_mode = render_mode
         self.verbose = verbose
-        self.course = COURSES[self.config.kind](self.config, loaded.base_dir, loaded.source)
-        self._source = loaded.source  # for errors found at reset
+        self.track_source = parts.source
+        self.course = parts.course
         self.dt = 1.0 / self.config.sim.fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
-        self._actions = ActionSpec.for_car(self.config.car.model, self.config.car.actions)
+        self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
+        box = self.config.observation == "box" and len(self.config.cameras) == 1
+        self._box_camera = self.config.cameras[0].id if box else None
         self.observation_space = self._observation_space()
         self._shaping = cte_shaping or shaping_from_config(self.config.reward_design)
         self.episode = None
@@ -102,27 +93,22 @@ class TinyRaceEnv(gym.Env):
         if not self.config.cameras:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
-        return spaces.Dict(
-            {c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras}
-        )
+        images = {
+            c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras
+        }
+        if self._box_camera is not None:  # ``observation: box``: the one camera's image alone
+            return images[self._box_camera]
+        return spaces.Dict(images)
 
     # -- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         options = _check_options(options)
-        try:
-            self.episode = self.course.new_episode(self.np_random, options)
-        except RuntimeError as exc:  # the procedural generator closed no lap with these knobs
-            if self.config.kind != "procedural":
-                raise
-            t = self.config.tracks[0]
-            knobs = {"radius": t.radius, "detail_step": t.detail_step, "turn_rate": t.turn_rate}
-            raise ConfigError(Problem(self._source, "tracks[0]", knobs, _NO_LAP)) from exc
-        if self.verbose and self.config.kind == "procedural":  # as CarRacing-v3 reports it
-            track = self.episode.track
-            print(
-                f"Track generation: {track.attempts} attempt(s) -> {len(track.tiles)}-tiles track"
-            )
+        draw = self.track_source.draw(self.np_random, options)
+        self.episode = self.course.new_episode(draw)
+        if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
+            attempts = getattr(draw.track.detail, "attempts", 1)
+            print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
@@ -166,7 +152,8 @@ class TinyRaceEnv(gym.Env):
         return observation, reward, reason is not None, truncated, info
 
     def _observe(self):
-        return self.episode.observe(self.t, self.score)
+        observation = self.episode.observe(self.t, self.score)
+        return observation if self._box_camera is None else observation[self._box_camera]
 
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()

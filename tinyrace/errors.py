@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import reprlib
 from dataclasses import dataclass
 
 
@@ -19,8 +20,20 @@ class Problem:
         return f"{where}: got {_show(self.value)}; {self.allowed}"
 
 
+_SHORT = reprlib.Repr()  # containers are cut before they are turned into text
+_SHORT.maxstring, _SHORT.maxother, _SHORT.maxlong = 80, 80, 40
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 8
+_SHORT.maxlevel = 4
+
+
 def _show(value: object) -> str:
-    text = repr(value)
+    """A value as a short text: a huge list, string or number is never turned whole into text."""
+    if isinstance(value, int) and value.bit_length() > 256:  # repr of huge ints is slow or fails
+        return f"<an integer of {value.bit_length()} bits>"
+    try:
+        text = _SHORT.repr(value)
+    except Exception:  # a user object whose repr fails
+        text = f"<{type(value).__name__}>"
     return text if len(text) <= 80 else text[:77] + "..."
 
 

@@ -1,10 +1,143 @@
-"""The example tracks and experiment configs shipped inside the package."""
+"""The example tracks and experiment configs shipped inside the package, found by bare name.
+
+A value that names an existing file or folder is always that path; otherwise a bare
+name (``formula_student``) stands for the shipped track folder or experiment file of
+that name, from any working folder. An unknown name raises a ConfigError that lists
+the known names.
+"""
 
 from __future__ import annotations
 
+import shutil
+from dataclasses import dataclass
 from pathlib import Path
+
+from tinyrace.errors import ConfigError, Problem
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 TRACKS_DIR = DATA_DIR / "tracks"  # one tinycarlo track folder per example
 CONFIGS_DIR = DATA_DIR / "configs"  # one experiment file per example
 DEFAULT_EXPERIMENT = CONFIGS_DIR / "carracing.yaml"
+TRACK_FILE = "track.yaml"
+CONFIG_SUFFIX = ".yaml"
+
+
+@dataclass(frozen=True)
+class Example:
+    """One shipped example: a track folder or an experiment file."""
+
+    kind: str  # "track" or "config"
+    name: str  # the bare name it is found by
+    path: Path  # the folder (track) or the YAML file (config)
+
+    @property
+    def summary(self) -> str:
+        """The first sentence of its YAML file's opening comment (what the example shows)."""
+        text = (self.path / TRACK_FILE if self.kind == "track" else self.path).read_text("utf-8")
+        comment = []
+        for line in text.splitlines():
+            if not line.startswith("#"):
+                break
+            comment.append(line.lstrip("#").strip())
+        sentence = " ".join(comment).split(". ")[0]
+        return sentence if sentence.endswith(".") or not sentence else sentence + "."
+
+
+def track_names() -> list[str]:
+    """The bare names of the shipped track folders, sorted."""
+    return sorted(p.parent.name for p in TRACKS_DIR.glob(f"*/{TRACK_FILE}"))
+
+
+def config_names() -> list[str]:
+    """The bare names of the shipped experiment files, sorted."""
+    return sorted(p.stem for p in CONFIGS_DIR.glob(f"*{CONFIG_SUFFIX}"))
+
+
+def examples() -> list[Example]:
+    """Every shipped example: the tracks, then the configs."""
+    tracks = [Example("track", n, TRACKS_DIR / n) for n in track_names()]
+    configs = [Example("config", n, CONFIGS_DIR / f"{n}{CONFIG_SUFFIX}") for n in config_names()]
+    return tracks + configs
+
+
+def is_bare_name(value: object) -> bool:
+    """A plain name without folders or a suffix, as the shipped examples are named."""
+    return isinstance(value, str) and bool(value) and Path(value).name == value and "." not in value
+
+
+def shipped_track(name: object, source: str = "<kwargs>", key: str = "environment") -> Path:
+    """The shipped track folder called ``name``; ConfigError listing the known tracks if none."""
+    if is_bare_name(name) and name in track_names():
+        return TRACKS_DIR / str(name)
+    allowed = (
+        f"expected a track folder holding {TRACK_FILE} "
+        f"or a shipped track: {', '.join(track_names())}"
+    )
+    raise ConfigError(Problem(source, key, str(name), allowed))
+
+
+def find_track(value: str | Path) -> Path:
+    """The path as given if it exists or is no bare name, else the shipped track of that name."""
+    if _exists(Path(value)) or not is_bare_name(value):
+        return Path(value)
+    return shipped_track(value)
+
+
+def find_experiment(value: str | Path, key: str = "experiment") -> Path:
+    """An experiment file as given if it exists, else the shipped config of that name."""
+    path = Path(value)
+    if _exists(path) or not is_bare_name(str(value)):
+        return path  # the loader reports a missing file in its own words
+    if str(value) in config_names():
+        return CONFIGS_DIR / f"{value}{CONFIG_SUFFIX}"
+    allowed = f"expected a YAML file or a shipped config: {', '.join(config_names())}"
+    raise ConfigError(Problem("<command line>", key, str(value), allowed))
+
+
+def find_example(value: str | Path, key: str = "path") -> Path:
+    """For validate/show/play: a path if it exists, else a shipped config, else a shipped track."""
+    path = Path(value)
+    if _exists(path) or not is_bare_name(str(value)):
+        return path
+    if str(value) in config_names():
+        return CONFIGS_DIR / f"{value}{CONFIG_SUFFIX}"
+    if str(value) in track_names():
+        return TRACKS_DIR / str(value)
+    allowed = (
+        f"expected a path, a shipped config ({', '.join(config_names())}) "
+        f"or a shipped track ({', '.join(track_names())})"
+    )
+    raise ConfigError(Problem("<command line>", key, str(value), allowed))
+
+
+def copy_example(name: str, folder: Path) -> list[Path]:
+    """Copy every shipped example called ``name`` (track folder and/or config) into ``folder``.
+
+    Refuses, copying nothing, when a target already exists. A copied config keeps its
+    bare ``environment:`` name, which now finds the copied track folder next to it.
+    """
+    chosen = [e for e in examples() if e.name == name]
+    if not chosen:
+        names = sorted({e.name for e in examples()})
+        raise ConfigError(
+            Problem("<command line>", "name", name, f"expected one of: {', '.join(names)}")
+        )
+    targets = [(e, folder / e.path.name) for e in chosen]
+    for _, target in targets:
+        if _exists(target):
+            allowed = "a path that does not exist yet (nothing is overwritten)"
+            raise ConfigError(Problem("<command line>", "DIR", str(target), allowed))
+    folder.mkdir(parents=True, exist_ok=True)
+    for example, target in targets:
+        if example.kind == "track":
+            shutil.copytree(example.path, target)
+        else:
+            shutil.copyfile(example.path, target)
+    return [target for _, target in targets]
+
+
+def _exists(path: Path) -> bool:
+    try:
+        return path.exists()
+    except (OSError, ValueError):  # a name the OS refuses (too long, NUL byte)
+        return False

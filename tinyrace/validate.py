@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from tinyrace.config import METRIC_KINDS, TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
-from tinyrace.errors import ConfigError
+from tinyrace.episodes.setup import Parts, prepare
+from tinyrace.errors import ConfigError, Problem
+
+COMMAND_LINE = "<command line>"  # the source named by errors in command-line arguments
 
 
 def load_any(path: Path) -> LoadedConfig:
@@ -26,21 +30,18 @@ def load_any(path: Path) -> LoadedConfig:
     return load_env_config(config=path)
 
 
-def build_course(loaded: LoadedConfig):
-    """Load everything the env would load at construction (images included)."""
-    from tinyrace.env import COURSES
-
-    return COURSES[loaded.config.kind](loaded.config, loaded.base_dir, loaded.source)
+def build_course(loaded: LoadedConfig) -> Parts:
+    """Load everything the env would load at construction (images included), as it does."""
+    return prepare(loaded)
 
 
 def validate_path(path: Path) -> tuple[list[str], str]:
     """Every problem found (as lines), or none and a one-line summary."""
     try:
-        loaded = load_any(path)
-        build_course(loaded)
+        parts = build_course(load_any(path))
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
-    return [], describe(loaded.config)
+    return [], describe(parts.config)
 
 
 def describe(config: EnvConfig) -> str:
@@ -51,19 +52,67 @@ def describe(config: EnvConfig) -> str:
     )
 
 
-def picture(target: str, seed: int) -> tuple[np.ndarray, str]:
-    """(RGB picture, name) of a track; ``target`` 'procedural' means CarRacing's track."""
+@dataclass(frozen=True)
+class Picture:
+    """A track's picture, the name to save it under, and the files it was made from."""
+
+    image: np.ndarray  # (H, W, 3) uint8 RGB
+    name: str
+    inputs: tuple[Path, ...]  # resolved paths of every file read: never to be written over
+
+
+def picture(target: str, seed: int) -> Picture:
+    """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
 
     if target == "procedural":
-        return procedural_picture(load_env_config().config, seed), f"procedural-seed{seed}"
+        image = procedural_picture(load_env_config().config, seed)
+        return Picture(image, f"procedural-seed{seed}", ())
     path = Path(target)
     loaded = load_any(path)
     name = (path if path.is_dir() or path.name != TRACK_FILE else path.parent).stem
+    inputs = input_files(path, loaded)
     if loaded.config.kind == "procedural":
-        return procedural_picture(loaded.config, seed), f"{name}-seed{seed}"
-    course = build_course(loaded)
+        return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
+    parts = build_course(loaded)
     if loaded.config.kind in METRIC_KINDS:
-        prepared = course.prepared[0]
-        return metric_picture(prepared.track, prepared.texture), name
-    return image_picture(loaded.config, course.tracks[0]), name
+        prepared = parts.course.prepared[0]
+        return Picture(metric_picture(prepared.track, prepared.texture), name, inputs)
+    return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
+
+
+def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:
+    """Every file a config was read from: the YAML files and the track images."""
+    files = [path / TRACK_FILE if path.is_dir() else path, Path(loaded.source)]
+    for track in loaded.config.tracks:
+        for key in ("image", "file", "waypoints"):  # picture and metric track files
+            name = getattr(track, key, None)
+            if isinstance(name, str):
+                files.append(loaded.base_dir / name)
+    return tuple(dict.fromkeys(f.resolve() for f in files))
+
+
+def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
+    """Refuse to write where the user's files are.
+
+    Never over a file the command read (even with ``force``); without ``force``, never over
+    an existing file and never into a track folder (one holding a track.yaml).
+    """
+    where = "-o/--output"
+    resolved = output.resolve()
+    if resolved in inputs:
+        allowed = "a path that is not one of the files this command reads: choose another -o"
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
+    if resolved.is_dir():
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), "a file path, not a folder"))
+    if force:
+        return
+    if resolved.exists() or resolved.is_symlink():
+        allowed = "a path that does not exist yet (or --force to replace the file)"
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
+    if (resolved.parent / TRACK_FILE).exists():
+        allowed = (
+            f"a path outside a track folder ({resolved.parent} holds {TRACK_FILE}): "
+            "give -o elsewhere, or --force"
+        )
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))

@@ -37,13 +37,14 @@ STREAMS = ("observations", "rewards", "terminated", "truncated", "infos", "frame
 
 
 def _config_env(path: Path) -> Callable[[], gym.Env]:
-    """The env of an experiment config: its ``env`` section, the track folder made absolute."""
+    """The env of an experiment config: its ``env`` section, a relative track folder resolved."""
 
     def make() -> gym.Env:
         sections = dict((yaml.safe_load(path.read_text()) or {}).get("env") or {})
         folder = sections.pop("environment", None)
-        if folder is not None:
-            sections["environment"] = str((path.parent / folder).resolve())
+        if folder is not None:  # a folder relative to the config, or a shipped track's name
+            relative = path.parent / folder
+            sections["environment"] = str(relative.resolve()) if relative.exists() else folder
         return gym.make("tinyrace/TinyRace-v0", render_mode="rgb_array", **sections)
 
     return make

@@ -13,44 +13,14 @@ How to add a car model:
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
+
+from tinyrace.world.snapshot import CarState, Point, Pose, WheelState
 
 if TYPE_CHECKING:
     import pymunk
 
-Point = tuple[float, float]  # [track units]
-Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
-
-
-@dataclass(frozen=True)
-class WheelState:
-    """One wheel of a car that models its wheels."""
-
-    omega: float  # [rad/s] spin
-    steer: float  # [rad] steering angle, + turns toward growing heading
-    radius: float  # [track units]
-
-
-@dataclass(frozen=True)
-class CarState:
-    """A copy of one car's state: what sensors and pictures read, never the live body."""
-
-    model: str  # the car model's registry name
-    pose: Pose  # the car's reference point and heading (see ``Car.pose``)
-    velocity: Point  # [track units/s] in the track frame
-    yaw_rate: float  # [rad/s] d(heading)/dt
-    steer: float  # [rad] front-wheel angle, + turns toward growing heading
-    front_axle: Point  # middle of the front axle (where cameras are mounted)
-    rear_axle: Point  # middle of the rear axle
-    footprint: tuple[float, float]  # (length rear to front axle, width) [track units]
-    wheels: tuple[WheelState, ...] = ()  # FL, FR, RL, RR on the dynamic car; () if not modelled
-
-    @property
-    def speed(self) -> float:
-        """[track units/s]"""
-        vx, vy = self.velocity
-        return float((vx * vx + vy * vy) ** 0.5)
+__all__ = ["Car", "CarState", "Point", "Pose", "WheelState"]
 
 
 class Car(Protocol):

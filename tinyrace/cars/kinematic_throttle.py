@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import pymunk
 
-from tinyrace.physics.world import footprint_sensor
+from tinyrace.world.world import footprint_sensor
 
 
 @dataclass

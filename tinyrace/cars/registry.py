@@ -15,10 +15,11 @@ import pymunk
 
 from tinyrace.actions import ActionSpec
 from tinyrace.cars.base import Car, Pose
+from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.kinematic import KinematicCar
+from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.kinematic_car import KinematicCar
 from tinyrace.tracks.base import Track
 
 CarBuilder = Callable[[pymunk.Space, Pose, CarConfig, Track], Car]
@@ -55,14 +56,42 @@ def _build_kinematic(space: pymunk.Space, pose: Pose, config: CarConfig, track: 
     )
 
 
+def _build_kinematic_throttle(
+    space: pymunk.Space, pose: Pose, config: CarConfig, track: Track
+) -> Car:
+    return KinematicThrottleCar.build(
+        space,
+        pose,
+        (config.wheelbase, config.track_width),
+        (config.velocity, config.max_acceleration, config.max_deceleration),
+        (config.max_steering_angle, config.max_steering_change),
+        y_down=track.y_down,
+    )
+
+
+def _kinematic_throttle_actions(config: CarConfig) -> ActionSpec:
+    return ActionSpec.for_car("kinematic_throttle", config.actions)
+
+
+METRIC_KINDS = frozenset({"centerline", "cone_map", "ros_map"})  # tracks in metres
+
+
+def _dynamic_actions(config: CarConfig) -> ActionSpec:
+    return ActionSpec.for_car("dynamic", config.actions)
+
+
+def _kinematic_actions(config: CarConfig) -> ActionSpec:
+    return ActionSpec.for_car("kinematic", config.actions)
+
+
 CAR_MODELS: dict[str, CarModel] = {
     "dynamic": CarModel(
         name="dynamic",
-        track_kinds=frozenset({"procedural", "image"}),
+        track_kinds=frozenset({"procedural", "image"}) | METRIC_KINDS,
         default_for=frozenset({"procedural"}),
         action_kinds=frozenset({"continuous", "discrete"}),
         build=_build_dynamic,
-        actions=lambda car: ActionSpec.for_car("dynamic", car.actions),
+        actions=_dynamic_actions,
         doc="CarRacing-v3's rear-wheel-drive car with tyre slip",
     ),
     "kinematic": CarModel(
@@ -71,8 +100,17 @@ CAR_MODELS: dict[str, CarModel] = {
         default_for=frozenset({"image"}),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic,
-        actions=lambda car: ActionSpec.for_car("kinematic", car.actions),
+        actions=_kinematic_actions,
         doc="tinycarlo's constant-speed kinematic bicycle",
+    ),
+    "kinematic_throttle": CarModel(
+        name="kinematic_throttle",
+        track_kinds=METRIC_KINDS,
+        default_for=METRIC_KINDS,
+        action_kinds=frozenset({"continuous"}),
+        build=_build_kinematic_throttle,
+        actions=_kinematic_throttle_actions,
+        doc="a kinematic bicycle with throttle in metres (tinycarlo 2's car): [steer, throttle]",
     ),
 }
 

@@ -27,6 +27,7 @@ from tinyrace.config.schema import (
     TrackConfig,
 )
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.examples import find_track, track_names
 
 __all__ = [
     "METRIC_KINDS",
@@ -97,10 +98,14 @@ def _read_source(
         if not isinstance(environment, (str, Path)):
             allowed = "expected a track folder (a path)"
             raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
-        folder = Path(environment)
+        folder = find_track(environment)  # a path that exists wins over a shipped track's name
         config = folder / TRACK_FILE
         if not _safely(config.is_file):
-            missing = "no such folder" if not _safely(folder.is_dir) else f"{config} does not exist"
+            missing = (
+                f"no such folder; shipped tracks: {', '.join(track_names())}"
+                if not _safely(folder.is_dir)
+                else f"{config} does not exist"
+            )
             allowed = f"expected a track folder holding {TRACK_FILE} ({missing})"
             raise ConfigError(Problem(str(config), "environment", str(environment), allowed))
     if config is None:
@@ -156,19 +161,14 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if image and not config.cameras:
         allowed = "an image track needs at least one camera (id, resolution, roi, position)"
         parser.problem(f"{at}cameras", [], allowed)
+    if config.observation == "box" and len(config.cameras) > 1:
+        ids = [c.id for c in config.cameras]
+        parser.problem(f"{at}observation", "box", f"box needs exactly one camera, not {ids}")
     ids = [c.id for c in config.cameras]
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
             parser.problem(f"{at}cameras[{i}].id", cam_id, "camera ids must be unique")
-    model = config.car.model or default_car_model(config.kind if config.tracks else "image")
-    if config.car.actions == "discrete" and model != "dynamic":
-        parser.problem(f"{at}car.actions", "discrete", "discrete actions need car.model: dynamic")
-    if config.tracks and config.kind in METRIC_KINDS and model == "kinematic":
-        allowed = "tracks in metres take car.model: kinematic_throttle or dynamic"
-        parser.problem(f"{at}car.model", model, allowed)
-    if config.tracks and config.kind not in METRIC_KINDS and model == "kinematic_throttle":
-        allowed = "car.model kinematic_throttle drives on centerline, cone_map and ros_map tracks"
-        parser.problem(f"{at}car.model", model, allowed)
+    # the car model and its actions are checked by tinyrace.cars.registry
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
@@ -201,13 +201,6 @@ CAR_DEFAULTS = {
 }
 
 
-def default_car_model(kind: str) -> str:
-    """The car of ``car.model: null`` on a track kind."""
-    if kind == "procedural":
-        return "dynamic"
-    return "kinematic_throttle" if kind in METRIC_KINDS else "kinematic"
-
-
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
     """Fill the ``None`` knobs whose default depends on the track kind."""
     procedural = config.kind == "procedural"
@@ -215,12 +208,10 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     sim = config.sim
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
-    car = config.car
-    if car.model is None:
-        car = dataclasses.replace(car, model=default_car_model(config.kind))
     sizes = CAR_DEFAULTS["m" if config.kind in METRIC_KINDS else "px"]
     car = dataclasses.replace(
-        car, **{key: _default(getattr(car, key), value) for key, value in sizes.items()}
+        config.car,
+        **{key: _default(getattr(config.car, key), value) for key, value in sizes.items()},
     )
     reward = config.reward_design
     reward = dataclasses.replace(

@@ -13,17 +13,18 @@ import math
 import types
 import typing
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any, Literal, Union
 
-import yaml
-
 from tinyrace.config.colors import Color
+from tinyrace.config.yaml_file import read_yaml  # re-exported: the one way to read YAML
 from tinyrace.errors import ConfigError, Problem
+
+__all__ = ["Parser", "deep_merge", "read_yaml"]
 
 _INVALID = object()  # a value that failed to parse; the problem is already recorded
 # No float knob means anything beyond this; larger values overflow rewards and drawings.
 MAX_MAGNITUDE = 1e9
+MAX_INT = 2**63 - 1  # whole-number knobs (seeds, step counts) fit a signed 64-bit integer
 
 
 class Parser:
@@ -169,6 +170,8 @@ class Parser:
             if isinstance(raw, float) and not raw.is_integer():
                 return self.problem(path, raw, allowed)
             raw = int(raw)
+            if abs(raw) > MAX_INT:
+                return self.problem(path, raw, f"{allowed}, at most 2**63 - 1 in magnitude")
         low, high = meta.get("low"), meta.get("high")
         too_low = low is not None and (raw <= low if meta.get("low_open") else raw < low)
         if too_low or (high is not None and raw > high):
@@ -216,27 +219,6 @@ def _describe_tuple(args: tuple, meta: Mapping[str, Any]) -> str:
     if len(set(args)) == 1:  # the unit already names every element: [px, px, rad]
         return f"each {_describe(args[0], meta)}"
     return ", ".join(_describe(a, meta) for a in args)
-
-
-# -- reading files ---------------------------------------------------------------------------
-def read_yaml(path: Path) -> Any:
-    """Read a YAML file, turning I/O and syntax failures into ConfigError."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigError(Problem(str(path), "", str(path), "the file does not exist")) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(
-            Problem(str(path), "", str(path), f"the file is unreadable ({exc})")
-        ) from None
-    try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else ""
-        line = text.splitlines()[mark.line] if mark and mark.line < len(text.splitlines()) else ""
-        reason = getattr(exc, "problem", None) or str(exc)
-        raise ConfigError(Problem(str(path), where, line, f"invalid YAML: {reason}")) from None
 
 
 def deep_merge(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:

@@ -367,6 +367,11 @@ class EnvConfig:
         "CarRacing's 96x96 view as a Box",
         aliases=("camera",),
     )
+    observation: Literal["dict", "box"] = knob(
+        "dict",
+        "dict: camera images keyed by id; box: the one camera's image as a plain Box, so "
+        "image wrappers (GrayscaleObservation, ResizeObservation, ...) apply directly",
+    )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
 
     @property

@@ -178,6 +178,8 @@ car:   # a kinematic car with throttle, in metres
   max_acceleration: 6.0     # [m/s^2]
   max_deceleration: 10.0    # [m/s^2]
   max_steering_angle: 30.0  # [deg]
+cameras:   # a bird's-eye camera over the road ahead: roi [ahead, across] in metres
+  - {id: front, resolution: [96, 128], roi: [30.0, 40.0], position: [0.0, 0.0]}
 sim: {step_limit: 6000}
 """,
     "autocross": """\
@@ -192,6 +194,8 @@ car:   # about a Formula Student car
   max_acceleration: 8.0     # [m/s^2]
   max_deceleration: 12.0    # [m/s^2]
   max_steering_angle: 30.0  # [deg]
+cameras:   # roi [ahead, across] in metres: the cones of the next corners
+  - {id: front, resolution: [96, 128], roi: [12.0, 16.0], position: [0.0, 0.0]}
 sim: {step_limit: 3000}
 """,
     "f1tenth_loop": """\
@@ -206,6 +210,8 @@ car:   # about an F1TENTH car
   max_acceleration: 9.51    # [m/s^2]
   max_deceleration: 13.26   # [m/s^2]
   max_steering_angle: 24.0  # [deg]
+cameras:   # roi [ahead, across] in metres: the corridor and its walls
+  - {id: front, resolution: [96, 128], roi: [3.0, 4.0], position: [0.0, 0.0]}
 sim: {step_limit: 2000}
 """,
 }

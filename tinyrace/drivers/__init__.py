@@ -32,6 +32,7 @@ from tinyrace.drivers.base import (
     RandomDriver,
 )
 from tinyrace.drivers.centerline import CenterlineDriver, Route, order_path, route_of, speed_profile
+from tinyrace.drivers.loop import DriverError, EpisodeObserver, check_action, run_episode
 
 __all__ = [
     "DRIVERS",
@@ -41,8 +42,11 @@ __all__ = [
     "Controls",
     "DiscreteChooser",
     "Driver",
+    "DriverError",
+    "EpisodeObserver",
     "RandomDriver",
     "Route",
+    "check_action",
     "load_driver",
     "make_driver",
     "order_path",
@@ -68,22 +72,6 @@ def make_driver(name: str, **kwargs: Any) -> Driver:
     return factory(**kwargs)
 
 
-def run_episode(
-    env: gym.Env, driver: Driver, seed: int | None = None, max_steps: int | None = None
-) -> tuple[float, int, dict[str, Any]]:
-    """Drive one episode; returns (return, steps, last info)."""
-    observation, info = env.reset(seed=seed)
-    driver.reset(env)
-    total, steps = 0.0, 0
-    while max_steps is None or steps < max_steps:
-        observation, reward, terminated, truncated, info = env.step(driver.act(observation, info))
-        total += float(reward)
-        steps += 1
-        if terminated or truncated:
-            break
-    return total, steps, info
-
-
 class PolicyDriver:
     """Wraps a plain ``policy(observation, info) -> action`` function as a Driver."""
 
@@ -101,16 +89,25 @@ def load_driver(spec: str, **kwargs: Any) -> Driver:
     """A built-in driver by name, or ``module:callable``: a factory called with ``kwargs``
     that returns a Driver (``reset(env)``, ``act(observation, info)``) or a policy function.
 
-    Raises ValueError (unknown name, import failure, wrong return) or the factory's TypeError.
+    Raises ValueError (unknown name, import failure, wrong return) or DriverError (the
+    factory raised, e.g. a TypeError for ``kwargs`` it does not take).
     """
     if ":" not in spec:
-        return make_driver(spec, **kwargs)
-    module_name, _, attribute = spec.partition(":")
+        factory: DriverFactory | None = DRIVERS.get(spec)
+        if factory is None:
+            make_driver(spec)  # raises, listing the valid names
+    else:
+        module_name, _, attribute = spec.partition(":")
+        try:
+            factory = getattr(importlib.import_module(module_name), attribute)
+        except (ImportError, AttributeError) as exc:
+            raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None
     try:
-        factory = getattr(importlib.import_module(module_name), attribute)
-    except (ImportError, AttributeError) as exc:
-        raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None
-    made = factory(**kwargs)
+        made = factory(**kwargs)
+    except Exception as exc:  # user code and user arguments: report, do not crash
+        raise DriverError(
+            f"{spec} with driver_args {kwargs} raised {type(exc).__name__}: {exc}"
+        ) from exc
     if hasattr(made, "act"):
         return made
     if callable(made):

@@ -11,8 +11,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from tinyrace.cars.dynamic import SIZE, DynamicCarSpec
 from tinyrace.drivers.base import ActionAdapter, Controls
-from tinyrace.physics.dynamic_car import SIZE, DynamicCarSpec
 
 CARRACING_WHEELBASE = (80 + 82) * SIZE  # [u] axle to axle of CarRacing's car
 

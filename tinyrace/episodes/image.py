@@ -4,38 +4,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
+from tinyrace.cars.registry import CarModel
 from tinyrace.config import EnvConfig
 from tinyrace.episodes import StepFacts
-from tinyrace.errors import ConfigError, Problem
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.kinematic_car import KinematicCar
-from tinyrace.physics.world import World
 from tinyrace.render.overview import Overview
-from tinyrace.render.roi_camera import RoiCamera
 from tinyrace.render.texture import GroundTexture
-from tinyrace.track.image import ImageTrack, load_image_track, touched_obstacles
+from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.tracks.base import TrackDraw
+from tinyrace.tracks.image import ImageSource, ImageTrack, touched_obstacles
+from tinyrace.world.world import World
 
 _ALL_ROAD = (True, True, True, True)  # image tracks have no grass: full grip everywhere
-
-
-def build_car(config: EnvConfig, world: World, pose: tuple[float, float, float]):
-    """The configured car model at ``pose`` (x px, y px, heading rad) on a y-down image."""
-    car = config.car
-    if car.model == "dynamic":
-        return DynamicCar.build(world.space, pose, scale=car.pixels_per_unit, y_down=True)
-    return KinematicCar.build(
-        world.space,
-        pose,
-        car.wheelbase,
-        car.track_width,
-        car.velocity,
-        car.max_steering_angle,
-        car.max_steering_change,
-    )
 
 
 def footprint_corners(car) -> np.ndarray:
@@ -70,15 +52,16 @@ class ImageEpisode:
     """One reset on an image track: the chosen track and spawn, a car in its world, cameras."""
 
     def __init__(
-        self, config: EnvConfig, prepared: PreparedTrack, track_index: int, spawn_index: int
+        self, config: EnvConfig, prepared: PreparedTrack, draw: TrackDraw, car_model: CarModel
     ):
         self.config = config
         self.prepared = prepared
-        self.track = prepared.track
-        self.track_index, self.spawn_index = track_index, spawn_index
+        self.layout = draw.track  # the generic view (tinyrace.tracks.base.Track)
+        self.track: ImageTrack = draw.track.detail
+        self.track_index, self.spawn_index = draw.track_index, draw.spawn_index
         self.world = prepared.world
         self.world.remove_cars()  # the last episode's car; the obstacle sensors stay
-        self.car = build_car(config, self.world, self.track.spawns[spawn_index])
+        self.car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
         self.cameras = [RoiCamera(c, prepared.texture, y_down=True) for c in config.cameras]
         self.obstacles_hit: list[int] = []
         self.cte: float | None = None
@@ -147,48 +130,23 @@ class ImageEpisode:
 
 
 class ImageCourse:
-    """What lasts across resets: every track image, loaded and prepared once."""
+    """What lasts across resets: every track of the source, prepared once."""
 
-    def __init__(self, config: EnvConfig, base_dir: Path, source: str):
+    def __init__(self, config: EnvConfig, source: ImageSource, car_model: CarModel):
         self.config = config
+        self.source = source
+        self.car_model = car_model
         self.prepared: list[PreparedTrack] = []
-        problems = []
-        for index, track_config in enumerate(config.tracks):
-            track, found = load_image_track(track_config, index, config, base_dir, source)
-            problems += found
-            if track is not None:
-                world = World()
-                world.add_obstacle_cells(track.cells)
-                self.prepared.append(
-                    PreparedTrack(track, GroundTexture.from_image(track.image), world)
-                )
-        if problems:
-            raise ConfigError(problems)
+        for layout in source.tracks:
+            track: ImageTrack = layout.detail
+            world = World()
+            world.add_obstacle_cells(track.cells)
+            self.prepared.append(PreparedTrack(track, GroundTexture.from_image(track.image), world))
 
     @property
     def tracks(self) -> list[ImageTrack]:
         return [p.track for p in self.prepared]
 
-    def new_episode(self, rng: np.random.Generator, options: dict) -> ImageEpisode:
-        """A track then a spawn, each drawn from ``rng`` unless ``options`` picks it."""
-        track_index = _pick(options, "track", len(self.prepared), rng)
-        spawn_index = _pick(options, "spawn", len(self.prepared[track_index].track.spawns), rng)
-        return ImageEpisode(self.config, self.prepared[track_index], track_index, spawn_index)
-
-
-def _pick(options: dict, key: str, count: int, rng: np.random.Generator) -> int:
-    drawn = int(
-        rng.integers(count)
-    )  # drawn even when chosen, so that choosing changes nothing else
-    chosen = options.get(key)
-    if chosen is None:
-        return drawn
-    if (
-        isinstance(chosen, bool)
-        or not isinstance(chosen, (int, np.integer))
-        or not 0 <= chosen < count
-    ):
-        raise ConfigError(
-            Problem("<reset options>", key, chosen, f"expected a {key} index from 0 to {count - 1}")
-        )
-    return int(chosen)
+    def new_episode(self, draw: TrackDraw) -> ImageEpisode:
+        prepared = self.prepared[draw.track_index]
+        return ImageEpisode(self.config, prepared, draw, self.car_model)

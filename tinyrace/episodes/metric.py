@@ -11,43 +11,26 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
 
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
+from tinyrace.cars.registry import CarModel
 from tinyrace.config import CameraConfig, EnvConfig
 from tinyrace.episodes import StepFacts
-from tinyrace.episodes.image import _pick, footprint_corners
-from tinyrace.errors import ConfigError
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.world import World
+from tinyrace.episodes.image import footprint_corners
 from tinyrace.render.metric_ground import MetricOverview, paint_ground
-from tinyrace.render.roi_camera import RoiCamera
 from tinyrace.render.texture import GroundTexture, transform_points
-from tinyrace.tracks.metric import MetricTrack, load_metric_track
+from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.tracks.base import TrackDraw
+from tinyrace.tracks.metric import MetricSource, MetricTrack
+from tinyrace.world.world import World
 
-METRIC_CAR_MODELS = ("kinematic_throttle", "dynamic")  # the cars that drive in metres
 DEFAULT_VIEW = (96, 96)  # [px] (h, w) the observation when no camera is configured
 VIEW_SPAN = 14.0  # [wheelbases] the default view's side
 NO_REFERENCE = "no reference line: this ros_map track has no waypoints (track.waypoints)"
 CAR_COLOR = (204, 0, 0)  # RGB, the car drawn into the default view
-
-
-def build_car(config: EnvConfig, world: World, pose: tuple[float, float, float]):
-    """The configured car at ``pose`` (x [m], y [m], heading [rad] counter-clockwise):
-    CarRacing's dynamic car or the kinematic car with throttle (METRIC_CAR_MODELS)."""
-    car = config.car
-    if car.model == "dynamic":  # CarRacing's car, car.pixels_per_unit metres per world unit
-        return DynamicCar.build(world.space, pose, scale=car.pixels_per_unit, y_down=False)
-    return KinematicThrottleCar.build(
-        world.space,
-        pose,
-        (car.wheelbase, car.track_width),
-        (car.velocity, car.max_acceleration, car.max_deceleration),
-        (car.max_steering_angle, car.max_steering_change),
-    )
 
 
 @dataclass(eq=False)
@@ -62,18 +45,25 @@ class PreparedMetricTrack:
 class MetricEpisode:
     """One reset on a track in metres: a world with the track's cones and walls, one car."""
 
-    def __init__(self, config: EnvConfig, prepared: PreparedMetricTrack, track_index: int):
+    def __init__(
+        self,
+        config: EnvConfig,
+        prepared: PreparedMetricTrack,
+        draw: TrackDraw,
+        car_model: CarModel,
+    ):
         self.config = config
         self.prepared = prepared
-        self.track = prepared.track
-        self.track_index = track_index
-        self.track_config = config.tracks[track_index]
+        self.layout = draw.track  # the generic view (tinyrace.tracks.base.Track)
+        self.track: MetricTrack = draw.track.detail
+        self.track_index = draw.track_index
+        self.track_config = config.tracks[draw.track_index]
         self.world = World()
         if len(self.track.tiles) and config.car.model == "dynamic":
             self.world.add_tiles(self.track.tiles)  # grip: wheels on the road
         self.world.add_cones(self.track.cones[:, :2], self.track.cone_radii)
         self.world.add_walls(self.track.walls)
-        self.car = build_car(config, self.world, self.track.spawn)
+        self.car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
         tiles = len(self.track.tiles)
         self.visited = np.zeros(tiles, bool)
         self.visited_count = 0
@@ -237,28 +227,21 @@ def _between(previous: int, current: int, n: int) -> list[int]:
 
 
 class MetricCourse:
-    """What lasts across resets: every track of the config, read and drawn once."""
+    """What lasts across resets: the ground texture of every track of the source."""
 
-    def __init__(self, config: EnvConfig, base_dir: Path, source: str):
+    def __init__(self, config: EnvConfig, source: MetricSource, car_model: CarModel):
         self.config = config
-        self.prepared: list[PreparedMetricTrack] = []
-        problems = []
-        for index, track_config in enumerate(config.tracks):
-            try:
-                track = load_metric_track(track_config, index, base_dir, source)
-            except ConfigError as error:
-                problems += error.problems
-                continue
-            texture = paint_ground(track, getattr(track_config, "pixels_per_meter", 20.0))
-            self.prepared.append(PreparedMetricTrack(track, texture))
-        if problems:
-            raise ConfigError(problems)
+        self.source = source
+        self.car_model = car_model
+        self.prepared = []
+        for layout, track_config in zip(source.tracks, config.tracks, strict=True):
+            texture = paint_ground(layout.detail, getattr(track_config, "pixels_per_meter", 20.0))
+            self.prepared.append(PreparedMetricTrack(layout.detail, texture))
 
     @property
     def tracks(self) -> list[MetricTrack]:
         return [p.track for p in self.prepared]
 
-    def new_episode(self, rng: np.random.Generator, options: dict) -> MetricEpisode:
-        """A track drawn from ``rng`` unless ``options['track']`` picks it."""
-        index = _pick(options, "track", len(self.prepared), rng)
-        return MetricEpisode(self.config, self.prepared[index], index)
+    def new_episode(self, draw: TrackDraw) -> MetricEpisode:
+        prepared = self.prepared[draw.track_index]
+        return MetricEpisode(self.config, prepared, draw, self.car_model)

@@ -2,55 +2,27 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
+from tinyrace.cars.registry import CarModel
 from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
 from tinyrace.episodes import StepFacts
-from tinyrace.physics.dynamic_car import DynamicCar
-from tinyrace.physics.world import World
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
-from tinyrace.render.procedural_ground import GroundColors, GroundPainter, repaint_tile
-from tinyrace.render.roi_camera import RoiCamera
+from tinyrace.render.procedural_ground import GroundPainter, repaint_tile
 from tinyrace.render.texture import GroundTexture
-from tinyrace.track.procedural import ProceduralTrackParams, generate_track
+from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.tracks.base import TrackDraw
+from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
+from tinyrace.world.world import World
 
 VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
 OBSERVATION_SIZE = (96, 96)  # [px] (w, h) CarRacing's state_pixels
 SMALL_VIEW = 160  # [px] views up to this size sample the observation texture, supersample the car
 RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "human": (1000, 800)}
-
-
-def track_params(config: ProceduralTrackConfig) -> ProceduralTrackParams:
-    return ProceduralTrackParams(
-        checkpoints=config.checkpoints,
-        radius=config.radius,
-        half_width=config.half_width,
-        turn_rate=config.turn_rate,
-        detail_step=config.detail_step,
-        border=config.border,
-        border_min_count=config.border_min_count,
-    )
-
-
-def draw_colors(rng: np.random.Generator) -> GroundColors:
-    """Domain randomisation: road, background uniform(0, 210); grass +20 on one channel."""
-    road = rng.uniform(0, 210, size=3)
-    background = rng.uniform(0, 210, size=3)
-    grass = background.copy()
-    grass[rng.integers(3)] += 20
-    return GroundColors(road, background, grass)
-
-
-def config_colors(config: ProceduralTrackConfig) -> GroundColors:
-    return GroundColors(
-        np.array(config.road_color, float),
-        np.array(config.background_color, float),
-        np.array(config.grass_color, float),
-    )
 
 
 class ProceduralEpisode:
@@ -59,19 +31,20 @@ class ProceduralEpisode:
     def __init__(
         self,
         config: EnvConfig,
-        rng: np.random.Generator,
+        draw: TrackDraw,
+        car_model: CarModel,
         colors: GroundColors,
         cache: RenderCache | None = None,
     ):
         self.config = config
         self.cache = cache or RenderCache(config.tracks[0].playfield)
         self.track_config: ProceduralTrackConfig = config.tracks[0]
-        self.track = generate_track(rng, track_params(self.track_config))
+        self.layout = draw.track  # the generic view (tinyrace.tracks.base.Track)
+        self.track: ProceduralTrack = draw.track.detail
         self.colors = colors
         self.world = World()
         self.world.add_tiles(self.track.tiles)
-        x, y, hull_angle = self.track.start_pose
-        self.car = DynamicCar.build(self.world.space, (x, y, hull_angle + math.pi / 2))
+        self.car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
         self.visited = np.zeros(len(self.track.tiles), bool)
         self.visited_count = 0
         self.visit_order: list[int] = []  # repainting in this order redraws the same pixels
@@ -195,16 +168,18 @@ class RenderCache:
 
 
 class ProceduralCourse:
-    """What lasts across resets on a procedural track: the colours of the last episode."""
+    """What lasts across resets on a procedural track: the source and the picture caches."""
 
-    def __init__(self, config: EnvConfig, base_dir: object = None, source: str = ""):
+    def __init__(self, config: EnvConfig, source: ProceduralSource, car_model: CarModel):
         self.config = config
-        self.track_config: ProceduralTrackConfig = config.tracks[0]
-        self.colors = config_colors(self.track_config)
-        self.cache = RenderCache(self.track_config.playfield)
+        self.source = source
+        self.car_model = car_model
+        self.cache = RenderCache(config.tracks[0].playfield)
 
-    def new_episode(self, rng: np.random.Generator, options: dict) -> ProceduralEpisode:
-        """CarRacing's reset order: colours (when randomised) are drawn before the track."""
-        if self.track_config.domain_randomize and options.get("randomize", True):
-            self.colors = draw_colors(rng)
-        return ProceduralEpisode(self.config, rng, self.colors, self.cache)
+    @property
+    def colors(self) -> GroundColors:
+        """The colours of the last episode."""
+        return self.source.colors
+
+    def new_episode(self, draw: TrackDraw) -> ProceduralEpisode:
+        return ProceduralEpisode(self.config, draw, self.car_model, self.colors, self.cache)

@@ -1,13 +1,14 @@
 """YAML experiments: an env, a driver, episodes; run end to end by ``tinyrace run``."""
 
+from tinyrace.config.experiment import ExperimentConfig, OutputConfig
 from tinyrace.experiment.load import (
     Experiment,
     experiment_from_dict,
     is_experiment,
     load_experiment,
 )
+from tinyrace.experiment.report import rebuild_report, write_report
 from tinyrace.experiment.runner import RunResult, print_report, run_experiment
-from tinyrace.experiment.schema import ExperimentConfig, OutputConfig
 
 __all__ = [
     "Experiment",
@@ -18,5 +19,7 @@ __all__ = [
     "is_experiment",
     "load_experiment",
     "print_report",
+    "rebuild_report",
     "run_experiment",
+    "write_report",
 ]

@@ -8,9 +8,10 @@ from pathlib import Path
 from typing import Any
 
 from tinyrace.config import TRACK_FILE, EnvConfig, load_env_config, parse_env_config
+from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.experiment.schema import ExperimentConfig
+from tinyrace.examples import shipped_track
 
 ENV_FOLDER_KEY = "environment"  # inside ``env``: a track folder or track.yaml
 
@@ -74,10 +75,8 @@ def _track_file(value: object, base_dir: Path, source: str) -> Path:
         found = path.is_file()
     except (OSError, ValueError):  # a name the file system cannot hold (too long, NUL byte)
         found = False
-    if not found:
-        raise ConfigError(
-            Problem(source, where, value, "expected a track folder holding track.yaml")
-        )
+    if not found:  # a shipped track's bare name, or an error listing them
+        return shipped_track(value, source, where) / TRACK_FILE
     return path
 
 

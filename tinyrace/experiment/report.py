@@ -1,92 +1,141 @@
-"""Per-episode table, summary (mean and std), results.json and episodes.csv."""
+"""``report.html`` for a run folder: self-contained (pictures inline as data URIs, no network,
+no JavaScript), with the pictures also saved beside it. Built from the run's files only
+(results.json, episodes.csv, the traces and track pictures), so ``tinyrace report RUN_DIR``
+rebuilds it."""
 
 from __future__ import annotations
 
-import csv
-import json
-import math
+import base64
+import html
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import cv2
+import numpy as np
 
-@dataclass
-class EpisodeResult:
-    """What one episode achieved."""
+from tinyrace.experiment import plots
+from tinyrace.experiment.record import read_trace
+from tinyrace.experiment.results import EpisodeResult, read_files, summary_text, table
+from tinyrace.render.track_picture import PictureFrame
 
-    episode: int
-    seed: int
-    episode_return: float
-    steps: int
-    tiles_visited: int | None  # procedural tracks
-    tiles_total: int | None
-    laps: int  # procedural: 1 if the lap was finished
-    obstacle_hits: int  # steps on which the footprint touched an obstacle colour
-    mean_abs_cte: float | None  # [px] image tracks with use_cte
-    end: str  # lap_finished, out_of_bounds, obstacle, step_limit, max_steps
-    steps_per_second: float
-    video: str | None = None
+REPORT_FILE = "report.html"
+CRASHES = ("out_of_bounds", "obstacle")
 
 
-COLUMNS = (
-    ("episode", "ep", "{:d}"),
-    ("episode_return", "return", "{:.1f}"),
-    ("steps", "steps", "{:d}"),
-    ("tiles", "tiles", "{}"),
-    ("laps", "laps", "{:d}"),
-    ("obstacle_hits", "hits", "{:d}"),
-    ("mean_abs_cte", "|cte|", "{:.1f}"),
-    ("end", "end", "{}"),
-)
-SUMMARIZED = (
-    "episode_return",
-    "steps",
-    "laps",
-    "obstacle_hits",
-    "mean_abs_cte",
-    "steps_per_second",
-)
+def rebuild_report(run_dir: Path) -> Path:
+    """Rebuild ``report.html`` and its pictures from a run folder's files."""
+    header, results = read_files(run_dir)
+    return write_report(run_dir, header, results)
 
 
-def _cell(result: EpisodeResult, key: str, fmt: str) -> str:
-    if key == "tiles":
-        return "-" if result.tiles_total is None else f"{result.tiles_visited}/{result.tiles_total}"
-    value = getattr(result, key)
-    return "-" if value is None else fmt.format(value)
+def write_report(run_dir: Path, header: dict, results: Sequence[EpisodeResult]) -> Path:
+    """Draw the pictures, save them as PNG and write report.html; returns its path."""
+    pictures = _track_pictures(run_dir, header, results)
+    labels = [str(r.episode) for r in results]
+    pictures.append(
+        ("report_returns.png", "Return per episode",
+         plots.bar_chart([r.episode_return for r in results], labels, "return per episode"))
+    )  # fmt: skip
+    pictures.append(
+        ("report_lap_times.png", "Lap time per episode (no bar: no lap finished)",
+         plots.bar_chart([r.lap_time for r in results], labels, "lap time [s]"))
+    )  # fmt: skip
+    unit = _unit(header)
+    for result in results:
+        trace = _trace(run_dir, result)
+        if trace is None:
+            continue
+        panels = [
+            (f"speed [{unit}/s]", trace["speed"]),
+            ("steering (-1 left .. +1 right)", trace["steer"]),
+            ("cross-track error [px]", trace["cte"]),
+        ]
+        title = f"episode {result.episode} (seed {result.seed}): {result.end}"
+        name = f"report_episode_{result.episode:03d}.png"
+        pictures.append((name, title, plots.time_series(trace["t"], panels, title)))
+    blobs = []
+    for name, caption, image in pictures:
+        _, data = cv2.imencode(".png", cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+        (run_dir / name).write_bytes(data.tobytes())
+        blobs.append((caption, data.tobytes()))
+    path = run_dir / REPORT_FILE
+    path.write_text(_html(header, results, blobs), encoding="utf-8")
+    return path
 
 
-def table(results: Sequence[EpisodeResult]) -> str:
-    """A fixed-width table, one row per episode."""
-    rows = [[title for _, title, _ in COLUMNS]]
-    rows += [[_cell(r, key, fmt) for key, _, fmt in COLUMNS] for r in results]
-    widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
-    lines = ["  ".join(cell.rjust(w) for cell, w in zip(row, widths, strict=True)) for row in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines)
+def _unit(header: dict) -> str:
+    return "u" if header.get("track_kind") == "procedural" else "px"
 
 
-def summary(results: Sequence[EpisodeResult]) -> dict[str, dict[str, float]]:
-    """Mean and (population) standard deviation of each numeric metric over the episodes."""
-    stats = {}
-    for key in SUMMARIZED:
-        values = [getattr(r, key) for r in results if getattr(r, key) is not None]
-        if values:
-            mean = sum(values) / len(values)
-            std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
-            stats[key] = {"mean": mean, "std": std}
-    return stats
+def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None:
+    path = run_dir / result.trace if result.trace else None
+    return read_trace(path) if path is not None and path.is_file() else None
 
 
-def summary_text(stats: dict[str, dict[str, float]]) -> str:
-    return "\n".join(f"{key:>18}: {s['mean']:.2f} ± {s['std']:.2f}" for key, s in stats.items())
+def _track_pictures(
+    run_dir: Path, header: dict, results: Sequence[EpisodeResult]
+) -> list[tuple[str, str, np.ndarray]]:
+    """One picture per track with the trajectories of the episodes run on it."""
+    pictures = []
+    tracks: dict = header.get("tracks") or {}
+    for key, entry in tracks.items():
+        background = cv2.imread(str(run_dir / entry["image"]))
+        if background is None:
+            continue
+        frame = PictureFrame(*entry["frame"]).pixels
+        paths = []
+        for result in (r for r in results if r.track == key):
+            trace = _trace(run_dir, result)
+            if trace is None:
+                continue
+            points = frame(np.stack([trace["x"], trace["y"]], axis=-1))
+            crashed = result.end in CRASHES
+            hits = trace["obstacle_hit"] > 0
+            paths.append(
+                plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
+            )
+        lap = None if entry.get("lap_line") is None else frame(np.array(entry["lap_line"]))
+        image = plots.trajectories(background[..., ::-1], paths, lap, entry.get("unit", ""))
+        episodes = ", ".join(p.label.removeprefix("ep ") for p in paths) or "none"
+        caption = (
+            f"Track {key}: episodes {episodes}. Colour: speed; green dot: start; "
+            "white line: lap line; red X: crash; orange rings: obstacle hits."
+        )
+        pictures.append((f"report_track_{key}.png", caption, image))
+    return pictures
 
 
-def write_files(run_dir: Path, results: Sequence[EpisodeResult], header: dict) -> None:
-    """results.json (everything) and episodes.csv (one row per episode)."""
-    rows = [asdict(r) for r in results]
-    payload = {**header, "episodes": rows, "summary": summary(results)}
-    (run_dir / "results.json").write_text(json.dumps(payload, indent=2, default=str) + "\n")
-    with (run_dir / "episodes.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["episode"])
-        writer.writeheader()
-        writer.writerows(rows)
+def _html(header: dict, results: Sequence[EpisodeResult], blobs: list[tuple[str, bytes]]) -> str:
+    title = f"tinyrace run {header.get('started', '')}"
+    state = []
+    if header.get("interrupted"):
+        state.append(f"<p class=warn>Interrupted by {html.escape(str(header.get('signal')))}.</p>")
+    if header.get("error"):
+        state.append(f"<p class=warn>Stopped by an error: {html.escape(header['error'])}</p>")
+    planned = header.get("episodes_planned", len(results))
+    figures = "\n".join(
+        f"<figure><img alt='{html.escape(caption)}' "
+        f"src='data:image/png;base64,{base64.b64encode(data).decode()}'>"
+        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+        for caption, data in blobs
+    )
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; color: #222; }}
+pre {{ background: #f4f4f4; padding: 1em; overflow-x: auto; }}
+img {{ max-width: 100%; border: 1px solid #ccc; }}
+figure {{ margin: 1.5em 0; }} .warn {{ color: #b00; font-weight: bold; }}
+</style></head><body>
+<h1>{html.escape(title)}</h1>
+<p>Experiment: {html.escape(str(header.get("experiment", "")))};
+{len(results)} of {planned} episode(s) finished; track kind: {header.get("track_kind", "?")}.</p>
+{"".join(state)}
+<h2>Episodes</h2>
+<pre>{html.escape(table(results))}</pre>
+<h2>Summary (mean ± std)</h2>
+<pre>{html.escape(summary_text(header.get("summary") or {}))}</pre>
+<h2>Pictures</h2>
+{figures}
+</body></html>
+"""

@@ -1,152 +1,202 @@
-"""Running an experiment end to end: episodes, driver, videos, metrics, files."""
+"""Running an experiment end to end: episodes, driver, videos, traces, metrics, files, report.
+
+Each episode is driven by ``tinyrace.drivers.run_episode`` (the one episode loop); an
+``EpisodeRecorder`` watches it. SIGINT/SIGTERM stop the run after the current step: the
+finished episodes are written, the run is marked interrupted, the open video is finished.
+"""
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
-import time
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 
-from tinyrace.drivers import Driver, load_driver
+from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.experiment.interrupt import Interrupted, StopSignals
 from tinyrace.experiment.load import Experiment
 from tinyrace.experiment.progress import Progress
-from tinyrace.experiment.report import EpisodeResult, summary, summary_text, table, write_files
+from tinyrace.experiment.record import EpisodeRecorder
+from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
+from tinyrace.experiment.tracks import save_track_picture
+from tinyrace.experiment.video import open_video
 
 DEFAULT_MAX_STEPS = 1000  # when neither the experiment nor the env sets a limit (CarRacing's)
 
 
 @dataclass
 class RunResult:
+    """The run folder, the finished episodes, and the signal that stopped the run (if any)."""
+
     run_dir: Path
     episodes: list[EpisodeResult]
+    interrupted: int | None = None  # signal number
 
     @property
     def summary(self) -> dict[str, dict[str, float]]:
         return summary(self.episodes)
 
 
-class _Tally:
-    """Accumulates one episode's metrics from the step infos."""
-
-    def __init__(self) -> None:
-        self.episode_return = 0.0
-        self.steps = 0
-        self.obstacle_hits = 0
-        self.cte_sum, self.cte_count = 0.0, 0
-        self.info: dict[str, Any] = {}
-
-    def add(self, reward: float, info: dict[str, Any]) -> None:
-        self.episode_return += reward
-        self.steps += 1
-        self.obstacle_hits += bool(info.get("obstacles_hit"))
-        if info.get("cte") is not None:
-            self.cte_sum += abs(info["cte"])
-            self.cte_count += 1
-        self.info = info
-
-
 def run_experiment(
-    experiment: Experiment, out_root: Path | None = None, show_progress: bool = True
+    experiment: Experiment,
+    out_root: Path | None = None,
+    show_progress: bool = True,
+    progress: Progress | None = None,
 ) -> RunResult:
-    """Run every episode; write results.json, episodes.csv and videos into a new run directory."""
+    """Run every episode; write results.json, episodes.csv, traces, videos and report.html
+    into a new run folder under ``out_root`` (default: ``output.dir``, relative to the cwd).
+
+    Raises ConfigError for a bad view or driver (no run folder is left behind when no
+    episode finished).
+    """
     config = experiment.config
-    run_dir = _new_run_dir(Path(out_root or config.output.dir), experiment.name)
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
-    _check_view(experiment, env)
-    driver = _driver(config.driver, config.driver_args, experiment.source)
-    limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
-    progress = Progress(config.episodes, enabled=show_progress)
-    results = []
     try:
-        for episode in range(config.episodes):
-            video = _video_path(run_dir, episode, config)
-            result = _run_episode(
-                env, driver, episode, config.seed + episode, limit, video, progress, config
-            )
-            results.append(result)
-            progress.end_episode(
-                episode, f"return {result.episode_return:.1f}, {result.steps} steps, {result.end}"
-            )
+        _check_view(experiment, env)
+        driver = _driver(config.driver, config.driver_args, experiment.source)
+        progress = progress or Progress(config.episodes, enabled=show_progress)
+        root = Path(out_root or config.output.dir)
+        made_root = not root.exists()
+        run = _Run(experiment, env, driver, new_run_dir(root, experiment.name), progress)
+        run.made_root = made_root
+        return run.all()
     finally:
         env.close()
-    header = {"experiment": experiment.source, "started": run_dir.name, "config": _plain(config)}
-    write_files(run_dir, results, header)
-    return RunResult(run_dir, results)
 
 
-def _run_episode(
-    env: TinyRaceEnv,
-    driver: Driver,
-    episode: int,
-    seed: int,
-    limit: int,
-    video: Path | None,
-    progress: Progress,
-    config,
-) -> EpisodeResult:
-    observation, info = env.reset(seed=seed)
-    driver.reset(env)
-    tally, writer = _Tally(), None
-    progress.start_episode()
-    started = time.perf_counter()
-    end = "max_steps"
-    while tally.steps < limit:
-        if video is not None:
-            writer = _write_frame(
-                writer, video, _frame(env, observation, config.output.view), env, config
-            )
-        action = driver.act(observation, info)
-        observation, reward, terminated, truncated, info = env.step(action)
-        tally.add(reward, info)
-        progress.update(episode, tally.steps, limit)
-        if terminated or truncated:
-            end = info.get("termination", "step_limit")
-            break
-    if writer is not None:
-        writer.release()
-    elapsed = time.perf_counter() - started
-    return EpisodeResult(
-        episode=episode,
-        seed=seed,
-        episode_return=tally.episode_return,
-        steps=tally.steps,
-        tiles_visited=tally.info.get("tiles_visited"),
-        tiles_total=tally.info.get("tiles_total"),
-        laps=int(end == "lap_finished"),
-        obstacle_hits=tally.obstacle_hits,
-        mean_abs_cte=tally.cte_sum / tally.cte_count if tally.cte_count else None,
-        end=end,
-        steps_per_second=tally.steps / elapsed if elapsed > 0 else 0.0,
-        video=str(video) if video is not None else None,
-    )
+class _Run:
+    """One run's state: the finished episodes and the track pictures saved so far."""
+
+    def __init__(
+        self,
+        experiment: Experiment,
+        env: TinyRaceEnv,
+        driver: Driver,
+        run_dir: Path,
+        progress: Progress,
+    ):
+        self.experiment, self.config = experiment, experiment.config
+        self.env, self.driver, self.run_dir, self.progress = env, driver, run_dir, progress
+        self.limit = self.config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
+        self.results: list[EpisodeResult] = []
+        self.tracks: dict[str, dict[str, Any]] = {}
+        self.made_root = False  # the parent folder was made for this run
+        progress.limit = progress.limit or self.limit
+
+    def all(self) -> RunResult:
+        interrupted = None
+        with StopSignals() as stop:
+            try:
+                for episode in range(self.config.episodes):
+                    self.results.append(self._episode(episode, stop))
+            except Interrupted as exc:
+                interrupted = exc.signum
+            except BaseException as exc:
+                self._fail(exc)
+                raise
+            self._write(interrupted)
+        return RunResult(self.run_dir, self.results, interrupted)
+
+    def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
+        seed = self.config.seed + episode
+        recorder = self._recorder(episode, stop)
+        self.progress.start_episode(episode)
+        try:
+            run_episode(self.env, self.driver, seed, self.limit, recorder)
+        except DriverError as exc:
+            where = f"episode {episode} (seed {seed}): {exc}"
+            problem = Problem(self.experiment.source, "driver", self.config.driver, where)
+            raise ConfigError(problem) from exc
+        finally:
+            recorder.close()
+        trace = f"episode_{episode:03d}_trace.csv"
+        recorder.write_trace(self.run_dir / trace)
+        result = EpisodeResult(
+            episode=episode,
+            seed=seed,
+            episode_return=recorder.episode_return,
+            steps=recorder.steps,
+            tiles_visited=recorder.info.get("tiles_visited"),
+            tiles_total=recorder.info.get("tiles_total"),
+            laps=int(recorder.end == "lap_finished"),
+            obstacle_hits=recorder.obstacle_hits,
+            mean_abs_cte=recorder.mean_abs_cte,
+            end=recorder.end,
+            steps_per_second=self.progress.rate(recorder.steps),
+            lap_time=recorder.lap_time,
+            track=self._track_picture(seed),
+            video=recorder.video.path.name if recorder.video is not None else None,
+            trace=trace,
+        )
+        self.progress.end_episode(episode, result)
+        return result
+
+    def _recorder(self, episode: int, stop: StopSignals) -> EpisodeRecorder:
+        out = self.config.output
+        filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
+        video = None
+        if filmed:
+            fps = out.fps or self.env.config.sim.fps  # [Hz]
+            video = open_video(self.run_dir / f"episode_{episode:03d}", fps)
+
+        def on_step(recorder: EpisodeRecorder) -> None:
+            self.progress.update(recorder)
+            stop.check()
+
+        return EpisodeRecorder(
+            self.env.action_space, self.env.dt, video, self._frame, on_step=on_step
+        )
+
+    def _frame(self, observation: Any) -> np.ndarray:
+        view = self.config.output.view
+        return self.env.render() if view == "default" else observation[view]
+
+    def _track_picture(self, seed: int) -> str:
+        key, entry = save_track_picture(self.env, seed, self.run_dir, self.tracks)
+        self.tracks[key] = entry
+        return key
+
+    def _write(self, interrupted: int | None, error: str | None = None) -> None:
+        from tinyrace.experiment.report import write_report
+
+        header = {
+            "experiment": self.experiment.source,
+            "started": self.run_dir.name,
+            "interrupted": interrupted is not None,
+            "signal": None if interrupted is None else Interrupted(interrupted).args[0],
+            "error": error,
+            "episodes_planned": self.config.episodes,
+            "track_kind": self.env.config.kind,
+            "dt": self.env.dt,  # [s] per step
+            "tracks": self.tracks,
+            "config": dataclasses.asdict(self.config),
+        }
+        payload = write_files(self.run_dir, self.results, header)
+        write_report(self.run_dir, payload, self.results)
+
+    def _fail(self, exc: BaseException) -> None:
+        """No finished episode: leave nothing behind; else keep what finished."""
+        if not self.results:
+            shutil.rmtree(self.run_dir, ignore_errors=True)
+            if self.made_root and not any(self.run_dir.parent.iterdir()):
+                self.run_dir.parent.rmdir()  # made for this run only
+        else:
+            self._write(None, error=f"{type(exc).__name__}: {exc}")
 
 
 def _driver(spec: str, args: dict, source: str) -> Driver:
     """The experiment's driver; problems name the experiment file and its ``driver`` key."""
     try:
         return load_driver(spec, **args)
-    except (ValueError, TypeError) as exc:
+    except ValueError as exc:  # DriverError included: the factory raised
         raise ConfigError(Problem(source, "driver", spec, str(exc))) from None
-
-
-def _frame(env: TinyRaceEnv, observation, view: str) -> np.ndarray:
-    return env.render() if view == "default" else observation[view]
-
-
-def _write_frame(writer, path: Path, frame: np.ndarray, env: TinyRaceEnv, config):
-    if writer is None:
-        fps = config.output.fps or env.config.sim.fps
-        size = (frame.shape[1], frame.shape[0])
-        writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
-    writer.write(cv2.cvtColor(frame, cv2.COLOR_RGB2BGR))
-    return writer
 
 
 def _check_view(experiment: Experiment, env: TinyRaceEnv) -> None:
@@ -157,30 +207,26 @@ def _check_view(experiment: Experiment, env: TinyRaceEnv) -> None:
         raise ConfigError(Problem(experiment.source, "output.view", view, allowed))
 
 
-def _video_path(run_dir: Path, episode: int, config) -> Path | None:
-    out = config.output
-    if not out.video or (out.video_episodes is not None and episode >= out.video_episodes):
-        return None
-    return run_dir / f"episode_{episode:03d}.mp4"
-
-
-def _new_run_dir(root: Path, name: str) -> Path:
+def new_run_dir(root: Path, name: str) -> Path:
+    """``root/<name>-<YYYYmmdd-HHMMSS>``, with ``-2``, ``-3``... when taken (by this or
+    another process: the folder is claimed by an atomic mkdir)."""
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    run_dir, n = root / f"{name}-{stamp}", 1
-    while run_dir.exists():
-        n += 1
-        run_dir = root / f"{name}-{stamp}-{n}"
-    run_dir.mkdir(parents=True)
-    return run_dir
-
-
-def _plain(config) -> dict:
-    import dataclasses
-
-    return dataclasses.asdict(config)
+    root.mkdir(parents=True, exist_ok=True)
+    n = 1
+    while True:
+        run_dir = root / (f"{name}-{stamp}" if n == 1 else f"{name}-{stamp}-{n}")
+        try:
+            run_dir.mkdir()
+        except FileExistsError:
+            n += 1
+            continue
+        return run_dir
 
 
 def print_report(result: RunResult) -> None:
+    """The table of episodes, the summary and where the files are, on stdout."""
+    if result.interrupted is not None:
+        print(f"interrupted by {Interrupted(result.interrupted).args[0]}: finished episodes only")
     print(table(result.episodes))
     print()
     print(summary_text(result.summary))

@@ -14,7 +14,7 @@ import math
 import cv2
 import numpy as np
 
-from tinyrace.physics.dynamic_car import (
+from tinyrace.cars.dynamic import (
     HULL_POLYGONS,
     SIZE,
     WHEEL_HALF_WIDTH,

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from tinyrace.physics.dynamic_car import DynamicCar
+from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.render.car_sprite import CarSprite
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.texture import GroundTexture

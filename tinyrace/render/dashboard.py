@@ -12,7 +12,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from tinyrace.physics.dynamic_car import DynamicCar
+from tinyrace.cars.dynamic import DynamicCar
 
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)

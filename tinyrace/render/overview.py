@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 
 from tinyrace.config import Color
-from tinyrace.track.image import ImageTrack
+from tinyrace.tracks.image import ImageTrack
 
 FOOTPRINT_COLOR = (255, 64, 64)  # RGB
 CAR_COLOR = (204, 0, 0)

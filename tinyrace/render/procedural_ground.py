@@ -2,27 +2,17 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import cv2
 import numpy as np
 
 from tinyrace.render.texture import GroundTexture, transform_points
-from tinyrace.track.procedural import ProceduralTrack
+from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.tracks.procedural_source import GroundColors
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px precision
 LEVEL_ALIGN = 64  # texture sides are multiples of this: levels of detail halve exactly
 _KERB_RED = (255, 0, 0)
 _KERB_WHITE = (255, 255, 255)
-
-
-@dataclass(frozen=True)
-class GroundColors:
-    """RGB colours of one episode (domain randomisation redraws them)."""
-
-    road: np.ndarray  # (3,) float: the tile colours add a small shade to it
-    background: np.ndarray
-    grass: np.ndarray
 
 
 def tile_colors(road: np.ndarray, count: int) -> np.ndarray:

@@ -4,18 +4,19 @@ the trajectory and a legend of what the colours mean."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
-from tinyrace.episodes.procedural import config_colors, draw_colors, track_params
 from tinyrace.render.procedural_ground import GroundPainter
 from tinyrace.render.texture import GroundTexture, transform_points
-from tinyrace.track.image import ImageTrack
-from tinyrace.track.procedural import generate_track
+from tinyrace.tracks.image import ImageTrack
 from tinyrace.tracks.metric import MetricTrack
+from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
 
 MAX_SIDE = 1600  # [px] longest side of a picture
 SPAWN_COLOR = (255, 60, 60)  # RGB
@@ -23,23 +24,54 @@ TEXT_COLOR = (255, 255, 255)
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 
 
+MARGIN = 40  # [px] around the track's extent in procedural pictures
+
+
+@dataclass(frozen=True)
+class PictureFrame:
+    """Where world points land in a picture: ``px = x * sx + ox``, ``py = y * sy + oy``."""
+
+    sx: float
+    ox: float
+    sy: float
+    oy: float
+
+    def pixels(self, points: np.ndarray) -> np.ndarray:
+        """(..., 2) world points [track units] to (..., 2) pixel coordinates (float)."""
+        points = np.asarray(points, float)
+        return np.stack(
+            [points[..., 0] * self.sx + self.ox, points[..., 1] * self.sy + self.oy], axis=-1
+        )
+
+
+def procedural_ground(
+    track: ProceduralTrack, colors: GroundColors, playfield: float
+) -> tuple[np.ndarray, PictureFrame]:
+    """The track's ground, north up, cropped to the track and its kerbs plus a margin (the
+    texture's black padding beyond the playfield never shows)."""
+    ppu = MAX_SIDE / (2 * playfield)  # [px/u]
+    texture = GroundPainter(playfield).paint(track, colors, ppu)
+    image = cv2.cvtColor(texture.levels[0], cv2.COLOR_RGBA2RGB)[::-1]
+    full = PictureFrame(ppu, playfield * ppu, -ppu, image.shape[0] - playfield * ppu)
+    corners = full.pixels(np.concatenate([track.tiles.reshape(-1, 2), track.kerbs.reshape(-1, 2)]))
+    inside = round(2 * playfield * ppu)  # the playfield's pixels, without the padding
+    top = image.shape[0] - inside
+    x0, y0 = np.maximum(np.floor(corners.min(axis=0)) - MARGIN, (0, top)).astype(int)
+    x1, y1 = np.minimum(np.ceil(corners.max(axis=0)) + MARGIN, (inside, image.shape[0]))
+    crop = np.ascontiguousarray(image[y0 : int(y1), x0 : int(x1)])
+    return crop, PictureFrame(full.sx, full.ox - x0, full.sy, full.oy - y0)
+
+
 def procedural_picture(config: EnvConfig, seed: int) -> np.ndarray:
     """The track CarRacing would draw for ``seed``, north up, with the start and tile 0."""
-    track_config = config.tracks[0]
+    source = ProceduralSource(config)
     rng = seeding.np_random(seed)[0]  # what reset(seed=seed) gives the env
-    colors = draw_colors(rng) if track_config.domain_randomize else config_colors(track_config)
-    track = generate_track(rng, track_params(track_config))
-    playfield = track_config.playfield
-    ppu = MAX_SIDE / (2 * playfield)
-    texture = GroundPainter(playfield).paint(track, colors, ppu)
-    image = np.ascontiguousarray(cv2.cvtColor(texture.levels[0], cv2.COLOR_RGBA2RGB)[::-1])
-
-    def to_pixels(x: float, y: float) -> tuple[float, float]:
-        return (x + playfield) * ppu, (playfield - y) * ppu
-
+    track, colors = source.draw(rng, {}).track.detail, source.colors  # the env's reset order
+    image, frame = procedural_ground(track, colors, source.config.playfield)
     x, y, angle = track.start_pose
     heading = angle + math.pi / 2
-    _arrow(image, to_pixels(x, y), (math.cos(heading), -math.sin(heading)), 40)
+    start = frame.pixels(np.array([x, y]))
+    _arrow(image, tuple(start), (math.cos(heading), -math.sin(heading)), 40)
     lines = [
         f"procedural track, seed {seed}",
         f"{len(track.tiles)} tiles, {len(track.kerbs)} kerbs",
@@ -48,8 +80,8 @@ def procedural_picture(config: EnvConfig, seed: int) -> np.ndarray:
     return image
 
 
-def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
-    """The track image with the trajectory drawn back, spawns as arrows, and a colour legend."""
+def image_ground(config: EnvConfig, track: ImageTrack) -> tuple[np.ndarray, PictureFrame]:
+    """The track image (trajectory drawn back), scaled to at most MAX_SIDE."""
     width, height = track.size
     scale = min(1.0, MAX_SIDE / max(width, height))
     rgb = cv2.cvtColor(track.image, cv2.COLOR_RGBA2RGB)
@@ -59,8 +91,16 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
         rgb[ys, xs] = cte.trajectory_color
     size = (max(1, round(width * scale)), max(1, round(height * scale)))
     image = cv2.resize(rgb, size, interpolation=cv2.INTER_AREA) if scale < 1 else rgb
+    return image, PictureFrame(size[0] / width, 0.0, size[1] / height, 0.0)
+
+
+def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
+    """The track image with the trajectory drawn back, spawns as arrows, and a colour legend."""
+    image, frame = image_ground(config, track)
+    cte = config.reward_design.cross_track_error
     for j, (x, y, heading) in enumerate(track.spawns):
-        tip = _arrow(image, (x * scale, y * scale), (math.cos(heading), math.sin(heading)), 40)
+        start = tuple(frame.pixels(np.array([x, y])))
+        tip = _arrow(image, start, (math.cos(heading), math.sin(heading)), 40)
         cv2.putText(
             image, str(j), (int(tip[0]) + 4, int(tip[1])), _FONT, 0.6, SPAWN_COLOR, 2, cv2.LINE_AA
         )

@@ -23,6 +23,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from tinyrace.errors import ConfigError, Problem
+
 Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
 Box = tuple[float, float, float, float]  # (x0, y0, x1, y1) [track units]
 RGB = tuple[float, float, float]  # 0-255 per channel
@@ -112,3 +114,24 @@ class TrackSource(Protocol):
         changes nothing else. Raises ConfigError when the config cannot make a track.
         """
         ...
+
+
+def pick_index(
+    options: Mapping[str, object], key: str, count: int, rng: np.random.Generator
+) -> int:
+    """An index below ``count`` drawn from ``rng``, or the one ``options[key]`` picks.
+
+    The number is drawn even when an option picks, so that picking changes nothing else.
+    """
+    drawn = int(rng.integers(count))
+    chosen = options.get(key)
+    if chosen is None:
+        return drawn
+    if isinstance(chosen, bool) or not isinstance(chosen, (int, np.integer)):
+        chosen_ok = False
+    else:
+        chosen_ok = 0 <= chosen < count
+    if not chosen_ok:
+        allowed = f"expected a {key} index from 0 to {count - 1}"
+        raise ConfigError(Problem("<reset options>", key, chosen, allowed))
+    return int(chosen)  # type: ignore[arg-type]

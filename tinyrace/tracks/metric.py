@@ -1,5 +1,6 @@
 """Tracks in metres from the three real-world formats, as one kind of data.
 
+``MetricSource`` is the track source of the three kinds (``tracks/registry.py``);
 ``load_metric_track`` reads a ``centerline``, ``cone_map`` or ``ros_map`` track section
 (files relative to the config's folder) into a ``MetricTrack``: the closed road
 (``Circuit``: centreline, widths, tiles) when the source has one, the spawn, the
@@ -8,7 +9,7 @@ bounds, the cones and the walls. ``as_track`` gives the shared ``Track`` contrac
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,10 +19,11 @@ from tinyrace.config import (
     CenterlineTrackConfig,
     ConeMapTrackConfig,
     ConfigError,
+    EnvConfig,
     RosMapTrackConfig,
 )
 from tinyrace.errors import Problem
-from tinyrace.tracks.base import Surface, Track
+from tinyrace.tracks.base import Surface, Track, TrackDraw, pick_index
 from tinyrace.tracks.centerline_csv import read_loop
 from tinyrace.tracks.circuit import Circuit
 from tinyrace.tracks.cone_map import RADII, read_cones, road_between
@@ -168,3 +170,25 @@ LOADERS: dict[str, Callable[..., MetricTrack]] = {
     "cone_map": _cone_map,
     "ros_map": _ros_map,
 }
+
+
+class MetricSource:
+    """``track.type: centerline``, ``cone_map`` or ``ros_map``: every track read once per env."""
+
+    def __init__(self, config: EnvConfig, base_dir: Path, source: str):
+        self.kind = config.kind
+        loaded, problems = [], []
+        for index, track_config in enumerate(config.tracks):
+            try:
+                loaded.append(load_metric_track(track_config, index, base_dir, source))
+            except ConfigError as error:
+                problems += error.problems
+        if problems:
+            raise ConfigError(problems)
+        self.tracks = tuple(track.as_track() for track in loaded)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
+        """A track drawn from ``rng`` unless ``options['track']`` picks it (one spawn each)."""
+        track_index = pick_index(options, "track", len(self.tracks), rng)
+        spawn_index = pick_index(options, "spawn", 1, rng)
+        return TrackDraw(self.tracks[track_index], track_index, spawn_index)

@@ -36,6 +36,7 @@ import contextlib
 import functools
 import itertools
 import multiprocessing
+import os
 import pickle
 from collections.abc import Callable, Sequence
 from copy import deepcopy
@@ -286,6 +287,21 @@ def make_batch(
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``."""
     maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv([maker] * num_envs, workers=workers, context=context)
+
+
+def make_carracing_vec(num_envs: int = 1, workers: int | None = None, **kwargs: Any):
+    """``gym.make_vec("tinyrace/CarRacing-v0", vectorization_mode="vector_entry_point")``."""
+    return make_batch("tinyrace/CarRacing-v0", num_envs, _workers(num_envs, workers), **kwargs)
+
+
+def make_tinyrace_vec(num_envs: int = 1, workers: int | None = None, **kwargs: Any):
+    """``gym.make_vec("tinyrace/TinyRace-v0", vectorization_mode="vector_entry_point")``."""
+    return make_batch("tinyrace/TinyRace-v0", num_envs, _workers(num_envs, workers), **kwargs)
+
+
+def _workers(num_envs: int, workers: int | None) -> int:
+    """One worker process per core by default, never more than envs."""
+    return workers if workers is not None else max(1, min(num_envs, os.cpu_count() or 1))
 
 
 def _make(id: str, kwargs: dict[str, Any]) -> gym.Env:

@@ -6,7 +6,8 @@ red/white kerbs on the hard turns, and one road tile per lap point. Given the
 same ``numpy.random.Generator`` state, :func:`generate_track` returns the
 track CarRacing-v3 builds after ``reset`` (tiles and kerbs within 1e-6 u).
 
-Pure numpy: no physics, no drawing, no gymnasium.
+Pure numpy: no physics, no drawing, no gymnasium (the track source that reads the
+config is ``tinyrace.tracks.procedural_source``).
 """
 
 from __future__ import annotations
@@ -26,6 +27,10 @@ _START_RADIUS_FACTOR = 1.5  # first and last checkpoints sit at 1.5 * radius
 _MAX_LAPS = 4  # the path stops once it has completed more laps than this
 _MAX_STEPS = 2500  # hard cap on path points
 _KERB_TURN_FRACTION = 0.2  # a hard turn steps by more than this fraction of turn_rate
+
+
+class NoClosedLap(RuntimeError):
+    """The generator found no closed lap within ``max_attempts``."""
 
 
 @dataclass(frozen=True)
@@ -78,7 +83,7 @@ def generate_track(
         lap = _extract_lap(_trace_path(checkpoints, params), params)
         if lap is not None:
             return _build_track(lap, params, attempt)
-    raise RuntimeError(
+    raise NoClosedLap(
         f"no closed track after {params.max_attempts} attempts; "
         "raise max_attempts or check radius, detail_step and turn_rate"
     )

@@ -9,6 +9,7 @@ world units: x right, y down.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,8 +17,9 @@ import cv2
 import numpy as np
 
 from tinyrace.config import Color, EnvConfig, ImageTrackConfig
-from tinyrace.errors import Problem
-from tinyrace.track.nearest import NearestPoint
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.tracks.base import ColorLayer, Track, TrackDraw, pick_index
+from tinyrace.tracks.nearest import NearestPoint
 
 THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
 CELL = 32  # [px] side of the obstacle broad-phase cells
@@ -229,3 +231,57 @@ def _row_spans(corners: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.nd
     left = np.where(crosses, xs, np.inf).min(axis=1)
     right = np.where(crosses, xs, -np.inf).max(axis=1)
     return left, right
+
+
+class ImageSource:
+    """``track.type: image``: tinycarlo track images, each loaded once per env."""
+
+    kind = "image"
+
+    def __init__(self, config: EnvConfig, base_dir: Path, source: str):
+        loaded, problems = [], []
+        for index, track_config in enumerate(config.tracks):
+            track, found = load_image_track(track_config, index, config, base_dir, source)
+            problems += found
+            if track is not None:
+                loaded.append(track)
+        if problems:
+            raise ConfigError(problems)
+        cte = config.reward_design.cross_track_error
+        self.tracks = tuple(as_track(t, cte.trajectory_color) for t in loaded)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
+        """A track then a spawn, each drawn from ``rng`` unless ``options`` picks it."""
+        track_index = pick_index(options, "track", len(self.tracks), rng)
+        spawn_index = pick_index(options, "spawn", len(self.tracks[track_index].spawns), rng)
+        return TrackDraw(self.tracks[track_index], track_index, spawn_index)
+
+
+def as_track(image_track: ImageTrack, trajectory_color: Color) -> Track:
+    """The generic view of a loaded image track: pixels are the unit, y points down."""
+    width, height = image_track.size
+    layers = [
+        ColorLayer(
+            f"obstacle {i}",
+            "obstacle",
+            tuple(color),
+            cells=image_track.cells[image_track.cell_obstacles == i],
+        )
+        for i, color in enumerate(image_track.obstacle_colors)
+    ]
+    if image_track.trajectory_mask is not None:
+        points = image_track.trajectory_mask
+        layers.append(
+            ColorLayer("trajectory", "trajectory", tuple(trajectory_color), points=points)
+        )
+    return Track(
+        kind="image",
+        unit="px",
+        metres_per_unit=None,
+        y_down=True,
+        bounds=(-0.5, -0.5, width - 0.5, height - 0.5),
+        spawns=image_track.spawns,
+        layers=tuple(layers),
+        picture=image_track.image,
+        detail=image_track,
+    )

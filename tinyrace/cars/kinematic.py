@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import pymunk
 
-from tinyrace.physics.world import footprint_sensor
+from tinyrace.world.snapshot import CarState
+from tinyrace.world.world import footprint_sensor
 
 
 @dataclass
@@ -68,6 +69,21 @@ class KinematicCar:
         speed = self.velocity * chord
         self.body.velocity = (speed * math.cos(direction), speed * math.sin(direction))
         self.body.angular_velocity = turn_rate
+
+    def state(self) -> CarState:
+        """A copy of the car's state for sensors and pictures."""
+        vx, vy = self.body.velocity
+        return CarState(
+            model="kinematic",
+            pose=self.pose,
+            velocity=(vx, vy),
+            speed=self.speed,
+            yaw_rate=self.body.angular_velocity,
+            steer=self.steer,
+            front_axle=self.front_axle,
+            rear_axle=self.rear_axle,
+            footprint=self.footprint,
+        )
 
     @property
     def pose(self) -> tuple[float, float, float]:

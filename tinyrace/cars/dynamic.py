@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pymunk
 
-from tinyrace.physics.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
+from tinyrace.world.snapshot import CarState, WheelState
+from tinyrace.world.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
 
 SIZE = 0.02  # [u per model unit] CarRacing's car model scale
 
@@ -260,6 +261,23 @@ class DynamicCar:
             self._skid_start[index] = None
 
     # -- state -------------------------------------------------------------------------------
+    def state(self) -> CarState:
+        """A copy of the car's state for sensors and pictures."""
+        vx, vy = self.body.velocity
+        radius = self.wheel_radius
+        return CarState(
+            model="dynamic",
+            pose=self.pose,
+            velocity=(vx, vy),
+            speed=self.speed,
+            yaw_rate=self.body.angular_velocity,
+            steer=self.wheels[0].steer,
+            front_axle=self.front_axle,
+            rear_axle=self.rear_axle,
+            footprint=self.footprint,
+            wheels=tuple(WheelState(w.omega, w.steer, radius) for w in self.wheels),
+        )
+
     @property
     def pose(self) -> tuple[float, float, float]:
         """(x, y, heading) in track units; heading is the forward direction's angle from +x."""

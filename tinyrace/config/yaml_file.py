@@ -1,0 +1,205 @@
+"""Reading YAML the user wrote, with bounds: nothing read whole before it is known to be small.
+
+A file is refused with a ConfigError (file, line, what is allowed) when it is not a regular
+file (a folder, FIFO or device), larger than ``MAX_YAML_BYTES``, not UTF-8, nested deeper than
+``MAX_DEPTH``, expands (aliases included) to more than ``MAX_VALUES`` values, holds a recursive
+alias, or repeats a key in one mapping (the message names both lines). The shape is checked on
+the parser's event stream, which needs no recursion, before any object is built.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from tinyrace.errors import ConfigError, Problem
+
+MAX_YAML_BYTES = 1 << 20  # [bytes] a track.yaml or experiment file (1 MiB)
+MAX_DEPTH = 32  # nested mappings and lists; the schema itself nests 4 deep
+MAX_VALUES = 200_000  # scalars and collections after alias expansion
+
+_BaseLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when installed
+_COLLECTION_START = (yaml.MappingStartEvent, yaml.SequenceStartEvent)
+_COLLECTION_END = (yaml.MappingEndEvent, yaml.SequenceEndEvent)
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+
+
+class _Refused(Exception):
+    """A bound was crossed at ``mark`` (a YAML mark or None)."""
+
+    def __init__(self, mark: Any, reason: str):
+        super().__init__(reason)
+        self.mark, self.reason = mark, reason
+
+
+def read_yaml(path: Path) -> Any:
+    """Read and parse a YAML file the user wrote; every failure is a ConfigError naming it."""
+    return parse_yaml(read_text(path), str(path))
+
+
+def read_text(path: Path, limit: int = MAX_YAML_BYTES) -> str:
+    """The UTF-8 text of a regular file of at most ``limit`` bytes."""
+    source = str(path)
+    data = read_bytes(path, limit, "a YAML file")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        allowed = f"expected UTF-8 text (byte {exc.start} is not)"
+        raise ConfigError(Problem(source, "", source, allowed)) from None
+
+
+def read_bytes(path: Path, limit: int, what: str) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes, opened without blocking.
+
+    A FIFO, device or folder is refused before anything is read from it.
+    """
+    source = str(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise ConfigError(Problem(source, "", source, "the file does not exist")) from None
+    except (OSError, ValueError) as exc:  # permissions, a NUL byte, a name too long
+        allowed = f"expected {what} that can be read ({_reason(exc)})"
+        raise ConfigError(Problem(source, "", source, allowed)) from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            allowed = f"expected {what} (a regular file), not {_file_kind(info.st_mode)}"
+            raise ConfigError(Problem(source, "", source, allowed))
+        if info.st_size > limit:
+            allowed = f"expected {what} of at most {limit:,} bytes (it has {info.st_size:,})"
+            raise ConfigError(Problem(source, "", source, allowed))
+        with os.fdopen(fd, "rb", closefd=False) as file:
+            data = file.read(limit + 1)  # a file that grows while read is cut here
+    finally:
+        os.close(fd)
+    if len(data) > limit:
+        allowed = f"expected {what} of at most {limit:,} bytes"
+        raise ConfigError(Problem(source, "", source, allowed))
+    return data
+
+
+def parse_yaml(text: str, source: str) -> Any:
+    """Parse YAML text within the bounds above; ``source`` names it in errors."""
+    try:
+        _check_shape(text)
+        return yaml.load(text, Loader=_StrictLoader)
+    except _Refused as exc:
+        raise ConfigError(
+            Problem(source, _line(exc.mark), _text_at(text, exc.mark), exc.reason)
+        ) from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        reason = getattr(exc, "problem", None) or str(exc)
+        problem = Problem(source, _line(mark), _text_at(text, mark), f"invalid YAML: {reason}")
+        raise ConfigError(problem) from None
+    except (ValueError, OverflowError, TypeError, RecursionError) as exc:  # e.g. 2001-13-45
+        allowed = f"invalid YAML: a value cannot be read ({_reason(exc)})"
+        raise ConfigError(Problem(source, "", source, allowed)) from None
+
+
+def _check_shape(text: str) -> None:
+    """Depth, alias expansion and recursion, from the event stream (no recursion, no objects)."""
+    stack: list[list[Any]] = []  # open collections: [expanded size, depth below, anchor]
+    anchors: dict[str, tuple[int, int]] = {}  # anchor -> (expanded size, depth below)
+    total = 0
+    for event in yaml.parse(text, Loader=_BaseLoader):
+        if isinstance(event, _COLLECTION_START):
+            stack.append([1, 0, event.anchor])
+            if len(stack) > MAX_DEPTH:
+                raise _Refused(event.start_mark, f"nesting deeper than {MAX_DEPTH} levels")
+            size = 1
+        elif isinstance(event, _COLLECTION_END):
+            size, below, anchor = stack.pop()
+            _add(stack, size, below + 1, anchor, anchors)
+            continue
+        elif isinstance(event, yaml.ScalarEvent):
+            size = 1
+            _add(stack, size, 0, event.anchor, anchors)
+        elif isinstance(event, yaml.AliasEvent):
+            size, depth = _alias(event, stack, anchors)
+            _add(stack, size, depth, None, anchors)
+        else:
+            continue
+        total += size
+        if total > MAX_VALUES:
+            raise _Refused(event.start_mark, f"more than {MAX_VALUES:,} values (aliases expanded)")
+
+
+def _alias(event: yaml.AliasEvent, stack: list[list[Any]], anchors: dict) -> tuple[int, int]:
+    if any(frame[2] == event.anchor for frame in stack):
+        raise _Refused(event.start_mark, f"an alias *{event.anchor} inside its own anchor")
+    size, depth = anchors.get(event.anchor, (1, 0))  # an unknown alias: the loader says so
+    if len(stack) + depth > MAX_DEPTH:
+        reason = f"nesting deeper than {MAX_DEPTH} levels (alias *{event.anchor} expanded)"
+        raise _Refused(event.start_mark, reason)
+    return size, depth
+
+
+def _add(stack: list[list[Any]], size: int, depth: int, anchor: str | None, anchors: dict) -> None:
+    """Count a finished node into its parent; remember what an anchor expands to."""
+    if anchor is not None:
+        anchors[anchor] = (size, depth)
+    if stack:
+        stack[-1][0] += size
+        stack[-1][1] = max(stack[-1][1], depth)
+
+
+class _StrictLoader(_BaseLoader):  # type: ignore[misc, valid-type]
+    """The safe loader, refusing a key given twice in one mapping."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: dict[Any, Any] = {}
+        for key_node, _ in node.value:
+            if key_node.tag == _MERGE_TAG:
+                continue
+            key = self.construct_object(key_node, deep=True)
+            try:
+                first = seen.setdefault(key, key_node.start_mark)
+            except TypeError:  # an unhashable key: the base loader reports it
+                continue
+            if first is not key_node.start_mark:
+                reason = (
+                    f"the key {_short(key)} is given twice in one mapping: "
+                    f"lines {first.line + 1} and {key_node.start_mark.line + 1}"
+                )
+                raise _Refused(key_node.start_mark, reason)
+        return super().construct_mapping(node, deep=deep)
+
+
+def _line(mark: Any) -> str:
+    return f"line {mark.line + 1}" if mark is not None else ""
+
+
+def _text_at(text: str, mark: Any) -> str:
+    """The line a mark points at, shortened (a one-line file may be megabytes long)."""
+    if mark is None:
+        return ""
+    lines = text.split("\n", mark.line + 1)
+    line = lines[mark.line] if mark.line < len(lines) else ""
+    return line if len(line) <= 200 else line[:197] + "..."
+
+
+def _short(value: object) -> str:
+    text = repr(value) if not isinstance(value, int) or value.bit_length() < 256 else "<int>"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _reason(exc: BaseException) -> str:
+    text = str(exc) or type(exc).__name__
+    return text if len(text) <= 120 else text[:117] + "..."
+
+
+def _file_kind(mode: int) -> str:
+    kinds = (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    )
+    return next((name for test, name in kinds if test(mode)), "a special file")

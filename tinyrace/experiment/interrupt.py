@@ -1,0 +1,55 @@
+"""Stopping a run cleanly on SIGINT or SIGTERM: the first signal asks the episode loop to stop
+after the current step (files and videos are then finished); a second one stops at once."""
+
+from __future__ import annotations
+
+import signal
+import threading
+from types import FrameType
+
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class Interrupted(BaseException):
+    """The run was stopped by a signal (a BaseException, like KeyboardInterrupt)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_code(self) -> int:
+        """The shell's convention: 128 + the signal number (130 SIGINT, 143 SIGTERM)."""
+        return 128 + self.signum
+
+
+class StopSignals:
+    """A context that turns SIGINT and SIGTERM into a stop request, checked by ``check()``.
+
+    Outside the main thread signals cannot be caught: the context then does nothing.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._previous: dict[int, object] = {}
+
+    def __enter__(self) -> StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            for signum in SIGNALS:
+                self._previous[signum] = signal.signal(signum, self._handle)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        for signum, handler in self._previous.items():
+            signal.signal(signum, handler)
+        self._previous.clear()
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.signum is not None:  # asked twice: do not wait for the step to end
+            raise Interrupted(signum)
+        self.signum = signum
+
+    def check(self) -> None:
+        """Raise Interrupted if a stop was asked for."""
+        if self.signum is not None:
+            raise Interrupted(self.signum)

@@ -1,0 +1,127 @@
+"""Per-episode table, summary (mean and std), results.json and episodes.csv; read back."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from dataclasses import fields as fields_of
+from pathlib import Path
+
+RESULTS_FILE = "results.json"
+EPISODES_FILE = "episodes.csv"
+
+
+@dataclass
+class EpisodeResult:
+    """What one episode achieved."""
+
+    episode: int
+    seed: int
+    episode_return: float
+    steps: int
+    tiles_visited: int | None  # procedural tracks
+    tiles_total: int | None
+    laps: int  # procedural: 1 if the lap was finished
+    obstacle_hits: int  # steps on which the footprint touched an obstacle colour
+    mean_abs_cte: float | None  # [px] image tracks with use_cte
+    end: str  # lap_finished, out_of_bounds, obstacle, step_limit, max_steps
+    steps_per_second: float
+    lap_time: float | None = None  # [s] reset to lap end; None without a finished lap
+    track: str = ""  # which track picture the episode ran on (a key of results.json "tracks")
+    video: str | None = None  # file name in the run folder
+    trace: str | None = None  # the per-step trace file (record.TRACE_COLUMNS)
+
+
+COLUMNS = (
+    ("episode", "ep", "{:d}"),
+    ("episode_return", "return", "{:.1f}"),
+    ("steps", "steps", "{:d}"),
+    ("tiles", "tiles", "{}"),
+    ("laps", "laps", "{:d}"),
+    ("lap_time", "lap [s]", "{:.2f}"),
+    ("obstacle_hits", "hits", "{:d}"),
+    ("mean_abs_cte", "|cte|", "{:.1f}"),
+    ("end", "end", "{}"),
+)
+SUMMARIZED = (
+    "episode_return",
+    "steps",
+    "laps",
+    "lap_time",
+    "obstacle_hits",
+    "mean_abs_cte",
+    "steps_per_second",
+)
+
+
+def _cell(result: EpisodeResult, key: str, fmt: str) -> str:
+    if key == "tiles":
+        return "-" if result.tiles_total is None else f"{result.tiles_visited}/{result.tiles_total}"
+    value = getattr(result, key)
+    return "-" if value is None else fmt.format(value)
+
+
+def table(results: Sequence[EpisodeResult]) -> str:
+    """A fixed-width table, one row per episode."""
+    rows = [[title for _, title, _ in COLUMNS]]
+    rows += [[_cell(r, key, fmt) for key, _, fmt in COLUMNS] for r in results]
+    widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
+    lines = ["  ".join(cell.rjust(w) for cell, w in zip(row, widths, strict=True)) for row in rows]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def summary(results: Sequence[EpisodeResult]) -> dict[str, dict[str, float]]:
+    """Mean and (population) standard deviation of each numeric metric over the episodes."""
+    stats = {}
+    for key in SUMMARIZED:
+        values = [getattr(r, key) for r in results if getattr(r, key) is not None]
+        if values:
+            mean = sum(values) / len(values)
+            std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
+            stats[key] = {"mean": mean, "std": std}
+    return stats
+
+
+def summary_text(stats: dict[str, dict[str, float]]) -> str:
+    return "\n".join(f"{key:>18}: {s['mean']:.2f} ± {s['std']:.2f}" for key, s in stats.items())
+
+
+def write_files(run_dir: Path, results: Sequence[EpisodeResult], header: dict) -> dict:
+    """results.json (everything) and episodes.csv (one row per episode); returns the payload."""
+    rows = [asdict(r) for r in results]
+    payload = {**header, "episodes": rows, "summary": summary(results)}
+    (run_dir / RESULTS_FILE).write_text(json.dumps(payload, indent=2, default=str) + "\n")
+    fields = [f.name for f in fields_of(EpisodeResult)]
+    with (run_dir / EPISODES_FILE).open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(rows)
+    return payload
+
+
+def read_files(run_dir: Path) -> tuple[dict, list[EpisodeResult]]:
+    """results.json's header and the episodes of episodes.csv (what ``tinyrace report`` reads)."""
+    header = json.loads((run_dir / RESULTS_FILE).read_text())
+    with (run_dir / EPISODES_FILE).open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    return header, [_episode(row) for row in rows]
+
+
+def _episode(row: dict[str, str]) -> EpisodeResult:
+    values = {}
+    for f in fields_of(EpisodeResult):
+        text = row.get(f.name, "")
+        kind = str(f.type)
+        if text == "" and ("None" in kind or f.name == "track"):
+            values[f.name] = None if "None" in kind else ""
+        elif kind.startswith("int"):
+            values[f.name] = int(text)
+        elif kind.startswith("float"):
+            values[f.name] = float(text)
+        else:
+            values[f.name] = text
+    return EpisodeResult(**values)

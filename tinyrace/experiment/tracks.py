@@ -1,0 +1,46 @@
+"""The track under each episode, saved once per track as a picture with its world-to-pixel
+frame, start and lap line: what the report draws trajectories over."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import cv2
+
+from tinyrace.env import TinyRaceEnv
+from tinyrace.render.track_picture import image_ground, procedural_ground
+
+
+def save_track_picture(
+    env: TinyRaceEnv, seed: int, run_dir: Path, known: dict[str, dict[str, Any]]
+) -> tuple[str, dict[str, Any]]:
+    """(key, entry) of the env's current track; writes ``track_<key>.png`` the first time.
+
+    Procedural tracks differ per seed; image tracks per track index. The entry holds the
+    picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox, py = y * sy + oy), the
+    start pose and, on procedural tracks, the lap line (two points) in track units.
+    """
+    episode = env.unwrapped.episode
+    procedural = env.config.kind == "procedural"
+    key = f"seed{seed}" if procedural else f"track{episode.track_index}"
+    if key in known:
+        return key, known[key]
+    if procedural:
+        track = episode.track
+        image, frame = procedural_ground(track, episode.colors, env.config.tracks[0].playfield)
+        start = track.start_pose
+        lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
+    else:
+        image, frame = image_ground(env.config, episode.track)
+        start, lap_line = episode.track.spawns[episode.spawn_index], None
+    name = f"track_{key}.png"
+    cv2.imwrite(str(run_dir / name), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    entry = {
+        "image": name,
+        "frame": [frame.sx, frame.ox, frame.sy, frame.oy],
+        "start": [float(v) for v in start[:2]],
+        "lap_line": lap_line,
+        "unit": "u" if procedural else "px",
+    }
+    return key, entry

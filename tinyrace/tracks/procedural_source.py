@@ -1,0 +1,128 @@
+"""``track.type: procedural``: CarRacing's track, drawn anew from the env's rng per reset.
+
+``ProceduralSource.draw`` holds CarRacing's reset order of random numbers (colours when
+randomised, then the track); the env and ``tinyrace show`` both call it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tinyrace.config import EnvConfig, ProceduralTrackConfig
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.tracks.base import Surface, Track, TrackDraw
+from tinyrace.tracks.procedural import (
+    NoClosedLap,
+    ProceduralTrack,
+    ProceduralTrackParams,
+    generate_track,
+)
+
+GRASS_FRICTION = 0.6  # CarRacing's grip off the road, as a fraction of the road's
+RANDOM_COLOR_HIGH = 210  # domain randomisation: road and background channels uniform(0, 210)
+RANDOM_GRASS_SHIFT = 20  # ... and the grass is the background + 20 on one channel
+_NO_LAP = (
+    "expected knobs that close a lap: a smaller radius, a longer detail_step "
+    "or a larger turn_rate (the track generator found no closed lap)"
+)
+
+
+@dataclass(frozen=True)
+class GroundColors:
+    """RGB colours of one episode (domain randomisation redraws them)."""
+
+    road: np.ndarray  # (3,) float: the tile colours add a small shade to it
+    background: np.ndarray
+    grass: np.ndarray
+
+
+def track_params(config: ProceduralTrackConfig) -> ProceduralTrackParams:
+    """The generator's knobs from the ``track`` section."""
+    return ProceduralTrackParams(
+        checkpoints=config.checkpoints,
+        radius=config.radius,
+        half_width=config.half_width,
+        turn_rate=config.turn_rate,
+        detail_step=config.detail_step,
+        border=config.border,
+        border_min_count=config.border_min_count,
+    )
+
+
+def draw_colors(rng: np.random.Generator) -> GroundColors:
+    """Domain randomisation: road, background uniform(0, 210); grass +20 on one channel."""
+    road = rng.uniform(0, RANDOM_COLOR_HIGH, size=3)
+    background = rng.uniform(0, RANDOM_COLOR_HIGH, size=3)
+    grass = background.copy()
+    grass[rng.integers(3)] += RANDOM_GRASS_SHIFT
+    return GroundColors(road, background, grass)
+
+
+def config_colors(config: ProceduralTrackConfig) -> GroundColors:
+    """The configured colours (no randomisation)."""
+    return GroundColors(
+        np.array(config.road_color, float),
+        np.array(config.background_color, float),
+        np.array(config.grass_color, float),
+    )
+
+
+class ProceduralSource:
+    """``track.type: procedural``: a new CarRacing track per reset.
+
+    ``colors`` are the last episode's: a reset with ``randomize: False`` keeps them.
+    """
+
+    kind = "procedural"
+
+    def __init__(self, config: EnvConfig, base_dir: Path | None = None, source: str = ""):
+        self.config: ProceduralTrackConfig = config.tracks[0]
+        self.source = source
+        self.params = track_params(self.config)
+        self.colors = config_colors(self.config)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
+        """CarRacing's reset order: colours (when randomised) are drawn before the track."""
+        if self.config.domain_randomize and options.get("randomize", True):
+            self.colors = draw_colors(rng)
+        try:
+            generated = generate_track(rng, self.params)
+        except NoClosedLap as exc:
+            c = self.config
+            knobs = {"radius": c.radius, "detail_step": c.detail_step, "turn_rate": c.turn_rate}
+            raise ConfigError(Problem(self.source, "tracks[0]", knobs, _NO_LAP)) from exc
+        return TrackDraw(self.track(generated), 0, 0)
+
+    def track(self, generated: ProceduralTrack) -> Track:
+        """The generic view of a generated track, in CarRacing's units, y up."""
+        x, y, hull_angle = generated.start_pose
+        side = self.config.playfield  # [u]
+        colors = self.colors
+        return Track(
+            kind=self.kind,
+            unit="u",
+            metres_per_unit=None,
+            y_down=False,
+            bounds=(-side, -side, side, side),
+            spawns=((x, y, hull_angle + math.pi / 2),),
+            centerline=generated.centerline,
+            tiles=generated.tiles,
+            surfaces=(Surface("road", 1.0, generated.tiles),),
+            off_road_friction=GRASS_FRICTION,
+            palette={
+                "road": _rgb(colors.road),
+                "background": _rgb(colors.background),
+                "grass": _rgb(colors.grass),
+            },
+            detail=generated,
+        )
+
+
+def _rgb(color: np.ndarray) -> tuple[float, float, float]:
+    r, g, b = color.tolist()
+    return float(r), float(g), float(b)
