@@ -36,6 +36,10 @@ class PictureFrame:
     sy: float
     oy: float
 
+    def matrix(self) -> np.ndarray:
+        """The 2x3 affine of ``pixels``."""
+        return np.array([[self.sx, 0.0, self.ox], [0.0, self.sy, self.oy]])
+
     def pixels(self, points: np.ndarray) -> np.ndarray:
         """(..., 2) world points [track units] to (..., 2) pixel coordinates (float)."""
         points = np.asarray(points, float)
@@ -114,13 +118,20 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
     return image
 
 
-def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
-    """A track in metres, north up: the road or map, cones, the reference line, the start."""
+def metric_ground(track: MetricTrack, texture: GroundTexture) -> tuple[np.ndarray, PictureFrame]:
+    """A track in metres, north up, its longest side MAX_SIDE px: the road or map, cones."""
     x0, y0, x1, y1 = track.bounds
     scale = MAX_SIDE / max(x1 - x0, y1 - y0)  # [px/m]
     size = (max(round((x1 - x0) * scale), 1), max(round((y1 - y0) * scale), 1))
-    matrix = np.array([[scale, 0.0, -x0 * scale], [0.0, -scale, y1 * scale]])
-    image = texture.warp(matrix, size)
+    frame = PictureFrame(scale, -x0 * scale, -scale, y1 * scale)
+    return texture.warp(frame.matrix(), size), frame
+
+
+def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
+    """A track in metres, north up: the road or map, cones, the reference line, the start."""
+    image, frame = metric_ground(track, texture)
+    matrix = frame.matrix()
+    x0, y0, x1, y1 = track.bounds
     entries: list = [(None, f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m")]
     if track.circuit is not None:
         line = transform_points(matrix, np.vstack((track.centerline, track.centerline[:1])))
