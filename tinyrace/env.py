@@ -15,8 +15,14 @@ from tinyrace.config import EnvConfig, load_env_config
 from tinyrace.episodes.procedural import OBSERVATION_SIZE
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.render.texture import GroundTexture
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
+from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.birdseye_camera import BirdseyeCamera
+from tinyrace.sensors.registry import sensor_type
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
@@ -82,23 +88,23 @@ class TinyRaceEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
-        box = self.config.observation == "box" and len(self.config.cameras) == 1
-        self._box_camera = self.config.cameras[0].id if box else None
+        self._ground = EpisodeGround()
+        self.sensors = _cameras(self.config, SensorContext(self.config, self._ground))
+        box = self.config.observation == "box" and len(self.sensors) == 1
+        self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
         self._shaping = cte_shaping or shaping_from_config(self.config.reward_design)
         self.episode = None
+        self.layout: Track | None = None  # the episode's track, as sensors see it
         self._window: Window | None = None
 
     def _observation_space(self) -> spaces.Space:
-        if not self.config.cameras:
+        if not self.sensors:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
-        images = {
-            c.id: spaces.Box(0, 255, (*c.resolution, 3), np.uint8) for c in self.config.cameras
-        }
         if self._box_camera is not None:  # ``observation: box``: the one camera's image alone
-            return images[self._box_camera]
-        return spaces.Dict(images)
+            return self.sensors[0].space
+        return spaces.Dict({sensor.id: sensor.space for sensor in self.sensors})
 
     # -- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -106,6 +112,9 @@ class TinyRaceEnv(gym.Env):
         options = _check_options(options)
         draw = self.track_source.draw(self.np_random, options)
         self.episode = self.course.new_episode(draw)
+        self._ground.episode, self.layout = self.episode, draw.track
+        for sensor in self.sensors:
+            sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
             attempts = getattr(draw.track.detail, "attempts", 1)
             print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
@@ -152,8 +161,20 @@ class TinyRaceEnv(gym.Env):
         return observation, reward, reason is not None, truncated, info
 
     def _observe(self):
-        observation = self.episode.observe(self.t, self.score)
+        if not self.sensors:  # CarRacing's view
+            return self.episode.observe(self.t, self.score)
+        snapshot = self.snapshot()
+        observation = {
+            sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
+            for sensor in self.sensors
+        }
         return observation if self._box_camera is None else observation[self._box_camera]
+
+    def snapshot(self) -> Snapshot:
+        """A copy of the world's state now (what sensors and pictures read)."""
+        if self.episode is None:
+            raise ResetNeeded("call reset() before reading a snapshot")
+        return Snapshot(self.t, self.steps, (self.episode.car.state(),))
 
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
         info = self.episode.info()
@@ -183,13 +204,26 @@ class TinyRaceEnv(gym.Env):
             return None
         if self.episode is None:
             raise ResetNeeded("call reset() before render()")
-        frame = self.episode.frame(self.render_mode, self.t, self.score)
+        frame = self.episode.frame(self.render_mode, self.t, self.score, self._camera_views())
         if self.render_mode != "human":
             return frame
         if self._window is None:
             self._window = Window("tinyrace", self.metadata["render_fps"])
         self._window.show(frame, realtime=self.config.sim.render_realtime)
         return None
+
+    def _camera_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each camera's image and track window now, for the overview picture."""
+        if not self.sensors:
+            return []
+        snapshot = self.snapshot()
+        return [
+            (
+                camera.observe(snapshot, self.layout, self.np_random),
+                camera.window(snapshot, self.layout),
+            )
+            for camera in self.sensors
+        ]
 
     def close(self):
         if self._window is not None:
@@ -200,6 +234,22 @@ class TinyRaceEnv(gym.Env):
         state = self.__dict__.copy()
         state["_window"] = None  # a window belongs to this process
         return state
+
+
+class EpisodeGround:
+    """The cameras' ground: the current episode's texture (CarRacing repaints visited tiles)."""
+
+    def __init__(self) -> None:
+        self.episode: Any = None
+
+    def texture(self, track: Track) -> GroundTexture:
+        return self.episode.ground_texture()
+
+
+def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
+    """tinycarlo's ``cameras:`` list, each entry a ``birdseye_camera`` sensor."""
+    camera_type = sensor_type("birdseye_camera", "<registry>", "cameras")
+    return [camera_type.build(entry, context) for entry in config.cameras]
 
 
 def _check_options(options: dict | None) -> dict:

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from tinyrace.config import RewardConfig
-from tinyrace.episodes import StepFacts
+from tinyrace.world.facts import StepFacts
 
 CteShaping = Callable[[float], float]
 

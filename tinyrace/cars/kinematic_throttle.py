@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import pymunk
 
+from tinyrace.world.snapshot import CarState
 from tinyrace.world.world import footprint_sensor
 
 
@@ -92,6 +93,21 @@ class KinematicThrottleCar:
         """A crash: the car stands still."""
         self.velocity = 0.0
         self.body.velocity, self.body.angular_velocity = (0.0, 0.0), 0.0
+
+    def state(self) -> CarState:
+        """A copy of the car's state for sensors and pictures."""
+        vx, vy = self.body.velocity
+        return CarState(
+            model="kinematic_throttle",
+            pose=self.pose,
+            velocity=(vx, vy),
+            speed=self.speed,
+            yaw_rate=self.body.angular_velocity,
+            steer=self.steer,
+            front_axle=self.front_axle,
+            rear_axle=self.rear_axle,
+            footprint=self.footprint,
+        )
 
     @property
     def pose(self) -> tuple[float, float, float]:

@@ -9,12 +9,12 @@ import numpy as np
 
 from tinyrace.cars.registry import CarModel
 from tinyrace.config import EnvConfig
-from tinyrace.episodes import StepFacts
+from tinyrace.episodes.procedural import CameraViews
 from tinyrace.render.overview import Overview
 from tinyrace.render.texture import GroundTexture
-from tinyrace.sensors.birdseye_camera import RoiCamera
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.image import ImageSource, ImageTrack, touched_obstacles
+from tinyrace.world.facts import StepFacts
 from tinyrace.world.world import World
 
 _ALL_ROAD = (True, True, True, True)  # image tracks have no grass: full grip everywhere
@@ -49,7 +49,7 @@ class PreparedTrack:
 
 
 class ImageEpisode:
-    """One reset on an image track: the chosen track and spawn, a car in its world, cameras."""
+    """One reset on an image track: the chosen track and spawn, a car in its world."""
 
     def __init__(
         self, config: EnvConfig, prepared: PreparedTrack, draw: TrackDraw, car_model: CarModel
@@ -62,7 +62,6 @@ class ImageEpisode:
         self.world = prepared.world
         self.world.remove_cars()  # the last episode's car; the obstacle sensors stay
         self.car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
-        self.cameras = [RoiCamera(c, prepared.texture, y_down=True) for c in config.cameras]
         self.obstacles_hit: list[int] = []
         self.cte: float | None = None
 
@@ -108,18 +107,20 @@ class ImageEpisode:
             info["cte"] = self.cte  # [px]
         return info
 
-    def observe(self, t: float, score: float) -> dict[str, np.ndarray]:
-        front, heading = self.car.front_axle, self.car.pose[2]
-        return {camera.config.id: camera.render(front, heading) for camera in self.cameras}
+    def frame(self, mode: str, t: float, score: float, cameras: CameraViews = ()) -> np.ndarray:
+        """state_pixels: the first camera; rgb_array and human: the overview.
 
-    def frame(self, mode: str, t: float, score: float) -> np.ndarray:
-        """state_pixels: the first camera; rgb_array and human: the overview."""
-        images = self.observe(t, score)
+        ``cameras``: each camera's (image, window corners) now.
+        """
         if mode == "state_pixels":
-            return next(iter(images.values()))
-        front, heading = self.car.front_axle, self.car.pose[2]
-        windows = [camera.corners(front, heading) for camera in self.cameras]
-        return self.overview().render(footprint_corners(self.car), windows, list(images.values()))
+            return cameras[0][0]
+        images = [image for image, _ in cameras]
+        windows = [corners for _, corners in cameras]
+        return self.overview().render(footprint_corners(self.car), windows, images)
+
+    def ground_texture(self) -> GroundTexture:
+        """The track picture the cameras see."""
+        return self.prepared.texture
 
     def overview(self) -> Overview:
         if self.prepared.overview is None:

@@ -18,13 +18,14 @@ import numpy as np
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.registry import CarModel
 from tinyrace.config import CameraConfig, EnvConfig
-from tinyrace.episodes import StepFacts
 from tinyrace.episodes.image import footprint_corners
+from tinyrace.episodes.procedural import CameraViews
 from tinyrace.render.metric_ground import MetricOverview, paint_ground
 from tinyrace.render.texture import GroundTexture, transform_points
 from tinyrace.sensors.birdseye_camera import RoiCamera
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.metric import MetricSource, MetricTrack
+from tinyrace.world.facts import StepFacts
 from tinyrace.world.world import World
 
 DEFAULT_VIEW = (96, 96)  # [px] (h, w) the observation when no camera is configured
@@ -73,8 +74,7 @@ class MetricEpisode:
         self.cte: float | None = None
         self.on_road = True
         self.walls_hit = 0
-        self.cameras = [RoiCamera(c, prepared.texture, y_down=False) for c in config.cameras]
-        self.view = None if config.cameras else self._default_view()
+        self.view = self._default_view()  # the observation when no camera is configured
 
     def _default_view(self) -> RoiCamera:
         span = VIEW_SPAN * self.car.footprint[0]  # [m]
@@ -192,11 +192,9 @@ class MetricEpisode:
         return info
 
     # -- pictures ----------------------------------------------------------------------------
-    def observe(self, t: float, score: float):
-        """The Dict of camera images, or the default 96x96 top view with the car."""
+    def observe(self, t: float, score: float) -> np.ndarray:
+        """The observation without cameras: a 96x96 top view of the road ahead, with the car."""
         front, heading = self.car.front_axle, self.car.pose[2]
-        if self.view is None:
-            return {camera.config.id: camera.render(front, heading) for camera in self.cameras}
         image = self.view.render(front, heading)
         matrix = self.view.matrix(front, heading)
         corners = transform_points(matrix, footprint_corners(self.car))
@@ -205,17 +203,20 @@ class MetricEpisode:
         )
         return image
 
-    def frame(self, mode: str, t: float, score: float) -> np.ndarray:
-        """state_pixels: the observation (or first camera); rgb_array and human: the overview."""
-        observed = self.observe(t, score)
-        images = [observed] if isinstance(observed, np.ndarray) else list(observed.values())
+    def frame(self, mode: str, t: float, score: float, cameras: CameraViews = ()) -> np.ndarray:
+        """state_pixels: the first camera or the default view; rgb_array and human: the
+        overview. ``cameras``: each camera's (image, window corners) now."""
+        images = [image for image, _ in cameras] or [self.observe(t, score)]
         if mode == "state_pixels":
             return images[0]
-        front, heading = self.car.front_axle, self.car.pose[2]
-        windows = [camera.corners(front, heading) for camera in self.cameras]
+        windows = [corners for _, corners in cameras]
         if self.prepared.overview is None:
             self.prepared.overview = MetricOverview(self.track, self.prepared.texture)
         return self.prepared.overview.render(footprint_corners(self.car), windows, images)
+
+    def ground_texture(self) -> GroundTexture:
+        """The track picture the cameras see."""
+        return self.prepared.texture
 
 
 def _between(previous: int, current: int, n: int) -> list[int]:

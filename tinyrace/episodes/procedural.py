@@ -8,17 +8,17 @@ import numpy as np
 
 from tinyrace.cars.registry import CarModel
 from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
-from tinyrace.episodes import StepFacts
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.procedural_ground import GroundPainter, repaint_tile
 from tinyrace.render.texture import GroundTexture
-from tinyrace.sensors.birdseye_camera import RoiCamera
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
+from tinyrace.world.facts import StepFacts
 from tinyrace.world.world import World
 
+CameraViews = Sequence[tuple[np.ndarray, np.ndarray]]  # per camera: (image, window corners)
 VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
 OBSERVATION_SIZE = (96, 96)  # [px] (w, h) CarRacing's state_pixels
 SMALL_VIEW = 160  # [px] views up to this size sample the observation texture, supersample the car
@@ -50,7 +50,6 @@ class ProceduralEpisode:
         self.visit_order: list[int] = []  # repainting in this order redraws the same pixels
         self._textures: dict[float, GroundTexture] = {}
         self._views: dict[tuple[int, int], ChaseView] = {}
-        self._cameras: list[RoiCamera] | None = None
 
     # -- physics and facts -------------------------------------------------------------------
     def start(self, dt: float) -> StepFacts:
@@ -97,22 +96,17 @@ class ProceduralEpisode:
         }
 
     # -- pictures ----------------------------------------------------------------------------
-    def observe(self, t: float, score: float):
-        """CarRacing's 96x96 view, or a Dict of the configured cameras' images."""
-        if not self.config.cameras:
-            return self.chase_view(OBSERVATION_SIZE).render(t, score)
-        front, heading = self.car.front_axle, self.car.pose[2]
-        return {camera.config.id: camera.render(front, heading) for camera in self.cameras()}
+    def observe(self, t: float, score: float) -> np.ndarray:
+        """CarRacing's 96x96 view (the observation when no camera is configured)."""
+        return self.chase_view(OBSERVATION_SIZE).render(t, score)
 
-    def frame(self, mode: str, t: float, score: float) -> np.ndarray:
+    def frame(self, mode: str, t: float, score: float, cameras: CameraViews = ()) -> np.ndarray:
         """The picture of a render mode: state_pixels 96x96, rgb_array 600x400, human 1000x800."""
         return self.chase_view(RENDER_SIZES[mode]).render(t, score)
 
-    def cameras(self) -> list[RoiCamera]:
-        if self._cameras is None:
-            texture = self.texture(self.track_config.pixels_per_unit)
-            self._cameras = [RoiCamera(c, texture, y_down=False) for c in self.config.cameras]
-        return self._cameras
+    def ground_texture(self) -> GroundTexture:
+        """The ground the cameras see, at the track's pixels_per_unit (visited tiles included)."""
+        return self.texture(self.track_config.pixels_per_unit)
 
     def chase_view(self, size: tuple[int, int]) -> ChaseView:
         """CarRacing's view at ``size`` (w, h); small views share the observation texture."""
@@ -145,7 +139,7 @@ class ProceduralEpisode:
     def __getstate__(self) -> dict:
         """Leave out the pictures (tens of MB): they are redrawn from the track when next asked."""
         state = self.__dict__.copy()
-        state.update(_textures={}, _views={}, _cameras=None)
+        state.update(_textures={}, _views={})
         return state
 
 

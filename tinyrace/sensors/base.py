@@ -6,8 +6,9 @@ dropouts) comes from the ``rng`` it is given: the env's ``np_random``.
 
 How to add a sensor type:
 1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor`` and a builder
-   ``build(entry, env_config) -> Sensor`` taking its own config entry (a dataclass with
-   ``knob()`` fields: units, bounds, docs) and the whole env config.
+   ``build(entry, context) -> Sensor`` taking its own config entry (a dataclass with
+   ``knob()`` fields: units, bounds, docs) and a ``SensorContext`` (the env config, the
+   ground textures). ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
    name (the entry's ``type``), config class, builder and the track kinds it supports.
 """
@@ -23,6 +24,7 @@ from gymnasium import spaces
 
 if TYPE_CHECKING:
     from tinyrace.config import EnvConfig
+    from tinyrace.render.texture import GroundTexture
     from tinyrace.tracks.base import Track
     from tinyrace.world.snapshot import Snapshot
 
@@ -48,7 +50,24 @@ class Sensor(Protocol):
         ...
 
 
-SensorBuilder = Callable[[Any, "EnvConfig"], Sensor]
+class Ground(Protocol):
+    """The episode's picture of the ground, shared by the cameras (and kept up to date:
+    CarRacing's visited tiles change colour)."""
+
+    def texture(self, track: Track) -> GroundTexture:
+        """The ground texture of ``track`` in the current episode."""
+        ...
+
+
+@dataclass(frozen=True, eq=False)
+class SensorContext:
+    """What a sensor may use when it is built: the env's config and its ground pictures."""
+
+    env: EnvConfig
+    ground: Ground
+
+
+SensorBuilder = Callable[[Any, SensorContext], Sensor]
 
 
 @dataclass(frozen=True)

@@ -6,16 +6,24 @@ on the mount point (the front axle's middle shifted by ``position`` = [y, x],
 ``roi[0]`` ahead along the camera's direction (the car's heading turned by ``yaw`` degrees,
 positive to the right), and it is sampled at ``resolution`` = [y, x] pixels by
 one affine warp of the ground texture.
+
+``BirdseyeCamera`` is the sensor type ``birdseye_camera``; each entry of tinycarlo's
+``cameras:`` list becomes one.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
 from tinyrace.render.texture import GroundTexture
+from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 
 class RoiCamera:
@@ -69,3 +77,43 @@ class RoiCamera:
         roi_y, roi_x = self.config.roi
         offsets = [(-roi_x / 2, 0), (roi_x / 2, 0), (roi_x / 2, roi_y), (-roi_x / 2, roi_y)]
         return np.array([(mx + a * rx + b * fx, my + a * ry + b * fy) for a, b in offsets])
+
+
+class BirdseyeCamera:
+    """The ``birdseye_camera`` sensor: an RGB image of the ground ahead of the car."""
+
+    def __init__(self, config: CameraConfig, ground: Ground):
+        self.config = config
+        self.ground = ground
+        self.space = spaces.Box(0, 255, (*config.resolution, 3), np.uint8)
+        self._camera: RoiCamera | None = None  # on the current episode's ground
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        self._camera = None  # a new episode may have a new ground
+
+    def camera(self, track: Track) -> RoiCamera:
+        """The camera on the current episode's ground texture."""
+        if self._camera is None:
+            self._camera = RoiCamera(self.config, self.ground.texture(track), track.y_down)
+        return self._camera
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        car = snapshot.car
+        return self.camera(track).render(car.front_axle, car.pose[2])
+
+    def window(self, snapshot: Snapshot, track: Track) -> np.ndarray:
+        """(4, 2) corners of the track window it sees [track units], for pictures."""
+        car = snapshot.car
+        return self.camera(track).corners(car.front_axle, car.pose[2])
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_camera": None}  # the texture belongs to the episode
+
+
+def build(entry: CameraConfig, context: SensorContext) -> BirdseyeCamera:
+    """A ``birdseye_camera`` from its config entry (a ``cameras:`` item)."""
+    return BirdseyeCamera(entry, context.ground)

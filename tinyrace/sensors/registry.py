@@ -5,7 +5,9 @@ Adding a type is one module plus one entry here (see ``tinyrace/sensors/base.py`
 
 from __future__ import annotations
 
+from tinyrace.config import CameraConfig
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.sensors import birdseye_camera
 from tinyrace.sensors.base import SensorType
 
 SENSOR_TYPES: dict[str, SensorType] = {}
@@ -24,3 +26,13 @@ def sensor_type(name: object, source: str, key_path: str) -> SensorType:
         allowed = f"expected a sensor type, one of: {', '.join(sorted(SENSOR_TYPES))}"
         raise ConfigError(Problem(source, key_path, name, allowed))
     return found
+
+
+register(
+    SensorType(
+        name="birdseye_camera",
+        config=CameraConfig,
+        build=birdseye_camera.build,
+        doc="a top-down camera fixed to the car (tinycarlo's cameras: list)",
+    )
+)

@@ -1,0 +1,114 @@
+"""Steps/s of two git refs side by side, in one run: ``python benchmarks/compare.py OLD NEW``.
+
+Each ref is checked out into a temporary git worktree; rounds alternate between the two
+(OLD, NEW, OLD, NEW, ...) so that load on a shared machine hits both alike. Each round is
+a fresh subprocess with ``PYTHONPATH`` set to that ref's checkout, stepping an env with
+pre-drawn seeded random actions (resets included when an episode ends). Prints the median
+steps/s per ref and case, and NEW/OLD.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# One round in a subprocess: make the env, warm up, time ``steps`` steps; print steps/s.
+ROUND = r"""
+import json, sys, time
+import gymnasium as gym
+import numpy as np
+import tinyrace
+from pathlib import Path
+case, steps = sys.argv[1], int(sys.argv[2])
+kwargs = json.loads(sys.argv[3])
+if "environment" in kwargs:
+    kwargs["environment"] = str(Path(tinyrace.__file__).parent / kwargs["environment"])
+env = gym.make(case, **kwargs)
+env.action_space.seed(0)
+actions = [env.action_space.sample() for _ in range(1024)]
+env.reset(seed=0)
+def run(n):
+    for i in range(n):
+        _, _, terminated, truncated, _ = env.step(actions[i % len(actions)])
+        if terminated or truncated:
+            env.reset()
+run(200)
+start = time.perf_counter()
+run(steps)
+print(json.dumps(steps / (time.perf_counter() - start)))
+"""
+
+CASES = {
+    "carracing": ("tinyrace/CarRacing-v0", {}),
+    "formula_student": (
+        "tinyrace/TinyRace-v0",
+        {"environment": "data/tracks/formula_student", "sim": {"step_limit": 10**9}},
+    ),
+}
+
+
+def checkout(ref: str, into: Path) -> Path:
+    """A detached worktree of ``ref`` under ``into``."""
+    path = into / ref.replace("/", "_")
+    subprocess.run(
+        ["git", "-C", str(ROOT), "worktree", "add", "--detach", "-f", str(path), ref],
+        check=True,
+        capture_output=True,
+    )
+    return path
+
+
+def one_round(tree: Path, case: str, steps: int) -> float:
+    env_id, kwargs = CASES[case]
+    done = subprocess.run(
+        [sys.executable, "-c", ROUND, env_id, str(steps), json.dumps(kwargs)],
+        env={"PYTHONPATH": str(tree), "PATH": "/usr/bin:/bin", "OMP_NUM_THREADS": "1"},
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return float(done.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("old", help="git ref of the baseline")
+    parser.add_argument("new", help="git ref to compare")
+    parser.add_argument("--rounds", type=int, default=5, help="rounds per ref and case")
+    parser.add_argument("--steps", type=int, default=5000, help="timed steps per round")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory(prefix="tinyrace-compare-") as tmp:
+        trees = {ref: checkout(ref, Path(tmp)) for ref in (args.old, args.new)}
+        try:
+            rates: dict[tuple[str, str], list[float]] = {}
+            for _ in range(args.rounds):
+                for case in CASES:
+                    for ref, tree in trees.items():
+                        rate = one_round(tree, case, args.steps)
+                        rates.setdefault((case, ref), []).append(rate)
+        finally:
+            for tree in trees.values():
+                subprocess.run(
+                    ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)],
+                    check=False,
+                    capture_output=True,
+                )
+    print(
+        f"{'case':<16} {args.old:>12} {args.new:>12}  new/old   (median steps/s of {args.rounds})"
+    )
+    for case in CASES:
+        old = statistics.median(rates[(case, args.old)])
+        new = statistics.median(rates[(case, args.new)])
+        print(f"{case:<16} {old:>12,.0f} {new:>12,.0f}  {new / old:.3f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,166 @@
+"""The package's layers, read from the source: no import cycle, no module that imports both
+pymunk and cv2, and no import that runs up the layers (docs/ARCHITECTURE.md draws them).
+
+Every import counts, also those inside functions; only ``if TYPE_CHECKING:`` blocks are
+left out (they never run).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "tinyrace"
+
+# Bottom to top; a module may import from its own layer and the layers below it.
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("errors", "examples", "actions"),
+    ("config",),
+    ("tracks",),
+    ("world",),
+    ("cars",),
+    ("render",),
+    ("sensors",),
+    ("rewards",),
+    ("episodes",),
+    ("env", "carracing"),
+    ("drivers", "experiment", "vector", "validate", "play", "cli", "__main__", "__init__"),
+)
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(tree: ast.AST, module: str, is_package: bool) -> set[str]:
+    """Every module named by an import statement that can run (``module:name`` for from-imports)."""
+    found: set[str] = set()
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _is_type_checking(node):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = module.split(".")
+                anchor = anchor if is_package else anchor[:-1]
+                anchor = anchor[: len(anchor) - (node.level - 1)]
+                base = ".".join([*anchor, base]) if base else ".".join(anchor)
+            # ``from package import submodule`` needs the submodule (and the package only
+            # as its parent); ``from module import name`` needs the module
+            found.update(f"{base}:{alias.name}" for alias in node.names)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(tree)
+    return found
+
+
+def _graph() -> dict[str, set[str]]:
+    """tinyrace module -> the tinyrace modules it imports; plus '+pymunk'/'+cv2' markers."""
+    sources = {
+        _module_name(p): (p, ast.parse(p.read_text())) for p in sorted(PACKAGE.rglob("*.py"))
+    }
+    graph: dict[str, set[str]] = {}
+    for name, (path, tree) in sources.items():
+        targets = set()
+        for imported in _imports(tree, name, path.name == "__init__.py"):
+            base, _, member = imported.partition(":")
+            imported = f"{base}.{member}" if f"{base}.{member}" in sources else base
+            root = imported.split(".")[0]
+            if root in ("pymunk", "cv2"):
+                targets.add(f"+{root}")
+            elif imported in sources and imported != name:
+                targets.add(imported)
+        graph[name] = targets
+    return graph
+
+
+GRAPH = _graph()
+
+
+def _layer(module: str) -> int:
+    parts = module.split(".")
+    top = parts[1] if len(parts) > 1 else "__init__"
+    for index, names in enumerate(LAYERS):
+        if top in names:
+            return index
+    raise AssertionError(f"{module} is in no layer: add {top!r} to LAYERS (and the docs)")
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One cycle of ``graph`` as a path, or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for target in sorted(graph.get(node, ())):
+            if state.get(target) == 1:
+                return [*stack[stack.index(target) :], target]
+            if target not in state and (found := visit(target)) is not None:
+                return found
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (found := visit(node)) is not None:
+            return found
+    return None
+
+
+def _modules() -> dict[str, set[str]]:
+    return {m: {t for t in ts if not t.startswith("+")} for m, ts in GRAPH.items()}
+
+
+def _folder(module: str) -> str:
+    return ".".join(module.split(".")[:2])
+
+
+def test_the_graph_sees_the_package():
+    assert "tinyrace.env" in GRAPH and "tinyrace.cars.dynamic" in GRAPH
+    assert "tinyrace.world.world" in GRAPH["tinyrace.cars.dynamic"]
+
+
+def test_no_import_cycle_between_modules():
+    assert _cycle(_modules()) is None
+
+
+def test_no_import_cycle_between_folders():
+    folders: dict[str, set[str]] = {}
+    for module, targets in _modules().items():
+        mine = _folder(module)
+        folders.setdefault(mine, set()).update(_folder(t) for t in targets if _folder(t) != mine)
+    assert _cycle(folders) is None
+
+
+def test_no_module_imports_both_pymunk_and_cv2():
+    both = sorted(m for m, targets in GRAPH.items() if {"+pymunk", "+cv2"} <= targets)
+    assert both == []
+
+
+@pytest.mark.parametrize("module", sorted(GRAPH))
+def test_imports_only_from_its_layer_or_below(module):
+    upward = sorted(t for t in _modules()[module] if _layer(t) > _layer(module))
+    assert upward == [], f"{module} (layer {_layer(module)}) imports from above: {upward}"
+
+
+def test_the_cycle_finder_finds_cycles():
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set()}) is None

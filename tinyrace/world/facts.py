@@ -1,0 +1,25 @@
+"""The facts of one step: what the world's contacts and the episode's rules found.
+
+Episodes turn contacts into ``StepFacts``; rewards are decided from those facts alone
+in ``tinyrace.rewards``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class StepFacts:
+    """What happened during one step, as the sensors saw it."""
+
+    new_tiles: int = 0  # tiles visited for the first time
+    tiles_total: int = 0
+    lap_finished: bool = False
+    out_of_bounds: bool = False  # left the playfield or the image
+    wheels_on_grass: int = 0
+    obstacles_hit: list[int] = field(default_factory=list)  # indices into color_obstacles
+    cte: float | None = None  # [track units] distance to the trajectory
+    cones_hit: int = 0  # cones knocked over during this step (each counts once per episode)
+    wall_hit: bool = False  # the car touched a wall this step (and was stopped)
+    collision_ends: bool = False  # the source ends the episode on this step's collision
