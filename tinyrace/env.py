@@ -89,7 +89,8 @@ class TinyRaceEnv(gym.Env):
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
         self._ground = EpisodeGround()
-        self.sensors = _cameras(self.config, SensorContext(self.config, self._ground))
+        context = SensorContext(self.config, self._ground)
+        self.sensors = _cameras(self.config, context) + _sensors(self.config, context)
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
@@ -223,6 +224,7 @@ class TinyRaceEnv(gym.Env):
                 camera.window(snapshot, self.layout),
             )
             for camera in self.sensors
+            if isinstance(camera, BirdseyeCamera)
         ]
 
     def close(self):
@@ -250,6 +252,14 @@ def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
     """tinycarlo's ``cameras:`` list, each entry a ``birdseye_camera`` sensor."""
     camera_type = sensor_type("birdseye_camera", "<registry>", "cameras")
     return [camera_type.build(entry, context) for entry in config.cameras]
+
+
+def _sensors(config: EnvConfig, context: SensorContext) -> list:
+    """The ``sensors:`` list (lidar, cones, ...), each built by its registered type."""
+    return [
+        sensor_type(entry.type, "<registry>", f"sensors[{i}]").build(entry, context)
+        for i, entry in enumerate(config.sensors)
+    ]
 
 
 def _check_options(options: dict | None) -> dict:

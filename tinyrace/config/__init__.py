@@ -17,9 +17,11 @@ from tinyrace.config.schema import (
     CenterlineTrackConfig,
     ColorObstacle,
     ConeMapTrackConfig,
+    ConeSensorConfig,
     CrossTrackErrorConfig,
     EnvConfig,
     ImageTrackConfig,
+    LidarConfig,
     ProceduralTrackConfig,
     RewardConfig,
     RosMapTrackConfig,
@@ -37,10 +39,12 @@ __all__ = [
     "Color",
     "ColorObstacle",
     "ConeMapTrackConfig",
+    "ConeSensorConfig",
     "ConfigError",
     "CrossTrackErrorConfig",
     "EnvConfig",
     "ImageTrackConfig",
+    "LidarConfig",
     "LoadedConfig",
     "ProceduralTrackConfig",
     "RewardConfig",
@@ -164,10 +168,12 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if config.observation == "box" and len(config.cameras) > 1:
         ids = [c.id for c in config.cameras]
         parser.problem(f"{at}observation", "box", f"box needs exactly one camera, not {ids}")
-    ids = [c.id for c in config.cameras]
+    ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
+    cameras = len(config.cameras)
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
-            parser.problem(f"{at}cameras[{i}].id", cam_id, "camera ids must be unique")
+            where = f"cameras[{i}].id" if i < cameras else f"sensors[{i - cameras}].id"
+            parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
     # the car model and its actions are checked by tinyrace.cars.registry
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]

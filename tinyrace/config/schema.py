@@ -353,6 +353,43 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class LidarConfig:
+    """``sensors[i]`` of ``type: lidar``: ranges to walls and cones in a fan of beams."""
+
+    type: Literal["lidar"] = knob("lidar", "sensor type")
+    id: str = knob(
+        "lidar", "observation key: a Dict of ranges and classes (0 none, 1 wall, 1+k cone)"
+    )
+    beams: int = knob(1080, "number of beams (F1TENTH's: 1080)", low=1, high=10000)
+    fov: float = knob(
+        270.0, "field of view, centred ahead (F1TENTH's: 4.7 rad)", "deg", low=1, high=360
+    )
+    max_range: float = knob(30.0, "longest range reported", "track units (m)", low=0, low_open=True)
+    resolution: float = knob(
+        0.05, "cell of the distance raster the beams march on", "track units (m)", low=0.001
+    )
+    max_steps: int = knob(
+        32, "marching steps per beam at most (a beam grazing a wall stops short)", low=1, high=1000
+    )
+
+
+@dataclass(frozen=True)
+class ConeSensorConfig:
+    """``sensors[i]`` of ``type: cones``: the nearest cones in the car's frame, by class."""
+
+    type: Literal["cones"] = knob("cones", "sensor type")
+    id: str = knob("cones", "observation key: rows [ahead, left, distance, class], nearest first")
+    count: int = knob(
+        32, "rows: the nearest this many cones (missing rows are zero)", low=1, high=1000
+    )
+    max_range: float = knob(20.0, "farthest cone seen", "track units (m)", low=0, low_open=True)
+    fov: float = knob(360.0, "field of view, centred ahead", "deg", low=1, high=360)
+
+
+SensorConfig = Union[LidarConfig, ConeSensorConfig]  # noqa: UP007 (read at runtime)
+
+
+@dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
 
@@ -366,6 +403,12 @@ class EnvConfig:
         "observation cameras (a mapping or a list); none on a procedural track: "
         "CarRacing's 96x96 view as a Box",
         aliases=("camera",),
+    )
+    sensors: tuple[SensorConfig, ...] = knob(
+        (),
+        "more sensors beside the cameras (a mapping or a list): lidar, cones; each adds its id "
+        "to the Dict observation",
+        aliases=("sensor",),
     )
     observation: Literal["dict", "box"] = knob(
         "dict",

@@ -5,9 +5,9 @@ Adding a type is one module plus one entry here (see ``tinyrace/sensors/base.py`
 
 from __future__ import annotations
 
-from tinyrace.config import CameraConfig
+from tinyrace.config import CameraConfig, ConeSensorConfig, LidarConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.sensors import birdseye_camera
+from tinyrace.sensors import birdseye_camera, cones, lidar
 from tinyrace.sensors.base import SensorType
 
 SENSOR_TYPES: dict[str, SensorType] = {}
@@ -34,5 +34,21 @@ register(
         config=CameraConfig,
         build=birdseye_camera.build,
         doc="a top-down camera fixed to the car (tinycarlo's cameras: list)",
+    )
+)
+register(
+    SensorType(
+        name="lidar",
+        config=LidarConfig,
+        build=lidar.build,
+        doc="a 2D lidar: ranges to walls and cones, and the class of what each beam hit",
+    )
+)
+register(
+    SensorType(
+        name="cones",
+        config=ConeSensorConfig,
+        build=cones.build,
+        doc="the nearest cones in the car's frame, by class",
     )
 )
