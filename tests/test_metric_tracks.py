@@ -221,3 +221,32 @@ def test_pictures_show_the_track_and_the_car(kind):
     frame = env.render()
     assert frame.ndim == 3 and max(frame.shape[:2]) == 800
     assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 3
+
+
+def test_an_image_track_may_declare_its_scale_and_keeps_pixels_without_it():
+    folder = str(TRACKS_DIR / "formula_student")
+    plain = gym.make("tinyrace/TinyRace-v0", environment=folder)
+    plain.reset(seed=0)
+    assert plain.unwrapped.layout.metres_per_unit is None
+    scaled = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment=folder,
+        tracks=[
+            {
+                **yaml.safe_load((TRACKS_DIR / "formula_student" / "track.yaml").read_text())[
+                    "tracks"
+                ][0],
+                "pixels_per_meter": 50.0,
+            }
+        ],
+    )
+    scaled.reset(seed=0)
+    assert scaled.unwrapped.layout.metres_per_unit == pytest.approx(0.02)
+    assert scaled.unwrapped.layout.unit == "px"
+
+
+@pytest.mark.parametrize("kind", sorted(FOLDERS))
+def test_metric_tracks_know_their_metres_per_unit(kind):
+    env = make(kind)
+    env.reset(seed=0)
+    assert env.unwrapped.layout.metres_per_unit == 1.0 and env.unwrapped.layout.unit == "m"

@@ -113,6 +113,14 @@ class ImageTrackConfig:
         low=16,
         high=20000,
     )
+    pixels_per_meter: float | None = knob(
+        None,
+        "the image's scale, when known: the track's metres per pixel is its inverse "
+        "(null: unknown, everything stays in pixels as in tinycarlo 1.1)",
+        "px/m",
+        low=0,
+        low_open=True,
+    )
 
 
 def _lap_percent() -> Any:
