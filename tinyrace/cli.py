@@ -161,6 +161,11 @@ def _run(args: argparse.Namespace) -> int:
     from tinyrace.experiment import load_experiment, print_report, run_experiment
 
     path = find_experiment(args.experiment) if args.experiment else default_experiment()
+    if path.is_dir() or path.name == "track.yaml":
+        raise UsageError(
+            f"argument experiment: {str(path)!r} is a track, not an experiment; name it in an "
+            "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
+        )
     experiment = _overridden(load_experiment(path), args)
     out = _out_folder(args.out)
     config = experiment.config
@@ -224,7 +229,14 @@ def _report(args: argparse.Namespace) -> int:
             f"argument run_dir: {args.run_dir!r} is no run folder "
             "(expected a folder holding results.json and episodes.csv)"
         )
-    print(f"wrote {rebuild_report(run_dir)}")
+    try:
+        path = rebuild_report(run_dir)
+    except (ValueError, KeyError, TypeError) as exc:  # results.json or episodes.csv edited
+        raise UsageError(
+            f"argument run_dir: cannot read the run in {args.run_dir!r} "
+            f"({type(exc).__name__}: {exc})"
+        ) from exc
+    print(f"wrote {path}")
     return 0
 
 

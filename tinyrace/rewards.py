@@ -61,9 +61,9 @@ def reward_terms(
     if facts.wheels_on_grass and config.off_road_penalty:
         terms["off_road"] = -config.off_road_penalty * facts.wheels_on_grass
     obstacle_reward = sum(
-        config.color_obstacles[i].reward
+        reward
         for i in facts.obstacles_hit
-        if config.color_obstacles[i].reward != "done"
+        if (reward := config.color_obstacles[i].reward) != "done"
     )
     if obstacle_reward:
         terms["obstacles"] = float(obstacle_reward)

@@ -9,6 +9,7 @@ import numpy as np
 
 from tinyrace.config import METRIC_KINDS, TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
+from tinyrace.episodes.image import ImageCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -78,6 +79,7 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind in METRIC_KINDS:
         prepared = parts.course.prepared[0]
         return Picture(metric_picture(prepared.track, prepared.texture), name, inputs)
+    assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 
 

@@ -6,7 +6,7 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
@@ -87,12 +87,15 @@ def load_env_config(
                 "give either config= or environment=, not both",
             )
         )
-    raw, source, base_dir = _read_source(config, environment)
+    raw, source, base_dir = _read_source(cast(_Source, config), environment)
     if overrides:
         raw = deep_merge(raw, overrides)
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
     return LoadedConfig(parse_env_config(raw, source), source, base_dir)
+
+
+_Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
 
 
 def _read_source(

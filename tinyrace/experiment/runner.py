@@ -101,6 +101,8 @@ class _Run:
             except BaseException as exc:
                 self._fail(exc)
                 raise
+            if interrupted is None:  # a signal after the last step: still say so
+                interrupted = stop.signum
             self._write(interrupted)
         return RunResult(self.run_dir, self.results, interrupted)
 
@@ -143,7 +145,7 @@ class _Run:
         filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
         video = None
         if filmed:
-            fps = out.fps or self.env.config.sim.fps  # [Hz]
+            fps = out.fps or 1.0 / self.env.dt  # [Hz] default: real time
             video = open_video(self.run_dir / f"episode_{episode:03d}", fps)
 
         def on_step(recorder: EpisodeRecorder) -> None:

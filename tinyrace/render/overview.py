@@ -42,7 +42,7 @@ class Overview:
         self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
     ) -> np.ndarray:
         """A frame: ``footprint`` (4, 2) and camera ``windows`` (4, 2 each) in track px."""
-        frame = self.background.copy()
+        frame: np.ndarray = self.background.copy()
         thickness = max(1, round(2 * min(frame.shape[:2]) / 800))
         for k, corners in enumerate(windows):
             color = ROI_COLORS[k % len(ROI_COLORS)]

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -51,7 +52,8 @@ class ImageTrack:
 
 def pack(color: Color) -> np.uint32:
     """The uint32 word of an RGBx pixel of ``color`` (alpha 255)."""
-    return np.array([*color, 255], np.uint8).view(np.uint32)[0]
+    word: np.uint32 = np.array([*color, 255], np.uint8).view(np.uint32)[0]
+    return word
 
 
 def load_image_track(
@@ -178,9 +180,11 @@ def _cell_boxes(hits: np.ndarray) -> np.ndarray:
     """(M, 4) int boxes x0, y0, x1, y1 (exclusive ends) of the hits within each occupied cell."""
     h, w = hits.shape
     ph, pw = -h % CELL, -w % CELL
-    grid = np.pad(hits, ((0, ph), (0, pw))).reshape((h + ph) // CELL, CELL, (w + pw) // CELL, CELL)
-    rows_hit = grid.any(axis=3)  # (gy, CELL, gx): which rows of each cell hold a hit
-    cols_hit = grid.any(axis=1)  # (gy, gx, CELL)
+    grid: np.ndarray = np.pad(hits, ((0, ph), (0, pw))).reshape(
+        (h + ph) // CELL, CELL, (w + pw) // CELL, CELL
+    )
+    rows_hit: Any = grid.any(axis=3)  # (gy, CELL, gx): which rows of each cell hold a hit
+    cols_hit: Any = grid.any(axis=1)  # (gy, gx, CELL)
     gy, gx = np.nonzero(rows_hit.any(axis=1))
     if len(gy) == 0:
         return np.zeros((0, 4), np.int64)
@@ -241,6 +245,7 @@ class ImageSource:
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         loaded, problems = [], []
         for index, track_config in enumerate(config.tracks):
+            assert isinstance(track_config, ImageTrackConfig)  # one kind per env (checked)
             track, found = load_image_track(track_config, index, config, base_dir, source)
             problems += found
             if track is not None:
@@ -269,16 +274,14 @@ def as_track(
         ColorLayer(
             f"obstacle {i}",
             "obstacle",
-            tuple(color),
+            color,
             cells=image_track.cells[image_track.cell_obstacles == i],
         )
         for i, color in enumerate(image_track.obstacle_colors)
     ]
     if image_track.trajectory_mask is not None:
         points = image_track.trajectory_mask
-        layers.append(
-            ColorLayer("trajectory", "trajectory", tuple(trajectory_color), points=points)
-        )
+        layers.append(ColorLayer("trajectory", "trajectory", trajectory_color, points=points))
     return Track(
         kind="image",
         unit="px",

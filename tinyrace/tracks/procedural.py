@@ -261,7 +261,8 @@ def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
     window = np.stack([np.roll(turns, k) for k in range(params.border_min_count)])
     sharp = np.all(np.abs(window) > params.turn_rate * _KERB_TURN_FRACTION, axis=0)
     one_way = np.abs(np.sign(window).sum(axis=0)) == params.border_min_count
-    return sharp & one_way
+    hard: np.ndarray = sharp & one_way
+    return hard
 
 
 def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
@@ -273,4 +274,5 @@ def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
     spread = flags.copy()
     for k in range(1, count):
         spread[-k] |= flags[: count - k].any()
-    return np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
+    spread_back: np.ndarray = np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
+    return spread_back
