@@ -250,3 +250,15 @@ def test_metric_tracks_know_their_metres_per_unit(kind):
     env = make(kind)
     env.reset(seed=0)
     assert env.unwrapped.layout.metres_per_unit == 1.0 and env.unwrapped.layout.unit == "m"
+
+
+def test_play_drives_the_throttle_car_with_the_arrow_keys():
+    from types import SimpleNamespace
+
+    from tinyrace.play import _action
+
+    keys_of = SimpleNamespace(K_LEFT=0, K_RIGHT=1, K_UP=2, K_DOWN=3)
+    env = make("cone_map").unwrapped
+    assert _action(env, [0, 1, 1, 0], keys_of).tolist() == [1.0, 1.0]  # right, throttle
+    assert _action(env, [1, 0, 0, 1], keys_of).tolist() == [-1.0, -1.0]  # left, brake
+    assert env.action_space.contains(_action(env, [0, 0, 0, 0], keys_of))
