@@ -13,21 +13,23 @@ from gymnasium.error import ResetNeeded
 
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.image import ImageEpisode
+from tinyrace.episodes.metric import MetricEpisode
 from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralEpisode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.texture import GroundTexture
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
-from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.base import Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import sensor_type
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.metric import MetricTrack
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.snapshot import Snapshot
 
-Episode = ProceduralEpisode | ImageEpisode
+Episode = ProceduralEpisode | ImageEpisode | MetricEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
@@ -96,7 +98,10 @@ class TinyRaceEnv(gym.Env):
         self.action_space = self._actions.space
         self._ground = EpisodeGround()
         context = SensorContext(self.config, self._ground)
-        self.sensors = _cameras(self.config, context) + _sensors(self.config, context)
+        self.sensors: list[Sensor] = [
+            *_cameras(self.config, context),
+            *_sensors(self.config, context),
+        ]
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
@@ -195,7 +200,7 @@ class TinyRaceEnv(gym.Env):
         return info
 
     @property
-    def track(self) -> ProceduralTrack | ImageTrack:
+    def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
         """The current episode's track data (read-only arrays in track units)."""
         return self._episode("the track").track
 
@@ -265,7 +270,7 @@ def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
     return [cast(BirdseyeCamera, camera_type.build(entry, context)) for entry in config.cameras]
 
 
-def _sensors(config: EnvConfig, context: SensorContext) -> list:
+def _sensors(config: EnvConfig, context: SensorContext) -> list[Sensor]:
     """The ``sensors:`` list (lidar, cones, ...), each built by its registered type."""
     return [
         sensor_type(entry.type, "<registry>", f"sensors[{i}]").build(entry, context)

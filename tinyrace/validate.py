@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tinyrace.config import METRIC_KINDS, TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
+from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
 from tinyrace.episodes.image import ImageCourse
+from tinyrace.episodes.metric import MetricCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -76,7 +77,7 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
-    if loaded.config.kind in METRIC_KINDS:
+    if isinstance(parts.course, MetricCourse):
         prepared = parts.course.prepared[0]
         return Picture(metric_picture(prepared.track, prepared.texture), name, inputs)
     assert isinstance(parts.course, ImageCourse)

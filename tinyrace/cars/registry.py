@@ -38,19 +38,25 @@ class CarModel:
     doc: str
 
 
+def _known(value: float | None) -> float:
+    """A car knob whose null default ``resolve_defaults`` has filled by track kind."""
+    assert value is not None, "car knobs are resolved when the config is loaded"
+    return value
+
+
 def _build_dynamic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
     if track.kind == "procedural":  # CarRacing's own frame and units
         return DynamicCar.build(space, pose)
-    return DynamicCar.build(space, pose, scale=config.pixels_per_unit, y_down=track.y_down)
+    return DynamicCar.build(space, pose, scale=_known(config.pixels_per_unit), y_down=track.y_down)
 
 
 def _build_kinematic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
     return KinematicCar.build(
         space,
         pose,
-        config.wheelbase,
-        config.track_width,
-        config.velocity,
+        _known(config.wheelbase),
+        _known(config.track_width),
+        _known(config.velocity),
         config.max_steering_angle,
         config.max_steering_change,
     )
@@ -62,8 +68,8 @@ def _build_kinematic_throttle(
     return KinematicThrottleCar.build(
         space,
         pose,
-        (config.wheelbase, config.track_width),
-        (config.velocity, config.max_acceleration, config.max_deceleration),
+        (_known(config.wheelbase), _known(config.track_width)),
+        (_known(config.velocity), config.max_acceleration, config.max_deceleration),
         (config.max_steering_angle, config.max_steering_change),
         y_down=track.y_down,
     )

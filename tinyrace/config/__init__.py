@@ -218,9 +218,13 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
     sizes = CAR_DEFAULTS["m" if config.kind in METRIC_KINDS else "px"]
+    car = config.car
     car = dataclasses.replace(
-        config.car,
-        **{key: _default(getattr(config.car, key), value) for key, value in sizes.items()},
+        car,
+        wheelbase=_default(car.wheelbase, sizes["wheelbase"]),
+        track_width=_default(car.track_width, sizes["track_width"]),
+        velocity=_default(car.velocity, sizes["velocity"]),
+        pixels_per_unit=_default(car.pixels_per_unit, sizes["pixels_per_unit"]),
     )
     reward = config.reward_design
     reward = dataclasses.replace(

@@ -27,6 +27,7 @@ output is the same on every run.
 from __future__ import annotations
 
 import math
+import runpy
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -515,10 +516,8 @@ def main(argv: list[str]) -> None:
     segmented_track(out_dir)
     formula_student_track(out_dir)
     carolo_cup_track(out_dir)
-    sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling script, run or imported
-    import make_metric_tracks
-
-    make_metric_tracks.main(out_dir)
+    sibling = Path(__file__).resolve().with_name("make_metric_tracks.py")  # run or imported
+    runpy.run_path(str(sibling))["main"](out_dir)
 
 
 if __name__ == "__main__":

@@ -119,7 +119,7 @@ def f1tenth_map(out_dir: Path) -> None:
     def pixels(points: np.ndarray) -> np.ndarray:  # world [m] -> cv2 points, 4 fractional bits
         col = (points[:, 0] - low[0]) / RESOLUTION - 0.5
         row = height - (points[:, 1] - low[1]) / RESOLUTION - 0.5
-        return np.rint(np.column_stack((col, row)) * 16).astype(np.int32)
+        return np.asarray(np.rint(np.column_stack((col, row)) * 16), np.int32)
 
     outer, inner = (right, left)  # counter-clockwise: the right edge is outside
     cv2.fillPoly(picture, [pixels(outer)], FREE, cv2.LINE_8, shift=4)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -59,6 +60,7 @@ class MetricEpisode:
         self.track: MetricTrack = draw.track.detail
         self.track_index = draw.track_index
         self.track_config = config.tracks[draw.track_index]
+        self.lap_percent: float = getattr(self.track_config, "lap_complete_percent", 0.95)
         self.world = World()
         if len(self.track.tiles) and config.car.model == "dynamic":
             self.world.add_tiles(self.track.tiles)  # grip: wheels on the road
@@ -91,7 +93,8 @@ class MetricEpisode:
 
     def step(self, dt: float) -> StepFacts:
         body = self.car.body
-        before = (tuple(body.position), body.angle)
+        x, y = body.position
+        before = ((float(x), float(y)), float(body.angle))
         on_road = [bool(tiles) for tiles in self.world.contacts.wheel_tiles]
         if self.track.occupancy is not None or not len(self.track.tiles):
             on_road = [True] * 4  # a map's free space grips everywhere
@@ -116,7 +119,7 @@ class MetricEpisode:
             facts.wheels_on_grass = sum(not tiles for tiles in wheels)
         return self._progress(facts)
 
-    def _crash(self, before: tuple) -> None:
+    def _crash(self, before: tuple[tuple[float, float], float]) -> None:
         """Against a wall: back to where the car stood before the step, at a standstill."""
         body = self.car.body
         body.position, body.angle = before
@@ -147,7 +150,7 @@ class MetricEpisode:
                 self.visited[tile] = True
                 self.visited_count += 1
                 facts.new_tiles += 1
-            if tile == 0 and self.visited_count / n > self.track_config.lap_complete_percent:
+            if tile == 0 and self.visited_count / n > self.lap_percent:
                 facts.lap_finished = True
         if self.visited_count == n:
             facts.lap_finished = True
@@ -155,16 +158,18 @@ class MetricEpisode:
 
     def _locate(self, x: float, y: float) -> tuple[int, float]:
         """(tile index, signed lateral offset [m], + left) of a point, searched near the last."""
-        points = self.track.circuit.centerline
+        circuit = self.track.circuit
+        assert circuit is not None  # only tracks with a reference line have tiles
+        points = circuit.centerline
         n = len(points)
         if self.nearest < 0:
             candidates = np.arange(n)
         else:
-            reach = max(int(60.0 / self.track.circuit.spacing), 8)  # [points] ~ 60 m either way
+            reach = max(int(60.0 / circuit.spacing), 8)  # [points] ~ 60 m either way
             candidates = np.arange(self.nearest - reach, self.nearest + reach) % n
         offsets = points[candidates] - (x, y)
         nearest = int(candidates[np.argmin(np.einsum("ij,ij->i", offsets, offsets))])
-        heading = self.track.circuit.headings[nearest]
+        heading = circuit.headings[nearest]
         dx, dy = x - points[nearest, 0], y - points[nearest, 1]
         along = dx * math.cos(heading) + dy * math.sin(heading)
         lateral = -dx * math.sin(heading) + dy * math.cos(heading)
@@ -172,7 +177,7 @@ class MetricEpisode:
         self.nearest = nearest
         return tile, lateral
 
-    def info(self) -> dict:
+    def info(self) -> dict[str, Any]:
         x, y, heading = self.car.pose
         info = {
             "pose": (x, y, heading),

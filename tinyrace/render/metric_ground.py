@@ -84,7 +84,9 @@ def _start_line(track: MetricTrack) -> np.ndarray:
     return np.array([[left[0] - ahead, right[0] - ahead, right[0] + ahead, left[0] + ahead]])
 
 
-def _fill(image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, color) -> None:
+def _fill(
+    image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, color: tuple[int, int, int]
+) -> None:
     if len(polygons) == 0:
         return
     pixels = np.round(transform_points(matrix, polygons) * (1 << _BITS)).astype(np.int32)
@@ -128,7 +130,7 @@ class MetricOverview:
                 break
             frame[4 : 4 + sh, x : x + sw] = small
             x += sw + 6
-        return frame
+        return np.asarray(frame)
 
     def _pixels(self, points: np.ndarray) -> np.ndarray:
         return np.round(transform_points(self.matrix, points) * (1 << _BITS)).astype(np.int32)

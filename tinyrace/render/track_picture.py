@@ -133,9 +133,12 @@ def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
     image, frame = metric_ground(track, texture)
     matrix = frame.matrix()
     x0, y0, x1, y1 = track.bounds
-    entries: list = [(None, f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m")]
+    entries: list[tuple[tuple[int, int, int] | None, str]] = [
+        (None, f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m")
+    ]
     if track.circuit is not None:
-        line = transform_points(matrix, np.vstack((track.centerline, track.centerline[:1])))
+        points = track.circuit.centerline
+        line = transform_points(matrix, np.vstack((points, points[:1])))
         cv2.polylines(
             image, [np.round(line * 16).astype(np.int32)], False, (255, 255, 255), 1, cv2.LINE_AA, 4
         )

@@ -79,7 +79,9 @@ class Lidar:
             self._fields = {key: ObstacleField(track, self.config.resolution)}
         self._field = self._fields[key]
 
-    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> dict:
+    def observe(
+        self, snapshot: Snapshot, track: Track, rng: np.random.Generator
+    ) -> dict[str, np.ndarray]:
         if self._field is None:
             self.reset(track)
         x, y, heading = snapshot.car.pose
@@ -93,6 +95,7 @@ class Lidar:
         Only the beams still marching are updated each round (most stop within a few).
         """
         field, limit = self._field, self.config.max_range
+        assert field is not None, "reset() prepares the track's field"
         count = len(angles)
         if field.empty:
             return np.full(count, limit), np.zeros(count, np.uint8)

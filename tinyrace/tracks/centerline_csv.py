@@ -48,7 +48,9 @@ def read_loop(path: Path, source: str, key: str, scale: float = 1.0) -> Loop:
     columns = _columns(table)
     x, y, right, left = columns
     points = table.values[:, [x, y]] * scale
-    widths = None if right is None else table.values[:, [right, left]] * scale
+    widths = None
+    if right is not None and left is not None:
+        widths = table.values[:, [right, left]] * scale
     problems = _check_count(table) or _check_widths(table, widths, (right, left))
     problems = problems or _check_repeats(table, points) or _check_crossing(table, points)
     if problems:

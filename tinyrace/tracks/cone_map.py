@@ -52,7 +52,10 @@ class Cones:
 def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
     """Read a cone map; a bad row is a ConfigError naming the file, line and column."""
     text = read_text(path, source, key)
-    positions, tags, lines, problems = [], [], [], []
+    positions: list[tuple[float, float]] = []
+    tags: list[str] = []
+    lines: list[int] = []
+    problems: list[Problem] = []
     for number, raw in enumerate(text.splitlines(), start=1):
         cells = [cell.strip() for cell in raw.split(",")]
         if not raw.strip() or raw.lstrip().startswith("#") or cells[0].lower() == "tag":
@@ -149,7 +152,7 @@ def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
     closing = float(np.hypot(*(points[order[-1]] - points[order[0]])))
     if closing > max_gap:
         _gap_error(cones, index[order[-1]], tag, closing, max_gap)
-    return points[order]
+    return np.asarray(points[order], float)
 
 
 def _start_cones_beside(cones: Cones, tag: str) -> np.ndarray:
@@ -159,7 +162,7 @@ def _start_cones_beside(cones: Cones, tag: str) -> np.ndarray:
     if len(big) == 0 or len(edges) == 0:
         return np.zeros(0, int)
     nearest = edges[_nearest(cones.positions[edges], cones.positions[big])]
-    return big[np.array([cones.tags[i] == tag for i in nearest], bool)]
+    return np.asarray(big[np.array([cones.tags[i] == tag for i in nearest], bool)], int)
 
 
 def _gap_error(cones: Cones, cone: int, tag: str, gap: float, max_gap: float) -> None:

@@ -53,7 +53,10 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
     counts of cells. Blank lines and ``#`` comments are skipped; the last comment before the
     first row is taken as the header."""
     text = read_text(path, source, key)
-    rows, lines, header, problems = [], [], (), []
+    rows: list[list[float]] = []
+    lines: list[int] = []
+    header: tuple[str, ...] = ()
+    problems: list[Problem] = []
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.strip()
         if not line:
@@ -97,7 +100,11 @@ def _is_number(cell: str) -> bool:
 
 
 def _numbers(
-    path: str, number: int, cells: tuple[str, ...], columns: tuple[int, ...], problems: list
+    path: str,
+    number: int,
+    cells: tuple[str, ...],
+    columns: tuple[int, ...],
+    problems: list[Problem],
 ) -> list[float] | None:
     """The row's floats, or None with its problems recorded (wrong count, not a finite number)."""
     if len(cells) not in columns:

@@ -253,7 +253,7 @@ class ImageSource:
         if problems:
             raise ConfigError(problems)
         cte = config.reward_design.cross_track_error
-        scales = [t.pixels_per_meter for t in config.tracks]
+        scales = [getattr(t, "pixels_per_meter", None) for t in config.tracks]
         self.tracks = tuple(
             as_track(t, cte.trajectory_color, ppm) for t, ppm in zip(loaded, scales, strict=True)
         )

@@ -79,6 +79,7 @@ class MetricTrack:
 
 
 MetricConfig = CenterlineTrackConfig | ConeMapTrackConfig | RosMapTrackConfig
+METRIC_CONFIGS = (CenterlineTrackConfig, ConeMapTrackConfig, RosMapTrackConfig)
 
 
 def load_metric_track(config: MetricConfig, index: int, base_dir: Path, source: str) -> MetricTrack:
@@ -177,8 +178,10 @@ class MetricSource:
 
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         self.kind = config.kind
-        loaded, problems = [], []
+        loaded: list[MetricTrack] = []
+        problems: list[Problem] = []
         for index, track_config in enumerate(config.tracks):
+            assert isinstance(track_config, METRIC_CONFIGS)  # one kind per env, checked at load
             try:
                 loaded.append(load_metric_track(track_config, index, base_dir, source))
             except ConfigError as error:

@@ -12,7 +12,7 @@ import numpy as np
 
 def segment_lengths(loop: np.ndarray) -> np.ndarray:
     """(N,) length of the segment from point i to point i + 1 (the last one closes the loop)."""
-    return np.hypot(*(np.roll(loop, -1, axis=0) - loop).T)
+    return np.asarray(np.hypot(*(np.roll(loop, -1, axis=0) - loop).T), float)
 
 
 def cumulative_length(loop: np.ndarray) -> np.ndarray:
@@ -44,14 +44,14 @@ def resample(
 def headings(loop: np.ndarray) -> np.ndarray:
     """(N,) direction of travel at each point [rad], from its two neighbours."""
     ahead = np.roll(loop, -1, axis=0) - np.roll(loop, 1, axis=0)
-    return np.arctan2(ahead[:, 1], ahead[:, 0])
+    return np.asarray(np.arctan2(ahead[:, 1], ahead[:, 0]), float)
 
 
 def curvature(loop: np.ndarray) -> np.ndarray:
     """(N,) signed curvature at each point [1/unit], positive turning left (counter-clockwise)."""
     turn = np.diff(np.unwrap(np.concatenate((headings(loop), headings(loop)[:1]))))
     step = segment_lengths(loop)
-    return np.roll(turn, 1) / np.maximum(0.5 * (step + np.roll(step, 1)), 1e-12)
+    return np.asarray(np.roll(turn, 1) / np.maximum(0.5 * (step + np.roll(step, 1)), 1e-12))
 
 
 def left_normals(loop: np.ndarray) -> np.ndarray:
@@ -118,23 +118,24 @@ def _crosses(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> 
         | ((d3 == 0) & _within(p1, p2, q1))
         | ((d4 == 0) & _within(p1, p2, q2))
     )
-    return proper | touching
+    return np.asarray(proper | touching, bool)
 
 
 def _side(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Sign of the cross product (b - a) x (p - a): which side of line a-b the point p is."""
     cross = (b[:, 0] - a[:, 0]) * (p[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (p[:, 0] - a[:, 0])
-    return np.sign(cross)
+    return np.asarray(np.sign(cross), float)
 
 
 def _within(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     """Whether p lies in the bounding box of segment a-b (for points on its line)."""
-    return (
+    inside = (
         (np.minimum(a[:, 0], b[:, 0]) <= p[:, 0])
         & (p[:, 0] <= np.maximum(a[:, 0], b[:, 0]))
         & (np.minimum(a[:, 1], b[:, 1]) <= p[:, 1])
         & (p[:, 1] <= np.maximum(a[:, 1], b[:, 1]))
     )
+    return np.asarray(inside, bool)
 
 
 def nearest_index(loop: np.ndarray, point: np.ndarray) -> int:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeGuard
 
 import cv2
 import numpy as np
@@ -55,7 +56,7 @@ class OccupancyMap:
         local = self.info.resolution * np.column_stack(
             (np.asarray(cols) + 0.5, height - np.asarray(rows) - 0.5)
         )
-        return _rotate(local, self.info.origin[2]) + self.info.origin[:2]
+        return np.asarray(_rotate(local, self.info.origin[2]) + self.info.origin[:2], float)
 
     def to_pixel(self, points: np.ndarray) -> np.ndarray:
         """(K, 2) fractional (row, col) of world points [m]; inverse of ``to_world``."""
@@ -79,7 +80,7 @@ class OccupancyMap:
         pixel = np.rint(self.to_pixel(points)).astype(int)
         rows = np.clip(pixel[:, 0], 0, self.shape[0] - 1)
         cols = np.clip(pixel[:, 1], 0, self.shape[1] - 1)
-        return field[rows, cols] * self.info.resolution
+        return np.asarray(field[rows, cols] * self.info.resolution, float)
 
     def wall_segments(self, tolerance_px: float = 1.0) -> np.ndarray:
         """(M, 2, 2) [m] the outlines of the occupied regions as line segments, simplified
@@ -102,9 +103,12 @@ class OccupancyMap:
         origin's yaw is 0, their bounding boxes otherwise)."""
         h, w = self.occupied.shape
         ph, pw = -h % cell_px, -w % cell_px
-        grid = np.pad(self.occupied, ((0, ph), (0, pw)))
-        grid = grid.reshape((h + ph) // cell_px, cell_px, (w + pw) // cell_px, cell_px)
-        rows_hit, cols_hit = grid.any(axis=3), grid.any(axis=1)  # (gy, c, gx), (gy, gx, c)
+        padded = np.pad(self.occupied, ((0, ph), (0, pw)))
+        grid: np.ndarray = padded.reshape(
+            (h + ph) // cell_px, cell_px, (w + pw) // cell_px, cell_px
+        )
+        rows_hit: np.ndarray = np.any(grid, axis=3)
+        cols_hit: np.ndarray = np.any(grid, axis=1)  # (gy, c, gx), (gy, gx, c)
         gy, gx = np.nonzero(rows_hit.any(axis=1))
         if len(gy) == 0:
             return np.zeros((0, 4))
@@ -117,12 +121,12 @@ class OccupancyMap:
         half = 0.5 * self.info.resolution  # from pixel centres to pixel edges
         stacked = np.stack(corners)  # (4, M, 2)
         low, high = stacked.min(axis=0) - half, stacked.max(axis=0) + half
-        return np.column_stack((low, high))
+        return np.asarray(np.column_stack((low, high)), float)
 
 
 def _rotate(points: np.ndarray, angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
-    return points @ np.array([[c, s], [-s, c]])
+    return np.asarray(points @ np.array([[c, s], [-s, c]]), float)
 
 
 def read_map(path: Path, source: str, key: str) -> OccupancyMap:
@@ -179,6 +183,7 @@ def read_info(path: Path, text: str) -> MapInfo:
         bad("mode", f"expected one of: {', '.join(MODES)}")
     if problems:
         raise ConfigError(problems)
+    assert isinstance(image, str) and isinstance(origin, list) and _number(resolution)
     return MapInfo(
         (path.parent / image).resolve(),
         float(resolution),
@@ -189,7 +194,7 @@ def read_info(path: Path, text: str) -> MapInfo:
     )
 
 
-def _number(value: object) -> bool:
+def _number(value: object) -> TypeGuard[float]:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
