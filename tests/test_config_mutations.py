@@ -163,7 +163,9 @@ _YAML_BREAKS = "\x85\u2028\u2029"
 
 
 def key_text(**sizes: int) -> st.SearchStrategy[str]:
-    return st.text(st.characters(exclude_characters=_YAML_BREAKS, exclude_categories=("Cs",)), **sizes)
+    return st.text(
+        st.characters(exclude_characters=_YAML_BREAKS, exclude_categories=("Cs",)), **sizes
+    )
 
 
 Path_ = tuple  # a key path into a raw mapping: keys and list indices
