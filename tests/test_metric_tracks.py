@@ -89,7 +89,7 @@ def test_a_cone_knocked_over_costs_once_and_may_end_the_episode():
         "cone_map",
         track={
             "type": "cone_map",
-            "file": str(TRACKS_DIR / "autocross" / "cones.csv"),
+            "file": "cones.csv",
             "cone_hit_ends_episode": True,
         },
     )
@@ -110,13 +110,12 @@ def test_a_wall_stops_the_car_costs_per_step_and_may_end_the_episode():
             break
     assert stopped and all(speed == 0.0 for speed in stopped)
     assert info["walls_hit"] == len(stopped)
-    ros = TRACKS_DIR / "f1tenth_loop"
     ends = make(
         "ros_map",
         track={
             "type": "ros_map",
-            "file": str(ros / "map.yaml"),
-            "waypoints": str(ros / "raceline.csv"),
+            "file": "map.yaml",
+            "waypoints": "raceline.csv",
             "wall_hit_ends_episode": True,
         },
     )
@@ -125,17 +124,16 @@ def test_a_wall_stops_the_car_costs_per_step_and_may_end_the_episode():
 
 
 def test_a_ros_map_without_waypoints_says_cte_and_lookahead_are_unavailable():
-    ros = TRACKS_DIR / "f1tenth_loop"
     env = make(
         "ros_map",
-        track={"file": str(ros / "map.yaml"), "waypoints": None, "spawn": [13.3, 0.0, 1.73]},
+        track={"file": "map.yaml", "waypoints": None, "spawn": [13.3, 0.0, 1.73]},
     )
     _, info = env.reset(seed=0)
     assert "cte" not in info and "waypoints" in info["cte_unavailable"]
     with pytest.raises(ValueError, match="waypoints"):
         CenterlineDriver().reset(env)
     with pytest.raises(ConfigError) as error:
-        make("ros_map", track={"file": str(ros / "map.yaml"), "waypoints": None})
+        make("ros_map", track={"file": "map.yaml", "waypoints": None})
     assert error.value.problems[0].path == "tracks[0].spawn"
 
 
@@ -262,3 +260,15 @@ def test_play_drives_the_throttle_car_with_the_arrow_keys():
     assert _action(env, [0, 1, 1, 0], keys_of).tolist() == [1.0, 1.0]  # right, throttle
     assert _action(env, [1, 0, 0, 1], keys_of).tolist() == [-1.0, -1.0]  # left, brake
     assert env.action_space.contains(_action(env, [0, 0, 0, 0], keys_of))
+
+
+def test_track_files_stay_in_the_configs_folder_unless_allowed(tmp_path):
+    outside = str(TRACKS_DIR / "circuit" / "circuit.csv")
+    track = {"type": "centerline", "file": outside}
+    with pytest.raises(ConfigError) as error:
+        gym.make("tinyrace/TinyRace-v0", config={"track": track})
+    assert error.value.problems[0].path == "tracks[0].file"
+    env = gym.make(
+        "tinyrace/TinyRace-v0", config={"track": track, "files": {"paths_outside_folder": True}}
+    )
+    assert env.reset(seed=0)[1]["tiles_total"] == 1085

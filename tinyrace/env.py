@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
@@ -32,6 +33,7 @@ from tinyrace.world.snapshot import Snapshot
 Episode = ProceduralEpisode | ImageEpisode | MetricEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
+RESET_SOURCE = "<reset options>"
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
 
 
@@ -105,7 +107,11 @@ class TinyRaceEnv(gym.Env):
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
-        self._shaping = cte_shaping or shaping_from_config(self.config.reward_design)
+        self._shaping = (
+            _checked_shaping(cte_shaping)
+            if cte_shaping is not None
+            else shaping_from_config(self.config.reward_design)
+        )
         self.episode: Episode | None = None
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
@@ -123,7 +129,7 @@ class TinyRaceEnv(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         super().reset(seed=seed)
-        options = _check_options(options)
+        options = _check_options(options, self.config.kind)
         draw = self.track_source.draw(self.np_random, options)
         self.episode = episode = self.course.new_episode(draw)
         self._ground.episode, self.layout = episode, draw.track
@@ -278,22 +284,62 @@ def _sensors(config: EnvConfig, context: SensorContext) -> list[Sensor]:
     ]
 
 
-def _check_options(options: object) -> dict[str, Any]:
+def _check_options(options: object, kind: str) -> dict[str, Any]:
+    """The reset options, checked: known keys, ``randomize`` a bool, indices whole numbers.
+
+    Image tracks check the index ranges when they pick; a procedural track has one track and
+    one start, index 0.
+    """
     if options is None:
         return {}
     if not isinstance(options, Mapping):
-        raise ConfigError(Problem("<reset options>", "", options, "expected a dict or None"))
-    for key in options:
+        raise ConfigError(Problem(RESET_SOURCE, "", options, "expected a dict or None"))
+    for key, value in options.items():
         if key not in RESET_OPTIONS:
-            raise ConfigError(
-                Problem(
-                    "<reset options>",
-                    str(key),
-                    options[key],
-                    f"unknown option; valid: {', '.join(RESET_OPTIONS)}",
-                )
-            )
+            allowed = f"unknown option; valid: {', '.join(RESET_OPTIONS)}"
+            raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
+        if key == "randomize" and not isinstance(value, (bool, np.bool_)):
+            raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
+        if key != "randomize" and kind == "procedural" and not _is_zero_or_none(value):
+            allowed = f"expected 0 or None (a procedural track has one {key})"
+            raise ConfigError(Problem(RESET_SOURCE, key, value, allowed))
     return dict(options)
+
+
+def _is_zero_or_none(value: object) -> bool:
+    whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    return value is None or (whole and value == 0)
+
+
+def _key_text(key: object) -> str:
+    text = key if isinstance(key, str) else repr(key)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _checked_shaping(shaping: object) -> Callable[[float], float]:
+    """The ``cte_shaping`` kwarg: a callable whose every result must be a finite number."""
+    if not callable(shaping):
+        allowed = (
+            "expected a function cte [px] -> reward, or None "
+            "(reward_design.cross_track_error.shaping names the built-in ones)"
+        )
+        raise ConfigError(Problem("<kwargs>", "cte_shaping", shaping, allowed))
+    return _CheckedShaping(shaping)
+
+
+@dataclass(frozen=True)
+class _CheckedShaping:
+    """Calls the user's shaping; a result that is not a finite number is a ConfigError."""
+
+    shaping: Callable[[float], Any]
+
+    def __call__(self, cte: float) -> float:
+        value = self.shaping(cte)
+        number = isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+        if not (number and np.isfinite(value)):
+            allowed = "expected the cte_shaping function to return a finite number"
+            raise ConfigError(Problem("<kwargs>", "cte_shaping", value, allowed))
+        return float(value)
 
 
 def _add_terms(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:

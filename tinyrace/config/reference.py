@@ -7,6 +7,7 @@ between the markers; a test fails when the README and the schema disagree.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import sys
 import types
 import typing
@@ -24,6 +25,7 @@ from tinyrace.config.schema import (
     ConeSensorConfig,
     CrossTrackErrorConfig,
     EnvConfig,
+    FilesConfig,
     ImageTrackConfig,
     LidarConfig,
     ProceduralTrackConfig,
@@ -50,6 +52,7 @@ SECTIONS = (
     ("reward_design", RewardConfig, "reward_design"),
     ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
     ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
+    ("files", FilesConfig, "files"),
     ("experiment file", ExperimentConfig, ""),
     ("experiment output", OutputConfig, "output"),
 )
@@ -99,7 +102,7 @@ def default_text(f: dataclasses.Field[Any]) -> str:
 
 def section(title: str, cls: type, path: str) -> str:
     hints = typing.get_type_hints(cls)
-    lines = [f"#### `{title}`", "", (cls.__doc__ or "").strip().splitlines()[0], ""]
+    lines = [f"#### `{title}`", "", _doc_text(cls), ""]
     lines += ["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
     for f in dataclasses.fields(cls):
         aliases = f.metadata.get("aliases", ())
@@ -108,6 +111,12 @@ def section(title: str, cls: type, path: str) -> str:
         doc = f.metadata.get("doc", "").replace("|", "\\|")
         lines.append(f"| {key} | {type_name(hints[f.name])} | {default_text(f)} | {unit} | {doc} |")
     return "\n".join(lines)
+
+
+def _doc_text(cls: type) -> str:
+    """The class docstring as one paragraph per blank-line-separated block."""
+    blocks = inspect.cleandoc(cls.__doc__ or "").split("\n\n")
+    return "\n\n".join(" ".join(block.split()) for block in blocks)
 
 
 def markdown() -> str:

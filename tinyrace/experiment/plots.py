@@ -187,10 +187,11 @@ def time_series(
     height = 44 + len(panels) * (panel_h + gap)
     image = np.full((height, width, 3), PAPER, np.uint8)
     cv2.putText(image, title, (8, 16), _FONT, 0.55, INK, 1, cv2.LINE_AA)
-    x_range = nice_range(t)
+    finite_t = t[np.isfinite(t)]
+    x_range = (float(finite_t.min()), float(finite_t.max())) if len(finite_t) > 1 else (0.0, 1.0)
     for k, (name, values) in enumerate(panels):
         axes = Axes(56, 20 + gap + k * (panel_h + gap) - 10, width - 72, panel_h, x_range,
-                    nice_range(values))  # fmt: skip
+                    nice_range(values, include_zero=True))  # fmt: skip
         _frame(image, axes, name, "s" if k == len(panels) - 1 else "")
         ok = np.isfinite(values) & np.isfinite(t)
         if not ok.any():

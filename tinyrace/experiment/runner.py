@@ -20,7 +20,7 @@ from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.interrupt import Interrupted, StopSignals
-from tinyrace.experiment.load import Experiment
+from tinyrace.experiment.load import Experiment, importable_from
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
@@ -60,7 +60,8 @@ def run_experiment(
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
     try:
         _check_view(experiment, env)
-        driver = _driver(config.driver, config.driver_args, experiment.source)
+        with importable_from(experiment.folder):  # own drivers sit beside the experiment file
+            driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
         root = Path(out_root or config.output.dir)
         made_root = not root.exists()

@@ -18,6 +18,9 @@ import cv2
 import numpy as np
 
 from tinyrace.config import Color, EnvConfig, ImageTrackConfig
+from tinyrace.config.image_file import read_image_bgr
+from tinyrace.config.paths import inside_folder
+from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import ColorLayer, Track, TrackDraw, pick_index
 from tinyrace.tracks.nearest import NearestPoint
@@ -61,7 +64,7 @@ def load_image_track(
 ) -> tuple[ImageTrack | None, list[Problem]]:
     """Load ``tracks[index]``; returns the track or the problems found (file, key path, value)."""
     where = f"tracks[{index}]"
-    image, problems = _read_rgbx(track, where, base_dir, source)
+    image, problems = _read_rgbx(track, where, base_dir, source, config.files)
     if image is None:
         return None, problems
     height, width = image.shape[:2]
@@ -100,46 +103,30 @@ def load_image_track(
 
 
 def _read_rgbx(
-    track: ImageTrackConfig, where: str, base_dir: Path, source: str
+    track: ImageTrackConfig, where: str, base_dir: Path, source: str, files: FilesConfig
 ) -> tuple[np.ndarray | None, list[Problem]]:
-    """Read and binarise the image (PNG/JPEG; RGB, RGBA or grey) as RGBx."""
-    if track.image is None:
-        height, width = track.plane_size
-        plane = np.zeros((height, width, 4), np.uint8)
-        plane[:, :, 3] = 255
-        return plane, []
-    path = (base_dir / track.image).resolve()
-    if not _is_file(path):  # also False for names the OS refuses (too long, ...)
-        return None, [
-            Problem(
-                source,
-                f"{where}.image",
-                track.image,
-                f"expected an image file (PNG or JPEG) next to the YAML; {path} does not exist",
-            )
-        ]
-    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)  # grey and RGBA become BGR; alpha is ignored
-    if bgr is None:
-        return None, [
-            Problem(
-                source,
-                f"{where}.image",
-                track.image,
-                f"expected a readable PNG or JPEG image; {path} is not one",
-            )
-        ]
+    """Read and binarise the image (PNG/JPEG/PGM; RGB, RGBA or grey) as RGBx, within bounds."""
+    try:
+        if track.image is None:
+            return _plane(track.plane_size), []
+        # Paths a file names stay in its folder; a dict's or kwargs' are the programmer's own.
+        confined = not source.startswith("<") and not files.paths_outside_folder
+        path = inside_folder(track.image, base_dir, not confined, source, f"{where}.image")
+        bgr = read_image_bgr(path, files.max_image_pixels, source, f"{where}.image", track.image)
+    except ConfigError as exc:
+        return None, exc.problems
     cv2.threshold(bgr, THRESHOLD, 255, cv2.THRESH_BINARY, dst=bgr)
     rgbx = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGBA)
     del bgr
     return rgbx, []
 
 
-def _is_file(path: Path) -> bool:
-    """Like ``Path.is_file``, but False for names the OS refuses (too long, ...)."""
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
+def _plane(size: tuple[int, int]) -> np.ndarray:
+    """The black plane of a track without an image (its size is capped by the config check)."""
+    height, width = size
+    plane = np.zeros((height, width, 4), np.uint8)
+    plane[:, :, 3] = 255
+    return plane
 
 
 def _take_color(image: np.ndarray, color: Color) -> np.ndarray:

@@ -22,6 +22,7 @@ from tinyrace.config import (
     EnvConfig,
     RosMapTrackConfig,
 )
+from tinyrace.config.paths import inside_folder
 from tinyrace.errors import Problem
 from tinyrace.tracks.base import Surface, Track, TrackDraw, pick_index
 from tinyrace.tracks.centerline_csv import read_loop
@@ -82,9 +83,19 @@ MetricConfig = CenterlineTrackConfig | ConeMapTrackConfig | RosMapTrackConfig
 METRIC_CONFIGS = (CenterlineTrackConfig, ConeMapTrackConfig, RosMapTrackConfig)
 
 
-def load_metric_track(config: MetricConfig, index: int, base_dir: Path, source: str) -> MetricTrack:
-    """Read ``tracks[index]``; a ConfigError names the file (and line) of every problem."""
-    return LOADERS[config.type](config, f"tracks[{index}]", base_dir, source)
+def load_metric_track(
+    config: MetricConfig, index: int, base_dir: Path, source: str, allow_outside: bool = False
+) -> MetricTrack:
+    """Read ``tracks[index]``; a ConfigError names the file (and line) of every problem.
+
+    Its files stay inside the config's folder unless ``allow_outside``
+    (``files.paths_outside_folder``)."""
+    where = f"tracks[{index}]"
+    for key in ("file", "waypoints"):
+        name = getattr(config, key, None)
+        if name is not None:
+            inside_folder(name, base_dir, allow_outside, source, f"{where}.{key}")
+    return LOADERS[config.type](config, where, base_dir, source)
 
 
 def _centerline(
@@ -183,7 +194,8 @@ class MetricSource:
         for index, track_config in enumerate(config.tracks):
             assert isinstance(track_config, METRIC_CONFIGS)  # one kind per env, checked at load
             try:
-                loaded.append(load_metric_track(track_config, index, base_dir, source))
+                outside = config.files.paths_outside_folder
+                loaded.append(load_metric_track(track_config, index, base_dir, source, outside))
             except ConfigError as error:
                 problems += error.problems
         if problems:
