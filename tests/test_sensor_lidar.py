@@ -104,3 +104,17 @@ def test_directions_turn_with_the_heading_and_the_image_convention():
     np.testing.assert_allclose(up, [[0, 1], [-1, 0]], atol=1e-12)  # + left: counter-clockwise
     down = directions(np.array([math.pi / 2]), 0.0, y_down=True)
     np.testing.assert_allclose(down, [[0, -1]], atol=1e-12)  # left of +x is up the image
+
+
+@pytest.mark.parametrize(("cell", "max_range"), [(0.19375, 3.3), (0.3, 7.0), (0.07, 30.0)])
+def test_a_beam_that_hits_nothing_reports_max_range_exactly(cell, max_range):
+    # cells whose max_range in cells, divided back, rounds past max_range in float32
+    side = int(2 * max_range / cell) + 20
+    field = distance_field(
+        np.zeros((side, side), bool), np.array([[1 / cell, 0, 0], [0, 1 / cell, 0]])
+    )
+    centre = side * cell / 2
+    ranges = cast(
+        field, (centre, centre), directions(beam_angles(360, 2 * math.pi), 0.0, False), max_range
+    )
+    assert (ranges == np.float32(max_range)).all()

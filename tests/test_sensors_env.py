@@ -1,5 +1,6 @@
 """Every sensor type in the env: check_env on every track kind it supports (ConfigError on
-the others), pickling, determinism for a seed, and the vector envs."""
+the others; the metric kinds by their shipped examples), pickling, determinism for a seed,
+and the vector envs."""
 
 from __future__ import annotations
 
@@ -21,6 +22,9 @@ ID = "tinyrace:tinyrace/TinyRace-v0"  # spawned workers import tinyrace first
 KINDS = {
     "procedural": {},
     "image": {"environment": str(TRACKS_DIR / "formula_student")},
+    "centerline": {"environment": str(TRACKS_DIR / "circuit")},
+    "cone_map": {"environment": str(TRACKS_DIR / "autocross")},
+    "ros_map": {"environment": str(TRACKS_DIR / "f1tenth_loop")},
 }
 ENTRIES = {  # small and noisy: noise must come from the env's seed
     "perspective_camera": {"resolution": [30, 40], "max_range": 60.0},

@@ -35,12 +35,15 @@ class ActionSpec:
     """How actions look for one car: the gymnasium space and how to read an action."""
 
     space: spaces.Box | spaces.Discrete
-    kind: str  # "discrete", "dynamic" ([steer, gas, brake]) or "kinematic" ([steer])
+    kind: str  # "discrete", "dynamic" ([steer, gas, brake]), "kinematic" ([steer]) or
+    # "kinematic_throttle" ([steer, throttle])
 
     @classmethod
     def for_car(cls, model: str, actions: str) -> ActionSpec:
         if model == "kinematic":
             return cls(spaces.Box(-1.0, 1.0, (1,), np.float32), "kinematic")
+        if model == "kinematic_throttle":
+            return cls(spaces.Box(-1.0, 1.0, (2,), np.float32), "kinematic_throttle")
         if actions == "discrete":
             return cls(spaces.Discrete(len(DISCRETE_CONTROLS)), "discrete")
         low, high = np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32)
@@ -56,7 +59,7 @@ class ActionSpec:
     )  # Box bounds as floats
 
     def read(self, action: object) -> tuple[float, ...]:
-        """The controls of a valid action: (steer, gas, brake) or (steer,)."""
+        """The controls of a valid action: (steer, gas, brake), (steer,) or (steer, throttle)."""
         if self.kind == "discrete":
             return DISCRETE_CONTROLS[self._index(action)]
         if (

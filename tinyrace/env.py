@@ -14,6 +14,7 @@ from gymnasium.error import ResetNeeded
 
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.image import ImageEpisode
+from tinyrace.episodes.metric import MetricEpisode
 from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralEpisode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
@@ -25,10 +26,11 @@ from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import build_sensors, sensor_type
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.metric import MetricTrack
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.snapshot import Snapshot
 
-Episode = ProceduralEpisode | ImageEpisode
+Episode = ProceduralEpisode | ImageEpisode | MetricEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
 RESET_SOURCE = "<reset options>"
@@ -208,7 +210,7 @@ class TinyRaceEnv(gym.Env):
         return info
 
     @property
-    def track(self) -> ProceduralTrack | ImageTrack:
+    def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
         """The current episode's track data (read-only arrays in track units)."""
         return self._episode("the track").track
 

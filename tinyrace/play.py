@@ -63,6 +63,8 @@ def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
     if env.action_space.shape == (1,):
         return np.array([steer], np.float32)
     gas, brake = float(keys[pygame.K_UP]), 0.8 * float(keys[pygame.K_DOWN])
+    if env.action_space.shape == (2,):  # the kinematic car with throttle: [steer, throttle]
+        return np.array([steer, gas - float(keys[pygame.K_DOWN])], np.float32)
     if env.config.car.actions == "discrete":
         return (
             GAS

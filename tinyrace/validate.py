@@ -12,6 +12,7 @@ import numpy as np
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
 from tinyrace.episodes.image import ImageCourse
+from tinyrace.episodes.metric import MetricCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -93,7 +94,7 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
-    from tinyrace.render.track_picture import image_picture, procedural_picture
+    from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
 
     if target == "procedural":
         image = procedural_picture(load_env_config().config, seed)
@@ -105,6 +106,9 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
+    if isinstance(parts.course, MetricCourse):
+        prepared = parts.course.prepared[0]
+        return Picture(metric_picture(prepared.track, prepared.texture), name, inputs)
     assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 
@@ -113,9 +117,10 @@ def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:
     """Every file a config was read from: the YAML files and the track images."""
     files = [path / TRACK_FILE if path.is_dir() else path, Path(loaded.source)]
     for track in loaded.config.tracks:
-        image = getattr(track, "image", None)
-        if isinstance(image, str):
-            files.append(loaded.base_dir / image)
+        for key in ("image", "file", "waypoints"):  # picture and metric track files
+            name = getattr(track, key, None)
+            if isinstance(name, str):
+                files.append(loaded.base_dir / name)
     return tuple(dict.fromkeys(f.resolve() for f in files))
 
 

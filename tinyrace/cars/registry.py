@@ -17,6 +17,7 @@ from tinyrace.actions import ActionSpec
 from tinyrace.cars.base import Car, Pose
 from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.cars.kinematic import KinematicCar
+from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Track
@@ -37,22 +38,48 @@ class CarModel:
     doc: str
 
 
+def _known(value: float | None) -> float:
+    """A car knob whose null default ``resolve_defaults`` has filled by track kind."""
+    assert value is not None, "car knobs are resolved when the config is loaded"
+    return value
+
+
 def _build_dynamic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
     if track.kind == "procedural":  # CarRacing's own frame and units
         return DynamicCar.build(space, pose)
-    return DynamicCar.build(space, pose, scale=config.pixels_per_unit, y_down=track.y_down)
+    return DynamicCar.build(space, pose, scale=_known(config.pixels_per_unit), y_down=track.y_down)
 
 
 def _build_kinematic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
     return KinematicCar.build(
         space,
         pose,
-        config.wheelbase,
-        config.track_width,
-        config.velocity,
+        _known(config.wheelbase),
+        _known(config.track_width),
+        _known(config.velocity),
         config.max_steering_angle,
         config.max_steering_change,
     )
+
+
+def _build_kinematic_throttle(
+    space: pymunk.Space, pose: Pose, config: CarConfig, track: Track
+) -> Car:
+    return KinematicThrottleCar.build(
+        space,
+        pose,
+        (_known(config.wheelbase), _known(config.track_width)),
+        (_known(config.velocity), config.max_acceleration, config.max_deceleration),
+        (config.max_steering_angle, config.max_steering_change),
+        y_down=track.y_down,
+    )
+
+
+def _kinematic_throttle_actions(config: CarConfig) -> ActionSpec:
+    return ActionSpec.for_car("kinematic_throttle", config.actions)
+
+
+METRIC_KINDS = frozenset({"centerline", "cone_map", "ros_map"})  # tracks in metres
 
 
 def _dynamic_actions(config: CarConfig) -> ActionSpec:
@@ -66,7 +93,7 @@ def _kinematic_actions(config: CarConfig) -> ActionSpec:
 CAR_MODELS: dict[str, CarModel] = {
     "dynamic": CarModel(
         name="dynamic",
-        track_kinds=frozenset({"procedural", "image"}),
+        track_kinds=frozenset({"procedural", "image"}) | METRIC_KINDS,
         default_for=frozenset({"procedural"}),
         action_kinds=frozenset({"continuous", "discrete"}),
         build=_build_dynamic,
@@ -81,6 +108,15 @@ CAR_MODELS: dict[str, CarModel] = {
         build=_build_kinematic,
         actions=_kinematic_actions,
         doc="tinycarlo's constant-speed kinematic bicycle",
+    ),
+    "kinematic_throttle": CarModel(
+        name="kinematic_throttle",
+        track_kinds=METRIC_KINDS,
+        default_for=METRIC_KINDS,
+        action_kinds=frozenset({"continuous"}),
+        build=_build_kinematic_throttle,
+        actions=_kinematic_throttle_actions,
+        doc="a kinematic bicycle with throttle in metres (tinycarlo 2's car): [steer, throttle]",
     ),
 }
 

@@ -12,15 +12,19 @@ from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
     MAX_CAMERA_PIXELS,
+    METRIC_KINDS,
     CameraConfig,
     CarConfig,
+    CenterlineTrackConfig,
     ColorObstacle,
+    ConeMapTrackConfig,
     CrossTrackErrorConfig,
     EnvConfig,
     FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
+    RosMapTrackConfig,
     SimConfig,
     TrackConfig,
 )
@@ -28,10 +32,13 @@ from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_track, track_names
 
 __all__ = [
+    "METRIC_KINDS",
     "CameraConfig",
     "CarConfig",
+    "CenterlineTrackConfig",
     "Color",
     "ColorObstacle",
+    "ConeMapTrackConfig",
     "ConfigError",
     "CrossTrackErrorConfig",
     "EnvConfig",
@@ -39,6 +46,7 @@ __all__ = [
     "LoadedConfig",
     "ProceduralTrackConfig",
     "RewardConfig",
+    "RosMapTrackConfig",
     "SimConfig",
     "TrackConfig",
     "load_env_config",
@@ -161,15 +169,12 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if config.observation == "box" and len(config.cameras) > 1:
         ids = [c.id for c in config.cameras]
         parser.problem(f"{at}observation", "box", f"box needs exactly one camera, not {ids}")
-    ids = [c.id for c in config.cameras]
+    ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
+    cameras = len(config.cameras)
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
-            parser.problem(f"{at}cameras[{i}].id", cam_id, "camera ids must be unique")
-    for i, sensor in enumerate(config.sensors):
-        if sensor.id in ids:
-            allowed = "sensor ids must be unique and differ from the camera ids"
-            parser.problem(f"{at}sensors[{i}].id", sensor.id, allowed)
-        ids.append(sensor.id)
+            where = f"cameras[{i}].id" if i < cameras else f"sensors[{i - cameras}].id"
+            parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
     # the car model and its actions are checked by tinyrace.cars.registry
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
@@ -179,7 +184,7 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     for i, track in enumerate(config.tracks):
         if track.type == "procedural":
             _check_texture_side(track, parser, f"{at}tracks[{i}]")
-        else:
+        elif track.type == "image":
             _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
     _check_camera_pixels(config.cameras, parser, at)
 
@@ -228,20 +233,42 @@ def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -
         parser.problem(f"{at}.pixels_per_unit", track.pixels_per_unit, allowed)
 
 
+# Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
+# a small racing car's in metres.
+CAR_DEFAULTS = {
+    # [px], [px], [px/s], [px/u]
+    "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0},
+    # [m], [m], [m/s], [m/u]
+    "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0},
+}
+
+
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
     """Fill the ``None`` knobs whose default depends on the track kind."""
     procedural = config.kind == "procedural"
+    carracing_rules = procedural or config.kind in METRIC_KINDS  # tiles, laps, time penalty
     sim = config.sim
     if sim.fps is None:
-        sim = dataclasses.replace(sim, fps=50.0 if procedural else 30.0)
+        sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
+    sizes = CAR_DEFAULTS["m" if config.kind in METRIC_KINDS else "px"]
+    car = config.car
+    car = dataclasses.replace(
+        car,
+        wheelbase=_default(car.wheelbase, sizes["wheelbase"]),
+        track_width=_default(car.track_width, sizes["track_width"]),
+        velocity=_default(car.velocity, sizes["velocity"]),
+        pixels_per_unit=_default(car.pixels_per_unit, sizes["pixels_per_unit"]),
+    )
     reward = config.reward_design
     reward = dataclasses.replace(
         reward,
-        tile_progress=_default(reward.tile_progress, 1000.0 if procedural else 0.0),
-        time_penalty=_default(reward.time_penalty, 0.1 if procedural else 0.0),
-        out_of_bounds_penalty=_default(reward.out_of_bounds_penalty, 100.0 if procedural else 0.0),
+        tile_progress=_default(reward.tile_progress, 1000.0 if carracing_rules else 0.0),
+        time_penalty=_default(reward.time_penalty, 0.1 if carracing_rules else 0.0),
+        out_of_bounds_penalty=_default(
+            reward.out_of_bounds_penalty, 100.0 if carracing_rules else 0.0
+        ),
     )
-    return dataclasses.replace(config, sim=sim, reward_design=reward)
+    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
 
 
 def _default(value: float | None, default: float) -> float:

@@ -19,13 +19,16 @@ from tinyrace.config.experiment import ExperimentConfig, OutputConfig
 from tinyrace.config.schema import (
     CameraConfig,
     CarConfig,
+    CenterlineTrackConfig,
     ColorObstacle,
+    ConeMapTrackConfig,
     CrossTrackErrorConfig,
     EnvConfig,
     FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
+    RosMapTrackConfig,
     SimConfig,
 )
 from tinyrace.config.sensors import SENSOR_CONFIGS
@@ -38,6 +41,9 @@ SECTIONS = (
     ("sim", SimConfig, "sim"),
     ("track: type procedural", ProceduralTrackConfig, "tracks[i]"),
     ("track: type image", ImageTrackConfig, "tracks[i]"),
+    ("track: type centerline", CenterlineTrackConfig, "tracks[i]"),
+    ("track: type cone_map", ConeMapTrackConfig, "tracks[i]"),
+    ("track: type ros_map", RosMapTrackConfig, "tracks[i]"),
     ("car", CarConfig, "car"),
     ("cameras[i]", CameraConfig, "cameras[i]"),
     *(
@@ -56,7 +62,8 @@ SECTIONS = (
 def type_name(hint: Any) -> str:
     origin, args = typing.get_origin(hint), typing.get_args(hint)
     if origin in (Union, types.UnionType):
-        return " or ".join(type_name(a) for a in args)
+        names = [type_name(a) for a in args]
+        return " or ".join(dict.fromkeys(names))  # a union of track kinds is one "mapping"
     if origin is Literal:
         return " \\| ".join(f"`{a}`" for a in args)
     if origin is tuple:

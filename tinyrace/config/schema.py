@@ -8,7 +8,7 @@ loader validates against it and the README's YAML reference is generated from it
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Union
+from typing import Any, Literal, Union
 
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
@@ -25,7 +25,7 @@ class SimConfig:
 
     fps: float | None = knob(
         None,
-        "simulation steps per second; null: 50 on procedural tracks, 30 on image tracks",
+        "simulation steps per second; null: 30 on image tracks, 50 on the others",
         "Hz",
         low=1,
         high=1000,
@@ -97,36 +97,161 @@ class ImageTrackConfig:
         low=16,
         high=20000,
     )
+    pixels_per_meter: float | None = knob(
+        None,
+        "the image's scale, when known: the track's metres per pixel is its inverse "
+        "(null: unknown, everything stays in pixels as in tinycarlo 1.1)",
+        "px/m",
+        low=0,
+        low_open=True,
+    )
+
+
+def _lap_percent() -> Any:
+    return knob(
+        0.95, "fraction of tiles visited before returning to tile 0 ends a lap", low=0, high=1
+    )
+
+
+def _ground_resolution() -> Any:
+    return knob(
+        8.0,
+        "pixels per metre of the pre-drawn ground texture (lowered to fit 8192 px a side)",
+        "px/m",
+        low=0.25,
+        high=200,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class CenterlineTrackConfig:
+    """A ``track`` of ``type: centerline``: a racetrack-database centreline CSV, in metres.
+
+    Rows ``x_m,y_m,w_tr_right_m,w_tr_left_m`` of one closed loop in driving order."""
+
+    type: Literal["centerline"] = knob("centerline", "track kind")
+    file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
+    spacing: float = knob(2.0, "resample the centreline (and tiles) this far apart", "m", low=0.05)
+    scale: float = knob(1.0, "multiply every coordinate and width by this", low=1e-6)
+    default_width: float = knob(
+        10.0, "road width when the file gives only x, y", "m", low=0, low_open=True
+    )
+    lap_complete_percent: float = _lap_percent()
+    margin: float = knob(
+        50.0, "leaving the road's bounding box by more than this ends the episode", "m", low=0
+    )
+    pixels_per_meter: float = _ground_resolution()
+
+
+@dataclass(frozen=True, kw_only=True)
+class ConeMapTrackConfig:
+    """A ``track`` of ``type: cone_map``: a Formula Student Driverless cone map CSV, in metres.
+
+    Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right."""
+
+    type: Literal["cone_map"] = knob("cone_map", "track kind")
+    file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
+    spacing: float = knob(0.5, "distance between centreline points (and tiles)", "m", low=0.05)
+    scale: float = knob(1.0, "multiply every coordinate by this", low=1e-6)
+    max_cone_gap: float = knob(
+        6.0, "cones of one edge further apart than this do not close a loop", "m", low=0.1
+    )
+    cone_hit_ends_episode: bool = knob(False, "knocking a cone over ends the episode")
+    lap_complete_percent: float = _lap_percent()
+    margin: float = knob(
+        10.0, "leaving the cones' bounding box by more than this ends the episode", "m", low=0
+    )
+    pixels_per_meter: float = knob(
+        20.0,
+        "pixels per metre of the pre-drawn ground texture (lowered to fit 8192 px a side)",
+        "px/m",
+        low=0.25,
+        high=200,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class RosMapTrackConfig:
+    """A ``track`` of ``type: ros_map``: a ROS map_server map with a raceline, in metres.
+
+    The map YAML and its picture (F1TENTH's maps), and optionally a waypoint CSV."""
+
+    type: Literal["ros_map"] = knob("ros_map", "track kind")
+    file: str = knob(REQUIRED, "the map YAML, relative to the config's folder")
+    waypoints: str | None = knob(
+        None,
+        "reference line CSV (x, y; or F1TENTH's s; x; y; psi; kappa; vx; ax), relative to the "
+        "config's folder; null: no tiles, laps, cte or look-ahead",
+    )
+    spawn: tuple[float, float, float] | None = knob(
+        None, "start pose [x, y, heading] (null: the first waypoint)", "m, m, rad"
+    )
+    spacing: float = knob(0.25, "resample the waypoints (and tiles) this far apart", "m", low=0.01)
+    wall_hit_ends_episode: bool = knob(False, "touching an occupied cell ends the episode")
+    lap_complete_percent: float = _lap_percent()
 
 
 # A track entry without ``type`` is an image track (tinycarlo files have none): listed first.
-TrackConfig = Union[ImageTrackConfig, ProceduralTrackConfig]  # noqa: UP007 (read at runtime)
+TrackConfig = Union[  # noqa: UP007 (read at runtime)
+    ImageTrackConfig,
+    ProceduralTrackConfig,
+    CenterlineTrackConfig,
+    ConeMapTrackConfig,
+    RosMapTrackConfig,
+]
+METRIC_KINDS = ("centerline", "cone_map", "ros_map")  # track kinds in metres
 
 
 @dataclass(frozen=True)
 class CarConfig:
-    """``car``: the car model and its parameters."""
+    """``car``: the car model and its parameters, in the track's unit (px or m)."""
 
-    model: Literal["kinematic", "dynamic"] | None = knob(
-        None, "kinematic bicycle (tinycarlo) or CarRacing's dynamic car; null: by track kind"
+    model: Literal["kinematic", "dynamic", "kinematic_throttle"] | None = knob(
+        None,
+        "kinematic bicycle at constant speed (tinycarlo), CarRacing's dynamic car, or a "
+        "kinematic bicycle with throttle (tinycarlo 2); null: by track kind",
     )
     actions: Literal["continuous", "discrete"] = knob(
         "continuous", "dynamic car only: Box [steer, gas, brake] or CarRacing's Discrete(5)"
     )
-    wheelbase: float = knob(160.0, "kinematic car: rear to front axle", "px", low=1, high=10000)
-    track_width: float = knob(
-        100.0, "kinematic car: width of its footprint", "px", low=1, high=10000
+    wheelbase: float | None = knob(
+        None,
+        "kinematic cars: rear to front axle (null: 160 px, 2.5 m on metric tracks)",
+        "px or m",
+        low=0.01,
+        high=10000,
     )
-    velocity: float = knob(500.0, "kinematic car: constant speed", "px/s", low=0, high=100000)
-    max_steering_angle: float = knob(33.0, "kinematic car: full lock", "deg", low=1, high=89)
+    track_width: float | None = knob(
+        None,
+        "kinematic cars: width of the footprint (null: 100 px, 1.6 m on metric tracks)",
+        "px or m",
+        low=0.01,
+        high=10000,
+    )
+    velocity: float | None = knob(
+        None,
+        "kinematic: constant speed; kinematic_throttle: top speed "
+        "(null: 500 px/s, 20 m/s on metric tracks)",
+        "px/s or m/s",
+        low=0,
+        high=100000,
+    )
+    max_steering_angle: float = knob(33.0, "kinematic cars: full lock", "deg", low=1, high=89)
     max_steering_change: float | None = knob(
-        None, "kinematic car: steering rate limit (null: none)", "deg/s", low=0, low_open=True
+        None, "kinematic cars: steering rate limit (null: none)", "deg/s", low=0, low_open=True
     )
-    pixels_per_unit: float = knob(
-        20.0,
-        "dynamic car on an image track: image pixels per CarRacing world unit",
-        "px/u",
-        low=0.1,
+    max_acceleration: float = knob(
+        6.0, "kinematic_throttle: acceleration at full throttle", "m/s^2", low=0, low_open=True
+    )
+    max_deceleration: float = knob(
+        10.0, "kinematic_throttle: deceleration at full brake", "m/s^2", low=0, low_open=True
+    )
+    pixels_per_unit: float | None = knob(
+        None,
+        "dynamic car: track units (image px, or m) per CarRacing world unit, which scales the "
+        "car (null: 20 px/u on image tracks, 1 m/u on metric tracks)",
+        "px/u or m/u",
+        low=0.001,
         high=1000,
     )
 
@@ -198,16 +323,24 @@ class RewardConfig:
     )
     cross_track_error: CrossTrackErrorConfig = knob(CrossTrackErrorConfig(), "image tracks")
     tile_progress: float | None = knob(
-        None, "procedural: reward for visiting every tile once (null: 1000)", "per lap"
+        None,
+        "tracks with tiles: reward for visiting every tile once (null: 1000; 0 on image tracks)",
+        "per lap",
     )
     time_penalty: float | None = knob(
-        None, "subtracted every step (null: 0.1 procedural, 0 image)", "per step"
+        None, "subtracted every step (null: 0 on image tracks, 0.1 on the others)", "per step"
     )
-    off_road_penalty: float = knob(0.0, "procedural: subtracted per wheel on grass", "per step")
+    off_road_penalty: float = knob(
+        0.0, "dynamic car on tiled tracks: subtracted per wheel on grass", "per step"
+    )
+    cone_penalty: float = knob(5.0, "cone maps: subtracted per cone knocked over", "per cone")
+    wall_penalty: float = knob(
+        1.0, "ROS maps: subtracted per step the car touches a wall", "per step"
+    )
     out_of_bounds_penalty: float | None = knob(
         None,
         "subtracted when the car leaves the playfield or image; ends the episode "
-        "(null: 100 procedural, 0 image)",
+        "(null: 0 on image tracks, 100 on the others)",
     )
 
 
@@ -251,6 +384,13 @@ class EnvConfig:
         "CarRacing's 96x96 view as a Box",
         aliases=("camera",),
     )
+    sensors: tuple[SensorConfig, ...] = knob(
+        (),
+        "more observation sensors by type (perspective_camera, lidar, state, lookahead, "
+        "cones; a mapping or a list), each under its id in the Dict observation beside the "
+        "cameras",
+        aliases=("sensor",),
+    )
     observation: Literal["dict", "box"] = knob(
         "dict",
         "dict: camera images keyed by id; box: the one camera's image as a plain Box, so "
@@ -258,11 +398,6 @@ class EnvConfig:
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
     files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
-    sensors: tuple[SensorConfig, ...] = knob(
-        (),
-        "more observation sensors by type (perspective_camera, lidar, state, lookahead, "
-        "cones), each under its id in the Dict observation beside the cameras",
-    )
 
     @property
     def kind(self) -> str:

@@ -89,6 +89,12 @@ class LidarConfig:
         "what stops a beam: off_road (beyond the road surfaces), walls, obstacles (colour "
         "obstacles of picture tracks), cones",
     )
+    hit_classes: bool = knob(
+        False,
+        "also report what each beam hit: a Dict of ranges and classes (uint8: 0 nothing, "
+        "1 wall, off-road or obstacle, 1 + k a cone of class k: 1 blue, 2 yellow, 3 orange, "
+        "4 big orange, 5 unknown)",
+    )
     cell: float | None = knob(
         None,
         "cell size of the distance map built once per track (null: 1 on picture tracks, "

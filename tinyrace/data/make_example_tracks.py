@@ -14,6 +14,9 @@ OUT_DIR defaults to the ``tracks/`` folder beside this script. Each track folder
   cones on the right.
 - ``carolo_cup/``: white markings on black, with obstacle boxes in the left lane.
 
+It then runs ``make_metric_tracks.py`` for the tracks in metres (a centreline CSV,
+a cone map, a ROS map with a raceline).
+
 Conventions (tinycarlo's): positions are image pixels, x right and y down;
 heading 0 points along +x and a growing heading turns clockwise on screen.
 Colours are BGR with every channel 0 or 255. Drawing uses ``cv2.LINE_8`` (no
@@ -24,6 +27,7 @@ output is the same on every run.
 from __future__ import annotations
 
 import math
+import runpy
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -512,6 +516,8 @@ def main(argv: list[str]) -> None:
     segmented_track(out_dir)
     formula_student_track(out_dir)
     carolo_cup_track(out_dir)
+    sibling = Path(__file__).resolve().with_name("make_metric_tracks.py")  # run or imported
+    runpy.run_path(str(sibling))["main"](out_dir)
 
 
 if __name__ == "__main__":

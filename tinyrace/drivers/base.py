@@ -28,22 +28,25 @@ class ActionAdapter:
     """Turns ``(steer, gas, brake)`` into an action of ``space``.
 
     Box(3,): the controls themselves, clipped; Box(1,): the steering only (the
-    kinematic car); Discrete(5): see ``DiscreteChooser``.
+    kinematic car); Box(2,): steering and throttle = gas - brake (the kinematic car with
+    throttle); Discrete(5): see ``DiscreteChooser``.
     """
 
     def __init__(self, space: spaces.Space, dt: float = 1 / 50):
         self.space = space
         self._discrete = DiscreteChooser(dt) if isinstance(space, spaces.Discrete) else None
         if self._discrete is None and not (
-            isinstance(space, spaces.Box) and space.shape in ((3,), (1,))
+            isinstance(space, spaces.Box) and space.shape in ((3,), (2,), (1,))
         ):
-            raise ValueError(f"drivers know Box(3,), Box(1,) and Discrete(5) actions, not {space}")
+            raise ValueError(
+                f"drivers know Box(3,), Box(2,), Box(1,) and Discrete(5) actions, not {space}"
+            )
 
     def __call__(self, controls: Controls) -> Any:
         if self._discrete is not None:
             return self._discrete.choose(controls)
         steer, gas, brake = controls
-        values = (steer,) if self.space.shape == (1,) else (steer, gas, brake)
+        values = {(1,): (steer,), (2,): (steer, gas - brake)}.get(self.space.shape, controls)
         return np.clip(np.array(values, np.float32), self.space.low, self.space.high)
 
 

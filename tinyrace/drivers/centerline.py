@@ -36,7 +36,7 @@ def route_of(env: gym.Env) -> Route:
     unwrapped = env.unwrapped
     track, car = unwrapped.track, unwrapped.car
     unit = car.footprint[0] / CARRACING_WHEELBASE  # the car's wheelbase sets the scale
-    if unwrapped.config.car.model == "kinematic":
+    if unwrapped.config.car.model in ("kinematic", "kinematic_throttle"):
         lock = math.radians(unwrapped.config.car.max_steering_angle)
         steering = {"steer_lock": lock, "steer_per_rad": 1.0 / lock}
     else:  # a steer action s asks for s rad, which the servo stops at its lock
@@ -44,6 +44,11 @@ def route_of(env: gym.Env) -> Route:
     centerline = getattr(track, "centerline", None)
     if centerline is not None:
         return Route(np.asarray(centerline, float), True, False, unit, **steering)
+    if getattr(track, "kind", None) == "ros_map":
+        raise ValueError(
+            "the centerline driver needs a line to follow, and this ros_map track has none: "
+            "give the track a waypoint or raceline CSV (track.waypoints)"
+        )
     pixels = getattr(track, "trajectory_mask", None)
     if pixels is None or len(pixels) == 0:
         raise ValueError(

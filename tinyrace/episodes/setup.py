@@ -13,14 +13,16 @@ from dataclasses import dataclass
 from tinyrace.cars.registry import CarModel, car_model_problems, choose_car_model
 from tinyrace.config import EnvConfig, LoadedConfig
 from tinyrace.episodes.image import ImageCourse
+from tinyrace.episodes.metric import MetricCourse
 from tinyrace.episodes.procedural import ProceduralCourse
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
 from tinyrace.tracks.image import ImageSource
+from tinyrace.tracks.metric import MetricSource
 from tinyrace.tracks.procedural_source import ProceduralSource
 from tinyrace.tracks.registry import make_track_source
 
-Course = ProceduralCourse | ImageCourse
+Course = ProceduralCourse | ImageCourse | MetricCourse
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,5 +51,7 @@ def prepare(loaded: LoadedConfig) -> Parts:
 def _course(config: EnvConfig, source: TrackSource, car_model: CarModel) -> Course:
     if isinstance(source, ProceduralSource):
         return ProceduralCourse(config, source, car_model)
+    if isinstance(source, MetricSource):
+        return MetricCourse(config, source, car_model)
     assert isinstance(source, ImageSource)
     return ImageCourse(config, source, car_model)

@@ -48,7 +48,7 @@ def write_report(run_dir: Path, header: dict, results: Sequence[EpisodeResult]) 
         panels = [
             (f"speed [{unit}/s]", trace["speed"]),
             ("steering (-1 left .. +1 right)", trace["steer"]),
-            ("cross-track error [px]", trace["cte"]),
+            (f"cross-track error [{unit}]", trace["cte"]),
         ]
         title = f"episode {result.episode} (seed {result.seed}): {result.end}"
         name = f"report_episode_{result.episode:03d}.png"
@@ -64,7 +64,9 @@ def write_report(run_dir: Path, header: dict, results: Sequence[EpisodeResult]) 
 
 
 def _unit(header: dict) -> str:
-    return "u" if header.get("track_kind") == "procedural" else "px"
+    """The track's unit: CarRacing's u, image pixels, or metres on the metric kinds."""
+    kind = header.get("track_kind")
+    return {"procedural": "u", "centerline": "m", "cone_map": "m", "ros_map": "m"}.get(kind, "px")
 
 
 def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None:

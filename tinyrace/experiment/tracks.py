@@ -8,8 +8,9 @@ from typing import Any
 
 import cv2
 
+from tinyrace.config import METRIC_KINDS
 from tinyrace.env import TinyRaceEnv
-from tinyrace.render.track_picture import image_ground, procedural_ground
+from tinyrace.render.track_picture import image_ground, metric_ground, procedural_ground
 
 
 def save_track_picture(
@@ -31,6 +32,11 @@ def save_track_picture(
         image, frame = procedural_ground(track, episode.colors, env.config.tracks[0].playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
+    elif env.config.kind in METRIC_KINDS:
+        track = episode.track
+        image, frame = metric_ground(track, episode.prepared.texture)
+        start = track.spawn
+        lap_line = None if track.circuit is None else track.tiles[0][[0, 1]].tolist()
     else:
         image, frame = image_ground(env.config, episode.track)
         start, lap_line = episode.track.spawns[episode.spawn_index], None
@@ -41,6 +47,6 @@ def save_track_picture(
         "frame": [frame.sx, frame.ox, frame.sy, frame.oy],
         "start": [float(v) for v in start[:2]],
         "lap_line": lap_line,
-        "unit": "u" if procedural else "px",
+        "unit": "u" if procedural else ("m" if env.config.kind in METRIC_KINDS else "px"),
     }
     return key, entry

@@ -13,7 +13,9 @@ from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
 from tinyrace.render.procedural_ground import GroundPainter
+from tinyrace.render.texture import GroundTexture, transform_points
 from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.metric import MetricTrack
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
 
@@ -34,6 +36,10 @@ class PictureFrame:
     ox: float
     sy: float
     oy: float
+
+    def matrix(self) -> np.ndarray:
+        """The 2x3 affine of ``pixels``."""
+        return np.array([[self.sx, 0.0, self.ox], [0.0, self.sy, self.oy]])
 
     def pixels(self, points: np.ndarray) -> np.ndarray:
         """(..., 2) world points [track units] to (..., 2) pixel coordinates (float)."""
@@ -109,6 +115,46 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
     if track.trajectory_mask is not None:
         entries.append((cte.trajectory_color, f"trajectory {cte.trajectory_color!r}"))
     entries.append((SPAWN_COLOR, "spawns (index, heading)"))
+    _legend(image, entries)
+    return image
+
+
+def metric_ground(track: MetricTrack, texture: GroundTexture) -> tuple[np.ndarray, PictureFrame]:
+    """A track in metres, north up, its longest side MAX_SIDE px: the road or map, cones."""
+    x0, y0, x1, y1 = track.bounds
+    scale = MAX_SIDE / max(x1 - x0, y1 - y0)  # [px/m]
+    size = (max(round((x1 - x0) * scale), 1), max(round((y1 - y0) * scale), 1))
+    frame = PictureFrame(scale, -x0 * scale, -scale, y1 * scale)
+    return texture.warp(frame.matrix(), size), frame
+
+
+def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
+    """A track in metres, north up: the road or map, cones, the reference line, the start."""
+    image, frame = metric_ground(track, texture)
+    matrix = frame.matrix()
+    x0, y0, x1, y1 = track.bounds
+    entries: list[tuple[tuple[int, int, int] | None, str]] = [
+        (None, f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m")
+    ]
+    if track.circuit is not None:
+        points = track.circuit.centerline
+        line = transform_points(matrix, np.vstack((points, points[:1])))
+        cv2.polylines(
+            image, [np.round(line * 16).astype(np.int32)], False, (255, 255, 255), 1, cv2.LINE_AA, 4
+        )
+        circuit = track.circuit
+        entries.append((None, f"{circuit.length:.0f} m, {len(circuit.tiles)} tiles"))
+        entries.append(((255, 255, 255), "reference line"))
+    else:
+        entries.append((None, "no reference line (no waypoints): no laps, no cte"))
+    if len(track.cones):
+        entries.append((None, f"{len(track.cones)} cones"))
+    if len(track.walls):
+        entries.append(((0, 0, 0), f"walls ({len(track.walls)} boxes)"))
+    x, y, heading = track.spawn
+    start = transform_points(matrix, np.array([x, y]))
+    _arrow(image, (start[0], start[1]), (math.cos(heading), -math.sin(heading)), 40)
+    entries.append((SPAWN_COLOR, "start, facing the direction of travel"))
     _legend(image, entries)
     return image
 

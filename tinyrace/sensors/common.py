@@ -21,6 +21,7 @@ from tinyrace.tracks.base import Track
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px
 MAX_MAP_SIDE = 4096  # [cells] largest side of a map a sensor draws of a whole track
+KINEMATIC_MODELS = ("kinematic", "kinematic_throttle")  # car models sized by car.wheelbase
 
 RGB = tuple[int, int, int]
 LabelTable = tuple[tuple[str, RGB | None], ...]
@@ -31,10 +32,21 @@ _T = TypeVar("_T")
 def car_length(config: EnvConfig) -> float:
     """[track units] rear to front axle of the configured car, known before any reset."""
     car = config.car
-    if car.model == "kinematic":
-        return car.wheelbase
+    if car.model in KINEMATIC_MODELS:
+        return known(car.wheelbase)
     wheelbase = (WHEEL_POSITIONS[0][1] - WHEEL_POSITIONS[2][1]) * SIZE  # [u]
-    return wheelbase * (car.pixels_per_unit if config.kind == "image" else 1.0)
+    return wheelbase * dynamic_scale(config)
+
+
+def dynamic_scale(config: EnvConfig) -> float:
+    """[track units per CarRacing unit] of the dynamic car on this config's track."""
+    return 1.0 if config.kind == "procedural" else known(config.car.pixels_per_unit)
+
+
+def known(value: float | None) -> float:
+    """A car knob whose null default the config loader has filled by track kind."""
+    assert value is not None, "car knobs are resolved when the config is loaded"
+    return value
 
 
 def mount(

@@ -1,12 +1,14 @@
 """Cone detection core: the track's cones in range and field of view, in the car's frame.
 
 Car frame: x ahead, y to the left [track units]. Detections come nearest first as a
-fixed-size array of rows (x, y, class) padded with zeros, plus a count. Classes: 1 blue,
-2 yellow, 3 orange (0 marks padding). Noise, misses and false positives are drawn from the
+fixed-size array of rows (x, y, class) padded with zeros, plus a count. Classes are the
+cone map's (``tracks.cone_map.CLASSES``): 1 blue, 2 yellow, 3 orange, 4 big orange,
+5 unknown (0 marks padding). Noise, misses and false positives are drawn from the
 generator given, in a fixed order, so that the same seed gives the same detections.
 
-On picture tracks the cones are the connected components of the cone colours
-(``cones_from_picture``), found once per track.
+A track that lists its cones (a cone map) is read as it is, by class; on picture tracks the
+cones are the connected components of the cone colours (``cones_from_picture``), found once
+per track.
 """
 
 from __future__ import annotations
@@ -23,9 +25,11 @@ from tinyrace.config.sensors import ConesConfig
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import PerTrack, Unsupported, car_length
 from tinyrace.tracks.base import Track
+from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
 
-CONE_CLASSES = ("blue", "yellow", "orange")  # class id = index + 1; 0 is padding
+CONE_CLASSES = CLASSES  # class id = index + 1; 0 is padding
+MADE_UP_CLASSES = 3  # false positives are blue, yellow or orange
 
 
 @dataclass(frozen=True)
@@ -111,7 +115,7 @@ def _false_positives(
     count = int(rng.poisson(noise.false_positives))
     distance = max_range * np.sqrt(rng.random(count))  # even over the sector's area
     bearing = (rng.random(count) - 0.5) * min(fov, 2 * math.pi)
-    classes = rng.integers(1, len(CONE_CLASSES) + 1, count)
+    classes = rng.integers(1, MADE_UP_CLASSES + 1, count)
     return np.column_stack([distance * np.cos(bearing), distance * np.sin(bearing), classes])
 
 
@@ -131,7 +135,8 @@ def cones_from_picture(picture: np.ndarray, colors: dict[int, tuple[int, int, in
 
 class ConesSensor:
     """``type: cones``: {"cones": (N, 3) float32 rows x, y [track units, car frame: ahead,
-    left], within max_range (noise clipped), and class (1 blue, 2 yellow, 3 orange; 0 padding),
+    left], within max_range (noise clipped), and class (1 blue, 2 yellow, 3 orange, 4 big
+orange, 5 unknown; 0 padding),
     "count": how many rows are used}."""
 
     def __init__(self, config: ConesConfig, max_range: float):

@@ -7,6 +7,9 @@ together (sphere tracing): each round, every beam samples the step under its tip
 stays. A few bisection rounds then put each hit on the boundary of the cell it entered.
 There is a Python loop over rounds, never over beams.
 
+With ``hit_classes``, each beam also reports what it hit: 0 nothing (max_range), 1 a wall
+(off-road, walls, obstacles), 1 + k a cone of class k (``tracks.cone_map.CLASSES``).
+
 Units: the field works in cells; ``to_cells`` maps track units to cell coordinates (a cell's
 centre on integer coordinates, as image pixels) and ranges come back in track units.
 """
@@ -15,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -33,6 +37,7 @@ from tinyrace.sensors.common import (
     mount,
 )
 from tinyrace.tracks.base import Track
+from tinyrace.tracks.cone_map import CLASSES, RADII
 from tinyrace.world.snapshot import Snapshot
 
 MIN_STEP = 1.0  # [cells] smallest step of a free beam: near walls it keeps beams moving
@@ -40,6 +45,8 @@ STEP_CAP = 127.5  # [cells] largest step (uint8 half cells)
 OVERSHOOT = 2.0  # [cells] a tip enters a blocking cell less than this far past its edge
 BISECTIONS = 3  # rounds that halve the overshoot bracket: error <= OVERSHOOT / 8
 CHECK_EVERY = 4  # rounds between checks whether every beam has stopped
+NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
+CONE_RADII = np.array([0.0, *(RADII[name] for name in CLASSES)])  # [m] by cone class id
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,14 +61,18 @@ class DistanceField:
     steps: np.ndarray  # (H, W) uint8 [half cells]
     to_cells: np.ndarray  # 2x3 affine: track units -> cell coordinates
     cells_per_unit: float  # [cells per track unit]
+    classes: np.ndarray | None = None  # (H, W) uint8 hit class of blocking cells and their rim
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.steps.shape
 
 
-def distance_field(blocking: np.ndarray, to_cells: np.ndarray) -> DistanceField:
-    """The field of a boolean (H, W) map of blocking cells, ``to_cells`` track -> cell affine.
+def distance_field(
+    blocking: np.ndarray, to_cells: np.ndarray, classes: np.ndarray | None = None
+) -> DistanceField:
+    """The field of a boolean (H, W) map of blocking cells, ``to_cells`` track -> cell affine;
+    ``classes`` (H, W) uint8 hit classes of the blocking cells, when beams report them.
 
     A free cell's step is its centre's Euclidean distance to the nearest blocking cell's centre
     less half a cell (the blocking cell's edge), never below MIN_STEP. Outside the map counts
@@ -73,7 +84,29 @@ def distance_field(blocking: np.ndarray, to_cells: np.ndarray) -> DistanceField:
     steps = halves.astype(np.uint8)
     steps[blocking] = 0
     scale = math.sqrt(abs(np.linalg.det(to_cells[:, :2])))
-    return DistanceField(steps, np.asarray(to_cells, np.float64), scale)
+    if classes is not None:  # a tip may stop a rounding error short: its rim has the class too
+        classes = np.where(classes > 0, classes, cv2.dilate(classes, np.ones((3, 3), np.uint8)))
+    return DistanceField(steps, np.asarray(to_cells, np.float64), scale, classes)
+
+
+def hit_classes(
+    field: DistanceField,
+    origin: tuple[float, float],
+    directions: np.ndarray,
+    ranges: np.ndarray,
+    max_range: float,
+) -> np.ndarray:
+    """(B,) uint8 class of what each beam of ``ranges`` [track units] hit (NO_HIT at
+    ``max_range``), read from the field's class map at the beam's end."""
+    assert field.classes is not None, "blocking_map(..., classes=True) keeps them"
+    ends = np.asarray(origin, np.float64) + ranges[:, None] * directions  # [track units]
+    cells = np.rint(ends @ field.to_cells[:, :2].T + field.to_cells[:, 2]).astype(np.int64)
+    height, width = field.classes.shape
+    col, row = cells[:, 0], cells[:, 1]
+    inside = (col >= 0) & (col < width) & (row >= 0) & (row < height) & (ranges < max_range)
+    found = np.zeros(len(ranges), np.uint8)
+    found[inside] = field.classes[row[inside], col[inside]]
+    return found
 
 
 def cast(
@@ -97,7 +130,8 @@ def cast(
     limit = np.float32(max_range * field.cells_per_unit)  # [cells]
     t = _march(field.steps, start, dx, dy, limit, max_rounds)
     t = _refine(field.steps, start, dx, dy, t)
-    ranges: np.ndarray = np.minimum(t, limit) / np.float32(field.cells_per_unit)
+    # clipped after the division: limit / cells_per_unit may round past max_range in float32
+    ranges: np.ndarray = np.minimum(t / np.float32(field.cells_per_unit), np.float32(max_range))
     return ranges
 
 
@@ -190,36 +224,58 @@ def add_noise(
 
 
 def blocking_map(
-    track: Track, blocks: tuple[str, ...], cell: float, cone_colors: tuple[RGB, ...]
+    track: Track,
+    blocks: tuple[str, ...],
+    cell: float,
+    cone_colors: tuple[RGB, ...],
+    classes: bool = False,
 ) -> DistanceField:
     """The distance field of what ``blocks`` names on ``track``, ``cell`` [track units] per
-    cell: off_road (outside the road surfaces, on tracks that have them), walls, obstacles
-    (picture tracks' obstacle colours), cones (listed cones, or the picture's cone colours)."""
+    cell: off_road (outside the road surfaces, on tracks that have them), walls (a ROS map's
+    occupied cells), obstacles (picture tracks' obstacle colours), cones (the track's cones,
+    e.g. a cone map's, or the picture's cone colours, ``cone_colors`` by class id - 1).
+    ``classes``: keep each blocking cell's hit class for ``hit_classes``."""
     to_cells, (w, h), cell = grid(track, cell)
-    blocking = np.zeros((h, w), np.uint8)
+    labels = np.zeros((h, w), np.uint8)  # hit class of each cell, 0 free
     roads = [s.quads for s in track.surfaces if s.name == "road"]
     if "off_road" in blocks and roads:
-        blocking[:] = 1
+        labels[:] = WALL_CLASS
         for quads in roads:
-            fill_quads(blocking, to_cells, quads, 0)
+            fill_quads(labels, to_cells, quads, NO_HIT)
     if "walls" in blocks:
-        fill_boxes(blocking, to_cells, track.walls, 1)
+        fill_boxes(labels, to_cells, track.walls, WALL_CLASS)
     if "cones" in blocks and len(track.cones):
-        for x, y, _ in track.cones:
-            cx, cy = to_cells @ (x, y, 1.0)
-            cv2.circle(blocking, (round(cx), round(cy)), 0, 1, -1)
+        _draw_cones(labels, to_cells, track, 1.0 / cell)
     if track.picture is not None:
         colors = [layer.color for layer in track.obstacles] if "obstacles" in blocks else []
-        colors += list(cone_colors) if "cones" in blocks else []
-        picture_mask: np.ndarray = np.zeros(track.picture.shape[:2], bool)
-        for rgb in colors:
-            picture_mask |= color_mask(track.picture, rgb)
-        if picture_mask.shape != blocking.shape:
-            picture_mask = (
-                cv2.resize(picture_mask.view(np.uint8), (w, h), interpolation=cv2.INTER_NEAREST) > 0
-            )
-        blocking |= picture_mask.view(np.uint8) if picture_mask.dtype == bool else picture_mask
-    return distance_field(blocking.astype(bool), to_cells)
+        picture = _picture_labels(track.picture, colors, cone_colors if "cones" in blocks else ())
+        if picture.shape != labels.shape:
+            picture = cv2.resize(picture, (w, h), interpolation=cv2.INTER_NEAREST)
+        labels = np.where(picture > 0, picture, labels)
+    return distance_field(labels > 0, to_cells, labels if classes else None)
+
+
+def _draw_cones(labels: np.ndarray, to_cells: np.ndarray, track: Track, per_unit: float) -> None:
+    """The track's cones as discs of their class's base radius (tracks in metres), or one
+    cell each (tracks of unknown scale), labelled by class."""
+    ids = np.clip(track.cones[:, 2].astype(np.int64), 0, len(CLASSES))
+    metres = track.metres_per_unit
+    radii = CONE_RADII[ids] / metres * per_unit if metres else np.zeros(len(ids))  # [cells]
+    for (x, y, _), class_id, radius in zip(track.cones.tolist(), ids, radii, strict=True):
+        cx, cy = to_cells @ (x, y, 1.0)
+        cv2.circle(labels, (round(cx), round(cy)), round(radius), WALL_CLASS + int(class_id), -1)
+
+
+def _picture_labels(
+    picture: np.ndarray, obstacles: list[RGB], cone_colors: tuple[RGB, ...]
+) -> np.ndarray:
+    """(H, W) uint8 hit classes of a picture track's obstacle and cone colours."""
+    labels = np.zeros(picture.shape[:2], np.uint8)
+    for rgb in obstacles:
+        labels[color_mask(picture, rgb)] = WALL_CLASS
+    for class_id, rgb in enumerate(cone_colors, start=1):
+        labels[color_mask(picture, rgb)] = WALL_CLASS + class_id
+    return labels
 
 
 class LidarSensor:
@@ -233,7 +289,11 @@ class LidarSensor:
         self.cell = cell  # [track units]
         self.cone_colors = cone_colors
         self.angles = beam_angles(config.beams, math.radians(config.fov))  # [rad] + left
-        self.space = spaces.Box(0.0, max_range, (config.beams,), np.float32)
+        ranges = spaces.Box(0.0, max_range, (config.beams,), np.float32)
+        self.space: spaces.Space[Any] = ranges
+        if config.hit_classes:
+            hits = spaces.Box(0, WALL_CLASS + len(CLASSES), (config.beams,), np.uint8)
+            self.space = spaces.Dict({"ranges": ranges, "classes": hits})
         self._fields: PerTrack[DistanceField] = PerTrack()
         self.field: DistanceField | None = None
 
@@ -244,7 +304,7 @@ class LidarSensor:
     def reset(self, track: Track) -> None:
         c = self.config
         self.field = self._fields.get(
-            track, lambda t: blocking_map(t, c.blocks, self.cell, self.cone_colors)
+            track, lambda t: blocking_map(t, c.blocks, self.cell, self.cone_colors, c.hit_classes)
         )
 
     def origin(self, snapshot: Snapshot, track: Track) -> tuple[float, float]:
@@ -253,15 +313,25 @@ class LidarSensor:
         ahead, left = self.config.position
         return mount(car.front_axle, car.pose[2], track.y_down, ahead, left)
 
-    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> Any:
+        """The ranges; with ``hit_classes``, {"ranges", "classes"} (dropped beams: NO_HIT)."""
         heading = snapshot.car.pose[2]
         beams = directions(self.angles, heading, track.y_down)
         assert self.field is not None, "reset() before observe()"
-        ranges = cast(self.field, self.origin(snapshot, track), beams, self.max_range)
+        origin = self.origin(snapshot, track)
+        ranges = cast(self.field, origin, beams, self.max_range)
         c = self.config
+        classes = (
+            hit_classes(self.field, origin, beams, ranges, self.max_range)
+            if c.hit_classes
+            else None
+        )
         if c.range_std > 0 or c.dropout > 0:
             ranges = add_noise(ranges, rng, c.range_std, c.dropout, self.max_range)
-        return ranges
+        if classes is None:
+            return ranges
+        classes[ranges >= self.max_range] = NO_HIT
+        return {"ranges": ranges, "classes": classes}
 
 
 def build(config: LidarConfig, context: SensorContext) -> LidarSensor:

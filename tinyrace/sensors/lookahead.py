@@ -18,6 +18,7 @@ import math
 import numpy as np
 from gymnasium import spaces
 
+from tinyrace.config.schema import RosMapTrackConfig
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import PerTrack, Unsupported, car_length
@@ -209,5 +210,7 @@ def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:
             "expected reward_design.cross_track_error.use_cte: true (with its "
             "trajectory_color) on an image track: lookahead follows that trajectory"
         )
+    if any(isinstance(t, RosMapTrackConfig) and t.waypoints is None for t in env.tracks):
+        raise Unsupported("expected track.waypoints on a ros_map track: lookahead follows them")
     spacing = config.spacing if config.spacing is not None else car_length(env)
     return LookaheadSensor(config, spacing)

@@ -60,7 +60,13 @@ def _register_built_in() -> None:
             None,
             "the next points of the reference line, with curvature",
         ),
-        ("cones", configs.ConesConfig, cones, frozenset({"image"}), "cones in range, padded"),
+        (
+            "cones",
+            configs.ConesConfig,
+            cones,
+            frozenset({"image", "cone_map"}),
+            "cones in range by class, padded",
+        ),
     ):
         register(SensorType(name, config, module.build, kinds, doc))
 

@@ -27,6 +27,7 @@ from tinyrace.cars.dynamic import DynamicCarSpec
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import StateConfig
 from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.common import KINEMATIC_MODELS, dynamic_scale, known
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import CarState, Snapshot
 
@@ -88,10 +89,11 @@ def limits(env: EnvConfig) -> Limits:
     """The configured car's limits: top speed, yaw rate and steering lock."""
     fps = env.sim.fps or 50.0
     car = env.car
-    if car.model == "kinematic":
+    if car.model in KINEMATIC_MODELS:  # velocity: the constant or the top speed
         lock = math.radians(car.max_steering_angle)
-        return Limits(car.velocity, car.velocity * math.tan(lock) / car.wheelbase, lock)
-    scale = car.pixels_per_unit if env.kind == "image" else 1.0
+        speed, wheelbase = known(car.velocity), known(car.wheelbase)
+        return Limits(speed, speed * math.tan(lock) / wheelbase, lock)
+    scale = dynamic_scale(env)
     spec = DynamicCarSpec()
     return Limits(spec.max_translation * scale * fps, 2 * math.pi * fps, spec.steer_limit)
 

@@ -98,8 +98,9 @@ class SensorView:
         if value is None:
             return
         if isinstance(sensor, LidarSensor):
+            ranges = value["ranges"] if isinstance(value, dict) else value  # hit_classes: Dict
             origin = _local(snapshot, track, sensor.origin(snapshot, track))
-            ends = origin + value[:, None] * np.stack(
+            ends = origin + ranges[:, None] * np.stack(
                 [np.cos(sensor.angles), np.sin(sensor.angles)], axis=1
             )
             start = _px(to_view, origin)

@@ -240,7 +240,10 @@ class ImageSource:
         if problems:
             raise ConfigError(problems)
         cte = config.reward_design.cross_track_error
-        self.tracks = tuple(as_track(t, cte.trajectory_color) for t in loaded)
+        scales = [getattr(t, "pixels_per_meter", None) for t in config.tracks]
+        self.tracks = tuple(
+            as_track(t, cte.trajectory_color, ppm) for t, ppm in zip(loaded, scales, strict=True)
+        )
 
     def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
         """A track then a spawn, each drawn from ``rng`` unless ``options`` picks it."""
@@ -249,7 +252,9 @@ class ImageSource:
         return TrackDraw(self.tracks[track_index], track_index, spawn_index)
 
 
-def as_track(image_track: ImageTrack, trajectory_color: Color) -> Track:
+def as_track(
+    image_track: ImageTrack, trajectory_color: Color, pixels_per_meter: float | None = None
+) -> Track:
     """The generic view of a loaded image track: pixels are the unit, y points down."""
     width, height = image_track.size
     layers = [
@@ -267,7 +272,7 @@ def as_track(image_track: ImageTrack, trajectory_color: Color) -> Track:
     return Track(
         kind="image",
         unit="px",
-        metres_per_unit=None,
+        metres_per_unit=None if pixels_per_meter is None else 1.0 / pixels_per_meter,
         y_down=True,
         bounds=(-0.5, -0.5, width - 0.5, height - 0.5),
         spawns=image_track.spawns,

@@ -9,6 +9,7 @@ from tinyrace.config import EnvConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
 from tinyrace.tracks.image import ImageSource
+from tinyrace.tracks.metric import MetricSource
 from tinyrace.tracks.procedural_source import ProceduralSource
 
 SourceBuilder = Callable[[EnvConfig, Path, str], TrackSource]
@@ -16,6 +17,9 @@ SourceBuilder = Callable[[EnvConfig, Path, str], TrackSource]
 TRACK_SOURCES: dict[str, SourceBuilder] = {
     "procedural": ProceduralSource,
     "image": ImageSource,
+    "centerline": MetricSource,
+    "cone_map": MetricSource,
+    "ros_map": MetricSource,
 }
 
 

@@ -20,3 +20,6 @@ class StepFacts:
     wheels_on_grass: int = 0
     obstacles_hit: list[int] = field(default_factory=list)  # indices into color_obstacles
     cte: float | None = None  # [track units] distance to the trajectory
+    cones_hit: int = 0  # cones knocked over during this step (each counts once per episode)
+    wall_hit: bool = False  # the car touched a wall this step (and was stopped)
+    collision_ends: bool = False  # the source ends the episode on this step's collision

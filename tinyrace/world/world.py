@@ -16,6 +16,8 @@ WHEEL = 1
 TILE = 2
 FOOTPRINT = 3
 OBSTACLE = 4
+WALL = 5  # solid map cells: the car stops against them
+CONE = 6  # a cone: knocked over when the footprint touches it
 
 # Filters keep pymunk from pairing shapes that have nothing to report (wheel-obstacle, ...).
 _WHEEL_BIT, _TILE_BIT, _FOOTPRINT_BIT, _OBSTACLE_BIT = 1, 2, 4, 8
@@ -45,6 +47,8 @@ class Contacts:
     wheel_tiles: list[set[int]] = field(default_factory=lambda: [set() for _ in range(4)])
     new_tile_touches: list[int] = field(default_factory=list)  # tiles a wheel began touching
     obstacle_cells: set[int] = field(default_factory=set)  # cells the footprint overlaps now
+    walls: set[int] = field(default_factory=set)  # wall boxes the footprint overlaps now
+    cones: set[int] = field(default_factory=set)  # cones the footprint overlaps now
 
 
 class World:
@@ -58,6 +62,8 @@ class World:
         self.contacts = Contacts()
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
         self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
+        self.space.on_collision(FOOTPRINT, WALL, begin=self._wall_on, separate=self._wall_off)
+        self.space.on_collision(FOOTPRINT, CONE, begin=self._cone_on, separate=self._cone_off)
 
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
@@ -74,6 +80,30 @@ class World:
         for index, (x0, y0, x1, y1) in enumerate(boxes.tolist()):
             corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
             shapes.append(self._static_sensor(corners, OBSTACLE, index, OBSTACLE_FILTER))
+        if shapes:
+            self.space.add(*shapes)
+
+    def add_walls(self, boxes: np.ndarray) -> None:
+        """Solid cells of a map (M x 4: x0, y0, x1, y1); the footprint reports touching them."""
+        shapes = []
+        for index, (x0, y0, x1, y1) in enumerate(boxes.tolist()):
+            corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+            shapes.append(self._static_sensor(corners, WALL, index, OBSTACLE_FILTER))
+        if shapes:
+            self.space.add(*shapes)
+
+    def add_cones(self, positions: np.ndarray, radii: np.ndarray) -> None:
+        """Cones (K x 2 centres, K radii) as static circles the footprint reports touching."""
+        shapes = []
+        for index, ((x, y), radius) in enumerate(
+            zip(positions.tolist(), radii.tolist(), strict=True)
+        ):
+            shape = pymunk.Circle(self.space.static_body, radius, (x, y))
+            shape.sensor = True
+            shape.filter = OBSTACLE_FILTER
+            shape.collision_type = CONE
+            shape.index = index
+            shapes.append(shape)
         if shapes:
             self.space.add(*shapes)
 
@@ -145,6 +175,18 @@ class World:
 
     def _cell_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         self.contacts.obstacle_cells.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+
+    def _wall_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.contacts.walls.add(_ordered(arbiter, FOOTPRINT)[1].index)
+
+    def _wall_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.contacts.walls.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+
+    def _cone_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.contacts.cones.add(_ordered(arbiter, FOOTPRINT)[1].index)
+
+    def _cone_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self.contacts.cones.discard(_ordered(arbiter, FOOTPRINT)[1].index)
 
 
 def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:

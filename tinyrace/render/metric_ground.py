@@ -1,0 +1,140 @@
+"""The ground of a track in metres, drawn once per env, and its overview picture.
+
+The road (tiles), a start line, the cones by class and a ROS map's cells are drawn
+into one RGBx texture with y up (north at the top of the picture); cameras sample it
+with one affine warp, as on the other track kinds.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from tinyrace.render.texture import GroundTexture, transform_points
+from tinyrace.tracks.metric import MetricTrack
+
+MAX_SIDE = 8192  # [px] the texture's longest side
+ROAD = (102, 102, 102)  # RGB, CarRacing's road
+GRASS = (102, 204, 102)  # RGB, CarRacing's background
+START_LINE = (255, 255, 255)
+CONE_COLORS = {  # RGB by class id (tinyrace.tracks.cone_map.CLASSES order, from 1)
+    1: (0, 70, 255),
+    2: (255, 220, 0),
+    3: (255, 140, 0),
+    4: (255, 90, 0),
+    5: (160, 160, 160),
+}
+MAP_COLORS = {"free": ROAD, "unknown": (40, 40, 40), "occupied": (0, 0, 0)}
+_BITS = 4  # cv2 fixed-point vertices: 1/16 px
+
+
+def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
+    """The whole track (its bounds) at up to ``pixels_per_meter``, as a ground texture."""
+    x0, y0, x1, y1 = track.bounds
+    ppm = min(pixels_per_meter, MAX_SIDE / max(x1 - x0, y1 - y0))
+    width, height = max(int(np.ceil((x1 - x0) * ppm)), 1), max(int(np.ceil((y1 - y0) * ppm)), 1)
+    to_pixels = np.array([[ppm, 0.0, -x0 * ppm], [0.0, -ppm, y1 * ppm]])  # y up -> rows down
+    image = np.zeros((height, width, 4), np.uint8)
+    image[:] = (*GRASS, 255)
+    if track.occupancy is not None:
+        _paint_map(image, to_pixels, track)
+    else:
+        _fill(image, to_pixels, track.tiles, ROAD)
+    if track.circuit is not None and track.occupancy is None:
+        _fill(image, to_pixels, _start_line(track), START_LINE)
+    for (x, y, cls), radius in zip(track.cones, track.cone_radii, strict=True):
+        centre = np.round(transform_points(to_pixels, np.array([x, y])) * (1 << _BITS))
+        size = max(round(radius * ppm * (1 << _BITS)), 1 << _BITS)
+        color = (*CONE_COLORS[int(cls)], 255)
+        cv2.circle(image, tuple(int(v) for v in centre), size, color, -1, cv2.LINE_AA, _BITS)
+    return GroundTexture.from_image(image, to_pixels, border=GRASS)
+
+
+def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: MetricTrack) -> None:
+    """The ROS map's cells, warped from map pixels into the texture."""
+    occupancy = track.occupancy
+    assert occupancy is not None
+    cells = np.zeros((*occupancy.shape, 4), np.uint8)
+    cells[:] = (*MAP_COLORS["unknown"], 255)
+    cells[occupancy.free] = (*MAP_COLORS["free"], 255)
+    cells[occupancy.occupied] = (*MAP_COLORS["occupied"], 255)
+    # map pixel (col, row) -> world, from three pixel centres
+    corners = occupancy.to_world(np.array([0, 0, 1]), np.array([0, 1, 0]))
+    origin, along_col, along_row = corners[0], corners[1] - corners[0], corners[2] - corners[0]
+    map_to_world = np.column_stack((along_col, along_row, origin))
+    matrix = to_pixels[:, :2] @ map_to_world
+    matrix[:, 2] += to_pixels[:, 2]
+    cv2.warpAffine(
+        cells,
+        matrix,
+        (image.shape[1], image.shape[0]),
+        dst=image,
+        flags=cv2.INTER_NEAREST,
+        borderMode=cv2.BORDER_TRANSPARENT,
+    )
+
+
+def _start_line(track: MetricTrack) -> np.ndarray:
+    """A 1 m band across the road at point 0."""
+    circuit = track.circuit
+    assert circuit is not None
+    left, right = circuit.edges()
+    heading = circuit.headings[0]
+    ahead = 0.5 * np.array([np.cos(heading), np.sin(heading)])
+    return np.array([[left[0] - ahead, right[0] - ahead, right[0] + ahead, left[0] + ahead]])
+
+
+def _fill(
+    image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, color: tuple[int, int, int]
+) -> None:
+    if len(polygons) == 0:
+        return
+    pixels = np.round(transform_points(matrix, polygons) * (1 << _BITS)).astype(np.int32)
+    cv2.fillPoly(image, list(pixels), (*color, 255), lineType=cv2.LINE_AA, shift=_BITS)
+
+
+class MetricOverview:
+    """The whole track scaled to ``max_side`` px, the reference line, the car and camera views."""
+
+    def __init__(self, track: MetricTrack, texture: GroundTexture, max_side: int = 800):
+        x0, y0, x1, y1 = track.bounds
+        self.scale = max_side / max(x1 - x0, y1 - y0)  # [px/m]
+        self.size = (max(round((x1 - x0) * self.scale), 1), max(round((y1 - y0) * self.scale), 1))
+        self.matrix = np.array(
+            [[self.scale, 0.0, -x0 * self.scale], [0.0, -self.scale, y1 * self.scale]]
+        )
+        self.background = texture.warp(self.matrix, self.size)
+        if track.centerline is not None:
+            line = self._pixels(np.vstack((track.centerline, track.centerline[:1])))
+            cv2.polylines(self.background, [line], False, (255, 255, 255), 1, cv2.LINE_AA, _BITS)
+
+    def render(
+        self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
+    ) -> np.ndarray:
+        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``."""
+        frame = self.background.copy()
+        for corners in windows:
+            cv2.polylines(
+                frame, [self._pixels(corners)], True, (255, 200, 0), 1, cv2.LINE_AA, _BITS
+            )
+        centre = footprint.mean(axis=0)
+        grown = centre + (footprint - centre) * max(1.0, 6.0 / (self.scale * _span(footprint)))
+        cv2.fillConvexPoly(frame, self._pixels(grown), (204, 0, 0), cv2.LINE_AA, _BITS)
+        x = 4
+        for image in images:  # camera insets along the top
+            h, w = image.shape[:2]
+            factor = min(self.size[0] / 4 / w, self.size[1] / 3 / h, 1.0)
+            small = cv2.resize(image, (max(int(w * factor), 1), max(int(h * factor), 1)))
+            sh, sw = small.shape[:2]
+            if x + sw > frame.shape[1] or sh + 4 > frame.shape[0]:
+                break
+            frame[4 : 4 + sh, x : x + sw] = small
+            x += sw + 6
+        return np.asarray(frame)
+
+    def _pixels(self, points: np.ndarray) -> np.ndarray:
+        return np.round(transform_points(self.matrix, points) * (1 << _BITS)).astype(np.int32)
+
+
+def _span(points: np.ndarray) -> float:
+    return float(np.ptp(points, axis=0).max()) or 1.0

@@ -1,0 +1,113 @@
+"""The racetrack-database centreline CSV: ``# x_m,y_m,w_tr_right_m,w_tr_left_m``.
+
+One closed loop in driving order (the last point is not a copy of the first), in
+metres. The same reader takes simpler waypoint files: ``x, y`` only (with a
+default width), or a raceline ``s; x; y; psi; kappa; vx; ax`` whose positions are
+columns 2 and 3. Headings are computed from the points, never read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.tracks import polyline
+from tinyrace.tracks.csv_rows import Table, read_table
+
+MIN_POINTS = 4
+# Column positions by row width when the header names none: x, y, right width, left width.
+_BY_WIDTH = {2: (0, 1, None, None), 4: (0, 1, 2, 3), 6: (1, 2, None, None), 7: (1, 2, None, None)}
+_NAMES = {
+    "x": ("x_m", "x"),
+    "y": ("y_m", "y"),
+    "right": ("w_tr_right_m", "w_right", "w_right_m"),
+    "left": ("w_tr_left_m", "w_left", "w_left_m"),
+}
+
+
+@dataclass(frozen=True)
+class Loop:
+    """Points of a closed loop as read, before resampling."""
+
+    points: np.ndarray  # (N, 2) [m]
+    widths: np.ndarray | None  # (N, 2) [m] (right, left), None when the file has none
+    table: Table  # the rows, for messages naming lines
+
+
+def read_loop(path: Path, source: str, key: str, scale: float = 1.0) -> Loop:
+    """Read a closed loop of points (and widths when present) from ``path``, times ``scale``.
+
+    Raises ConfigError naming the file, line and column for: a missing file, rows
+    that are not finite numbers, fewer than 4 points, negative widths, a point that
+    repeats the one before, and a loop that crosses itself.
+    """
+    table = read_table(path, source, key, tuple(_BY_WIDTH))
+    columns = _columns(table)
+    x, y, right, left = columns
+    points = table.values[:, [x, y]] * scale
+    widths = None
+    if right is not None and left is not None:
+        widths = table.values[:, [right, left]] * scale
+    problems = _check_count(table) or _check_widths(table, widths, (right, left))
+    problems = problems or _check_repeats(table, points) or _check_crossing(table, points)
+    if problems:
+        raise ConfigError(problems)
+    return Loop(points, widths, table)
+
+
+def _columns(table: Table) -> tuple[int, int, int | None, int | None]:
+    """Which columns hold x, y and the widths: by header name, else by row width."""
+    found = {}
+    for role, names in _NAMES.items():
+        found[role] = next((table.header.index(n) for n in names if n in table.header), None)
+    if found["x"] is not None and found["y"] is not None:
+        return found["x"], found["y"], found["right"], found["left"]
+    return _BY_WIDTH[table.values.shape[1]]
+
+
+def _check_count(table: Table) -> list[Problem]:
+    if len(table.values) >= MIN_POINTS:
+        return []
+    where = table.where(len(table.values) - 1) if len(table.values) else ""
+    allowed = f"expected a closed loop of at least {MIN_POINTS} points"
+    return [Problem(table.path, where, f"{len(table.values)} points", allowed)]
+
+
+def _check_widths(
+    table: Table, widths: np.ndarray | None, columns: tuple[int | None, int | None]
+) -> list[Problem]:
+    if widths is None:
+        return []
+    rows, sides = np.nonzero(widths < 0)
+    return [
+        table.problem(r, columns[s], float(widths[r, s]), "expected a width >= 0 [m]")
+        for r, s in zip(rows[:20], sides[:20], strict=True)
+    ]
+
+
+def _check_repeats(table: Table, points: np.ndarray) -> list[Problem]:
+    repeats = np.flatnonzero(polyline.segment_lengths(points) == 0)
+    return [
+        table.problem(
+            (i + 1) % len(points),
+            None,
+            points[i].tolist(),
+            "expected a point apart from the one before",
+        )
+        for i in repeats[:20]
+    ]
+
+
+def _check_crossing(table: Table, points: np.ndarray) -> list[Problem]:
+    pair = polyline.self_intersection(points)
+    if pair is None:
+        return []
+    i, j = pair
+    n = len(points)
+    lines = [int(table.lines[k]) for k in (i, (i + 1) % n, j, (j + 1) % n)]
+    where = f"lines {lines[0]}-{lines[1]} and {lines[2]}-{lines[3]}"
+    allowed = "expected a loop that does not cross itself (these segments cross)"
+    return [Problem(table.path, where, [points[i].tolist(), points[j].tolist()], allowed)]

@@ -1,0 +1,199 @@
+"""The Formula Student Driverless simulator's cone map CSV.
+
+Rows ``tag,x,y,direction,x_variance,y_variance,covariance`` in metres; tags
+``blue`` (left edge in the driving direction), ``yellow`` (right edge), ``orange``
+(extra marks), ``big_orange`` (the start/finish line) and ``unknown``. The road
+is derived from the cones: each edge is put in order around the loop, the
+centreline is the middle between the edges, the widths are the distances to them,
+and the start is the centreline point nearest the big orange cones.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.tracks import polyline
+from tinyrace.tracks.csv_rows import read_text
+
+CLASSES = ("blue", "yellow", "orange", "big_orange", "unknown")  # class id = index + 1
+RADII = {"blue": 0.115, "yellow": 0.115, "orange": 0.115, "big_orange": 0.145, "unknown": 0.115}
+MIN_EDGE_CONES = 3
+_COLUMNS = ("tag", "x", "y", "direction", "x_variance", "y_variance", "covariance")
+
+
+@dataclass(frozen=True)
+class Cones:
+    """Every cone of a map: positions [m], class names, and the file line of each."""
+
+    path: str
+    positions: np.ndarray  # (K, 2) [m]
+    tags: tuple[str, ...]  # one of CLASSES per cone
+    lines: tuple[int, ...]  # file line of each cone (from 1)
+
+    def of(self, tag: str) -> np.ndarray:
+        """Indices of the cones of class ``tag``."""
+        return np.array([i for i, t in enumerate(self.tags) if t == tag], int)
+
+    @property
+    def radii(self) -> np.ndarray:
+        """(K,) [m] base radius of each cone, by class."""
+        return np.array([RADII[t] for t in self.tags])
+
+    @property
+    def class_ids(self) -> np.ndarray:
+        """(K,) int class id of each cone: 1 + its index in CLASSES."""
+        return np.array([CLASSES.index(t) + 1 for t in self.tags], int)
+
+
+def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
+    """Read a cone map; a bad row is a ConfigError naming the file, line and column."""
+    text = read_text(path, source, key)
+    positions: list[tuple[float, float]] = []
+    tags: list[str] = []
+    lines: list[int] = []
+    problems: list[Problem] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        cells = [cell.strip() for cell in raw.split(",")]
+        if not raw.strip() or raw.lstrip().startswith("#") or cells[0].lower() == "tag":
+            continue
+        cone = _cone(str(path), number, cells, problems)
+        if cone is not None:
+            positions.append(cone[1])
+            tags.append(cone[0])
+            lines.append(number)
+    if problems:
+        raise ConfigError(problems[:20])
+    array = np.array(positions, np.float64).reshape(-1, 2) * scale
+    return Cones(str(path), array, tuple(tags), tuple(lines))
+
+
+def _cone(
+    path: str, number: int, cells: list[str], problems: list[Problem]
+) -> tuple[str, tuple[float, float]] | None:
+    if len(cells) < 3:
+        allowed = f"expected at least tag,x,y of {','.join(_COLUMNS)}"
+        problems.append(Problem(path, f"line {number}", ",".join(cells), allowed))
+        return None
+    tag = cells[0].lower()
+    if tag not in CLASSES:
+        allowed = f"expected a tag among: {', '.join(CLASSES)}"
+        problems.append(Problem(path, f"line {number}, column 1 (tag)", cells[0], allowed))
+        return None
+    values = []
+    for column in (1, 2):
+        try:
+            value = float(cells[column])
+        except ValueError:
+            value = float("nan")
+        if not np.isfinite(value):
+            where = f"line {number}, column {column + 1} ({_COLUMNS[column]})"
+            problems.append(Problem(path, where, cells[column], "expected a finite number [m]"))
+            return None
+        values.append(value)
+    return tag, (values[0], values[1])
+
+
+@dataclass(frozen=True)
+class ConeRoad:
+    """The road between the cones: a closed centreline with widths, start at point 0."""
+
+    centerline: np.ndarray  # (N, 2) [m] in driving order (blue on the left)
+    widths: np.ndarray  # (N, 2) [m] to the right (yellow) and to the left (blue)
+
+
+def road_between(cones: Cones, spacing: float, max_gap: float) -> ConeRoad:
+    """The centreline between the blue and yellow edges, sampled about ``spacing`` [m] apart.
+
+    Each edge is ordered by chaining nearest cones; a gap longer than ``max_gap`` [m]
+    between neighbours is an error (the cones do not close a loop).
+    """
+    blue = _edge_loop(cones, "blue", max_gap)
+    yellow = _edge_loop(cones, "yellow", max_gap)
+    dense_blue, _ = polyline.resample(blue, spacing / 4)
+    dense_yellow, _ = polyline.resample(yellow, spacing / 4)
+    guide, _ = polyline.resample(blue, spacing)
+    left = dense_blue[_nearest(dense_blue, guide)]
+    right = dense_yellow[_nearest(dense_yellow, guide)]
+    right = dense_yellow[_nearest(dense_yellow, 0.5 * (left + right))]  # opposite the middle
+    middle = 0.5 * (left + right)
+    half = np.hypot(*(left - right).T) / 2
+    widths = np.column_stack((half, half))
+    if _blue_on_right(middle, left):
+        middle, widths = middle[::-1].copy(), widths[::-1].copy()
+    start = _start_point(cones, middle)
+    return ConeRoad(np.roll(middle, -start, axis=0), np.roll(widths, -start, axis=0))
+
+
+def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
+    """The cones of one edge in order around the loop (nearest neighbour chain); big orange
+    cones join the edge whose cones are nearest to them (they stand on the start line)."""
+    index = cones.of(tag)
+    if len(index):
+        index = np.concatenate((index, _start_cones_beside(cones, tag)))
+    if len(index) < MIN_EDGE_CONES:
+        allowed = f"expected at least {MIN_EDGE_CONES} {tag} cones (the {tag} edge of the road)"
+        raise ConfigError(Problem(cones.path, "", f"{len(index)} {tag} cones", allowed))
+    points = cones.positions[index]
+    free = np.ones(len(points), bool)
+    order = [0]
+    free[0] = False
+    for _ in range(len(points) - 1):
+        distance = np.hypot(*(points - points[order[-1]]).T)
+        distance[~free] = np.inf
+        step = int(np.argmin(distance))
+        if distance[step] > max_gap:
+            _gap_error(cones, index[order[-1]], tag, float(distance[step]), max_gap)
+        order.append(step)
+        free[step] = False
+    closing = float(np.hypot(*(points[order[-1]] - points[order[0]])))
+    if closing > max_gap:
+        _gap_error(cones, index[order[-1]], tag, closing, max_gap)
+    return np.asarray(points[order], float)
+
+
+def _start_cones_beside(cones: Cones, tag: str) -> np.ndarray:
+    """Indices of the big orange cones nearer to a ``tag`` cone than to the other edge's."""
+    big = cones.of("big_orange")
+    edges = np.concatenate((cones.of("blue"), cones.of("yellow")))
+    if len(big) == 0 or len(edges) == 0:
+        return np.zeros(0, int)
+    nearest = edges[_nearest(cones.positions[edges], cones.positions[big])]
+    return np.asarray(big[np.array([cones.tags[i] == tag for i in nearest], bool)], int)
+
+
+def _gap_error(cones: Cones, cone: int, tag: str, gap: float, max_gap: float) -> None:
+    allowed = (
+        f"expected the {tag} cones to close a loop with neighbours at most {max_gap:g} m apart; "
+        f"the next {tag} cone after this one is {gap:.2f} m away"
+    )
+    where = f"line {cones.lines[cone]}"
+    raise ConfigError(Problem(cones.path, where, cones.positions[cone].tolist(), allowed))
+
+
+def _nearest(points: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """Index into ``points`` of the nearest point to each query (in chunks: bounded memory)."""
+    found = []
+    for start in range(0, len(queries), 256):
+        chunk = queries[start : start + 256]
+        d2 = ((chunk[:, None, :] - points[None, :, :]) ** 2).sum(axis=2)
+        found.append(np.argmin(d2, axis=1))
+    return np.concatenate(found)
+
+
+def _blue_on_right(middle: np.ndarray, left: np.ndarray) -> bool:
+    """Whether, driving along ``middle`` in its order, the blue points lie mostly on the right."""
+    normal = polyline.left_normals(middle)
+    return float(np.sum(np.sum((left - middle) * normal, axis=1))) < 0
+
+
+def _start_point(cones: Cones, middle: np.ndarray) -> int:
+    """The centreline point nearest the big orange cones (or orange ones; else point 0)."""
+    for tag in ("big_orange", "orange"):
+        index = cones.of(tag)
+        if len(index):
+            return polyline.nearest_index(middle, cones.positions[index].mean(axis=0))
+    return 0

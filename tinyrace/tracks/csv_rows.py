@@ -1,0 +1,127 @@
+"""Delimited numeric text (CSV with ``#`` comments), read with line and column numbers.
+
+Every problem names the file, the line and the column (both counted from 1), so that
+a user can open the file at the faulty cell.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tinyrace.errors import ConfigError, Problem
+
+
+@dataclass(frozen=True)
+class Table:
+    """The numeric rows of a file: values, the line of each row, and the header names."""
+
+    path: str  # the file, for messages
+    values: np.ndarray  # (rows, columns) float64
+    lines: np.ndarray  # (rows,) int, the file line of each row (from 1)
+    header: tuple[str, ...]  # column names from the last comment line, lower case ("" if none)
+
+    def where(self, row: int, column: int | None = None, name: str = "") -> str:
+        """The Problem path of a row (and column): 'line 7, column 3 (w_tr_left_m)'."""
+        text = f"line {int(self.lines[row])}"
+        if column is not None:
+            text += f", column {column + 1}"
+        return f"{text} ({name})" if name else text
+
+    def problem(self, row: int, column: int | None, value: object, allowed: str) -> Problem:
+        name = self.header[column] if column is not None and column < len(self.header) else ""
+        return Problem(self.path, self.where(row, column, name), value, allowed)
+
+
+def read_text(path: Path, source: str, key: str) -> str:
+    """The file's text; a missing or unreadable file is a problem of ``key`` in ``source``."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        reason = (
+            "does not exist" if isinstance(exc, FileNotFoundError) else f"is unreadable ({exc})"
+        )
+        allowed = f"expected a readable file; it {reason}"
+        raise ConfigError(Problem(source, key, str(path), allowed)) from None
+
+
+def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> Table:
+    """Numeric rows of a ``,`` or ``;`` separated file; each row must have one of ``columns``
+    counts of cells. Blank lines and ``#`` comments are skipped; the last comment before the
+    first row is taken as the header."""
+    text = read_text(path, source, key)
+    rows: list[list[float]] = []
+    lines: list[int] = []
+    header: tuple[str, ...] = ()
+    problems: list[Problem] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line.startswith("#"):
+            if not rows:
+                header = _split(line.lstrip("#"))
+            continue
+        cells = _split(line)
+        if not rows and not lines and _is_header(cells):
+            header = cells  # a header line without '#'
+            continue
+        allowed = (len(rows[0]),) if rows else columns  # every row as wide as the first
+        row = _numbers(str(path), number, cells, allowed, problems)
+        if row is not None:
+            rows.append(row)
+            lines.append(number)
+    if problems:
+        raise ConfigError(problems[:20])
+    width = len(rows[0]) if rows else columns[0]
+    values = np.array(rows, np.float64).reshape(len(rows), width)
+    return Table(str(path), values, np.array(lines, int), tuple(h.lower() for h in header))
+
+
+def _split(line: str) -> tuple[str, ...]:
+    separator = ";" if ";" in line else ","
+    return tuple(cell.strip() for cell in line.split(separator))
+
+
+def _is_header(cells: tuple[str, ...]) -> bool:
+    """A first line whose cells are all names (no numbers) is a header."""
+    return all(cell and not _is_number(cell) for cell in cells)
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def _numbers(
+    path: str,
+    number: int,
+    cells: tuple[str, ...],
+    columns: tuple[int, ...],
+    problems: list[Problem],
+) -> list[float] | None:
+    """The row's floats, or None with its problems recorded (wrong count, not a finite number)."""
+    if len(cells) not in columns:
+        counts = " or ".join(str(c) for c in columns)
+        problems.append(
+            Problem(path, f"line {number}", ",".join(cells), f"expected {counts} numbers")
+        )
+        return None
+    values = []
+    for column, cell in enumerate(cells):
+        try:
+            value = float(cell)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            where = f"line {number}, column {column + 1}"
+            problems.append(Problem(path, where, cell, "expected a finite number"))
+            return None
+        values.append(value)
+    return values

@@ -1,0 +1,209 @@
+"""Tracks in metres from the three real-world formats, as one kind of data.
+
+``MetricSource`` is the track source of the three kinds (``tracks/registry.py``);
+``load_metric_track`` reads a ``centerline``, ``cone_map`` or ``ros_map`` track section
+(files relative to the config's folder) into a ``MetricTrack``: the closed road
+(``Circuit``: centreline, widths, tiles) when the source has one, the spawn, the
+bounds, the cones and the walls. ``as_track`` gives the shared ``Track`` contract.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from tinyrace.config import (
+    CenterlineTrackConfig,
+    ConeMapTrackConfig,
+    ConfigError,
+    EnvConfig,
+    RosMapTrackConfig,
+)
+from tinyrace.config.paths import inside_folder
+from tinyrace.errors import Problem
+from tinyrace.tracks.base import Surface, Track, TrackDraw, pick_index
+from tinyrace.tracks.centerline_csv import read_loop
+from tinyrace.tracks.circuit import Circuit
+from tinyrace.tracks.cone_map import RADII, read_cones, road_between
+from tinyrace.tracks.ros_map import OccupancyMap, read_map
+
+Pose = tuple[float, float, float]
+OFF_ROAD_FRICTION = 0.6  # CarRacing's grass grip, as a fraction of the road's
+
+
+@dataclass(frozen=True, eq=False)
+class MetricTrack:
+    """One track in metres (x right, y up, headings counter-clockwise); read-only."""
+
+    kind: str  # the track.type it came from
+    circuit: Circuit | None  # the road and its tiles; None: a ROS map without waypoints
+    spawn: Pose  # (x [m], y [m], heading [rad])
+    bounds: tuple[float, float, float, float]  # (x0, y0, x1, y1) [m]: leaving it ends the episode
+    path: str  # the file read, for messages
+    cones: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (K, 3) x, y, class id
+    cone_radii: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (K,) [m]
+    walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))  # (M, 4) boxes [m]
+    occupancy: OccupancyMap | None = None  # the ROS map's cells
+
+    @property
+    def centerline(self) -> np.ndarray | None:
+        """(N, 2) [m] the reference line (CTE, look-ahead, the centreline driver), or None."""
+        return None if self.circuit is None else self.circuit.centerline
+
+    @property
+    def tiles(self) -> np.ndarray:
+        """(N, 4, 2) [m] progress tiles (none without a reference line)."""
+        return np.zeros((0, 4, 2)) if self.circuit is None else self.circuit.tiles
+
+    def as_track(self) -> Track:
+        """The shared track contract (``tinyrace.tracks.base.Track``)."""
+        tiles = None if self.circuit is None else self.circuit.tiles
+        surfaces = () if tiles is None else (Surface("road", 1.0, tiles),)
+        return Track(
+            kind=self.kind,
+            unit="m",
+            metres_per_unit=1.0,
+            y_down=False,
+            bounds=self.bounds,
+            spawns=(self.spawn,),
+            centerline=self.centerline,
+            tiles=tiles,
+            surfaces=surfaces,
+            off_road_friction=OFF_ROAD_FRICTION if self.occupancy is None else 1.0,
+            walls=self.walls,
+            cones=self.cones,
+            detail=self,
+        )
+
+
+MetricConfig = CenterlineTrackConfig | ConeMapTrackConfig | RosMapTrackConfig
+METRIC_CONFIGS = (CenterlineTrackConfig, ConeMapTrackConfig, RosMapTrackConfig)
+
+
+def load_metric_track(
+    config: MetricConfig, index: int, base_dir: Path, source: str, allow_outside: bool = False
+) -> MetricTrack:
+    """Read ``tracks[index]``; a ConfigError names the file (and line) of every problem.
+
+    Its files stay inside the config's folder unless ``allow_outside``
+    (``files.paths_outside_folder``)."""
+    where = f"tracks[{index}]"
+    for key in ("file", "waypoints"):
+        name = getattr(config, key, None)
+        if name is not None:
+            inside_folder(name, base_dir, allow_outside, source, f"{where}.{key}")
+    return LOADERS[config.type](config, where, base_dir, source)
+
+
+def _centerline(
+    config: CenterlineTrackConfig, where: str, base_dir: Path, source: str
+) -> MetricTrack:
+    loop = read_loop(base_dir / config.file, source, f"{where}.file", config.scale)
+    widths = loop.widths
+    if widths is None:
+        widths = np.full((len(loop.points), 2), config.default_width / 2)
+    circuit = Circuit.build(loop.points, widths, config.spacing)
+    return MetricTrack(
+        "centerline",
+        circuit,
+        circuit.start_pose,
+        circuit.bounds(config.margin),
+        str(base_dir / config.file),
+    )
+
+
+def _cone_map(config: ConeMapTrackConfig, where: str, base_dir: Path, source: str) -> MetricTrack:
+    cones = read_cones(base_dir / config.file, source, f"{where}.file", config.scale)
+    road = road_between(cones, config.spacing, config.max_cone_gap)
+    circuit = Circuit.build(road.centerline, road.widths, config.spacing)
+    low = cones.positions.min(axis=0) - config.margin
+    high = cones.positions.max(axis=0) + config.margin
+    return MetricTrack(
+        "cone_map",
+        circuit,
+        circuit.start_pose,
+        (float(low[0]), float(low[1]), float(high[0]), float(high[1])),
+        cones.path,
+        cones=np.column_stack((cones.positions, cones.class_ids)),
+        cone_radii=np.array([RADII[t] for t in cones.tags]),
+    )
+
+
+def _ros_map(config: RosMapTrackConfig, where: str, base_dir: Path, source: str) -> MetricTrack:
+    occupancy = read_map(base_dir / config.file, source, f"{where}.file")
+    circuit = None
+    if config.waypoints is not None:
+        loop = read_loop(base_dir / config.waypoints, source, f"{where}.waypoints")
+        widths = loop.widths
+        if widths is None:  # the free space around each waypoint
+            clearance = occupancy.clearance(loop.points)
+            widths = np.column_stack((clearance, clearance))
+        circuit = Circuit.build(loop.points, widths, config.spacing)
+    spawn = _ros_spawn(config, circuit, occupancy, where, source)
+    corners = occupancy.to_world(
+        np.array([0, 0, occupancy.shape[0] - 1, occupancy.shape[0] - 1]),
+        np.array([0, occupancy.shape[1] - 1, 0, occupancy.shape[1] - 1]),
+    )
+    (x0, y0), (x1, y1) = corners.min(axis=0), corners.max(axis=0)
+    return MetricTrack(
+        "ros_map",
+        circuit,
+        spawn,
+        (float(x0), float(y0), float(x1), float(y1)),
+        str(base_dir / config.file),
+        walls=occupancy.wall_boxes(),
+        occupancy=occupancy,
+    )
+
+
+def _ros_spawn(
+    config: RosMapTrackConfig,
+    circuit: Circuit | None,
+    occupancy: OccupancyMap,
+    where: str,
+    source: str,
+) -> Pose:
+    if config.spawn is not None:
+        if not occupancy.is_free(np.array([config.spawn[:2]]))[0]:
+            allowed = "expected a spawn on a free cell of the map"
+            raise ConfigError(Problem(source, f"{where}.spawn", list(config.spawn), allowed))
+        return config.spawn
+    if circuit is None:
+        allowed = "expected waypoints (a reference line) or a spawn [x, y, heading] [m, m, rad]"
+        raise ConfigError(Problem(source, f"{where}.spawn", None, allowed))
+    return circuit.start_pose
+
+
+LOADERS: dict[str, Callable[..., MetricTrack]] = {
+    "centerline": _centerline,
+    "cone_map": _cone_map,
+    "ros_map": _ros_map,
+}
+
+
+class MetricSource:
+    """``track.type: centerline``, ``cone_map`` or ``ros_map``: every track read once per env."""
+
+    def __init__(self, config: EnvConfig, base_dir: Path, source: str):
+        self.kind = config.kind
+        loaded: list[MetricTrack] = []
+        problems: list[Problem] = []
+        for index, track_config in enumerate(config.tracks):
+            assert isinstance(track_config, METRIC_CONFIGS)  # one kind per env, checked at load
+            try:
+                outside = config.files.paths_outside_folder
+                loaded.append(load_metric_track(track_config, index, base_dir, source, outside))
+            except ConfigError as error:
+                problems += error.problems
+        if problems:
+            raise ConfigError(problems)
+        self.tracks = tuple(track.as_track() for track in loaded)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
+        """A track drawn from ``rng`` unless ``options['track']`` picks it (one spawn each)."""
+        track_index = pick_index(options, "track", len(self.tracks), rng)
+        spawn_index = pick_index(options, "spawn", 1, rng)
+        return TrackDraw(self.tracks[track_index], track_index, spawn_index)

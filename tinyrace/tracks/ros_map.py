@@ -1,0 +1,211 @@
+"""The ROS map_server occupancy map (used by F1TENTH): a YAML file beside a picture.
+
+YAML keys: ``image`` (relative to the YAML), ``resolution`` [m/px], ``origin``
+[x m, y m, yaw rad] (the pose of the image's lower-left pixel), ``negate``,
+``occupied_thresh``, ``free_thresh`` and an optional ``mode`` (trinary). A pixel
+of value v has occupancy p = (255 - v) / 255 (v / 255 when negated): occupied above
+``occupied_thresh``, free below ``free_thresh``, unknown between (not drivable).
+Image row 0 is the top; world y grows upward.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TypeGuard
+
+import cv2
+import numpy as np
+import yaml
+
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.tracks.csv_rows import read_text
+
+MODES = ("trinary", "scale", "raw")
+
+
+@dataclass(frozen=True)
+class MapInfo:
+    """The YAML's numbers: where the picture sits in the world and how to read it."""
+
+    image: Path  # the picture, resolved
+    resolution: float  # [m/px]
+    origin: tuple[float, float, float]  # [m, m, rad] pose of the lower-left pixel's corner
+    negate: bool
+    occupied_thresh: float
+    free_thresh: float
+
+
+@dataclass(frozen=True, eq=False)
+class OccupancyMap:
+    """Free and occupied cells of a map, and the transform between world and pixels."""
+
+    info: MapInfo
+    free: np.ndarray  # (H, W) bool: drivable
+    occupied: np.ndarray  # (H, W) bool: walls
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(height, width) in pixels."""
+        return self.free.shape
+
+    def to_world(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """(K, 2) world points [m] of the centres of pixels (row, col)."""
+        height = self.free.shape[0]
+        local = self.info.resolution * np.column_stack(
+            (np.asarray(cols) + 0.5, height - np.asarray(rows) - 0.5)
+        )
+        return np.asarray(_rotate(local, self.info.origin[2]) + self.info.origin[:2], float)
+
+    def to_pixel(self, points: np.ndarray) -> np.ndarray:
+        """(K, 2) fractional (row, col) of world points [m]; inverse of ``to_world``."""
+        local = _rotate(np.asarray(points, float) - self.info.origin[:2], -self.info.origin[2])
+        cols = local[:, 0] / self.info.resolution - 0.5
+        rows = self.free.shape[0] - local[:, 1] / self.info.resolution - 0.5
+        return np.column_stack((rows, cols))
+
+    def is_free(self, points: np.ndarray) -> np.ndarray:
+        """(K,) bool: whether each world point [m] lies on a free cell (outside: not free)."""
+        pixel = np.rint(self.to_pixel(points)).astype(int)
+        rows, cols = pixel[:, 0], pixel[:, 1]
+        inside = (rows >= 0) & (rows < self.shape[0]) & (cols >= 0) & (cols < self.shape[1])
+        result = np.zeros(len(pixel), bool)
+        result[inside] = self.free[rows[inside], cols[inside]]
+        return result
+
+    def clearance(self, points: np.ndarray) -> np.ndarray:
+        """(K,) [m] distance from each world point to the nearest cell that is not free."""
+        field = cv2.distanceTransform(self.free.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_5)
+        pixel = np.rint(self.to_pixel(points)).astype(int)
+        rows = np.clip(pixel[:, 0], 0, self.shape[0] - 1)
+        cols = np.clip(pixel[:, 1], 0, self.shape[1] - 1)
+        return np.asarray(field[rows, cols] * self.info.resolution, float)
+
+    def wall_segments(self, tolerance_px: float = 1.0) -> np.ndarray:
+        """(M, 2, 2) [m] the outlines of the occupied regions as line segments, simplified
+        to within ``tolerance_px`` pixels (pymunk walls: few shapes, solid from outside)."""
+        contours, _ = cv2.findContours(
+            self.occupied.astype(np.uint8), cv2.RETR_LIST, cv2.CHAIN_APPROX_SIMPLE
+        )
+        segments = []
+        for contour in contours:
+            outline = cv2.approxPolyDP(contour, tolerance_px, True)[:, 0, :]  # (K, 2) col, row
+            world = self.to_world(outline[:, 1], outline[:, 0])
+            if len(world) == 1:
+                world = np.vstack((world, world))
+            segments.append(np.stack((world, np.roll(world, -1, axis=0)), axis=1))
+        return np.concatenate(segments) if segments else np.zeros((0, 2, 2))
+
+    def wall_boxes(self, cell_px: int = 4) -> np.ndarray:
+        """(M, 4) [m] boxes x0, y0, x1, y1 around the occupied cells of each ``cell_px``
+        square of pixels: solid walls for the physics (axis-aligned in the world when the
+        origin's yaw is 0, their bounding boxes otherwise)."""
+        h, w = self.occupied.shape
+        ph, pw = -h % cell_px, -w % cell_px
+        padded = np.pad(self.occupied, ((0, ph), (0, pw)))
+        grid: np.ndarray = padded.reshape(
+            (h + ph) // cell_px, cell_px, (w + pw) // cell_px, cell_px
+        )
+        rows_hit: np.ndarray = np.any(grid, axis=3)
+        cols_hit: np.ndarray = np.any(grid, axis=1)  # (gy, c, gx), (gy, gx, c)
+        gy, gx = np.nonzero(rows_hit.any(axis=1))
+        if len(gy) == 0:
+            return np.zeros((0, 4))
+        r, c = rows_hit[gy, :, gx], cols_hit[gy, gx, :]
+        top = gy * cell_px + r.argmax(axis=1)
+        bottom = gy * cell_px + cell_px - 1 - r[:, ::-1].argmax(axis=1)
+        left = gx * cell_px + c.argmax(axis=1)
+        right = gx * cell_px + cell_px - 1 - c[:, ::-1].argmax(axis=1)
+        corners = [self.to_world(rows, cols) for rows in (top, bottom) for cols in (left, right)]
+        half = 0.5 * self.info.resolution  # from pixel centres to pixel edges
+        stacked = np.stack(corners)  # (4, M, 2)
+        low, high = stacked.min(axis=0) - half, stacked.max(axis=0) + half
+        return np.asarray(np.column_stack((low, high)), float)
+
+
+def _rotate(points: np.ndarray, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.asarray(points @ np.array([[c, s], [-s, c]]), float)
+
+
+def read_map(path: Path, source: str, key: str) -> OccupancyMap:
+    """Read the map YAML and its picture; problems name the YAML file and the key's line."""
+    text = read_text(path, source, key)
+    info = read_info(path, text)
+    gray = cv2.imread(str(info.image), cv2.IMREAD_GRAYSCALE)
+    if gray is None:
+        where = _where(text, "image")
+        allowed = "expected a readable picture (PGM, PNG, ...) relative to the YAML"
+        raise ConfigError(Problem(str(path), where, str(info.image), allowed))
+    occupancy = gray.astype(np.float32) / 255.0
+    if not info.negate:
+        occupancy = 1.0 - occupancy
+    return OccupancyMap(info, occupancy < info.free_thresh, occupancy > info.occupied_thresh)
+
+
+def read_info(path: Path, text: str) -> MapInfo:
+    """The map YAML's keys, checked; every problem names the file and the key's line."""
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark else ""
+        raise ConfigError(Problem(str(path), where, "", f"invalid YAML: {exc}")) from None
+    if not isinstance(data, dict):
+        raise ConfigError(Problem(str(path), "", data, "expected a mapping of map_server keys"))
+    problems: list[Problem] = []
+
+    def bad(key: str, allowed: str) -> None:
+        problems.append(Problem(str(path), _where(text, key), data.get(key), allowed))
+
+    image = data.get("image")
+    if not isinstance(image, str) or not image.strip():
+        bad("image", "expected the picture's file name, relative to the YAML")
+    elif not (path.parent / image).is_file():
+        bad("image", f"expected an existing picture; {path.parent / image} does not exist")
+    resolution = data.get("resolution")
+    if not _number(resolution) or resolution <= 0:
+        bad("resolution", "expected a number > 0 [m/px]")
+    origin = data.get("origin")
+    if not (isinstance(origin, list) and len(origin) == 3 and all(map(_number, origin))):
+        bad("origin", "expected [x, y, yaw] numbers [m, m, rad]")
+    negate = data.get("negate", 0)
+    if negate not in (0, 1) or isinstance(negate, float):
+        bad("negate", "expected 0 or 1")
+    occupied, free = data.get("occupied_thresh", 0.65), data.get("free_thresh", 0.196)
+    for name, value in (("occupied_thresh", occupied), ("free_thresh", free)):
+        if not _number(value) or not 0 <= value <= 1:
+            bad(name, "expected a number from 0 to 1")
+    if _number(occupied) and _number(free) and free > occupied:
+        bad("free_thresh", f"expected free_thresh <= occupied_thresh ({occupied})")
+    if data.get("mode", "trinary") not in MODES:
+        bad("mode", f"expected one of: {', '.join(MODES)}")
+    if problems:
+        raise ConfigError(problems)
+    assert isinstance(image, str) and isinstance(origin, list) and _number(resolution)
+    return MapInfo(
+        (path.parent / image).resolve(),
+        float(resolution),
+        (float(origin[0]), float(origin[1]), float(origin[2])),
+        bool(negate),
+        float(occupied),
+        float(free),
+    )
+
+
+def _number(value: object) -> TypeGuard[float]:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _where(text: str, key: str) -> str:
+    """'line N (key)' of a top-level key in the YAML text, or the key alone if absent."""
+    try:
+        root = yaml.compose(text)
+    except yaml.YAMLError:
+        return key
+    if isinstance(root, yaml.MappingNode):
+        for name, value in root.value:
+            if name.value == key:
+                return f"line {value.start_mark.line + 1} ({key})"
+    return key
