@@ -136,8 +136,7 @@ def cones_from_picture(picture: np.ndarray, colors: dict[int, tuple[int, int, in
 class ConesSensor:
     """``type: cones``: {"cones": (N, 3) float32 rows x, y [track units, car frame: ahead,
     left], within max_range (noise clipped), and class (1 blue, 2 yellow, 3 orange, 4 big
-orange, 5 unknown; 0 padding),
-    "count": how many rows are used}."""
+    orange, 5 unknown; 0 padding), "count": how many rows are used}."""
 
     def __init__(self, config: ConesConfig, max_range: float):
         self.config = config
