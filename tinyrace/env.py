@@ -228,6 +228,7 @@ class TinyRaceEnv(gym.Env):
                 camera.window(snapshot, self.layout),
             )
             for camera in self.sensors
+            if isinstance(camera, BirdseyeCamera)  # the ones with a window on the ground
         ]
 
     def close(self):
