@@ -11,8 +11,12 @@ from dataclasses import dataclass
 from typing import Literal, Union
 
 from tinyrace.config.colors import Color
+from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 from tinyrace.config.knobs import REQUIRED, knob
 from tinyrace.config.sensors import SensorConfig
+
+MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
+MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together
 
 
 @dataclass(frozen=True)
@@ -32,7 +36,8 @@ class SimConfig:
     )
     overview_downscale: float = knob(
         1.0,
-        "divide the track image size by this in the overview (rgb_array/human render)",
+        "divide the track image size by this in the overview (rgb_array/human render); "
+        "the overview is at most 32 Mpx whatever this says",
         low=0.05,
         high=100,
     )
@@ -207,6 +212,31 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class FilesConfig:
+    """``files``: how far the files a config names may reach, and how large they may be.
+
+    Fixed bounds, not knobs: a YAML file is at most 1 MiB, nests at most 32 levels and expands
+    (aliases included) to at most 200,000 values; a key may appear once per mapping; FIFOs and
+    devices are refused. Overview frames are at most 32 Mpx (a larger one is downscaled
+    further) and all cameras together at most 4096 x 4096 px.
+    """
+
+    max_image_pixels: int = knob(
+        DEFAULT_MAX_IMAGE_PIXELS,
+        "a track image larger than this (width * height, read from its header) is refused "
+        "before it is decoded",
+        "px",
+        low=1,
+        high=400_000_000,
+    )
+    paths_outside_folder: bool = knob(
+        False,
+        "let image and data paths leave the config's folder: absolute paths, '..' and "
+        "symlinks out of it (refused by default; a NUL byte is always refused)",
+    )
+
+
+@dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
 
@@ -232,6 +262,7 @@ class EnvConfig:
         "more observation sensors by type (perspective_camera, lidar, state, lookahead, "
         "cones), each under its id in the Dict observation beside the cameras",
     )
+    files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
 
     @property
     def kind(self) -> str:

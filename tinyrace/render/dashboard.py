@@ -8,14 +8,29 @@ sub-pixel information.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Any
 
 import cv2
 import numpy as np
 
 from tinyrace.cars.dynamic import DynamicCar
 
+RGB = tuple[int, int, int]
+Bar = tuple[str, int, int, RGB]  # (v or h, place, length in 1/(8 factor) units, colour)
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)
+
+# CarRacing's layout: the frame is 40 layout units wide and 40 high; the bar fills the
+# bottom BAR_HEIGHT of them. Each instrument sits at a layout column and turns a physical
+# value into a bar length in layout units through its gain.
+LAYOUT_UNITS = 40  # layout units per frame side
+BAR_HEIGHT = 5  # [layout units] the bottom strip
+BAR_STEPS = 8  # bar lengths are kept to 1/8 layout unit (times the supersample factor)
+SPEED_COLUMN, SPEED_GAIN = 5, 0.02  # [layout units per u/s] true speed, vertical
+WHEEL_COLUMNS = (7, 8, 9, 10)  # FL, FR, RL, RR spin, vertical
+WHEEL_GAIN = 0.01  # [layout units per rad/s]
+STEER_COLUMN, STEER_GAIN = 20, -10.0  # [layout units per rad] front wheel angle, horizontal
+GYRO_COLUMN, GYRO_GAIN = 30, -0.8  # [layout units per rad/s] yaw rate, horizontal
 
 
 class Dashboard:
@@ -28,22 +43,24 @@ class Dashboard:
 
     def __init__(self, width: int, height: int, supersample: int = 1):
         self.width, self.height = width, height
-        self.top = round(height - 5 * height / 40)  # first row of the bar
+        self.top = round(height - BAR_HEIGHT * height / LAYOUT_UNITS)  # first row of the bar
         self.factor = supersample
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
-        self._patches: dict[tuple, tuple[int, np.ndarray]] = {}
-        self._shown: tuple | None = None  # what the strip holds now
+        self._patches: dict[tuple[str, int, int], tuple[int, np.ndarray]] = {}
+        self._shown: tuple[Any, ...] | None = None  # what the strip holds now
 
     def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
-        wheels, sign, q = car.wheels, car.steer_sign, 8 * self.factor  # q: steps per layout unit
+        wheels, sign = car.wheels, car.steer_sign
+        q = BAR_STEPS * self.factor  # bar steps per layout unit
+        fl, fr, rl, rr = WHEEL_COLUMNS
         bars = (
-            ("v", 5, round(0.02 * car.speed / car.scale * q), _WHITE),
-            ("v", 7, round(0.01 * wheels[0].omega * q), _BLUE),
-            ("v", 8, round(0.01 * wheels[1].omega * q), _BLUE),
-            ("v", 9, round(0.01 * wheels[2].omega * q), _PURPLE),
-            ("v", 10, round(0.01 * wheels[3].omega * q), _PURPLE),
-            ("h", 20, round(-10.0 * wheels[0].steer * sign * q), _GREEN),
-            ("h", 30, round(-0.8 * car.body.angular_velocity * sign * q), _RED),
+            ("v", SPEED_COLUMN, round(SPEED_GAIN * car.speed / car.scale * q), _WHITE),
+            ("v", fl, round(WHEEL_GAIN * wheels[0].omega * q), _BLUE),
+            ("v", fr, round(WHEEL_GAIN * wheels[1].omega * q), _BLUE),
+            ("v", rl, round(WHEEL_GAIN * wheels[2].omega * q), _PURPLE),
+            ("v", rr, round(WHEEL_GAIN * wheels[3].omega * q), _PURPLE),
+            ("h", STEER_COLUMN, round(STEER_GAIN * wheels[0].steer * sign * q), _GREEN),
+            ("h", GYRO_COLUMN, round(GYRO_GAIN * car.body.angular_velocity * sign * q), _RED),
         )
         shown = (bars, int(score))
         if shown != self._shown:  # redraw the strip only when an instrument moved
@@ -51,7 +68,7 @@ class Dashboard:
             self._redraw(bars, int(score))
         image[self.top :] = self.strip
 
-    def _redraw(self, bars: tuple, score: int) -> None:
+    def _redraw(self, bars: tuple[Bar, ...], score: int) -> None:
         strip = self.strip
         strip[:] = 0
         for kind, place, steps, color in bars:
@@ -64,20 +81,20 @@ class Dashboard:
         region = strip[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
         np.maximum(region, mask[: region.shape[0], : region.shape[1], None], out=region)
 
-    def _bar(self, kind: str, place: int, steps: int, color: tuple) -> tuple[int, np.ndarray]:
+    def _bar(self, kind: str, place: int, steps: int, color: RGB) -> tuple[int, np.ndarray]:
         key = (kind, place, steps)
         cached = self._patches.get(key)
         if cached is None:
-            value = steps / (8 * self.factor)
+            value = steps / (BAR_STEPS * self.factor)
             cached = self._patches[key] = self._render_bar(kind, place, value, color)
         return cached
 
     def _render_bar(
-        self, kind: str, place: int, value: float, color: tuple
+        self, kind: str, place: int, value: float, color: RGB
     ) -> tuple[int, np.ndarray]:
         """Draw one bar at ``factor`` x into a strip-high patch; return (first column, patch)."""
         f = self.factor
-        s, h = self.width / 40.0 * f, self.height / 40.0 * f
+        s, h = self.width / float(LAYOUT_UNITS) * f, self.height / float(LAYOUT_UNITS) * f
         bottom = (self.height - self.top) * f  # the frame's bottom, in patch rows
         if kind == "v":
             x0, y0, x1, y1 = place * s, bottom - h - h * value, (place + 1) * s, bottom - h
