@@ -189,10 +189,8 @@ def print_sensors(results: dict[str, Any]) -> None:
         print(f"\nSensors on {name} (median us per step over {result['steps']} steps)")
         for key, value in sorted(result["us_per_step"].items(), key=lambda kv: kv[1]):
             print(f"  {key:32s} {value:10.1f}")
-        error = result["lidar_max_abs_difference_to_reference"]
-        print(
-            f"  lidar vs reference: max |difference| {error:.3g} (cell {result['lidar_cell']:.3g})"
-        )
+        agree, cell = result["lidar_beams_within_a_cell_of_reference"], result["lidar_cell"]
+        print(f"  lidar vs reference: {100 * agree:.1f} % of beams within a cell ({cell:.3g})")
         for check, passed in result["checks"].items():
             print(f"  {'PASS' if passed else 'FAIL'}  {check}")
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.synthetic import BGR, blank, make_env, straight, write_track
+from tests.synthetic import BGR, EXAMPLES, blank, make_env, straight, write_track
 
 # tinycarlo's shipped configs: a 480x640 (or 360x480) window seen at 120x160: 4x (3x) smaller
 CAMERAS = [
@@ -35,4 +35,35 @@ def test_thin_markings_keep_their_exact_colours(tmp_path, width):
         for name in colours:
             exact = np.all(pixels == BGR[name][::-1], axis=1)
             assert exact.sum() >= 120 // 2, (camera, name)  # at least a pixel per other row
+    env.close()
+
+
+def test_gray_and_classes_formats_of_a_birdseye_camera():
+    """Labels are the track's layers, sampled without blending: where the rgb image shows a
+    layer's exact colour, the label image (same window) names that layer."""
+    window = {"resolution": [60, 80], "roi": [360, 480]}
+    cameras = [
+        {"id": "rgb", **window},
+        {"id": "gray", **window, "format": "gray"},
+        {"id": "labels", **window, "format": "classes"},
+    ]
+    env = make_env(EXAMPLES / "segmented", cameras=cameras)
+    observation, info = env.reset(seed=0)
+    for _ in range(10):
+        observation, *_ = env.step(straight())
+    table = info["sensor_labels"]["labels"]
+    rgb, labels = observation["rgb"], observation["labels"]
+    assert observation["gray"].shape == (60, 80) and labels.shape == (60, 80)
+    assert set(np.unique(labels)) <= set(range(len(table)))
+    checked = 0
+    for label, name in enumerate(table):
+        if "#" not in name:
+            continue
+        rgb_color = tuple(int(name[-6:][i : i + 2], 16) for i in (0, 2, 4))
+        exact = np.all(rgb == rgb_color, axis=-1)
+        if not exact.any():
+            continue  # not in view
+        checked += exact.sum()
+        assert (labels[exact] == label).mean() > 0.95, name  # edge pixels may round apart
+    assert checked > 50
     env.close()

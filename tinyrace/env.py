@@ -246,7 +246,7 @@ class TinyRaceEnv(gym.Env):
         snapshot = self.snapshot()
         return [
             (
-                camera.observe(snapshot, self.layout, self.np_random),
+                _rgb(camera.observe(snapshot, self.layout, self.np_random)),
                 camera.window(snapshot, self.layout),
             )
             for camera in cameras
@@ -272,6 +272,11 @@ class EpisodeGround:
     def texture(self, track: Track) -> GroundTexture:
         texture: GroundTexture = self.episode.ground_texture()
         return texture
+
+
+def _rgb(image: np.ndarray) -> np.ndarray:
+    """Gray and class-label images as RGB, for pictures."""
+    return image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
 
 
 def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:

@@ -278,6 +278,11 @@ class CameraConfig:
     yaw: float = knob(
         0.0, "camera rotation from straight ahead; 90 right, 180 back", "deg", low=-360, high=360
     )
+    format: Literal["rgb", "gray", "classes"] = knob(
+        "rgb",
+        "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the "
+        "track's layers, never blended (table in info['sensor_labels'])",
+    )
 
 
 @dataclass(frozen=True)

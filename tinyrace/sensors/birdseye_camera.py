@@ -16,12 +16,14 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import cv2
 import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
-from tinyrace.render.texture import GroundTexture
+from tinyrace.render.texture import GroundTexture, compose
 from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.sensors.common import GroundImage, PerTrack, label_table, paint_labels
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -80,13 +82,17 @@ class RoiCamera:
 
 
 class BirdseyeCamera:
-    """The ``birdseye_camera`` sensor: an RGB image of the ground ahead of the car."""
+    """The ``birdseye_camera`` sensor: the ground ahead of the car as an RGB, gray or class
+    label image (``format``; labels as the perspective camera's, without a sky)."""
 
     def __init__(self, config: CameraConfig, ground: Ground):
         self.config = config
         self.ground = ground
-        self.space = spaces.Box(0, 255, (*config.resolution, 3), np.uint8)
+        channels = (3,) if config.format == "rgb" else ()
+        self.space = spaces.Box(0, 255, (*config.resolution, *channels), np.uint8)
         self._camera: RoiCamera | None = None  # on the current episode's ground
+        self._labels: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()  # classes
+        self.labels: tuple[str, ...] = ()
 
     @property
     def id(self) -> str:
@@ -94,6 +100,13 @@ class BirdseyeCamera:
 
     def reset(self, track: Track) -> None:
         self._camera = None  # a new episode may have a new ground
+        if self.config.format == "classes":
+            self._label_ground, self.labels = self._labels.get(track, self._paint_labels)
+
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+        table = label_table(track)
+        ppu = self.camera(track).pixels_per_unit  # [label px per track unit] as the output's
+        return paint_labels(track, table, ppu), tuple(name for name, _ in table)
 
     def camera(self, track: Track) -> RoiCamera:
         """The camera on the current episode's ground texture."""
@@ -103,7 +116,16 @@ class BirdseyeCamera:
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
-        return self.camera(track).render(car.front_axle, car.pose[2])
+        camera = self.camera(track)
+        if self.config.format == "classes":  # labels: nearest sample, never blended
+            ground = self._label_ground
+            to_out = camera.matrix(car.front_axle, car.pose[2])
+            matrix = compose(to_out, cv2.invertAffineTransform(ground.to_pixels))
+            return cv2.warpAffine(
+                ground.image, matrix, camera.size, flags=cv2.INTER_NEAREST, borderValue=0
+            )
+        image = camera.render(car.front_axle, car.pose[2])
+        return image if self.config.format == "rgb" else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
 
     def window(self, snapshot: Snapshot, track: Track) -> np.ndarray:
         """(4, 2) corners of the track window it sees [track units], for pictures."""
