@@ -103,6 +103,7 @@ def _parser() -> argparse.ArgumentParser:
         "--seed", type=_count(0, "a whole number >= 0"), help="override the first seed"
     )
     run.add_argument("--no-video", action="store_true", help="write no videos")
+    run.add_argument("--force", action="store_true", help="allow run folders inside a track folder")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--json", action="store_true", help="print the results summary as JSON")
     run.set_defaults(handler=_run)
@@ -135,7 +136,7 @@ def _parser() -> argparse.ArgumentParser:
     play.add_argument(
         "path", nargs="?", help="track folder, track.yaml or experiment (default: procedural)"
     )
-    play.add_argument("--seed", type=int, default=None)
+    play.add_argument("--seed", type=_count(0, "a whole number >= 0"), default=None)
     play.set_defaults(handler=_play)
     _examples_parser(commands)
     for command in commands.choices.values():  # also after the command: tinyrace run --debug
@@ -172,7 +173,7 @@ def _run(args: argparse.Namespace) -> int:
             "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
         )
     experiment = _overridden(load_experiment(path), args)
-    out = _out_folder(args.out)
+    out = _out_folder(args.out, experiment.config.output.dir, args.force)
     config = experiment.config
     if not (args.quiet or args.json):
         what = f"{config.episodes} episodes, driver {config.driver}"
@@ -204,13 +205,21 @@ def _overridden(experiment, args: argparse.Namespace):
     return dataclasses.replace(experiment, config=config)
 
 
-def _out_folder(out: str | None) -> Path | None:
-    if out is None:
-        return None
-    path = Path(out)
+def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
+    """``--out`` checked: a folder, and (unless ``force``) not inside a track folder."""
+    from tinyrace.validate import track_folder_holding
+
+    path = Path(out if out is not None else default)
     if path.exists() and not path.is_dir():
-        raise UsageError(f"argument -o/--out: {out!r} is a file; expected a folder")
-    return path
+        raise UsageError(f"argument -o/--out: {str(path)!r} is a file; expected a folder")
+    inside = track_folder_holding(path.resolve())
+    if inside is not None and not force:
+        where = "argument -o/--out" if out is not None else "output.dir (run folders)"
+        raise UsageError(
+            f"{where}: {str(path)!r} lies inside the track folder {str(inside)!r}; "
+            "expected a folder outside it (run elsewhere, give -o, or --force)"
+        )
+    return None if out is None else path
 
 
 def _json_summary(result) -> dict:
