@@ -7,10 +7,15 @@ import dataclasses
 import json
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_example, find_experiment
+
+if TYPE_CHECKING:
+    from tinyrace.experiment import Experiment, RunResult
 
 
 class UsageError(Exception):
@@ -20,7 +25,7 @@ class UsageError(Exception):
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line (``tinyrace: error: ...``), exit 2."""
 
-    def error(self, message: str):  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         raise UsageError(message)
 
 
@@ -36,7 +41,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return args.handler(args)
+        code: int = args.handler(args)
+        return code
     except (ConfigError, UsageError) as exc:
         if args.debug:
             raise
@@ -67,7 +73,7 @@ def _one_line(exc: Exception) -> str:
     return " ".join(str(exc).split())
 
 
-def _count(low: int, what: str):
+def _count(low: int, what: str) -> Callable[[str], int]:
     """An argparse type: a whole number >= ``low``."""
 
     def parse(text: str) -> int:
@@ -144,7 +150,7 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _examples_parser(commands) -> None:
+def _examples_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
     examples = commands.add_parser(
         "examples", help="list the shipped tracks and configs; copy one out to edit"
     )
@@ -193,7 +199,7 @@ def _run(args: argparse.Namespace) -> int:
     return 128 + result.interrupted
 
 
-def _overridden(experiment, args: argparse.Namespace):
+def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
     """The experiment with the command line's --episodes, --seed and --no-video."""
     config = experiment.config
     if args.episodes is not None:
@@ -222,7 +228,7 @@ def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
     return None if out is None else path
 
 
-def _json_summary(result) -> dict:
+def _json_summary(result: RunResult) -> dict[str, Any]:
     from dataclasses import asdict
 
     return {

@@ -159,7 +159,13 @@ class _Run:
 
     def _frame(self, observation: Any) -> np.ndarray:
         view = self.config.output.view
-        return self.env.render() if view == "default" else observation[view]
+        if view != "default":
+            frame: np.ndarray = observation[view]
+            return frame
+        rendered = self.env.render()  # the env was made with render_mode rgb_array
+        if rendered is None:
+            raise RuntimeError("the env rendered no frame for the video")
+        return rendered
 
     def _track_picture(self, seed: int) -> str:
         key, entry = save_track_picture(self.env, seed, self.run_dir, self.tracks)
@@ -194,7 +200,7 @@ class _Run:
             self._write(None, error=f"{type(exc).__name__}: {exc}")
 
 
-def _driver(spec: str, args: dict, source: str) -> Driver:
+def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
     """The experiment's driver; problems name the experiment file and its ``driver`` key."""
     try:
         return load_driver(spec, **args)
