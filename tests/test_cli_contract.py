@@ -93,7 +93,7 @@ def test_out_pointing_at_a_file(tmp_path: Path, capsys):
 @pytest.mark.parametrize(
     ("content", "says"),
     [
-        (b"\x89PNG\r\n\x1a\n\x00\x00", "unreadable"),
+        (b"\x89PNG\r\n\x1a\n\x00\x00", "UTF-8"),
         (b"key: [1, 2\n", "invalid YAML"),
         (b"just words\n", "expected a mapping"),
     ],
