@@ -16,6 +16,7 @@ from tinyrace.cars.dynamic import DynamicCar
 
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)
+_LAYERS = 8  # the seven bars and the score
 
 
 class Dashboard:
@@ -33,6 +34,10 @@ class Dashboard:
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
         self._patches: dict[tuple, tuple[int, np.ndarray]] = {}
         self._shown: tuple | None = None  # what the strip holds now
+        # one layer per instrument (7 bars, then the score); the strip is their maximum, so
+        # a step redraws only the layers whose value changed
+        self._layers = np.zeros((_LAYERS, *self.strip.shape), np.uint8)
+        self._layer_values: list = [None] * _LAYERS
 
     def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
         wheels, sign, q = car.wheels, car.steer_sign, 8 * self.factor  # q: steps per layout unit
@@ -52,17 +57,29 @@ class Dashboard:
         image[self.top :] = self.strip
 
     def _redraw(self, bars: tuple, score: int) -> None:
-        strip = self.strip
-        strip[:] = 0
-        for kind, place, steps, color in bars:
-            if steps:
-                first, patch = self._bar(kind, place, steps, color)
-                region = strip[:, first : first + patch.shape[1]]
-                np.maximum(region, patch[:, : region.shape[1]], out=region)
+        values = self._layer_values
+        for index, bar in enumerate(bars):
+            if values[index] != bar:
+                values[index] = bar
+                self._draw_bar(self._layers[index], *bar)
+        if values[-1] != score:
+            values[-1] = score
+            self._draw_score(self._layers[-1], score)
+        np.maximum.reduce(self._layers, axis=0, out=self.strip)
+
+    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, steps: int, color: tuple):
+        layer[:] = 0
+        if steps:
+            first, patch = self._bar(kind, place, steps, color)
+            region = layer[:, first : first + patch.shape[1]]
+            region[:] = patch[:, : region.shape[1]]
+
+    def _draw_score(self, layer: np.ndarray, score: int) -> None:
+        layer[:] = 0
         mask, x0, y0 = _text_mask(f"{score:04d}", self.width, self.height)
         top = max(y0 - self.top, 0)
-        region = strip[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
-        np.maximum(region, mask[: region.shape[0], : region.shape[1], None], out=region)
+        region = layer[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
+        region[:] = mask[: region.shape[0], : region.shape[1], None]
 
     def _bar(self, kind: str, place: int, steps: int, color: tuple) -> tuple[int, np.ndarray]:
         key = (kind, place, steps)
