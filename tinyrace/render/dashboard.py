@@ -16,7 +16,17 @@ from tinyrace.cars.dynamic import DynamicCar
 
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)
-_LAYERS = 8  # the seven bars and the score
+# (kind, layout column, colour) of each bar: speed, four wheel spins, steering, gyro
+_BARS = (
+    ("v", 5, _WHITE),
+    ("v", 7, _BLUE),
+    ("v", 8, _BLUE),
+    ("v", 9, _PURPLE),
+    ("v", 10, _PURPLE),
+    ("h", 20, _GREEN),
+    ("h", 30, _RED),
+)
+_LAYER_CACHE_BYTES = 8_000_000  # [bytes] of cached instrument layers per dashboard
 
 
 class Dashboard:
@@ -35,47 +45,59 @@ class Dashboard:
         self._patches: dict[tuple, tuple[int, np.ndarray]] = {}
         self._shown: tuple | None = None  # what the strip holds now
         # one layer per instrument (7 bars, then the score); the strip is their maximum, so
-        # a step redraws only the layers whose value changed
-        self._layers = np.zeros((_LAYERS, *self.strip.shape), np.uint8)
-        self._layer_values: list = [None] * _LAYERS
+        # a step redraws only the layers whose value changed, from layers cached per value
+        self._layers = np.zeros((len(_BARS) + 1, *self.strip.shape), np.uint8)
+        self._layer_values: list = [None] * len(self._layers)
+        self._cached_layers: dict[tuple[int, int], np.ndarray] = {}
+        self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
 
     def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
         wheels, sign, q = car.wheels, car.steer_sign, 8 * self.factor  # q: steps per layout unit
-        bars = (
-            ("v", 5, round(0.02 * car.speed / car.scale * q), _WHITE),
-            ("v", 7, round(0.01 * wheels[0].omega * q), _BLUE),
-            ("v", 8, round(0.01 * wheels[1].omega * q), _BLUE),
-            ("v", 9, round(0.01 * wheels[2].omega * q), _PURPLE),
-            ("v", 10, round(0.01 * wheels[3].omega * q), _PURPLE),
-            ("h", 20, round(-10.0 * wheels[0].steer * sign * q), _GREEN),
-            ("h", 30, round(-0.8 * car.body.angular_velocity * sign * q), _RED),
+        shown = (  # bar lengths in steps (see _BARS), then the score
+            round(0.02 * car.speed / car.scale * q),
+            round(0.01 * wheels[0].omega * q),
+            round(0.01 * wheels[1].omega * q),
+            round(0.01 * wheels[2].omega * q),
+            round(0.01 * wheels[3].omega * q),
+            round(-10.0 * wheels[0].steer * sign * q),
+            round(-0.8 * car.body.angular_velocity * sign * q),
+            int(score),
         )
-        shown = (bars, int(score))
         if shown != self._shown:  # redraw the strip only when an instrument moved
             self._shown = shown
-            self._redraw(bars, int(score))
+            self._redraw(shown)
         image[self.top :] = self.strip
 
-    def _redraw(self, bars: tuple, score: int) -> None:
-        values = self._layer_values
-        for index, bar in enumerate(bars):
-            if values[index] != bar:
-                values[index] = bar
-                self._draw_bar(self._layers[index], *bar)
-        if values[-1] != score:
-            values[-1] = score
-            self._draw_score(self._layers[-1], score)
+    def _redraw(self, shown: tuple) -> None:
+        drawn = self._layer_values
+        for index, value in enumerate(shown):
+            if drawn[index] != value:
+                drawn[index] = value
+                self._layers[index] = self._layer(index, value)
         np.maximum.reduce(self._layers, axis=0, out=self.strip)
 
-    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, steps: int, color: tuple):
-        layer[:] = 0
+    def _layer(self, index: int, value: int) -> np.ndarray:
+        """Instrument ``index`` showing ``value``, alone in a strip-sized picture (cached)."""
+        layer = self._cached_layers.get((index, value))
+        if layer is None:
+            if len(self._cached_layers) >= self._max_cached:
+                self._cached_layers.clear()
+            layer = np.zeros_like(self.strip)
+            if index < len(_BARS):
+                self._draw_bar(layer, *_BARS[index], value)
+            else:
+                self._draw_score(layer, value)
+            layer.setflags(write=False)
+            self._cached_layers[index, value] = layer
+        return layer
+
+    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, color: tuple, steps: int):
         if steps:
             first, patch = self._bar(kind, place, steps, color)
             region = layer[:, first : first + patch.shape[1]]
             region[:] = patch[:, : region.shape[1]]
 
     def _draw_score(self, layer: np.ndarray, score: int) -> None:
-        layer[:] = 0
         mask, x0, y0 = _text_mask(f"{score:04d}", self.width, self.height)
         top = max(y0 - self.top, 0)
         region = layer[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
