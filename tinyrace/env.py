@@ -134,11 +134,19 @@ class TinyRaceEnv(gym.Env):
         return observation, self._info({})
 
     def step(self, action):
+        self.control(action)
+        return self.conclude(self.episode.step(self.dt))
+
+    # A step in parts, for vector envs that move many cars together (tinyrace.vector.batched):
+    # control(action); the car's forces; facts = episode.advance(dt); conclude(facts).
+    def control(self, action) -> None:
+        """Check ``action`` and hand it to the car (the first part of a step)."""
         if self.episode is None:
             raise ResetNeeded("call reset() before step()")
-        controls = self._actions.read(action)
-        self.episode.car.control(*controls)
-        facts = self.episode.step(self.dt)
+        self.episode.car.control(*self._actions.read(action))
+
+    def conclude(self, facts):
+        """Rewards, episode end, observation and info of a step whose physics is done."""
         self.t += self.dt
         self.steps += 1
         terms = reward_terms(facts, self.config.reward_design, self._shaping)
