@@ -12,3 +12,38 @@ from pathlib import Path
 HERE = str(Path(__file__).resolve().parent)
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
+
+import gymnasium as gym  # noqa: E402
+import pytest  # noqa: E402
+
+import tinyrace  # noqa: E402, F401  (registers the env ids)
+from tinyrace.examples import TRACKS_DIR  # noqa: E402
+
+
+@pytest.fixture
+def no_display(monkeypatch: pytest.MonkeyPatch) -> None:
+    """SDL's dummy drivers: a human render opens a window on no display."""
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    monkeypatch.setenv("SDL_AUDIODRIVER", "dummy")
+
+
+@pytest.fixture
+def carracing():
+    """tinyrace/CarRacing-v0 with rgb_array rendering, reset with seed 0; closed after."""
+    env = gym.make("tinyrace/CarRacing-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    yield env
+    env.close()
+
+
+@pytest.fixture
+def image_track_env():
+    """The formula_student image track (kinematic car, one camera), reset with seed 0."""
+    env = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment=str(TRACKS_DIR / "formula_student"),
+        render_mode="rgb_array",
+    )
+    env.reset(seed=0)
+    yield env
+    env.close()

@@ -34,12 +34,12 @@ def failing_factory():
     raise RuntimeError("no model file")
 
 
-def slow_policy(delay: float = 0.002):
-    """Straight ahead, slowly: long enough runs to be interrupted."""
+def slow_policy(delay: float = 0.002, size: int = 3):
+    """Straight ahead, slowly: long enough runs to be interrupted (size 1: kinematic car)."""
     import time
 
     def policy(observation, info):
         time.sleep(delay)
-        return np.array([0.0, 0.3, 0.0], np.float32)
+        return np.array([0.0, 0.3, 0.0][:size], np.float32)
 
     return policy

@@ -128,3 +128,14 @@ def test_a_huge_integer_is_quoted_short(tmp_path: Path):
     with pytest.raises(ConfigError) as caught:
         gym.make("tinyrace/TinyRace-v0", config=str(tmp_path / "track.yaml"))
     assert "sim.step_limit" in str(caught.value) and len(str(caught.value)) < 400
+
+
+def test_the_documented_bounds_are_the_enforced_ones():
+    from tinyrace.config.schema import MAX_CAMERA_PIXELS, MAX_FRAME_PIXELS, FilesConfig
+
+    doc = " ".join(FilesConfig.__doc__.split())
+    assert f"at most {MAX_YAML_BYTES >> 20} MiB" in doc
+    assert f"nests at most {MAX_DEPTH} levels" in doc
+    assert f"at most {MAX_VALUES:,} values" in doc
+    assert f"at most {MAX_FRAME_PIXELS >> 20} Mpx" in doc
+    assert MAX_CAMERA_PIXELS == 4096 * 4096 and "4096 x 4096 px" in doc

@@ -97,8 +97,8 @@ def test_show_procedural_is_the_seeds_track(tmp_path: Path):
     cli.main(["show", "procedural", "--seed", "1", "-o", str(b)])
     cli.main(["show", "procedural", "--seed", "2", "-o", str(c)])
     first, again, other = (cv2.imread(str(p)) for p in (a, b, c))
-    assert first.shape == again.shape and (first == again).all()
-    assert first.shape != other.shape or not (first == other).all()  # cropped to each track
+    assert (first == again).all()
+    assert first.shape != other.shape or not (first == other).all()  # cropped to the track
 
 
 def test_play_without_a_display_says_what_is_missing():

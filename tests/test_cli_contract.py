@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from tinyrace import cli
-from tinyrace.examples import CONFIGS_DIR
+from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 CAROLO = str(CONFIGS_DIR / "carolo_cup.yaml")
@@ -93,7 +93,7 @@ def test_out_pointing_at_a_file(tmp_path: Path, capsys):
 @pytest.mark.parametrize(
     ("content", "says"),
     [
-        (b"\x89PNG\r\n\x1a\n\x00\x00", "UTF-8"),
+        (b"\x89PNG\r\n\x1a\n\x00\x00", "UTF-8 text"),  # the bounded YAML reader's words
         (b"key: [1, 2\n", "invalid YAML"),
         (b"just words\n", "expected a mapping"),
     ],
@@ -150,3 +150,10 @@ def test_run_folders_go_to_the_current_folder(tmp_path: Path, monkeypatch):
     (run_dir,) = (tmp_path / "runs").iterdir()
     assert run_dir.name.startswith("carracing-")
     assert not (CONFIGS_DIR / "runs").exists() and not (CONFIGS_DIR.parent / "runs").exists()
+
+
+def test_a_track_is_not_an_experiment(capsys):
+    track = TRACKS_DIR / "segmented"
+    for path in (track, track / "track.yaml"):
+        assert cli.main(["run", str(path)]) == 2
+        one_error_line(capsys, "argument experiment", "is a track", "env.environment")

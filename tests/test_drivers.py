@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import gymnasium as gym
 import numpy as np
@@ -17,7 +18,9 @@ from tinyrace.drivers import (
     ConstantDriver,
     DiscreteChooser,
     Driver,
+    DriverError,
     RandomDriver,
+    check_action,
     make_driver,
     order_path,
     run_episode,
@@ -206,3 +209,39 @@ def test_centerline_driver_needs_a_line_to_follow() -> None:
     env.reset(seed=0)
     with pytest.raises(ValueError, match="use_cte"):
         CenterlineDriver().reset(env)
+
+
+@pytest.mark.parametrize(
+    ("space", "action", "says"),
+    [
+        (spaces.Box(-1, 1, (3,)), [0.0, 0.5], "shape (2,)"),
+        (spaces.Box(-1, 1, (3,)), [0.0, float("inf"), 0.0], "not finite"),
+        (spaces.Box(-1, 1, (3,)), [0.0, 2.0, 0.0], "outside"),
+        (spaces.Box(-1, 1, (3,)), "left", "expected numbers"),
+        (spaces.Discrete(5), 7, "int in Discrete(5)"),
+        (spaces.Discrete(5), True, "int in Discrete(5)"),
+        (spaces.Discrete(5), 1.0, "int in Discrete(5)"),
+    ],
+)
+def test_driver_output_is_checked(space, action, says):
+    with pytest.raises(DriverError, match=re.escape(says)):
+        check_action(action, space, "act() at step 3")
+    check_action(space.sample(), space)  # a sample passes
+
+
+def test_run_episode_shows_every_step_to_its_observer():
+    class Count:
+        def __init__(self):
+            self.started, self.steps = 0, []
+
+        def start(self, observation, info):
+            self.started += 1
+
+        def step(self, action, observation, reward, terminated, truncated, info):
+            self.steps.append(reward)
+
+    env = gym.make("tinyrace/CarRacing-v0")
+    seen = Count()
+    total, steps, _ = run_episode(env, ConstantDriver((0.0, 1.0, 0.0)), 0, 25, seen)
+    assert seen.started == 1 and len(seen.steps) == steps == 25
+    assert sum(seen.steps) == pytest.approx(total)

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -16,6 +20,7 @@ IDS = {
     "tinyrace/CarRacing-v0": {},
     "tinyrace/TinyRace-v0": {"environment": "formula_student", "sim": {"step_limit": 6}},
 }
+ROOT = Path(__file__).resolve().parents[1]
 STEPS = 8  # [steps] across one autoreset of the image track
 
 
@@ -114,3 +119,28 @@ def test_box_vector_env_batches_the_image():
         assert observation.shape == (2, 120, 160, 3)
     finally:
         envs.close()
+
+
+def test_the_module_prefixed_id_registers_tinyrace_in_a_fresh_process():
+    """RLlib's workers make the env by id alone: "tinyrace:<id>" imports tinyrace first."""
+    code = (
+        "import sys, gymnasium as gym\n"
+        "env = gym.make('tinyrace:tinyrace/CarRacing-v0')\n"
+        "observation, _ = env.reset(seed=0)\n"
+        "assert 'tinyrace' in sys.modules\n"
+        "print(observation.shape)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "(96, 96, 3)"
+
+
+def test_readme_trains_with_the_train_extra_and_ci_runs_its_test():
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Train an agent", 1)[1].split("\n## ", 1)[0]
+    assert 'pip install -e ".[train]"' in section
+    assert '"tinyrace:tinyrace/CarRacing-v0"' in section and "PPOConfig" in section
+    assert (ROOT / "examples" / "train_ppo.py").is_file()
+    ci = (ROOT / ".ci" / "run").read_text()
+    main_tests = ci.index('pip install -e ".[test]" && python -m pytest -q')
+    assert main_tests < ci.index("torch==") < ci.index('".[train]"') < ci.index("tests_train")

@@ -10,13 +10,17 @@ complex or object arrays), NaN, infinity or a value outside the space raises
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 from gymnasium.error import InvalidAction
 
-# CarRacing's Discrete(5): nothing, right, left, gas, brake -> (steer, gas, brake).
+# CarRacing's Discrete(5): action index -> (steer -1..1 [+ right], gas 0..1, brake 0..1),
+# each a fraction of full lock, full throttle and full brake.
+NOTHING, RIGHT, LEFT, GAS, BRAKE = range(5)  # the action indices
 DISCRETE_CONTROLS = (
     (0.0, 0.0, 0.0),
     (0.6, 0.0, 0.0),
@@ -30,7 +34,7 @@ DISCRETE_CONTROLS = (
 class ActionSpec:
     """How actions look for one car: the gymnasium space and how to read an action."""
 
-    space: spaces.Space
+    space: spaces.Box | spaces.Discrete
     kind: str  # "discrete", "dynamic" ([steer, gas, brake]) or "kinematic" ([steer])
 
     @classmethod
@@ -38,7 +42,7 @@ class ActionSpec:
         if model == "kinematic":
             return cls(spaces.Box(-1.0, 1.0, (1,), np.float32), "kinematic")
         if actions == "discrete":
-            return cls(spaces.Discrete(5), "discrete")
+            return cls(spaces.Discrete(len(DISCRETE_CONTROLS)), "discrete")
         low, high = np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32)
         return cls(spaces.Box(low, high, dtype=np.float32), "dynamic")
 
@@ -46,6 +50,10 @@ class ActionSpec:
         if isinstance(self.space, spaces.Box):  # plain floats: cheaper to compare per step
             bounds = list(zip(self.space.low.tolist(), self.space.high.tolist(), strict=True))
             object.__setattr__(self, "_bounds", bounds)
+
+    _bounds: list[tuple[float, float]] = dataclasses.field(
+        default_factory=list, init=False, repr=False, compare=False
+    )  # Box bounds as floats
 
     def read(self, action: object) -> tuple[float, ...]:
         """The controls of a valid action: (steer, gas, brake) or (steer,)."""
@@ -66,6 +74,7 @@ class ActionSpec:
             action = action.item()
         if not isinstance(action, (int, np.integer)) or isinstance(action, (bool, np.bool_)):
             raise InvalidAction(f"action {action!r} is not an integer of {self.space}")
+        assert isinstance(self.space, spaces.Discrete)
         if not 0 <= action < self.space.n:
             raise InvalidAction(f"action {action!r} is outside {self.space}")
         return int(action)
@@ -80,12 +89,13 @@ class ActionSpec:
         if array.shape != self.space.shape:
             raise InvalidAction(f"action of shape {array.shape} does not fit {self.space}")
         # bounds before the cast: a float64 beyond float32's range would warn as it became inf
+        assert isinstance(self.space, spaces.Box)
         if not (np.all(array >= self.space.low) and np.all(array <= self.space.high)):
             raise InvalidAction(f"action {array.tolist()} is outside {self.space} (NaN included)")
         return array.astype(np.float32, copy=False)
 
 
-def _as_array(action: object, space: spaces.Space) -> np.ndarray:
+def _as_array(action: object, space: spaces.Space[Any]) -> np.ndarray:
     try:
         return np.asarray(action)
     except (TypeError, ValueError) as exc:

@@ -9,7 +9,7 @@ import os
 import sys
 from pathlib import Path
 
-from tinyrace.errors import ConfigError
+from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_example, find_experiment
 
 
@@ -118,7 +118,12 @@ def _parser() -> argparse.ArgumentParser:
     show.add_argument(
         "path", help="track folder, track.yaml, experiment, a shipped name, or 'procedural'"
     )
-    show.add_argument("--seed", type=int, default=0, help="procedural tracks: which seed's track")
+    show.add_argument(
+        "--seed",
+        type=_count(0, "a whole number >= 0"),
+        default=0,
+        help="procedural tracks: which seed's track",
+    )
     show.add_argument("-o", "--output", help="PNG file (default: <name>.png in this folder)")
     show.add_argument(
         "--force",
@@ -161,6 +166,11 @@ def _run(args: argparse.Namespace) -> int:
     from tinyrace.experiment import load_experiment, print_report, run_experiment
 
     path = find_experiment(args.experiment) if args.experiment else default_experiment()
+    if path.is_dir() or path.name == "track.yaml":
+        raise UsageError(
+            f"argument experiment: {str(path)!r} is a track, not an experiment; name it in an "
+            "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
+        )
     experiment = _overridden(load_experiment(path), args)
     out = _out_folder(args.out)
     config = experiment.config
@@ -219,13 +229,28 @@ def _report(args: argparse.Namespace) -> int:
     from tinyrace.experiment import rebuild_report
 
     run_dir = Path(args.run_dir)
-    if not ((run_dir / "results.json").is_file() and (run_dir / "episodes.csv").is_file()):
+    if not (_is_file(run_dir / "results.json") and _is_file(run_dir / "episodes.csv")):
         raise UsageError(
             f"argument run_dir: {args.run_dir!r} is no run folder "
             "(expected a folder holding results.json and episodes.csv)"
         )
-    print(f"wrote {rebuild_report(run_dir)}")
+    try:
+        path = rebuild_report(run_dir)
+    except (ValueError, KeyError, TypeError) as exc:  # results.json or episodes.csv edited
+        raise UsageError(
+            f"argument run_dir: cannot read the run in {args.run_dir!r} "
+            f"({type(exc).__name__}: {exc})"
+        ) from exc
+    print(f"wrote {path}")
     return 0
+
+
+def _is_file(path: Path) -> bool:
+    """``Path.is_file``, but False for names the system refuses (too long, a NUL byte)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 # -- examples ----------------------------------------------------------------------------------
@@ -269,10 +294,18 @@ def _show(args: argparse.Namespace) -> int:
     image = shown.image
     output = Path(args.output or f"{shown.name}.png")
     check_output(output, shown.inputs, args.force)
-    output.parent.mkdir(parents=True, exist_ok=True)
-    if not cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
-        print(f"tinyrace: could not write {output} (use a .png path)", file=sys.stderr)
-        return 1
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        allowed = f"a path whose folder can be made ({type(exc).__name__}: {exc})"
+        raise ConfigError(Problem("<command line>", "-o/--output", str(output), allowed)) from None
+    try:
+        written = cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    except cv2.error:
+        written = False
+    if not written:
+        allowed = "a .png or .jpg path that can be written"
+        raise ConfigError(Problem("<command line>", "-o/--output", str(output), allowed))
     print(f"wrote {output} ({image.shape[1]}x{image.shape[0]})")
     return 0
 

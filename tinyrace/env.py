@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
-from tinyrace.config import EnvConfig, load_env_config
-from tinyrace.episodes.procedural import OBSERVATION_SIZE
+from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
+from tinyrace.episodes.image import ImageEpisode
+from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralEpisode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.texture import GroundTexture
@@ -22,10 +24,15 @@ from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import sensor_type
 from tinyrace.tracks.base import Track
+from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 
+Episode = ProceduralEpisode | ImageEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
+RESET_SOURCE = "<reset options>"
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
 
 
@@ -57,11 +64,11 @@ class TinyRaceEnv(gym.Env):
     ``sim.step_limit``.
     """
 
-    metadata: ClassVar[dict] = {"render_modes": list(RENDER_MODES), "render_fps": 50}
+    metadata: dict[str, Any] = {"render_modes": list(RENDER_MODES), "render_fps": 50}  # noqa: RUF012
 
     def __init__(
         self,
-        config: str | Path | Mapping[str, Any] | None = None,
+        config: str | Path | Mapping[str, Any] | LoadedConfig | None = None,
         environment: str | Path | None = None,
         render_mode: str | None = None,
         cte_shaping: Callable[[float], float] | None = None,
@@ -84,8 +91,10 @@ class TinyRaceEnv(gym.Env):
         self.verbose = verbose
         self.track_source = parts.source
         self.course = parts.course
-        self.dt = 1.0 / self.config.sim.fps  # [s]
-        self.metadata = {**self.metadata, "render_fps": round(self.config.sim.fps)}
+        fps = self.config.sim.fps
+        assert fps is not None  # resolved by the config loader
+        self.dt = 1.0 / fps  # [s]
+        self.metadata = {**self.metadata, "render_fps": round(fps)}
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
         self._ground = EpisodeGround()
@@ -93,12 +102,16 @@ class TinyRaceEnv(gym.Env):
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
-        self._shaping = cte_shaping or shaping_from_config(self.config.reward_design)
-        self.episode = None
-        self.layout: Track | None = None  # the episode's track, as sensors see it
+        self._shaping = (
+            _checked_shaping(cte_shaping)
+            if cte_shaping is not None
+            else shaping_from_config(self.config.reward_design)
+        )
+        self.episode: Episode | None = None
+        self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
 
-    def _observation_space(self) -> spaces.Space:
+    def _observation_space(self) -> spaces.Space[Any]:
         if not self.sensors:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
@@ -107,12 +120,14 @@ class TinyRaceEnv(gym.Env):
         return spaces.Dict({sensor.id: sensor.space for sensor in self.sensors})
 
     # -- gymnasium API -----------------------------------------------------------------------
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
         super().reset(seed=seed)
-        options = _check_options(options)
+        options = _check_options(options, self.config.kind)
         draw = self.track_source.draw(self.np_random, options)
-        self.episode = self.course.new_episode(draw)
-        self._ground.episode, self.layout = self.episode, draw.track
+        self.episode = episode = self.course.new_episode(draw)
+        self._ground.episode, self.layout = episode, draw.track
         for sensor in self.sensors:
             sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
@@ -121,7 +136,7 @@ class TinyRaceEnv(gym.Env):
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
-        facts = self.episode.start(self.dt)
+        facts = episode.start(self.dt)
         self.t += self.dt
         # The reset step is not rewarded; tiles it touched are paid by the first step (as
         # CarRacing does). Only such events carry over, never states like the cte.
@@ -133,19 +148,20 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, self._info({})
 
-    def step(self, action):
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         self.control(action)
-        return self.conclude(self.episode.step(self.dt))
+        return self.conclude(self._episode().step(self.dt))
 
-    # A step in parts, for vector envs that move many cars together (tinyrace.vector.batched):
+    # A step in parts, for a vector env that moves many cars between them:
     # control(action); the car's forces; facts = episode.advance(dt); conclude(facts).
-    def control(self, action) -> None:
+    def control(self, action: Any) -> None:
         """Check ``action`` and hand it to the car (the first part of a step)."""
-        if self.episode is None:
+        episode = self.episode
+        if episode is None:
             raise ResetNeeded("call reset() before step()")
-        self.episode.car.control(*self._actions.read(action))
+        episode.car.control(*self._actions.read(action))
 
-    def conclude(self, facts):
+    def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Rewards, episode end, observation and info of a step whose physics is done."""
         self.t += self.dt
         self.steps += 1
@@ -168,9 +184,9 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, reward, reason is not None, truncated, info
 
-    def _observe(self):
-        if not self.sensors:  # CarRacing's view
-            return self.episode.observe(self.t, self.score)
+    def _observe(self) -> Any:
+        if not self.sensors:  # CarRacing's view (only procedural tracks have no camera)
+            return cast(ProceduralEpisode, self._episode()).observe(self.t, self.score)
         snapshot = self.snapshot()
         observation = {
             sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
@@ -180,31 +196,30 @@ class TinyRaceEnv(gym.Env):
 
     def snapshot(self) -> Snapshot:
         """A copy of the world's state now (what sensors and pictures read)."""
+        return Snapshot(self.t, self.steps, (self._episode().car.state(),))
+
+    def _episode(self, reading: str = "a snapshot") -> Episode:
         if self.episode is None:
-            raise ResetNeeded("call reset() before reading a snapshot")
-        return Snapshot(self.t, self.steps, (self.episode.car.state(),))
+            raise ResetNeeded(f"call reset() before reading {reading}")
+        return self.episode
 
     def _info(self, terms: dict[str, float]) -> dict[str, Any]:
-        info = self.episode.info()
+        info: dict[str, Any] = self._episode().info()
         info["reward_terms"] = terms
         return info
 
     @property
-    def track(self):
+    def track(self) -> ProceduralTrack | ImageTrack:
         """The current episode's track data (read-only arrays in track units)."""
-        if self.episode is None:
-            raise ResetNeeded("call reset() before reading the track")
-        return self.episode.track
+        return self._episode("the track").track
 
     @property
-    def car(self):
+    def car(self) -> Any:
         """The current episode's car (a pymunk body plus its state)."""
-        if self.episode is None:
-            raise ResetNeeded("call reset() before reading the car")
-        return self.episode.car
+        return self._episode("the car").car
 
     # -- pictures ------------------------------------------------------------------------------
-    def render(self):
+    def render(self) -> np.ndarray | None:
         if self.render_mode is None:
             gym.logger.warn(
                 "render() called without a render_mode; make the env with render_mode='rgb_array'"
@@ -212,7 +227,9 @@ class TinyRaceEnv(gym.Env):
             return None
         if self.episode is None:
             raise ResetNeeded("call reset() before render()")
-        frame = self.episode.frame(self.render_mode, self.t, self.score, self._camera_views())
+        frame: np.ndarray = self.episode.frame(
+            self.render_mode, self.t, self.score, self._camera_views()
+        )
         if self.render_mode != "human":
             return frame
         if self._window is None:
@@ -233,12 +250,12 @@ class TinyRaceEnv(gym.Env):
             for camera in self.sensors
         ]
 
-    def close(self):
+    def close(self) -> None:
         if self._window is not None:
             self._window.close()
             self._window = None
 
-    def __getstate__(self):
+    def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_window"] = None  # a window belongs to this process
         return state
@@ -251,31 +268,72 @@ class EpisodeGround:
         self.episode: Any = None
 
     def texture(self, track: Track) -> GroundTexture:
-        return self.episode.ground_texture()
+        texture: GroundTexture = self.episode.ground_texture()
+        return texture
 
 
 def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
     """tinycarlo's ``cameras:`` list, each entry a ``birdseye_camera`` sensor."""
     camera_type = sensor_type("birdseye_camera", "<registry>", "cameras")
-    return [camera_type.build(entry, context) for entry in config.cameras]
+    return [cast(BirdseyeCamera, camera_type.build(entry, context)) for entry in config.cameras]
 
 
-def _check_options(options: dict | None) -> dict:
+def _check_options(options: object, kind: str) -> dict[str, Any]:
+    """The reset options, checked: known keys, ``randomize`` a bool, indices whole numbers.
+
+    Image tracks check the index ranges when they pick; a procedural track has one track and
+    one start, index 0.
+    """
     if options is None:
         return {}
     if not isinstance(options, Mapping):
-        raise ConfigError(Problem("<reset options>", "", options, "expected a dict or None"))
-    for key in options:
+        raise ConfigError(Problem(RESET_SOURCE, "", options, "expected a dict or None"))
+    for key, value in options.items():
         if key not in RESET_OPTIONS:
-            raise ConfigError(
-                Problem(
-                    "<reset options>",
-                    str(key),
-                    options[key],
-                    f"unknown option; valid: {', '.join(RESET_OPTIONS)}",
-                )
-            )
+            allowed = f"unknown option; valid: {', '.join(RESET_OPTIONS)}"
+            raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
+        if key == "randomize" and not isinstance(value, (bool, np.bool_)):
+            raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
+        if key != "randomize" and kind == "procedural" and not _is_zero_or_none(value):
+            allowed = f"expected 0 or None (a procedural track has one {key})"
+            raise ConfigError(Problem(RESET_SOURCE, key, value, allowed))
     return dict(options)
+
+
+def _is_zero_or_none(value: object) -> bool:
+    whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    return value is None or (whole and value == 0)
+
+
+def _key_text(key: object) -> str:
+    text = key if isinstance(key, str) else repr(key)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _checked_shaping(shaping: object) -> Callable[[float], float]:
+    """The ``cte_shaping`` kwarg: a callable whose every result must be a finite number."""
+    if not callable(shaping):
+        allowed = (
+            "expected a function cte [px] -> reward, or None "
+            "(reward_design.cross_track_error.shaping names the built-in ones)"
+        )
+        raise ConfigError(Problem("<kwargs>", "cte_shaping", shaping, allowed))
+    return _CheckedShaping(shaping)
+
+
+@dataclass(frozen=True)
+class _CheckedShaping:
+    """Calls the user's shaping; a result that is not a finite number is a ConfigError."""
+
+    shaping: Callable[[float], Any]
+
+    def __call__(self, cte: float) -> float:
+        value = self.shaping(cte)
+        number = isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+        if not (number and np.isfinite(value)):
+            allowed = "expected the cte_shaping function to return a finite number"
+            raise ConfigError(Problem("<kwargs>", "cte_shaping", value, allowed))
+        return float(value)
 
 
 def _add_terms(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:

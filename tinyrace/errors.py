@@ -52,6 +52,6 @@ class ConfigError(ValueError):
         )
         super().__init__(head + ":\n  " + "\n  ".join(lines))
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[type[ConfigError], tuple[list[Problem]]]:
         """Pickle by the problems, so the error crosses process boundaries (vector envs)."""
         return ConfigError, (self.problems,)

@@ -122,17 +122,24 @@ def copy_example(name: str, folder: Path) -> list[Path]:
         raise ConfigError(
             Problem("<command line>", "name", name, f"expected one of: {', '.join(names)}")
         )
+    if _exists(folder) and not folder.is_dir():
+        allowed = "a folder (or a path that does not exist yet), not a file"
+        raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed))
     targets = [(e, folder / e.path.name) for e in chosen]
     for _, target in targets:
         if _exists(target):
             allowed = "a path that does not exist yet (nothing is overwritten)"
             raise ConfigError(Problem("<command line>", "DIR", str(target), allowed))
-    folder.mkdir(parents=True, exist_ok=True)
-    for example, target in targets:
-        if example.kind == "track":
-            shutil.copytree(example.path, target)
-        else:
-            shutil.copyfile(example.path, target)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for example, target in targets:
+            if example.kind == "track":
+                shutil.copytree(example.path, target)
+            else:
+                shutil.copyfile(example.path, target)
+    except (OSError, ValueError) as exc:  # no permission, a name too long, a NUL byte
+        allowed = f"a folder that can be written ({type(exc).__name__}: {exc})"
+        raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed)) from None
     return [target for _, target in targets]
 
 

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from tinyrace.actions import BRAKE, GAS, LEFT, NOTHING, RIGHT
 from tinyrace.env import TinyRaceEnv
 from tinyrace.validate import load_any
 
@@ -44,7 +46,7 @@ def _env(target: str | None) -> TinyRaceEnv:
     return TinyRaceEnv(config=load_any(Path(target)), render_mode="human")
 
 
-def _read_keys(pygame):
+def _read_keys(pygame: Any) -> tuple[Any, bool, bool]:
     quit_requested = reset = False
     for event in pygame.event.get():
         if event.type == pygame.QUIT or (
@@ -56,11 +58,21 @@ def _read_keys(pygame):
     return pygame.key.get_pressed(), quit_requested, reset
 
 
-def _action(env: TinyRaceEnv, keys, pygame) -> np.ndarray | int:
+def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
     steer = float(keys[pygame.K_RIGHT]) - float(keys[pygame.K_LEFT])
     if env.action_space.shape == (1,):
         return np.array([steer], np.float32)
     gas, brake = float(keys[pygame.K_UP]), 0.8 * float(keys[pygame.K_DOWN])
     if env.config.car.actions == "discrete":
-        return 3 if gas else 4 if brake else 1 if steer > 0 else 2 if steer < 0 else 0
+        return (
+            GAS
+            if gas
+            else BRAKE
+            if brake
+            else RIGHT
+            if steer > 0
+            else LEFT
+            if steer < 0
+            else NOTHING
+        )
     return np.array([steer, gas, brake], np.float32)

@@ -1,7 +1,9 @@
 """Rewards are decided here, and only here, from the facts of a step.
 
 Each term is named; the step's reward is their sum and the terms are reported
-in ``info["reward_terms"]`` so that a reward design can be inspected.
+in ``info["reward_terms"]`` so that a reward design can be inspected. A term is a
+function of the step's facts and the ``reward_design`` (the ``RewardTerm`` protocol);
+adding one is a function here plus an entry in ``REWARD_TERMS``.
 """
 
 from __future__ import annotations
@@ -9,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from tinyrace.config import RewardConfig
 from tinyrace.world.facts import StepFacts
@@ -41,6 +44,65 @@ def shaping_from_config(config: RewardConfig) -> CteShaping | None:
     return None if cte.shaping == "none" else Shaping(cte.shaping, cte.scale, cte.weight)
 
 
+class RewardTerm(Protocol):
+    """One named reward term: its value for a step's facts, or None when it does not apply."""
+
+    def __call__(
+        self, facts: StepFacts, config: RewardConfig, shaping: CteShaping | None
+    ) -> float | None: ...
+
+
+def time_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
+    """``time``: the per-step cost."""
+    return -config.time_penalty if config.time_penalty else None
+
+
+def tiles_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
+    """``tiles``: tile_progress shared out over the tiles, paid per newly visited tile."""
+    if facts.new_tiles and config.tile_progress:
+        return config.tile_progress * facts.new_tiles / facts.tiles_total
+    return None
+
+
+def off_road_term(
+    facts: StepFacts, config: RewardConfig, shaping: CteShaping | None
+) -> float | None:
+    """``off_road``: the penalty per wheel on grass."""
+    if facts.wheels_on_grass and config.off_road_penalty:
+        return -config.off_road_penalty * facts.wheels_on_grass
+    return None
+
+
+def obstacles_term(
+    facts: StepFacts, config: RewardConfig, shaping: CteShaping | None
+) -> float | None:
+    """``obstacles``: the rewards of the obstacle colours touched (``done`` ones end instead)."""
+    total = sum(
+        reward
+        for i in facts.obstacles_hit
+        if (reward := config.color_obstacles[i].reward) != "done"
+    )
+    return float(total) if total else None
+
+
+def cte_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
+    """``cte``: the shaping of the cross-track error."""
+    if shaping is not None and facts.cte is not None:
+        return float(shaping(facts.cte))
+    return None
+
+
+# The terms by name, in the order they are summed (the order is part of the float result).
+REWARD_TERMS: dict[str, RewardTerm] = {
+    "time": time_term,
+    "tiles": tiles_term,
+    "off_road": off_road_term,
+    "obstacles": obstacles_term,
+    "cte": cte_term,
+}
+UNCHARGED_AT_RESET = ("time",)  # terms the step that reset takes with no action does not pay
+
+
 def reward_terms(
     facts: StepFacts, config: RewardConfig, shaping: CteShaping | None, charge_time: bool = True
 ) -> dict[str, float]:
@@ -54,21 +116,12 @@ def reward_terms(
             {"out_of_bounds": -config.out_of_bounds_penalty} if config.out_of_bounds_penalty else {}
         )
     terms: dict[str, float] = {}
-    if charge_time and config.time_penalty:
-        terms["time"] = -config.time_penalty
-    if facts.new_tiles and config.tile_progress:
-        terms["tiles"] = config.tile_progress * facts.new_tiles / facts.tiles_total
-    if facts.wheels_on_grass and config.off_road_penalty:
-        terms["off_road"] = -config.off_road_penalty * facts.wheels_on_grass
-    obstacle_reward = sum(
-        config.color_obstacles[i].reward
-        for i in facts.obstacles_hit
-        if config.color_obstacles[i].reward != "done"
-    )
-    if obstacle_reward:
-        terms["obstacles"] = float(obstacle_reward)
-    if shaping is not None and facts.cte is not None:
-        terms["cte"] = float(shaping(facts.cte))
+    for name, term in REWARD_TERMS.items():
+        if not charge_time and name in UNCHARGED_AT_RESET:
+            continue
+        value = term(facts, config, shaping)
+        if value is not None:
+            terms[name] = value
     return terms
 
 

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
+from tinyrace.episodes.image import ImageCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -36,12 +39,39 @@ def build_course(loaded: LoadedConfig) -> Parts:
 
 
 def validate_path(path: Path) -> tuple[list[str], str]:
-    """Every problem found (as lines), or none and a one-line summary."""
+    """Every problem found (as lines), or none and a one-line summary.
+
+    What passes has been built, reset (seed 0) and stepped once, as ``gym.make`` and
+    ``tinyrace run`` would: they read the config through the same functions.
+    """
     try:
-        parts = build_course(load_any(path))
+        loaded = load_any(path)
+        parts = build_course(loaded)  # the same parts the env is made of
+        try_one_step(loaded)
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
     return [], describe(parts.config)
+
+
+def try_one_step(loaded: LoadedConfig) -> None:
+    """Build the env of ``loaded``, reset it with seed 0 and take one neutral step."""
+    from tinyrace.env import TinyRaceEnv
+
+    env = TinyRaceEnv(config=loaded)
+    try:
+        env.reset(seed=0)
+        env.step(neutral_action(env.action_space))
+    finally:
+        env.close()
+
+
+def neutral_action(space: gym.Space[Any]) -> Any:
+    """The action nearest to 'do nothing': 0 clipped into a Box, the first of a Discrete."""
+    if isinstance(space, gym.spaces.Discrete):
+        return space.start
+    if isinstance(space, gym.spaces.Box):
+        return np.clip(np.zeros(space.shape), space.low, space.high).astype(space.dtype)
+    return space.sample()  # another kind of space: any valid action
 
 
 def describe(config: EnvConfig) -> str:
@@ -75,6 +105,7 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
+    assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 
 
@@ -92,9 +123,23 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     """Refuse to write where the user's files are.
 
     Never over a file the command read (even with ``force``); without ``force``, never over
-    an existing file and never into a track folder (one holding a track.yaml).
+    an existing file and never into a track folder (one holding a track.yaml) or below one.
     """
+    try:
+        _check_output(output, inputs, force)
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte, no permission
+        allowed = f"a path the system can write ({type(exc).__name__}: {exc})"
+        raise ConfigError(Problem(COMMAND_LINE, "-o/--output", str(output), allowed)) from None
+
+
+PICTURE_SUFFIXES = (".png", ".jpg", ".jpeg")
+
+
+def _check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     where = "-o/--output"
+    if output.suffix.lower() not in PICTURE_SUFFIXES:
+        allowed = f"a picture file name ending in {', '.join(PICTURE_SUFFIXES)}"
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
     resolved = output.resolve()
     if resolved in inputs:
         allowed = "a path that is not one of the files this command reads: choose another -o"
@@ -106,9 +151,12 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     if resolved.exists() or resolved.is_symlink():
         allowed = "a path that does not exist yet (or --force to replace the file)"
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
-    if (resolved.parent / TRACK_FILE).exists():
+    track_folders = [p.parent for p in inputs if p.name == TRACK_FILE]
+    track_folders += [f for f in resolved.parents if (f / TRACK_FILE).is_file()]
+    inside = next((f for f in track_folders if resolved.is_relative_to(f)), None)
+    if inside is not None:
         allowed = (
-            f"a path outside a track folder ({resolved.parent} holds {TRACK_FILE}): "
+            f"a path outside the track folder {inside} (it holds {TRACK_FILE}): "
             "give -o elsewhere, or --force"
         )
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))

@@ -12,7 +12,7 @@ How to add a car model:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Protocol
 
 from tinyrace.world.snapshot import CarState, Point, Pose, WheelState
@@ -29,8 +29,10 @@ class Car(Protocol):
     @property
     def body(self) -> pymunk.Body: ...
 
-    def control(self, *controls: float) -> None:
-        """Set the controls of one action (e.g. steer, gas, brake) for the coming steps."""
+    @property
+    def control(self) -> Callable[..., None]:
+        """Sets the controls of one action (e.g. steer, gas, brake) for the coming steps."""
+        ...
 
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
         """Prepare the body for a world step of ``dt`` seconds; ``on_road`` per wheel."""

@@ -13,12 +13,13 @@ The model is written in CarRacing's frame (y up, angles counter-clockwise). A
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pymunk
 
-from tinyrace.world.snapshot import CarState, WheelState
+from tinyrace.world.snapshot import CarState, Point, WheelState
 from tinyrace.world.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
 
 SIZE = 0.02  # [u per model unit] CarRacing's car model scale
@@ -52,6 +53,8 @@ class DynamicCarSpec:
     steer_speed: float = 3.0  # [rad/s] max steering motor speed
     steer_limit: float = 0.4  # [rad] front wheel lock
     max_translation: float = 2.0  # [u per step] Box2D's speed cap, kept for identical top speed
+    spin_floor: float = 5.0  # [rad/s] added to |spin| where the engine's torque is divided by it
+    skid_ratio: float = 2.0  # a tyre skids (draws a mark) beyond this multiple of its grip
 
 
 @dataclass
@@ -79,7 +82,7 @@ class SkidMarks:
         self._next = 0
         self._count = 0
 
-    def start(self, first: tuple, second: tuple, on_grass: bool) -> tuple[int, int]:
+    def start(self, first: Point, second: Point, on_grass: bool) -> tuple[int, int]:
         """A new two-point mark (evicting the oldest); returns its handle (slot, serial)."""
         slot = self._next
         self._next = (slot + 1) % len(self.lengths)
@@ -90,7 +93,7 @@ class SkidMarks:
         self.serial[slot] = self._count
         return slot, self._count
 
-    def extend(self, handle: tuple[int, int], point: tuple, on_grass: bool) -> bool:
+    def extend(self, handle: tuple[int, int], point: Point, on_grass: bool) -> bool:
         """Append to a mark if it still exists, is on the same ground and has room."""
         slot, serial = handle
         n = self.lengths[slot]
@@ -116,8 +119,9 @@ class DynamicCar:
     steer_sign: float  # +1 in CarRacing's y-up frame, -1 on a y-down image
     steer_target: float = 0.0  # [rad] internal sign (positive: counter-clockwise)
     skids: SkidMarks = field(default_factory=SkidMarks)
-    _skid_open: list = field(default_factory=lambda: [None] * 4)  # per wheel: mark being drawn
-    _skid_start: list = field(default_factory=lambda: [None] * 4)  # per wheel: first point
+    # per wheel: the mark being drawn (its handle), and a first point waiting for a second
+    _skid_open: list[tuple[int, int] | None] = field(default_factory=lambda: [None] * 4)
+    _skid_start: list[Point | None] = field(default_factory=lambda: [None] * 4)
 
     @classmethod
     def build(
@@ -169,7 +173,7 @@ class DynamicCar:
         self._grass_limit = spec.friction_limit * scale * spec.grass_friction
         self._spin_moment = spec.wheel_moment * scale**2  # [mass track units^2]
 
-    def apply_forces(self, dt: float, on_road: list[bool]) -> None:
+    def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
         """Spin the wheels, compute tyre forces and set them on the body for the next space step.
 
         Written for speed (one body read, no per-wheel method calls); each formula keeps
@@ -197,7 +201,7 @@ class DynamicCar:
             f = (wheel.omega * radius - (-side_y * wvx + side_x * wvy)) * gain
             p = -(side_x * wvx + side_y * wvy) * gain
             total = math.hypot(f, p)
-            wheel.skidding = total > 2.0 * limit
+            wheel.skidding = total > spec.skid_ratio * limit
             if total > limit:
                 f, p = f * limit / total, p * limit / total
             wheel.omega -= dt * f * radius / moment
@@ -248,15 +252,16 @@ class DynamicCar:
         if not wheel.skidding:
             self._skid_open[index] = self._skid_start[index] = None
             return
-        point = self.body.local_to_world((wheel.x, wheel.y))
-        point = (point.x, point.y)
+        world = self.body.local_to_world((wheel.x, wheel.y))
+        point = (world.x, world.y)
         handle = self._skid_open[index]
         if handle and self.skids.extend(handle, point, not on_road):
             return
-        if self._skid_start[index] is None:
+        first = self._skid_start[index]
+        if first is None:
             self._skid_open[index], self._skid_start[index] = None, point
         else:
-            self._skid_open[index] = self.skids.start(self._skid_start[index], point, not on_road)
+            self._skid_open[index] = self.skids.start(first, point, not on_road)
             self._skid_start[index] = None
 
     # -- state -------------------------------------------------------------------------------
@@ -312,7 +317,7 @@ class DynamicCar:
 def _spin(wheel: Wheel, dt: float, drive: float, spec: DynamicCarSpec) -> None:
     """Engine and brake act on the wheel's spin (``drive`` is dt * engine power)."""
     omega = wheel.omega
-    omega += drive * wheel.gas / spec.wheel_moment / (abs(omega) + 5.0)
+    omega += drive * wheel.gas / spec.wheel_moment / (abs(omega) + spec.spin_floor)
     brake = wheel.brake
     if brake >= spec.brake_lock:
         omega = 0.0
@@ -331,7 +336,9 @@ def _footprint(scale: float) -> tuple[float, float, float]:
     return rear, base, width
 
 
-def _hull_shape(body: pymunk.Body, polygon: tuple, unit: float, density: float) -> pymunk.Poly:
+def _hull_shape(
+    body: pymunk.Body, polygon: tuple[tuple[int, int], ...], unit: float, density: float
+) -> pymunk.Poly:
     shape = pymunk.Poly(body, [(x * unit, y * unit) for x, y in polygon])
     shape.density = density
     shape.filter = NOTHING  # the hull only carries mass; nothing in CarRacing collides with it

@@ -6,16 +6,18 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
+    MAX_CAMERA_PIXELS,
     CameraConfig,
     CarConfig,
     ColorObstacle,
     CrossTrackErrorConfig,
     EnvConfig,
+    FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
@@ -75,12 +77,15 @@ def load_env_config(
                 "give either config= or environment=, not both",
             )
         )
-    raw, source, base_dir = _read_source(config, environment)
+    raw, source, base_dir = _read_source(cast(_Source, config), environment)
     if overrides:
         raw = deep_merge(raw, overrides)
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
     return LoadedConfig(parse_env_config(raw, source), source, base_dir)
+
+
+_Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
 
 
 def _read_source(
@@ -165,9 +170,44 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
         parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
+    _check_obstacle_colors(config.reward_design, parser, at)
     for i, track in enumerate(config.tracks):
         if track.type == "procedural":
             _check_texture_side(track, parser, f"{at}tracks[{i}]")
+        else:
+            _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
+    _check_camera_pixels(config.cameras, parser, at)
+
+
+def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:
+    """An obstacle in the trajectory's colour could never be hit: its pixels are taken out."""
+    cte = reward.cross_track_error
+    for i, obstacle in enumerate(reward.color_obstacles):
+        if cte.use_cte and obstacle.color == cte.trajectory_color:
+            allowed = (
+                "expected a colour other than cross_track_error.trajectory_color (trajectory "
+                "pixels are taken out of the picture, so this obstacle could never be hit)"
+            )
+            parser.problem(f"{at}reward_design.color_obstacles[{i}].color", obstacle.color, allowed)
+
+
+def _check_image_track(
+    track: ImageTrackConfig, files: FilesConfig, parser: Parser, at: str
+) -> None:
+    if not track.spawns:
+        parser.problem(f"{at}.spawns", [], "expected at least one start pose")
+    height, width = track.plane_size
+    if track.image is None and height * width > files.max_image_pixels:
+        allowed = f"expected at most {files.max_image_pixels:,} px in all (files.max_image_pixels)"
+        parser.problem(f"{at}.plane_size", [height, width], allowed)
+
+
+def _check_camera_pixels(cameras: tuple[CameraConfig, ...], parser: Parser, at: str) -> None:
+    total = sum(c.resolution[0] * c.resolution[1] for c in cameras)  # [px]
+    if total > MAX_CAMERA_PIXELS:
+        sizes = [list(c.resolution) for c in cameras]
+        allowed = f"expected cameras of at most {MAX_CAMERA_PIXELS:,} px together (here {total:,})"
+        parser.problem(f"{at}cameras", sizes, allowed)
 
 
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB

@@ -10,7 +10,7 @@ import re
 _HEX = re.compile(r"^#([0-9a-fA-F]{6})$")
 
 
-class Color(tuple):
+class Color(tuple[int, int, int]):
     """An RGB colour, 0-255 per channel. Build it with ``Color.from_yaml`` or ``Color.rgb``."""
 
     __slots__ = ()

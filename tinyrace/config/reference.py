@@ -7,6 +7,7 @@ between the markers; a test fails when the README and the schema disagree.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import sys
 import types
 import typing
@@ -21,6 +22,7 @@ from tinyrace.config.schema import (
     ColorObstacle,
     CrossTrackErrorConfig,
     EnvConfig,
+    FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
@@ -40,6 +42,7 @@ SECTIONS = (
     ("reward_design", RewardConfig, "reward_design"),
     ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
     ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
+    ("files", FilesConfig, "files"),
     ("experiment file", ExperimentConfig, ""),
     ("experiment output", OutputConfig, "output"),
 )
@@ -66,7 +69,7 @@ def type_name(hint: Any) -> str:
     return getattr(hint, "__name__", str(hint))
 
 
-def default_text(f: dataclasses.Field) -> str:
+def default_text(f: dataclasses.Field[Any]) -> str:
     if f.default is not dataclasses.MISSING:
         value = f.default
     elif f.default_factory is not dataclasses.MISSING:
@@ -88,7 +91,7 @@ def default_text(f: dataclasses.Field) -> str:
 
 def section(title: str, cls: type, path: str) -> str:
     hints = typing.get_type_hints(cls)
-    lines = [f"#### `{title}`", "", (cls.__doc__ or "").strip().splitlines()[0], ""]
+    lines = [f"#### `{title}`", "", _doc_text(cls), ""]
     lines += ["| key | type | default | unit | meaning |", "|---|---|---|---|---|"]
     for f in dataclasses.fields(cls):
         aliases = f.metadata.get("aliases", ())
@@ -97,6 +100,12 @@ def section(title: str, cls: type, path: str) -> str:
         doc = f.metadata.get("doc", "").replace("|", "\\|")
         lines.append(f"| {key} | {type_name(hints[f.name])} | {default_text(f)} | {unit} | {doc} |")
     return "\n".join(lines)
+
+
+def _doc_text(cls: type) -> str:
+    """The class docstring as one paragraph per blank-line-separated block."""
+    blocks = inspect.cleandoc(cls.__doc__ or "").split("\n\n")
+    return "\n\n".join(" ".join(block.split()) for block in blocks)
 
 
 def markdown() -> str:

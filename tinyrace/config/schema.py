@@ -13,6 +13,7 @@ from types import MappingProxyType
 from typing import Any, Literal, Union
 
 from tinyrace.config.colors import Color
+from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 
 
 def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
@@ -34,6 +35,8 @@ def knob(default: Any, doc: str, unit: str = "", **rules: Any) -> Any:
 
 
 REQUIRED = dataclasses.MISSING
+MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
+MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together
 
 
 @dataclass(frozen=True)
@@ -53,7 +56,8 @@ class SimConfig:
     )
     overview_downscale: float = knob(
         1.0,
-        "divide the track image size by this in the overview (rgb_array/human render)",
+        "divide the track image size by this in the overview (rgb_array/human render); "
+        "the overview is at most 32 Mpx whatever this says",
         low=0.05,
         high=100,
     )
@@ -228,6 +232,31 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class FilesConfig:
+    """``files``: how far the files a config names may reach, and how large they may be.
+
+    Fixed bounds, not knobs: a YAML file is at most 1 MiB, nests at most 32 levels and expands
+    (aliases included) to at most 200,000 values; a key may appear once per mapping; FIFOs and
+    devices are refused. Overview frames are at most 32 Mpx (a larger one is downscaled
+    further) and all cameras together at most 4096 x 4096 px.
+    """
+
+    max_image_pixels: int = knob(
+        DEFAULT_MAX_IMAGE_PIXELS,
+        "a track image larger than this (width * height, read from its header) is refused "
+        "before it is decoded",
+        "px",
+        low=1,
+        high=400_000_000,
+    )
+    paths_outside_folder: bool = knob(
+        False,
+        "let image and data paths leave the config's folder: absolute paths, '..' and "
+        "symlinks out of it (refused by default; a NUL byte is always refused)",
+    )
+
+
+@dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
 
@@ -248,6 +277,7 @@ class EnvConfig:
         "image wrappers (GrayscaleObservation, ResizeObservation, ...) apply directly",
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
+    files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
 
     @property
     def kind(self) -> str:

@@ -14,7 +14,7 @@ import stat
 from pathlib import Path
 from typing import Any
 
-import yaml
+import yaml  # type: ignore[import-untyped, unused-ignore]
 
 from tinyrace.errors import ConfigError, Problem
 
@@ -26,6 +26,7 @@ _BaseLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when inst
 _COLLECTION_START = (yaml.MappingStartEvent, yaml.SequenceStartEvent)
 _COLLECTION_END = (yaml.MappingEndEvent, yaml.SequenceEndEvent)
 _MERGE_TAG = "tag:yaml.org,2002:merge"
+Anchors = dict[str, tuple[int, int]]  # anchor -> (expanded size, depth below)
 
 
 class _Refused(Exception):
@@ -48,7 +49,7 @@ def read_text(path: Path, limit: int = MAX_YAML_BYTES) -> str:
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
-        allowed = f"expected UTF-8 text (byte {exc.start} is not)"
+        allowed = f"the file is unreadable: expected UTF-8 text (byte {exc.start} is not)"
         raise ConfigError(Problem(source, "", source, allowed)) from None
 
 
@@ -105,7 +106,7 @@ def parse_yaml(text: str, source: str) -> Any:
 def _check_shape(text: str) -> None:
     """Depth, alias expansion and recursion, from the event stream (no recursion, no objects)."""
     stack: list[list[Any]] = []  # open collections: [expanded size, depth below, anchor]
-    anchors: dict[str, tuple[int, int]] = {}  # anchor -> (expanded size, depth below)
+    anchors: Anchors = {}
     total = 0
     for event in yaml.parse(text, Loader=_BaseLoader):
         if isinstance(event, _COLLECTION_START):
@@ -130,7 +131,7 @@ def _check_shape(text: str) -> None:
             raise _Refused(event.start_mark, f"more than {MAX_VALUES:,} values (aliases expanded)")
 
 
-def _alias(event: yaml.AliasEvent, stack: list[list[Any]], anchors: dict) -> tuple[int, int]:
+def _alias(event: yaml.AliasEvent, stack: list[list[Any]], anchors: Anchors) -> tuple[int, int]:
     if any(frame[2] == event.anchor for frame in stack):
         raise _Refused(event.start_mark, f"an alias *{event.anchor} inside its own anchor")
     size, depth = anchors.get(event.anchor, (1, 0))  # an unknown alias: the loader says so
@@ -140,7 +141,9 @@ def _alias(event: yaml.AliasEvent, stack: list[list[Any]], anchors: dict) -> tup
     return size, depth
 
 
-def _add(stack: list[list[Any]], size: int, depth: int, anchor: str | None, anchors: dict) -> None:
+def _add(
+    stack: list[list[Any]], size: int, depth: int, anchor: str | None, anchors: Anchors
+) -> None:
     """Count a finished node into its parent; remember what an anchor expands to."""
     if anchor is not None:
         anchors[anchor] = (size, depth)
@@ -152,7 +155,7 @@ def _add(stack: list[list[Any]], size: int, depth: int, anchor: str | None, anch
 class _StrictLoader(_BaseLoader):  # type: ignore[misc, valid-type]
     """The safe loader, refusing a key given twice in one mapping."""
 
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
         seen: dict[Any, Any] = {}
         for key_node, _ in node.value:
             if key_node.tag == _MERGE_TAG:
@@ -168,7 +171,8 @@ class _StrictLoader(_BaseLoader):  # type: ignore[misc, valid-type]
                     f"lines {first.line + 1} and {key_node.start_mark.line + 1}"
                 )
                 raise _Refused(key_node.start_mark, reason)
-        return super().construct_mapping(node, deep=deep)
+        mapping: dict[Any, Any] = super().construct_mapping(node, deep=deep)
+        return mapping
 
 
 def _line(mark: Any) -> str:

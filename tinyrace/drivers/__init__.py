@@ -92,16 +92,7 @@ def load_driver(spec: str, **kwargs: Any) -> Driver:
     Raises ValueError (unknown name, import failure, wrong return) or DriverError (the
     factory raised, e.g. a TypeError for ``kwargs`` it does not take).
     """
-    if ":" not in spec:
-        factory: DriverFactory | None = DRIVERS.get(spec)
-        if factory is None:
-            make_driver(spec)  # raises, listing the valid names
-    else:
-        module_name, _, attribute = spec.partition(":")
-        try:
-            factory = getattr(importlib.import_module(module_name), attribute)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None
+    factory = _factory(spec)
     try:
         made = factory(**kwargs)
     except Exception as exc:  # user code and user arguments: report, do not crash
@@ -113,3 +104,18 @@ def load_driver(spec: str, **kwargs: Any) -> Driver:
     if callable(made):
         return PolicyDriver(made)
     raise ValueError(f"{spec!r} returned {type(made).__name__}, not a driver or a policy function")
+
+
+def _factory(spec: str) -> DriverFactory:
+    """The registry entry of a name, or the ``module:callable`` imported."""
+    if ":" not in spec:
+        if spec not in DRIVERS:
+            raise ValueError(
+                f"unknown driver {spec!r}; valid drivers: {', '.join(sorted(DRIVERS))}"
+            )
+        return DRIVERS[spec]
+    module_name, _, attribute = spec.partition(":")
+    try:
+        return getattr(importlib.import_module(module_name), attribute)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None

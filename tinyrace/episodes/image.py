@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from tinyrace.cars.base import Car
 from tinyrace.cars.registry import CarModel
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.procedural import CameraViews
@@ -20,7 +22,7 @@ from tinyrace.world.world import World
 _ALL_ROAD = (True, True, True, True)  # image tracks have no grass: full grip everywhere
 
 
-def footprint_corners(car) -> np.ndarray:
+def footprint_corners(car: Car) -> np.ndarray:
     """(4, 2) corners of the car's footprint: track_width wide, rear axle to front axle."""
     x, y = car.rear_axle
     heading = car.pose[2]
@@ -101,7 +103,7 @@ class ImageEpisode:
         self.obstacles_hit, self.cte = facts.obstacles_hit, facts.cte
         return facts
 
-    def info(self) -> dict:
+    def info(self) -> dict[str, Any]:
         x, y, heading = self.car.pose
         colors = self.track.obstacle_colors
         info = {

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
+from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.cars.registry import CarModel
 from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
+from tinyrace.render.car_sprite import Patches
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.procedural_ground import GroundPainter, repaint_tile
@@ -37,14 +40,18 @@ class ProceduralEpisode:
         cache: RenderCache | None = None,
     ):
         self.config = config
-        self.cache = cache or RenderCache(config.tracks[0].playfield)
-        self.track_config: ProceduralTrackConfig = config.tracks[0]
+        track_config = config.tracks[0]
+        assert isinstance(track_config, ProceduralTrackConfig)
+        self.track_config = track_config
+        self.cache = cache or RenderCache(track_config.playfield)
         self.layout = draw.track  # the generic view (tinyrace.tracks.base.Track)
         self.track: ProceduralTrack = draw.track.detail
         self.colors = colors
         self.world = World()
         self.world.add_tiles(self.track.tiles)
-        self.car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
+        car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
+        assert isinstance(car, DynamicCar)  # the cars registry allows no other here
+        self.car = car
         self.visited = np.zeros(len(self.track.tiles), bool)
         self.visited_count = 0
         self.visit_order: list[int] = []  # repainting in this order redraws the same pixels
@@ -92,7 +99,7 @@ class ProceduralEpisode:
             facts.lap_finished = True
         return facts
 
-    def info(self) -> dict:
+    def info(self) -> dict[str, Any]:
         x, y, heading = self.car.pose
         return {
             "pose": (x, y, heading),
@@ -143,7 +150,7 @@ class ProceduralEpisode:
             repaint_tile(texture, self.track, tile, self.colors.road)
 
     # -- pickling ----------------------------------------------------------------------------
-    def __getstate__(self) -> dict:
+    def __getstate__(self) -> dict[str, Any]:
         """Leave out the pictures (tens of MB): they are redrawn from the track when next asked."""
         state = self.__dict__.copy()
         state.update(_textures={}, _views={})
@@ -155,16 +162,16 @@ class RenderCache:
 
     def __init__(self, playfield: float):
         self.painter = GroundPainter(playfield)
-        self._views: dict[tuple[int, int], tuple[Dashboard, dict]] = {}
+        self._views: dict[tuple[int, int], tuple[Dashboard, Patches]] = {}
 
-    def for_view(self, size: tuple[int, int]) -> tuple[Dashboard, dict]:
+    def for_view(self, size: tuple[int, int]) -> tuple[Dashboard, Patches]:
         """The dashboard and the car-patch cache of a view size."""
         if size not in self._views:
             small = max(size) <= SMALL_VIEW
             self._views[size] = (Dashboard(size[0], size[1], supersample=4 if small else 1), {})
         return self._views[size]
 
-    def __getstate__(self) -> dict:
+    def __getstate__(self) -> dict[str, Any]:
         return {"painter": GroundPainter(self.painter.playfield), "_views": {}}  # cheap to redo
 
 
@@ -175,7 +182,7 @@ class ProceduralCourse:
         self.config = config
         self.source = source
         self.car_model = car_model
-        self.cache = RenderCache(config.tracks[0].playfield)
+        self.cache = RenderCache(source.config.playfield)
 
     @property
     def colors(self) -> GroundColors:

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import importlib.util
+import sys
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -10,6 +13,7 @@ from typing import Any
 from tinyrace.config import TRACK_FILE, EnvConfig, load_env_config, parse_env_config
 from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.config.paths import inside_folder
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import shipped_track
 
@@ -24,6 +28,7 @@ class Experiment:
     source: str  # the file, for messages and the run directory's name
     env_config: EnvConfig
     env_kwargs: dict[str, Any]  # for TinyRaceEnv(**env_kwargs)
+    folder: Path = Path()  # the experiment file's folder: own drivers are imported from it
 
     @property
     def name(self) -> str:
@@ -47,6 +52,7 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
     parser = Parser(source)
     config = parser.dataclass(ExperimentConfig, raw, "")
     parser.check()
+    check_driver(config.driver, base_dir, source)
     sections = dict(config.env)
     track_path = sections.pop(ENV_FOLDER_KEY, None)
     kwargs: dict[str, Any] = {}
@@ -58,7 +64,54 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
         merged = deep_merge(read_yaml(track_file) or {}, sections)
         kwargs["config"] = str(track_file)
     env_config = parse_env_config(merged, source, prefix="env")
-    return Experiment(config, source, env_config, {**kwargs, **sections})
+    check_view(config, env_config, source)
+    return Experiment(config, source, env_config, {**kwargs, **sections}, base_dir)
+
+
+def check_view(config: ExperimentConfig, env_config: EnvConfig, source: str) -> None:
+    """``output.view`` is ``default`` or one of the env's camera ids (checked at validate)."""
+    view = config.output.view
+    ids = [c.id for c in env_config.cameras]
+    if view != "default" and view not in ids:
+        allowed = f"default or a camera id: {', '.join(ids) or '(this env has no cameras)'}"
+        raise ConfigError(Problem(source, "output.view", view, allowed))
+
+
+def check_driver(spec: str, folder: Path, source: str) -> None:
+    """A built-in driver name, or ``module:callable`` with the module found from ``folder``.
+
+    The module is looked up, not run (a dotted name imports its parent package).
+    """
+    from tinyrace.drivers import DRIVERS
+
+    if ":" not in spec:
+        if spec not in DRIVERS:
+            allowed = f"expected one of: {', '.join(sorted(DRIVERS))}, or module:callable"
+            raise ConfigError(Problem(source, "driver", spec, allowed))
+        return
+    module, _, attribute = spec.partition(":")
+    if not (all(p.isidentifier() for p in module.split(".")) and attribute.isidentifier()):
+        allowed = "expected module:callable made of Python names (e.g. my_policy:make)"
+        raise ConfigError(Problem(source, "driver", spec, allowed))
+    with importable_from(folder):
+        try:
+            found = importlib.util.find_spec(module) is not None
+        except (ImportError, ValueError):
+            found = False
+    if not found:
+        allowed = f"expected module:callable with the module in {folder} or on the Python path"
+        raise ConfigError(Problem(source, "driver", spec, allowed))
+
+
+@contextmanager
+def importable_from(folder: Path) -> Iterator[None]:
+    """Modules in ``folder`` (an experiment's folder) can be imported inside this block."""
+    entry = str(folder.resolve())
+    sys.path.insert(0, entry)
+    try:
+        yield
+    finally:
+        sys.path.remove(entry)
 
 
 def _track_file(value: object, base_dir: Path, source: str) -> Path:
@@ -81,7 +134,10 @@ def _track_file(value: object, base_dir: Path, source: str) -> Path:
 
 
 def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> dict[str, Any]:
-    """Inline track images are relative to the experiment file: make them absolute."""
+    """Inline track images are relative to the experiment file (and stay in its folder unless
+    ``files.paths_outside_folder``): make them absolute."""
+    files = sections.get("files")
+    outside = isinstance(files, Mapping) and files.get("paths_outside_folder") is True
     for key in ("track", "tracks"):
         tracks = sections.get(key)
         entries = (
@@ -90,20 +146,10 @@ def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> d
         resolved = []
         for index, entry in enumerate(entries):
             if isinstance(entry, Mapping) and isinstance(entry.get("image"), str):
-                entry = {
-                    **entry,
-                    "image": _absolute(
-                        entry["image"], base_dir, source, f"env.{key}[{index}].image"
-                    ),
-                }
+                where = f"env.{key}[{index}].image"
+                image = inside_folder(entry["image"], base_dir, outside, source, where)
+                entry = {**entry, "image": str(image)}
             resolved.append(entry)
         if entries:
             sections = {**sections, key: resolved[0] if isinstance(tracks, Mapping) else resolved}
     return sections
-
-
-def _absolute(image: str, base_dir: Path, source: str, where: str) -> str:
-    try:
-        return str((base_dir / image).resolve())
-    except (OSError, ValueError):
-        raise ConfigError(Problem(source, where, image, "expected an image file name")) from None

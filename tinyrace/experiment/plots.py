@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from numpy.typing import ArrayLike
 
 _FONT = cv2.FONT_HERSHEY_SIMPLEX
 INK = (40, 40, 40)  # RGB: axes and text
@@ -50,26 +51,33 @@ def trajectories(
         cv2.line(image, a, b, LAP_LINE, 2 * scale, cv2.LINE_AA)
     speeds = [p.speed[np.isfinite(p.speed)] for p in paths]
     top = max([float(s.max()) for s in speeds if len(s)] + [1e-9])
+    labels: list[tuple[int, int]] = []  # where labels went: same starts stack their labels
     for path in paths:
-        _draw_path(image, path, top, scale)
+        _draw_path(image, path, top, scale, labels)
     _speed_bar(image, top, unit)
     return image
 
 
-def _draw_path(image: np.ndarray, path: Path2D, top: float, scale: int) -> None:
+def _draw_path(
+    image: np.ndarray, path: Path2D, top: float, scale: int, labels: list[tuple[int, int]]
+) -> None:
     ok = np.isfinite(path.points).all(axis=1)
     points, colors = path.points[ok], speed_colors(path.speed[ok], top)
     pixels = np.round(points).astype(np.int32)
     for k in range(1, len(pixels)):
         color = tuple(int(c) for c in colors[k])
         cv2.line(image, tuple(pixels[k - 1]), tuple(pixels[k]), color, 2 * scale, cv2.LINE_AA)
-    for k in np.flatnonzero(path.hits[ok]):
-        cv2.circle(image, tuple(pixels[k]), 4 * scale, HIT, scale, cv2.LINE_AA)
+    for hit in np.flatnonzero(path.hits[ok]):
+        cv2.circle(image, tuple(pixels[hit]), 4 * scale, HIT, scale, cv2.LINE_AA)
     if len(pixels) == 0:
         return
     cv2.circle(image, tuple(pixels[0]), 6 * scale, START, -1, cv2.LINE_AA)
     cv2.circle(image, tuple(pixels[0]), 6 * scale, (0, 0, 0), 1, cv2.LINE_AA)
-    _text(image, path.label, (pixels[0][0] + 8 * scale, pixels[0][1] - 6 * scale), 0.5 * scale)
+    at = (int(pixels[0][0]) + 8 * scale, int(pixels[0][1]) - 6 * scale)
+    while any(abs(at[0] - x) < 40 * scale and abs(at[1] - y) < 16 * scale for x, y in labels):
+        at = (at[0], at[1] + 18 * scale)
+    labels.append(at)
+    _text(image, path.label, at, 0.5 * scale)
     if path.crashed:
         x, y, r = int(pixels[-1][0]), int(pixels[-1][1]), 9 * scale
         cv2.line(image, (x - r, y - r), (x + r, y + r), CRASH, 3 * scale, cv2.LINE_AA)
@@ -106,7 +114,7 @@ class Axes:
     x_range: tuple[float, float]
     y_range: tuple[float, float]
 
-    def pixel(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    def pixel(self, x: ArrayLike, y: ArrayLike) -> np.ndarray:
         (x0, x1), (y0, y1) = self.x_range, self.y_range
         px = self.left + (np.asarray(x, float) - x0) / (x1 - x0) * self.width
         py = self.top + self.height - (np.asarray(y, float) - y0) / (y1 - y0) * self.height
@@ -179,10 +187,11 @@ def time_series(
     height = 44 + len(panels) * (panel_h + gap)
     image = np.full((height, width, 3), PAPER, np.uint8)
     cv2.putText(image, title, (8, 16), _FONT, 0.55, INK, 1, cv2.LINE_AA)
-    x_range = nice_range(t)
+    finite_t = t[np.isfinite(t)]
+    x_range = (float(finite_t.min()), float(finite_t.max())) if len(finite_t) > 1 else (0.0, 1.0)
     for k, (name, values) in enumerate(panels):
         axes = Axes(56, 20 + gap + k * (panel_h + gap) - 10, width - 72, panel_h, x_range,
-                    nice_range(values))  # fmt: skip
+                    nice_range(values, include_zero=True))  # fmt: skip
         _frame(image, axes, name, "s" if k == len(panels) - 1 else "")
         ok = np.isfinite(values) & np.isfinite(t)
         if not ok.any():

@@ -104,7 +104,8 @@ class EpisodeRecorder:
     @property
     def mean_abs_cte(self) -> float | None:
         """[px] over the steps (the reset excluded); None without a cte."""
-        ctes = [abs(row[8]) for row in self.rows[1:] if row[8] != ""]
+        column = TRACE_COLUMNS.index("cte")
+        ctes = [abs(row[column]) for row in self.rows[1:] if row[column] != ""]
         return sum(ctes) / len(ctes) if ctes else None
 
     @property

@@ -114,7 +114,8 @@ def _html(header: dict, results: Sequence[EpisodeResult], blobs: list[tuple[str,
         state.append(f"<p class=warn>Stopped by an error: {html.escape(header['error'])}</p>")
     planned = header.get("episodes_planned", len(results))
     figures = "\n".join(
-        f"<figure><img alt='{html.escape(caption)}' "
+        f"<figure class={'wide' if caption.startswith('Track') else 'small'}>"
+        f"<img alt='{html.escape(caption)}' "
         f"src='data:image/png;base64,{base64.b64encode(data).decode()}'>"
         f"<figcaption>{html.escape(caption)}</figcaption></figure>"
         for caption, data in blobs
@@ -125,7 +126,8 @@ def _html(header: dict, results: Sequence[EpisodeResult], blobs: list[tuple[str,
 body {{ font-family: sans-serif; margin: 2em; color: #222; }}
 pre {{ background: #f4f4f4; padding: 1em; overflow-x: auto; }}
 img {{ max-width: 100%; border: 1px solid #ccc; }}
-figure {{ margin: 1.5em 0; }} .warn {{ color: #b00; font-weight: bold; }}
+figure {{ margin: 1.5em 1em 1.5em 0; }} .warn {{ color: #b00; font-weight: bold; }}
+figure.small {{ display: inline-block; vertical-align: top; max-width: 560px; }}
 </style></head><body>
 <h1>{html.escape(title)}</h1>
 <p>Experiment: {html.escape(str(header.get("experiment", "")))};

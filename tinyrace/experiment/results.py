@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from dataclasses import fields as fields_of
 from pathlib import Path
+from typing import Any
 
 RESULTS_FILE = "results.json"
 EPISODES_FILE = "episodes.csv"
@@ -112,7 +113,7 @@ def read_files(run_dir: Path) -> tuple[dict, list[EpisodeResult]]:
 
 
 def _episode(row: dict[str, str]) -> EpisodeResult:
-    values = {}
+    values: dict[str, Any] = {}
     for f in fields_of(EpisodeResult):
         text = row.get(f.name, "")
         kind = str(f.type)

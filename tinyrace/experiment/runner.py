@@ -20,7 +20,7 @@ from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.interrupt import Interrupted, StopSignals
-from tinyrace.experiment.load import Experiment
+from tinyrace.experiment.load import Experiment, importable_from
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
@@ -60,7 +60,8 @@ def run_experiment(
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
     try:
         _check_view(experiment, env)
-        driver = _driver(config.driver, config.driver_args, experiment.source)
+        with importable_from(experiment.folder):  # own drivers sit beside the experiment file
+            driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
         root = Path(out_root or config.output.dir)
         made_root = not root.exists()
@@ -101,6 +102,8 @@ class _Run:
             except BaseException as exc:
                 self._fail(exc)
                 raise
+            if interrupted is None:  # a signal after the last step: still say so
+                interrupted = stop.signum
             self._write(interrupted)
         return RunResult(self.run_dir, self.results, interrupted)
 
@@ -143,7 +146,7 @@ class _Run:
         filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
         video = None
         if filmed:
-            fps = out.fps or self.env.config.sim.fps  # [Hz]
+            fps = out.fps or 1.0 / self.env.dt  # [Hz] default: real time
             video = open_video(self.run_dir / f"episode_{episode:03d}", fps)
 
         def on_step(recorder: EpisodeRecorder) -> None:

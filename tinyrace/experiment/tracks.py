@@ -21,7 +21,7 @@ def save_track_picture(
     picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox, py = y * sy + oy), the
     start pose and, on procedural tracks, the lap line (two points) in track units.
     """
-    episode = env.unwrapped.episode
+    episode: Any = env.episode  # ProceduralEpisode or ImageEpisode
     procedural = env.config.kind == "procedural"
     key = f"seed{seed}" if procedural else f"track{episode.track_index}"
     if key in known:

@@ -8,7 +8,7 @@ one more row or column (a copy of the last), never lose one.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -37,7 +37,7 @@ def even_frame(frame: np.ndarray) -> np.ndarray:
 def h264_available() -> bool:
     """Whether imageio-ffmpeg (with its bundled ffmpeg and libx264) can be used."""
     try:
-        import imageio_ffmpeg
+        import imageio_ffmpeg  # type: ignore[import-untyped]
 
         imageio_ffmpeg.get_ffmpeg_exe()
     except (ImportError, RuntimeError):
@@ -58,7 +58,7 @@ class H264Writer:
     def __init__(self, path: Path, fps: float):
         self.path = path
         self.fps = fps  # [Hz]
-        self._pipe = None
+        self._pipe: Any = None  # imageio-ffmpeg's generator
         self._size: tuple[int, int] | None = None  # (w, h), even
 
     def write(self, frame: np.ndarray) -> None:
@@ -68,7 +68,7 @@ class H264Writer:
         self._pipe.send(frame)
 
     def _start(self, size: tuple[int, int]) -> None:
-        import imageio_ffmpeg
+        import imageio_ffmpeg  # type: ignore[import-untyped]
 
         self._size = size
         self._pipe = imageio_ffmpeg.write_frames(
@@ -97,7 +97,7 @@ class Vp9Writer:
     def __init__(self, path: Path, fps: float):
         self.path = path
         self.fps = fps  # [Hz]
-        self._writer = None
+        self._writer: Any = None  # cv2.VideoWriter
 
     def write(self, frame: np.ndarray) -> None:
         import cv2
@@ -105,7 +105,7 @@ class Vp9Writer:
         frame = even_frame(frame)
         if self._writer is None:
             size = (frame.shape[1], frame.shape[0])
-            fourcc = cv2.VideoWriter_fourcc(*"VP90")
+            fourcc = cv2.VideoWriter.fourcc(*"VP90")
             self._writer = cv2.VideoWriter(str(self.path), fourcc, self.fps, size)
         self._writer.write(np.ascontiguousarray(frame[..., ::-1]))  # OpenCV takes BGR
 

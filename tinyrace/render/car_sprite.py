@@ -10,6 +10,7 @@ it is cached and reused from step to step.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import cv2
 import numpy as np
@@ -34,6 +35,8 @@ _WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
     WHEEL_HALF_WIDTH,
     WHEEL_RADIUS,
 )
+Patch = tuple[slice, slice, np.ndarray, np.ndarray]  # rows, columns, weight, colour
+Patches = dict[tuple[float, int], Patch | None]  # by (zoom, steering step)
 _STEER_STEP = 0.005  # [rad] steering resolution of cached patches
 _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
 
@@ -41,16 +44,20 @@ _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
 class CarSprite:
     """Draws one DynamicCar; polygons are prepared once, transformed per frame."""
 
-    def __init__(self, car: DynamicCar, supersample: bool, patches: dict | None = None):
+    def __init__(self, car: DynamicCar, supersample: bool, patches: Patches | None = None):
         unit = SIZE * car.scale
         self.car = car
         self.hull = [np.array(poly, float) * unit for poly in HULL_POLYGONS]
         self.wheel_box = _WHEEL_BOX * unit
         self.supersample = supersample
-        self._patches: dict[tuple, tuple] = {} if patches is None else patches
+        self._patches: Patches = {} if patches is None else patches
 
     def draw(
-        self, image: np.ndarray, world_to_out: np.ndarray, skid_width: int, cache_key=None
+        self,
+        image: np.ndarray,
+        world_to_out: np.ndarray,
+        skid_width: int,
+        cache_key: float | None = None,
     ) -> None:
         """Skid marks (unless ``skid_width`` is 0), wheels, then hull into ``image``.
 
@@ -62,7 +69,7 @@ class CarSprite:
         if self.supersample:
             steer = round(self.car.wheels[0].steer / _STEER_STEP)
             key = None if cache_key is None else (cache_key, steer)
-            patch = self._patches.get(key)
+            patch = None if key is None else self._patches.get(key)
             if patch is None:
                 local_to_out = self._local_to_out(world_to_out)
                 patch = _clip(image.shape, *self._render_patch(local_to_out, steer * _STEER_STEP))
@@ -96,7 +103,9 @@ class CarSprite:
         ]
         return wheels + self.hull
 
-    def _render_patch(self, local_to_out: np.ndarray, steer: float) -> tuple:
+    def _render_patch(
+        self, local_to_out: np.ndarray, steer: float
+    ) -> tuple[int, int, np.ndarray, np.ndarray]:
         """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha)."""
         polygons = [transform_points(local_to_out, p) for p in self._polygons(steer)]
         points = np.concatenate(polygons)
@@ -119,7 +128,9 @@ class CarSprite:
         return int(x0), int(y0), color, weight
 
 
-def _clip(shape: tuple, x0: int, y0: int, color: np.ndarray, weight: np.ndarray):
+def _clip(
+    shape: tuple[int, ...], x0: int, y0: int, color: np.ndarray, weight: np.ndarray
+) -> Patch | None:
     """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour)."""
     h, w = color.shape[:2]
     ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
@@ -132,7 +143,8 @@ def _clip(shape: tuple, x0: int, y0: int, color: np.ndarray, weight: np.ndarray)
 def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidMarks, width: int) -> None:
     """All skid marks in one transform and one polyline call per colour."""
     points = np.round(transform_points(world_to_out, skids.points) * (1 << _BITS)).astype(np.int32)
-    road, grass = [], []
+    road: list[np.ndarray] = []
+    grass: list[np.ndarray] = []
     for slot in np.flatnonzero(skids.lengths).tolist():
         (grass if skids.on_grass[slot] else road).append(points[slot, : skids.lengths[slot]])
     for lines, color in ((road, SKID_ROAD_COLOR), (grass, SKID_GRASS_COLOR)):
@@ -140,7 +152,13 @@ def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidMarks, w
             cv2.polylines(image, lines, False, color, width, cv2.LINE_AA, _BITS)
 
 
-def _fill(image, matrix, polygons, color, antialias: bool = True) -> None:
+def _fill(
+    image: np.ndarray,
+    matrix: np.ndarray,
+    polygons: Sequence[np.ndarray],
+    color: tuple[int, ...] | int,
+    antialias: bool = True,
+) -> None:
     pixels = [
         np.round(transform_points(matrix, p) * (1 << _BITS)).astype(np.int32) for p in polygons
     ]

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from tinyrace.cars.dynamic import DynamicCar
-from tinyrace.render.car_sprite import CarSprite
+from tinyrace.render.car_sprite import CarSprite, Patches
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.texture import GroundTexture
 
@@ -50,7 +50,7 @@ class ChaseView:
         texture: GroundTexture,
         car: DynamicCar,
         dashboard: Dashboard,
-        patches: dict,
+        patches: Patches,
     ):
         """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes."""
         self.size = size  # (w, h)
@@ -67,7 +67,8 @@ class ChaseView:
         """The view t seconds after reset, with ``score`` on the dashboard. Returns a new array."""
         body = self.car.body
         zoom = zoom_at(t)
-        matrix = chase_matrix(tuple(body.position), body.angle, zoom / self.car.scale, self.size)
+        position = (body.position.x, body.position.y)
+        matrix = chase_matrix(position, body.angle, zoom / self.car.scale, self.size)
         pixels_per_unit = (
             zoom / self.car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
         )
@@ -76,4 +77,5 @@ class ChaseView:
         # zoom-in's values repeat every episode, so they are worth caching too)
         self.sprite.draw(self.frame, matrix, self.skid_width, cache_key=zoom)
         self.dashboard.draw(self.frame, self.car, score)
-        return self.frame.copy()
+        frame: np.ndarray = self.frame.copy()
+        return frame

@@ -14,17 +14,30 @@ import numpy as np
 
 from tinyrace.cars.dynamic import DynamicCar
 
+RGB = tuple[int, int, int]
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)
-# (kind, layout column, colour) of each bar: speed, four wheel spins, steering, gyro
-_BARS = (
-    ("v", 5, _WHITE),
-    ("v", 7, _BLUE),
-    ("v", 8, _BLUE),
-    ("v", 9, _PURPLE),
-    ("v", 10, _PURPLE),
-    ("h", 20, _GREEN),
-    ("h", 30, _RED),
+
+# CarRacing's layout: the frame is 40 layout units wide and 40 high; the bar fills the
+# bottom BAR_HEIGHT of them. Each instrument sits at a layout column and turns a physical
+# value into a bar length in layout units through its gain.
+LAYOUT_UNITS = 40  # layout units per frame side
+BAR_HEIGHT = 5  # [layout units] the bottom strip
+BAR_STEPS = 8  # bar lengths are kept to 1/8 layout unit (times the supersample factor)
+SPEED_COLUMN, SPEED_GAIN = 5, 0.02  # [layout units per u/s] true speed, vertical
+WHEEL_COLUMNS = (7, 8, 9, 10)  # FL, FR, RL, RR spin, vertical
+WHEEL_GAIN = 0.01  # [layout units per rad/s]
+STEER_COLUMN, STEER_GAIN = 20, -10.0  # [layout units per rad] front wheel angle, horizontal
+GYRO_COLUMN, GYRO_GAIN = 30, -0.8  # [layout units per rad/s] yaw rate, horizontal
+# (kind, layout column, colour) of each bar, in the order draw() measures them
+_BARS: tuple[tuple[str, int, RGB], ...] = (
+    ("v", SPEED_COLUMN, _WHITE),
+    ("v", WHEEL_COLUMNS[0], _BLUE),
+    ("v", WHEEL_COLUMNS[1], _BLUE),
+    ("v", WHEEL_COLUMNS[2], _PURPLE),
+    ("v", WHEEL_COLUMNS[3], _PURPLE),
+    ("h", STEER_COLUMN, _GREEN),
+    ("h", GYRO_COLUMN, _RED),
 )
 _LAYER_CACHE_BYTES = 8_000_000  # [bytes] of cached instrument layers per dashboard
 
@@ -39,28 +52,29 @@ class Dashboard:
 
     def __init__(self, width: int, height: int, supersample: int = 1):
         self.width, self.height = width, height
-        self.top = round(height - 5 * height / 40)  # first row of the bar
+        self.top = round(height - BAR_HEIGHT * height / LAYOUT_UNITS)  # first row of the bar
         self.factor = supersample
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
-        self._patches: dict[tuple, tuple[int, np.ndarray]] = {}
-        self._shown: tuple | None = None  # what the strip holds now
-        # one layer per instrument (7 bars, then the score); the strip is their maximum, so
-        # a step redraws only the layers whose value changed, from layers cached per value
+        self._patches: dict[tuple[str, int, int], tuple[int, np.ndarray]] = {}
+        self._shown: tuple[int, ...] | None = None  # what the strip holds now
+        # one layer per instrument (the bars, then the score); the strip is their maximum,
+        # so a step redraws only the layers whose value changed, from layers cached per value
         self._layers = np.zeros((len(_BARS) + 1, *self.strip.shape), np.uint8)
-        self._layer_values: list = [None] * len(self._layers)
+        self._layer_values: list[int | None] = [None] * len(self._layers)
         self._cached_layers: dict[tuple[int, int], np.ndarray] = {}
         self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
 
     def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
-        wheels, sign, q = car.wheels, car.steer_sign, 8 * self.factor  # q: steps per layout unit
-        shown = (  # bar lengths in steps (see _BARS), then the score
-            round(0.02 * car.speed / car.scale * q),
-            round(0.01 * wheels[0].omega * q),
-            round(0.01 * wheels[1].omega * q),
-            round(0.01 * wheels[2].omega * q),
-            round(0.01 * wheels[3].omega * q),
-            round(-10.0 * wheels[0].steer * sign * q),
-            round(-0.8 * car.body.angular_velocity * sign * q),
+        wheels, sign = car.wheels, car.steer_sign
+        q = BAR_STEPS * self.factor  # bar steps per layout unit
+        shown = (  # bar lengths in steps, in _BARS's order, then the score
+            round(SPEED_GAIN * car.speed / car.scale * q),
+            round(WHEEL_GAIN * wheels[0].omega * q),
+            round(WHEEL_GAIN * wheels[1].omega * q),
+            round(WHEEL_GAIN * wheels[2].omega * q),
+            round(WHEEL_GAIN * wheels[3].omega * q),
+            round(STEER_GAIN * wheels[0].steer * sign * q),
+            round(GYRO_GAIN * car.body.angular_velocity * sign * q),
             int(score),
         )
         if shown != self._shown:  # redraw the strip only when an instrument moved
@@ -68,7 +82,7 @@ class Dashboard:
             self._redraw(shown)
         image[self.top :] = self.strip
 
-    def _redraw(self, shown: tuple) -> None:
+    def _redraw(self, shown: tuple[int, ...]) -> None:
         drawn = self._layer_values
         for index, value in enumerate(shown):
             if drawn[index] != value:
@@ -84,14 +98,15 @@ class Dashboard:
                 self._cached_layers.clear()
             layer = np.zeros_like(self.strip)
             if index < len(_BARS):
-                self._draw_bar(layer, *_BARS[index], value)
+                kind, place, color = _BARS[index]
+                self._draw_bar(layer, kind, place, value, color)
             else:
                 self._draw_score(layer, value)
             layer.setflags(write=False)
             self._cached_layers[index, value] = layer
         return layer
 
-    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, color: tuple, steps: int):
+    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, steps: int, color: RGB) -> None:
         if steps:
             first, patch = self._bar(kind, place, steps, color)
             region = layer[:, first : first + patch.shape[1]]
@@ -103,20 +118,20 @@ class Dashboard:
         region = layer[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
         region[:] = mask[: region.shape[0], : region.shape[1], None]
 
-    def _bar(self, kind: str, place: int, steps: int, color: tuple) -> tuple[int, np.ndarray]:
+    def _bar(self, kind: str, place: int, steps: int, color: RGB) -> tuple[int, np.ndarray]:
         key = (kind, place, steps)
         cached = self._patches.get(key)
         if cached is None:
-            value = steps / (8 * self.factor)
+            value = steps / (BAR_STEPS * self.factor)
             cached = self._patches[key] = self._render_bar(kind, place, value, color)
         return cached
 
     def _render_bar(
-        self, kind: str, place: int, value: float, color: tuple
+        self, kind: str, place: int, value: float, color: RGB
     ) -> tuple[int, np.ndarray]:
         """Draw one bar at ``factor`` x into a strip-high patch; return (first column, patch)."""
         f = self.factor
-        s, h = self.width / 40.0 * f, self.height / 40.0 * f
+        s, h = self.width / float(LAYOUT_UNITS) * f, self.height / float(LAYOUT_UNITS) * f
         bottom = (self.height - self.top) * f  # the frame's bottom, in patch rows
         if kind == "v":
             x0, y0, x1, y1 = place * s, bottom - h - h * value, (place + 1) * s, bottom - h

@@ -7,10 +7,13 @@ window outline and the camera images inset along the top.
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
 
 from tinyrace.config import Color
+from tinyrace.config.schema import MAX_FRAME_PIXELS
 from tinyrace.tracks.image import ImageTrack
 
 FOOTPRINT_COLOR = (255, 64, 64)  # RGB
@@ -27,6 +30,9 @@ class Overview:
         width, height = track.size
         self.scale = 1.0 / downscale  # [overview px per track px]
         size = (max(1, round(width * self.scale)), max(1, round(height * self.scale)))
+        if size[0] * size[1] > MAX_FRAME_PIXELS:  # no downscale knob allocates gigabytes
+            self.scale = math.sqrt(MAX_FRAME_PIXELS / (width * height))
+            size = (max(1, math.floor(width * self.scale)), max(1, math.floor(height * self.scale)))
         rgb = cv2.cvtColor(track.image, cv2.COLOR_RGBA2RGB)
         interpolation = cv2.INTER_AREA if self.scale < 1 else cv2.INTER_NEAREST
         self.background = (
@@ -42,7 +48,7 @@ class Overview:
         self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
     ) -> np.ndarray:
         """A frame: ``footprint`` (4, 2) and camera ``windows`` (4, 2 each) in track px."""
-        frame = self.background.copy()
+        frame: np.ndarray = self.background.copy()
         thickness = max(1, round(2 * min(frame.shape[:2]) / 800))
         for k, corners in enumerate(windows):
             color = ROI_COLORS[k % len(ROI_COLORS)]

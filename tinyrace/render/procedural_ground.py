@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import cv2
 import numpy as np
 
@@ -18,7 +20,8 @@ _KERB_WHITE = (255, 255, 255)
 def tile_colors(road: np.ndarray, count: int) -> np.ndarray:
     """(count, 3) int colours: CarRacing shades tile i by 0.01*(i % 3) of full scale."""
     shade = 0.01 * (np.arange(count) % 3) * 255
-    return (road[None, :] + shade[:, None]).astype(int)
+    colors: np.ndarray = (road[None, :] + shade[:, None]).astype(int)
+    return colors
 
 
 class GroundPainter:
@@ -30,7 +33,7 @@ class GroundPainter:
 
     def __init__(self, playfield: float):
         self.playfield = playfield  # [u]
-        self._bases: dict[tuple, np.ndarray] = {}
+        self._bases: dict[tuple[Any, ...], np.ndarray] = {}
 
     def paint(
         self, track: ProceduralTrack, colors: GroundColors, pixels_per_unit: float
@@ -75,7 +78,8 @@ def repaint_tile(
 
 def _pack(color: np.ndarray) -> np.uint32:
     """An RGB colour as the 32-bit word of an RGBx pixel (alpha 255)."""
-    return np.array([*color.astype(int), 255], np.uint8).view(np.uint32)[0]
+    word: np.uint32 = np.array([*color.astype(int), 255], np.uint8).view(np.uint32)[0]
+    return word
 
 
 def _grass_squares(playfield: float) -> np.ndarray:
@@ -84,10 +88,11 @@ def _grass_squares(playfield: float) -> np.ndarray:
     cells = np.arange(-20, 20, 2) * side
     x, y = np.meshgrid(cells, cells, indexing="ij")
     corners = np.array([(0, 0), (side, 0), (side, side), (0, side)])
-    return np.stack([x.ravel(), y.ravel()], axis=1)[:, None, :] + corners[None]
+    squares: np.ndarray = np.stack([x.ravel(), y.ravel()], axis=1)[:, None, :] + corners[None]
+    return squares
 
 
-def _fill(image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, color) -> None:
+def _fill(image: np.ndarray, matrix: np.ndarray, polygons: np.ndarray, color: Any) -> None:
     """Fill world-unit polygons in one colour, antialiased, in one cv2 call."""
     if len(polygons) == 0:
         return

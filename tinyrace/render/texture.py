@@ -21,7 +21,7 @@ Painter = Callable[[np.ndarray, np.ndarray], None]
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
     """The affine ``outer ∘ inner`` (apply inner first)."""
-    result = outer[:, :2] @ inner
+    result: np.ndarray = outer[:, :2] @ inner
     result[:, 2] += outer[:, 2]
     return result
 
@@ -126,6 +126,8 @@ class GroundTexture:
     def repaint(self, painter: Painter) -> None:
         """Draw on level 0 (e.g. a tile that changed colour); smaller levels are made anew
         from it when next needed, so a level never depends on when it was first made."""
-        painter(self.levels[0], self.to_pixels[0])
+        base = self.levels[0]
+        assert base is not None  # level 0 is never dropped
+        painter(base, self.to_pixels[0])
         for level in range(1, len(self.levels)):
             self.levels[level] = None

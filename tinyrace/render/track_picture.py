@@ -4,6 +4,7 @@ the trajectory and a legend of what the colours mean."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -49,7 +50,7 @@ def procedural_ground(
     texture's black padding beyond the playfield never shows)."""
     ppu = MAX_SIDE / (2 * playfield)  # [px/u]
     texture = GroundPainter(playfield).paint(track, colors, ppu)
-    image = cv2.cvtColor(texture.levels[0], cv2.COLOR_RGBA2RGB)[::-1]
+    image = cv2.cvtColor(texture.image(0), cv2.COLOR_RGBA2RGB)[::-1]
     full = PictureFrame(ppu, playfield * ppu, -ppu, image.shape[0] - playfield * ppu)
     corners = full.pixels(np.concatenate([track.tiles.reshape(-1, 2), track.kerbs.reshape(-1, 2)]))
     inside = round(2 * playfield * ppu)  # the playfield's pixels, without the padding
@@ -102,7 +103,7 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
         cv2.putText(
             image, str(j), (int(tip[0]) + 4, int(tip[1])), _FONT, 0.6, SPAWN_COLOR, 2, cv2.LINE_AA
         )
-    entries = [
+    entries: list[tuple[tuple[int, int, int] | None, str]] = [
         (o.color, f"obstacle {o.color!r}: {o.reward}") for o in config.reward_design.color_obstacles
     ]
     if track.trajectory_mask is not None:
@@ -114,7 +115,7 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
 
 def _arrow(
     image: np.ndarray, start: tuple[float, float], direction: tuple[float, float], length: float
-):
+) -> tuple[float, float]:
     tip = (start[0] + direction[0] * length, start[1] + direction[1] * length)
     cv2.circle(image, (round(start[0]), round(start[1])), 5, SPAWN_COLOR, -1, cv2.LINE_AA)
     p0, p1 = (round(start[0]), round(start[1])), (round(tip[0]), round(tip[1]))
@@ -122,7 +123,7 @@ def _arrow(
     return tip
 
 
-def _legend(image: np.ndarray, entries: list) -> None:
+def _legend(image: np.ndarray, entries: Sequence[tuple[tuple[int, int, int] | None, str]]) -> None:
     """Swatches and labels in a dark box at the bottom left."""
     row, pad = 22, 8
     box_h = row * len(entries) + pad

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 from gymnasium.error import DependencyNotInstalled
@@ -21,7 +22,7 @@ class Window:
         self.pygame = pygame
         self.title = title
         self.fps = fps
-        self.screen = None
+        self.screen: Any = None  # the pygame display surface, once shown
         self._last = 0.0
 
     def show(self, frame: np.ndarray, realtime: bool = True) -> None:

@@ -127,11 +127,13 @@ def pick_index(
     chosen = options.get(key)
     if chosen is None:
         return drawn
-    if isinstance(chosen, bool) or not isinstance(chosen, (int, np.integer)):
-        chosen_ok = False
-    else:
-        chosen_ok = 0 <= chosen < count
-    if not chosen_ok:
+    if (
+        isinstance(chosen, bool)
+        or not isinstance(chosen, (int, np.integer))
+        or not 0 <= chosen < count
+    ):
+        chosen = None
+    if chosen is None:
         allowed = f"expected a {key} index from 0 to {count - 1}"
-        raise ConfigError(Problem("<reset options>", key, chosen, allowed))
-    return int(chosen)  # type: ignore[arg-type]
+        raise ConfigError(Problem("<reset options>", key, options.get(key), allowed))
+    return int(chosen)

@@ -12,11 +12,15 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
 
 from tinyrace.config import Color, EnvConfig, ImageTrackConfig
+from tinyrace.config.image_file import read_image_bgr
+from tinyrace.config.paths import inside_folder
+from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import ColorLayer, Track, TrackDraw, pick_index
 from tinyrace.tracks.nearest import NearestPoint
@@ -51,7 +55,8 @@ class ImageTrack:
 
 def pack(color: Color) -> np.uint32:
     """The uint32 word of an RGBx pixel of ``color`` (alpha 255)."""
-    return np.array([*color, 255], np.uint8).view(np.uint32)[0]
+    word: np.uint32 = np.array([*color, 255], np.uint8).view(np.uint32)[0]
+    return word
 
 
 def load_image_track(
@@ -59,7 +64,7 @@ def load_image_track(
 ) -> tuple[ImageTrack | None, list[Problem]]:
     """Load ``tracks[index]``; returns the track or the problems found (file, key path, value)."""
     where = f"tracks[{index}]"
-    image, problems = _read_rgbx(track, where, base_dir, source)
+    image, problems = _read_rgbx(track, where, base_dir, source, config.files)
     if image is None:
         return None, problems
     height, width = image.shape[:2]
@@ -98,46 +103,30 @@ def load_image_track(
 
 
 def _read_rgbx(
-    track: ImageTrackConfig, where: str, base_dir: Path, source: str
+    track: ImageTrackConfig, where: str, base_dir: Path, source: str, files: FilesConfig
 ) -> tuple[np.ndarray | None, list[Problem]]:
-    """Read and binarise the image (PNG/JPEG; RGB, RGBA or grey) as RGBx."""
-    if track.image is None:
-        height, width = track.plane_size
-        plane = np.zeros((height, width, 4), np.uint8)
-        plane[:, :, 3] = 255
-        return plane, []
-    path = (base_dir / track.image).resolve()
-    if not _is_file(path):  # also False for names the OS refuses (too long, ...)
-        return None, [
-            Problem(
-                source,
-                f"{where}.image",
-                track.image,
-                f"expected an image file (PNG or JPEG) next to the YAML; {path} does not exist",
-            )
-        ]
-    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)  # grey and RGBA become BGR; alpha is ignored
-    if bgr is None:
-        return None, [
-            Problem(
-                source,
-                f"{where}.image",
-                track.image,
-                f"expected a readable PNG or JPEG image; {path} is not one",
-            )
-        ]
+    """Read and binarise the image (PNG/JPEG/PGM; RGB, RGBA or grey) as RGBx, within bounds."""
+    try:
+        if track.image is None:
+            return _plane(track.plane_size), []
+        # Paths a file names stay in its folder; a dict's or kwargs' are the programmer's own.
+        confined = not source.startswith("<") and not files.paths_outside_folder
+        path = inside_folder(track.image, base_dir, not confined, source, f"{where}.image")
+        bgr = read_image_bgr(path, files.max_image_pixels, source, f"{where}.image", track.image)
+    except ConfigError as exc:
+        return None, exc.problems
     cv2.threshold(bgr, THRESHOLD, 255, cv2.THRESH_BINARY, dst=bgr)
     rgbx = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGBA)
     del bgr
     return rgbx, []
 
 
-def _is_file(path: Path) -> bool:
-    """Like ``Path.is_file``, but False for names the OS refuses (too long, ...)."""
-    try:
-        return path.is_file()
-    except (OSError, ValueError):
-        return False
+def _plane(size: tuple[int, int]) -> np.ndarray:
+    """The black plane of a track without an image (its size is capped by the config check)."""
+    height, width = size
+    plane = np.zeros((height, width, 4), np.uint8)
+    plane[:, :, 3] = 255
+    return plane
 
 
 def _take_color(image: np.ndarray, color: Color) -> np.ndarray:
@@ -178,9 +167,11 @@ def _cell_boxes(hits: np.ndarray) -> np.ndarray:
     """(M, 4) int boxes x0, y0, x1, y1 (exclusive ends) of the hits within each occupied cell."""
     h, w = hits.shape
     ph, pw = -h % CELL, -w % CELL
-    grid = np.pad(hits, ((0, ph), (0, pw))).reshape((h + ph) // CELL, CELL, (w + pw) // CELL, CELL)
-    rows_hit = grid.any(axis=3)  # (gy, CELL, gx): which rows of each cell hold a hit
-    cols_hit = grid.any(axis=1)  # (gy, gx, CELL)
+    grid: np.ndarray = np.pad(hits, ((0, ph), (0, pw))).reshape(
+        (h + ph) // CELL, CELL, (w + pw) // CELL, CELL
+    )
+    rows_hit: Any = grid.any(axis=3)  # (gy, CELL, gx): which rows of each cell hold a hit
+    cols_hit: Any = grid.any(axis=1)  # (gy, gx, CELL)
     gy, gx = np.nonzero(rows_hit.any(axis=1))
     if len(gy) == 0:
         return np.zeros((0, 4), np.int64)
@@ -241,6 +232,7 @@ class ImageSource:
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         loaded, problems = [], []
         for index, track_config in enumerate(config.tracks):
+            assert isinstance(track_config, ImageTrackConfig)  # one kind per env (checked)
             track, found = load_image_track(track_config, index, config, base_dir, source)
             problems += found
             if track is not None:
@@ -264,16 +256,14 @@ def as_track(image_track: ImageTrack, trajectory_color: Color) -> Track:
         ColorLayer(
             f"obstacle {i}",
             "obstacle",
-            tuple(color),
+            color,
             cells=image_track.cells[image_track.cell_obstacles == i],
         )
         for i, color in enumerate(image_track.obstacle_colors)
     ]
     if image_track.trajectory_mask is not None:
         points = image_track.trajectory_mask
-        layers.append(
-            ColorLayer("trajectory", "trajectory", tuple(trajectory_color), points=points)
-        )
+        layers.append(ColorLayer("trajectory", "trajectory", trajectory_color, points=points))
     return Track(
         kind="image",
         unit="px",

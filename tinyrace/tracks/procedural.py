@@ -27,6 +27,7 @@ _START_RADIUS_FACTOR = 1.5  # first and last checkpoints sit at 1.5 * radius
 _MAX_LAPS = 4  # the path stops once it has completed more laps than this
 _MAX_STEPS = 2500  # hard cap on path points
 _KERB_TURN_FRACTION = 0.2  # a hard turn steps by more than this fraction of turn_rate
+_MIN_LAP_POINTS = 3  # fewer is no track (extreme knobs); CarRacing's own knobs never get there
 
 
 class NoClosedLap(RuntimeError):
@@ -181,6 +182,8 @@ def _extract_lap(path: np.ndarray, params: ProceduralTrackParams) -> np.ndarray 
     if len(crossings) < 2:
         return None
     lap = path[crossings[-2] : crossings[-1] - 1]
+    if len(lap) < _MIN_LAP_POINTS:
+        return None
     return lap if _seam_gap(lap) <= params.detail_step else None
 
 
@@ -261,7 +264,8 @@ def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
     window = np.stack([np.roll(turns, k) for k in range(params.border_min_count)])
     sharp = np.all(np.abs(window) > params.turn_rate * _KERB_TURN_FRACTION, axis=0)
     one_way = np.abs(np.sign(window).sum(axis=0)) == params.border_min_count
-    return sharp & one_way
+    hard: np.ndarray = sharp & one_way
+    return hard
 
 
 def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
@@ -272,5 +276,6 @@ def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
     """
     spread = flags.copy()
     for k in range(1, count):
-        spread[-k] |= flags[: count - k].any()
-    return np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
+        spread[-k % len(spread)] |= flags[: count - k].any()  # wraps on laps shorter than count
+    spread_back: np.ndarray = np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
+    return spread_back

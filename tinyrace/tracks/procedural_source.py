@@ -81,7 +81,9 @@ class ProceduralSource:
     kind = "procedural"
 
     def __init__(self, config: EnvConfig, base_dir: Path | None = None, source: str = ""):
-        self.config: ProceduralTrackConfig = config.tracks[0]
+        track = config.tracks[0]
+        assert isinstance(track, ProceduralTrackConfig)
+        self.config = track
         self.source = source
         self.params = track_params(self.config)
         self.colors = config_colors(self.config)

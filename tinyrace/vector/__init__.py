@@ -104,7 +104,7 @@ class BatchVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
 
         ctx = multiprocessing.get_context(context)
-        self._buffer = create_shared_memory(self.single_observation_space, self.num_envs, ctx)
+        self._buffer = create_shared_memory(self.single_observation_space, self.num_envs, ctx)  # type: ignore[arg-type]
         self._observations = read_from_shared_memory(
             self.single_observation_space, self._buffer, self.num_envs
         )
@@ -114,7 +114,7 @@ class BatchVectorEnv(VectorEnv):
         for number, envs in enumerate(self._slices):
             parent, child = ctx.Pipe()
             fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
-            process = ctx.Process(
+            process = ctx.Process(  # type: ignore[attr-defined]
                 target=work,
                 args=(child, parent, fns, envs.start, memory),
                 name=f"BatchVectorEnv-worker-{number}",
@@ -130,7 +130,7 @@ class BatchVectorEnv(VectorEnv):
             self.close()
             raise
 
-    def _check_spaces(self, replies: list[list[tuple[gym.Space, gym.Space]]]) -> None:
+    def _check_spaces(self, replies: list[list[tuple[gym.Space[Any], gym.Space[Any]]]]) -> None:
         """Every env must have the first env's spaces, as in SyncVectorEnv."""
         expected = (self.single_observation_space, self.single_action_space)
         for index, spaces in enumerate(_flat(replies)):
@@ -142,7 +142,10 @@ class BatchVectorEnv(VectorEnv):
 
     # -- gymnasium API ----------------------------------------------------------------------
     def reset(
-        self, *, seed: int | Sequence[int | None] | None = None, options: dict | None = None
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
     ) -> tuple[Any, dict[str, Any]]:
         """Reset every env (or those in ``options["reset_mask"]``), as SyncVectorEnv does."""
         if seed is None:
@@ -206,12 +209,12 @@ class BatchVectorEnv(VectorEnv):
         self._exchange("set_attr", [(name, values[s]) for s in self._slices])
 
     @property
-    def np_random_seed(self) -> tuple[int, ...]:
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
         """The seeds of the envs' random generators."""
         return self.get_attr("np_random_seed")
 
-    @property
-    def np_random(self) -> tuple[np.random.Generator, ...]:
+    @property  # type: ignore[misc]  # read-only here: the envs own their generators
+    def np_random(self) -> tuple[np.random.Generator, ...]:  # type: ignore[override]
         """Copies of the envs' random generators."""
         return self.get_attr("np_random")
 
@@ -228,14 +231,14 @@ class BatchVectorEnv(VectorEnv):
                 process.terminate()
                 process.join()
         self._pipes, self._processes = [], []
-        self._observations = self._buffer = None  # the shared memory goes with its last view
+        self._observations = self._buffer = None  # type: ignore[assignment]  # memory freed
 
     def __del__(self) -> None:
         if not self.closed and hasattr(self, "_pipes"):
             self.close()
 
     # -- messages ---------------------------------------------------------------------------
-    def _exchange(self, command: str, args: list[tuple]) -> list[Any]:
+    def _exchange(self, command: str, args: list[tuple[Any, ...]]) -> list[Any]:
         """Send each worker its command and arguments; every worker's answer, in order."""
         if self.closed:
             raise gym.error.ClosedEnvironmentError("BatchVectorEnv was closed")
@@ -270,7 +273,7 @@ class BatchVectorEnv(VectorEnv):
     def _split_actions(self, actions: Any) -> list[Any]:
         """One batch per worker: an array slice for array spaces, else a list of actions."""
         if isinstance(self.single_action_space, ARRAY_ACTIONS):
-            batch = np.asarray(actions)
+            batch: Any = np.asarray(actions)
         else:
             batch = list(iterate(self.action_space, actions))
         if len(batch) != self.num_envs:
@@ -289,12 +292,16 @@ def make_batch(
     return BatchVectorEnv([maker] * num_envs, workers=workers, context=context)
 
 
-def make_carracing_vec(num_envs: int = 1, workers: int | None = None, **kwargs: Any):
+def make_carracing_vec(
+    num_envs: int = 1, workers: int | None = None, **kwargs: Any
+) -> BatchVectorEnv:
     """``gym.make_vec("tinyrace/CarRacing-v0", vectorization_mode="vector_entry_point")``."""
     return make_batch("tinyrace/CarRacing-v0", num_envs, _workers(num_envs, workers), **kwargs)
 
 
-def make_tinyrace_vec(num_envs: int = 1, workers: int | None = None, **kwargs: Any):
+def make_tinyrace_vec(
+    num_envs: int = 1, workers: int | None = None, **kwargs: Any
+) -> BatchVectorEnv:
     """``gym.make_vec("tinyrace/TinyRace-v0", vectorization_mode="vector_entry_point")``."""
     return make_batch("tinyrace/TinyRace-v0", num_envs, _workers(num_envs, workers), **kwargs)
 
@@ -320,7 +327,7 @@ def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
     return mask
 
 
-def _flat(per_worker: Sequence[list]) -> list:
+def _flat(per_worker: Sequence[list[Any]]) -> list[Any]:
     return list(itertools.chain.from_iterable(per_worker))
 
 
@@ -338,7 +345,9 @@ def _rebuild_error(
         rebuilt = pickle.loads(pickled) if pickled is not None else None
     if rebuilt is None or str(rebuilt) != message:  # exceptions whose args are not the message
         rebuilt = RuntimeError(f"{name}: {message}")
-    rebuilt.add_note(f"raised in BatchVectorEnv worker {number} (envs {_show(envs)}):\n{trace}")
+    note = f"raised in BatchVectorEnv worker {number} (envs {_show(envs)}):\n{trace}"
+    if hasattr(rebuilt, "add_note"):  # Python >= 3.11
+        rebuilt.add_note(note)
     return rebuilt
 
 

@@ -7,7 +7,7 @@ import pickle
 import signal
 import time
 import traceback
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -15,6 +15,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.spaces import Box, Dict
 from gymnasium.vector.utils import read_from_shared_memory, write_to_shared_memory
+
+Memory = tuple[Any, gym.Space[Any], int]  # shared buffer, one env's observation space, envs
 
 # [s] a worker polls for its next command this long before it sleeps: waking a sleeping
 # process on another core costs 0.1-0.6 ms on a virtual machine, as much as a few env steps
@@ -26,7 +28,7 @@ _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # no sched_yiel
 class _Slice:
     """One worker's envs: envs ``first``, ``first + 1``, ... of the vector env."""
 
-    def __init__(self, env_fns: list, first: int, memory: tuple[Any, gym.Space, int]):
+    def __init__(self, env_fns: list[Callable[[], gym.Env[Any, Any]]], first: int, memory: Memory):
         self.envs = [fn() for fn in env_fns]
         self.first = first
         self.buffer, self.space, num_envs = memory
@@ -37,11 +39,13 @@ class _Slice:
         plain = all(isinstance(space, Box) for space in spaces)
         self.views = read_from_shared_memory(self.space, self.buffer, num_envs) if plain else None
 
-    def spaces(self) -> list[tuple[gym.Space, gym.Space]]:
+    def spaces(self) -> list[tuple[gym.Space[Any], gym.Space[Any]]]:
         return [(env.observation_space, env.action_space) for env in self.envs]
 
-    def reset(self, seeds: list, options: dict | None, mask: np.ndarray) -> list[dict | None]:
-        infos: list[dict | None] = []
+    def reset(
+        self, seeds: list[int | None], options: dict[str, Any] | None, mask: np.ndarray
+    ) -> list[dict[str, Any] | None]:
+        infos: list[dict[str, Any] | None] = []
         for j, env in enumerate(self.envs):
             if not mask[j]:
                 infos.append(None)
@@ -52,7 +56,9 @@ class _Slice:
             infos.append(info)
         return infos
 
-    def step(self, actions: Any) -> tuple[list[float], list[bool], list[bool], list[dict]]:
+    def step(
+        self, actions: Any
+    ) -> tuple[list[float], list[bool], list[bool], list[dict[str, Any]]]:
         n = len(self.envs)
         rewards = np.zeros(n, dtype=np.float64)
         terminated, truncated = np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_)
@@ -68,7 +74,7 @@ class _Slice:
         # cast by numpy as SyncVectorEnv's arrays do; sent as lists, which pickle faster
         return rewards.tolist(), terminated.tolist(), truncated.tolist(), infos
 
-    def call(self, name: str, args: tuple, kwargs: dict) -> list[Any]:
+    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> list[Any]:
         results = []
         for env in self.envs:
             attribute = env.get_wrapper_attr(name)
@@ -91,10 +97,16 @@ class _Slice:
             for key, view in self.views.items():
                 view[index] = observation[key]
         else:
-            self.views[index] = observation
+            self.views[index] = observation  # type: ignore[index]  # a Box: one array
 
 
-def work(pipe: Connection, parent: Connection, env_fns: list, first: int, memory: tuple) -> None:
+def work(
+    pipe: Connection,
+    parent: Connection,
+    env_fns: list[Callable[[], gym.Env[Any, Any]]],
+    first: int,
+    memory: Memory,
+) -> None:
     """A worker's loop: build the envs, then answer ``(command, args)`` until "close"."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()

@@ -78,7 +78,11 @@ class World:
             self.space.add(*shapes)
 
     def _static_sensor(
-        self, vertices: list, kind: int, index: int, shape_filter: pymunk.ShapeFilter
+        self,
+        vertices: list[tuple[float, float]],
+        kind: int,
+        index: int,
+        shape_filter: pymunk.ShapeFilter,
     ) -> pymunk.Poly:
         shape = pymunk.Poly(self.space.static_body, vertices)
         shape.sensor = True
@@ -94,7 +98,7 @@ class World:
         self.contacts = Contacts()
 
     # -- pickling ----------------------------------------------------------------------------
-    def __setstate__(self, state: dict) -> None:
+    def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
         self._rebind_contacts()
 

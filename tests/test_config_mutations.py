@@ -19,7 +19,7 @@ import math
 import os
 import re
 import typing
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -156,6 +156,18 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Workspace:
 
 
 # -- mutations -----------------------------------------------------------------------------
+# YAML 1.1 reads NEL, LS and PS as line breaks even inside a written key, and PyYAML writes
+# but cannot read back a lone surrogate, so such a key is not the key the file holds; new
+# keys are drawn without them.
+_YAML_BREAKS = "\x85\u2028\u2029"
+
+
+def key_text(**sizes: int) -> st.SearchStrategy[str]:
+    return st.text(
+        st.characters(exclude_characters=_YAML_BREAKS, exclude_categories=("Cs",)), **sizes
+    )
+
+
 Path_ = tuple  # a key path into a raw mapping: keys and list indices
 
 
@@ -208,7 +220,7 @@ PYTHON_ONLY = [
 NESTED_JUNK = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=6),
     lambda inner: (
-        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner, max_size=3)
+        st.lists(inner, max_size=3) | st.dictionaries(key_text(max_size=6), inner, max_size=3)
     ),
     max_leaves=8,
 )
@@ -225,7 +237,7 @@ def mutation(junk: st.SearchStrategy, images: bool) -> st.SearchStrategy:
     options = [
         st.tuples(st.just("set"), where, junk),
         st.tuples(st.just("delete"), where),
-        st.tuples(st.just("add"), where, st.text(min_size=1, max_size=8), junk),
+        st.tuples(st.just("add"), where, key_text(min_size=1, max_size=8), junk),
         st.tuples(st.just("number"), where, st.sampled_from(NUMBER_TWEAKS)),
         st.tuples(st.just("bound"), where, st.sampled_from(BOUNDS)),
         st.tuples(st.just("type"), where, st.sampled_from(TRACK_TYPES)),
@@ -299,15 +311,19 @@ def _bound(meta: Mapping[str, Any] | None, which: str, current: Any) -> Any:
 def _tweak(value: Any, how: str) -> Any:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return value
-    return {
-        "negate": -value,
-        "zero": 0,
-        "half": value / 2,
-        "float": float(value),
-        "string": str(value),
-        "times_1e6": value * 1_000_000,
-        "plus_half": value + 0.5,
-    }[how]
+    tweaks: dict[str, Callable[[Any], Any]] = {  # lazy: a huge int overflows float()
+        "negate": lambda v: -v,
+        "zero": lambda v: 0,
+        "half": lambda v: v / 2,
+        "float": float,
+        "string": str,
+        "times_1e6": lambda v: v * 1_000_000,
+        "plus_half": lambda v: v + 0.5,
+    }
+    try:
+        return tweaks[how](value)
+    except OverflowError:
+        return str(value)  # still a hostile value: a number written as text
 
 
 # A bound that is valid but only costs memory: a 20000 x 20000 black plane is 1.6 GB.
@@ -392,6 +408,7 @@ CROSS_RULES = [
     r"tracks\[\d+\]\.pixels_per_unit",  # the ground texture's side (playfield * ppu)
     r"car\.actions",  # discrete actions need the dynamic car
     r"reward_design\.color_obstacles",  # colour obstacles need an image track
+    r"reward_design\.color_obstacles\[\d+\]\.color",  # the trajectory's colour: never hit
     r"reward_design\.cross_track_error\.trajectory_color",  # colour absent from the image
     r"environment",  # the track folder of an experiment
 ]
