@@ -17,12 +17,12 @@ from tinyrace.episodes.image import ImageEpisode
 from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralEpisode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.render.texture import GroundTexture
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import sensor_type
+from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.image import ImageTrack
 from tinyrace.tracks.procedural import ProceduralTrack

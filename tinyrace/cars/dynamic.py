@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pymunk
 
-from tinyrace.world.snapshot import CarState, Point, WheelState
-from tinyrace.world.world import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
+from tinyrace.cars.collision import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
+from tinyrace.cars.state import CarState, Point, WheelState
 
 SIZE = 0.02  # [u per model unit] CarRacing's car model scale
 

@@ -13,7 +13,7 @@ from tinyrace.cars.registry import CarModel
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.procedural import CameraViews
 from tinyrace.render.overview import Overview
-from tinyrace.render.texture import GroundTexture
+from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.image import ImageSource, ImageTrack, touched_obstacles
 from tinyrace.world.facts import StepFacts

@@ -14,7 +14,7 @@ from tinyrace.render.car_sprite import Patches
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.procedural_ground import GroundPainter, repaint_tile
-from tinyrace.render.texture import GroundTexture
+from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource

@@ -20,8 +20,8 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
-from tinyrace.render.texture import GroundTexture
 from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
