@@ -19,10 +19,10 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "examples", "actions"),
     ("config",),
     ("tracks",),
-    ("world",),
     ("cars",),
-    ("render",),
+    ("world",),
     ("sensors",),
+    ("render",),
     ("rewards",),
     ("episodes",),
     ("env", "carracing"),
@@ -135,7 +135,8 @@ def _folder(module: str) -> str:
 
 def test_the_graph_sees_the_package():
     assert "tinyrace.env" in GRAPH and "tinyrace.cars.dynamic" in GRAPH
-    assert "tinyrace.world.world" in GRAPH["tinyrace.cars.dynamic"]
+    assert "tinyrace.cars.collision" in GRAPH["tinyrace.cars.dynamic"]
+    assert "tinyrace.cars.state" in GRAPH["tinyrace.world.snapshot"]
 
 
 def test_no_import_cycle_between_modules():

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from tinyrace.cars.state import CarState, WheelState
 from tinyrace.sensors.state import fields, state_vector
-from tinyrace.world.snapshot import CarState, WheelState
 
 
 def _car(pose, velocity, yaw_rate=0.0, steer=0.0, wheels=()):

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Protocol
 
-from tinyrace.world.snapshot import CarState, Point, Pose, WheelState
+from tinyrace.cars.state import CarState, Point, Pose, WheelState
 
 if TYPE_CHECKING:
     import pymunk

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import pymunk
 
-from tinyrace.world.snapshot import CarState
-from tinyrace.world.world import footprint_sensor
+from tinyrace.cars.collision import footprint_sensor
+from tinyrace.cars.state import CarState
 
 
 @dataclass

@@ -22,8 +22,8 @@ from tinyrace.config import CameraConfig, EnvConfig
 from tinyrace.episodes.image import footprint_corners
 from tinyrace.episodes.procedural import CameraViews
 from tinyrace.render.metric_ground import MetricOverview, paint_ground
-from tinyrace.render.texture import GroundTexture, transform_points
 from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.metric import MetricSource, MetricTrack
 from tinyrace.world.facts import StepFacts

@@ -20,7 +20,7 @@ from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.interrupt import Interrupted, StopSignals
-from tinyrace.experiment.load import Experiment, importable_from
+from tinyrace.experiment.load import Experiment, check_view, importable_from
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
@@ -60,7 +60,7 @@ def run_experiment(
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
     try:
-        _check_view(experiment, env)
+        check_view(experiment.config, env.config, experiment.source)
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
@@ -163,8 +163,13 @@ class _Run:
         if view == "sensors":
             env = self.env
             return sensor_view(env).render(env.snapshot(), env.layout, observation)
-        frame = self.env.render() if view == "default" else observation[view]
-        return frame if frame.ndim == 3 else np.repeat(frame[..., None], 3, axis=2)  # gray
+        if view != "default":
+            frame: np.ndarray = observation[view]
+            return frame if frame.ndim == 3 else np.repeat(frame[..., None], 3, axis=2)  # gray
+        rendered = self.env.render()  # the env was made with render_mode rgb_array
+        if rendered is None:
+            raise RuntimeError("the env rendered no frame for the video")
+        return rendered
 
     def _track_picture(self, seed: int) -> str:
         key, entry = save_track_picture(self.env, seed, self.run_dir, self.tracks)
@@ -199,28 +204,12 @@ class _Run:
             self._write(None, error=f"{type(exc).__name__}: {exc}")
 
 
-def _driver(spec: str, args: dict, source: str) -> Driver:
+def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
     """The experiment's driver; problems name the experiment file and its ``driver`` key."""
     try:
         return load_driver(spec, **args)
     except ValueError as exc:  # DriverError included: the factory raised
         raise ConfigError(Problem(source, "driver", spec, str(exc))) from None
-
-
-def _check_view(experiment: Experiment, env: TinyRaceEnv) -> None:
-    view = experiment.config.output.view
-    ids = [s.id for s in env.sensors if _is_image(s.space)]  # cameras and image sensors
-    if view == "sensors" and env.config.sensors:
-        return
-    if view != "default" and view not in ids:
-        allowed = f"default, sensors (with sensors:) or an image id: {', '.join(ids) or '(none)'}"
-        raise ConfigError(Problem(experiment.source, "output.view", view, allowed))
-
-
-def _is_image(space) -> bool:
-    """A Box of uint8 pixels, (H, W) or (H, W, 3)."""
-    shape = getattr(space, "shape", None) or ()
-    return getattr(space, "dtype", None) == np.uint8 and len(shape) in (2, 3)
 
 
 def new_run_dir(root: Path, name: str) -> Path:

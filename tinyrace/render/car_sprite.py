@@ -23,7 +23,7 @@ from tinyrace.cars.dynamic import (
     DynamicCar,
     SkidMarks,
 )
-from tinyrace.render.texture import compose, transform_points
+from tinyrace.sensors.texture import compose, transform_points
 
 HULL_COLOR = (204, 0, 0)  # RGB
 WHEEL_COLOR = (0, 0, 0)

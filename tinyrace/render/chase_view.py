@@ -14,7 +14,7 @@ import numpy as np
 from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.render.car_sprite import CarSprite, Patches
 from tinyrace.render.dashboard import Dashboard
-from tinyrace.render.texture import GroundTexture
+from tinyrace.sensors.texture import GroundTexture
 
 WINDOW = (1000, 800)  # [px] the reference's layout size (w, h)
 ZOOM = 2.7 * 6.0  # [window px/u] after the first second

@@ -10,7 +10,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from tinyrace.render.texture import GroundTexture, transform_points
+from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.metric import MetricTrack
 
 MAX_SIDE = 8192  # [px] the texture's longest side

@@ -7,7 +7,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from tinyrace.render.texture import GroundTexture, transform_points
+from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.tracks.procedural_source import GroundColors
 

@@ -13,7 +13,7 @@ from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
 from tinyrace.render.procedural_ground import GroundPainter
-from tinyrace.render.texture import GroundTexture, transform_points
+from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.image import ImageTrack
 from tinyrace.tracks.metric import MetricTrack
 from tinyrace.tracks.procedural import ProceduralTrack

@@ -24,7 +24,7 @@ from gymnasium import spaces
 
 if TYPE_CHECKING:
     from tinyrace.config import EnvConfig
-    from tinyrace.render.texture import GroundTexture
+    from tinyrace.sensors.texture import GroundTexture
     from tinyrace.tracks.base import Track
     from tinyrace.world.snapshot import Snapshot
 

@@ -21,9 +21,9 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
-from tinyrace.render.texture import GroundTexture, compose
 from tinyrace.sensors.base import Ground, SensorContext
 from tinyrace.sensors.common import GroundImage, PerTrack, label_table, paint_labels
+from tinyrace.sensors.texture import GroundTexture, compose
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 

@@ -24,12 +24,13 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.cars.dynamic import DynamicCarSpec
+from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import StateConfig
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import KINEMATIC_MODELS, dynamic_scale, known
 from tinyrace.tracks.base import Track
-from tinyrace.world.snapshot import CarState, Snapshot
+from tinyrace.world.snapshot import Snapshot
 
 WHEELS = ("fl", "fr", "rl", "rr")
 MOTION = ("speed_long", "speed_lat", "yaw_rate", "steer")
