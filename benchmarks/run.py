@@ -23,6 +23,12 @@ machine's conditions. Measured:
 - peak RSS of one env of each kind, each in a fresh process, after creating it,
   a reset and 200 steps; beside a process that only imports gymnasium, numpy,
   cv2 and pymunk;
+- env-steps/s of 1, 2, 4, 8, 16 and 32 envs stepped in this one process
+  (``SyncVectorEnv``) against one env's;
+- tinycarlo 1.1's steps/s on the example tracks, each with one 120x160 camera (its
+  wheel ships no examples; these folders are in its format), run by
+  ``tinycarlo_steps.py`` in an interpreter that imports tinycarlo ($TINYCARLO_PYTHON,
+  /tmp/tc/bin/python or this one; "not installed" otherwise), beside tinyrace's;
 - ``SyncVectorEnv`` and ``AsyncVectorEnv`` (2 envs, 2 workers) env-steps/s of
   ``tinyrace/CarRacing-v0`` against one env's steps/s, and tinyrace's
   ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step);
@@ -43,6 +49,7 @@ import math
 import os
 import platform
 import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -77,6 +84,8 @@ DEFAULT_OUT = ROOT / "benchmarks" / "results" / "latest.json"
 RSS_STEPS = 200
 GENERATED_SIZES = {SMALL: (1000, 1000), BIG: (6000, 3000)}  # (width, height) [px]
 BATCH_ENVS = 8  # envs of the BatchVectorEnv case, in 2 workers
+SCALING_ENVS = (1, 2, 4, 8, 16, 32)  # envs stepped in one process (SyncVectorEnv)
+TINYCARLO_SCRIPT = Path(__file__).resolve().parent / "tinycarlo_steps.py"
 
 FRONT = {"id": "front", "resolution": [120, 160], "roi": [360, 480]}
 ONE_CAMERA = [FRONT]
@@ -228,6 +237,69 @@ def measure_vector(budget: Budget) -> dict[str, Any]:
     return {**timed(steppers, budget), **results}
 
 
+def measure_vector_scaling(budget: Budget) -> dict[str, Any]:
+    """Env-steps/s of N envs stepped in this one process (SyncVectorEnv), N in SCALING_ENVS,
+    beside one env, interleaved."""
+    steppers = {"single": Stepper(make_tinyrace())}
+    for n in SCALING_ENVS:
+        steppers[f"one_process_{n}"] = Stepper(
+            gym.vector.SyncVectorEnv([make_tinyrace] * n), batch=n, auto_reset=True
+        )
+    return timed(steppers, budget)
+
+
+def tinycarlo_python() -> str | None:
+    """An interpreter that imports tinycarlo: $TINYCARLO_PYTHON, /tmp/tc's venv, or this one."""
+    for candidate in (os.environ.get("TINYCARLO_PYTHON"), "/tmp/tc/bin/python", sys.executable):
+        if candidate and Path(candidate).exists():
+            probe = [candidate, "-c", "import tinycarlo"]
+            if subprocess.run(probe, capture_output=True).returncode == 0:
+                return candidate
+    return None
+
+
+def one_camera_copies(generated_dir: Path) -> dict[str, Path]:
+    """The example tracks, each copied with one 120x160 camera (and a step limit, which
+    tinycarlo 1.1 needs), for tinyrace and tinycarlo alike."""
+    folders = {}
+    for name in EXAMPLE_TRACKS:
+        folder = generated_dir / f"one_camera_{name}"
+        shutil.copytree(TRACKS_DIR / name, folder, dirs_exist_ok=True)
+        config = yaml.safe_load((folder / "track.yaml").read_text())
+        config.pop("camera", None)
+        config["cameras"] = ONE_CAMERA
+        config.setdefault("sim", {}).setdefault("step_limit", 1000)
+        (folder / "track.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+        folders[name] = folder
+    return folders
+
+
+def measure_tinycarlo(budget: Budget, generated_dir: Path) -> dict[str, Any]:
+    """tinycarlo 1.1's steps/s on the example tracks with one 120x160 camera (run in its
+    own interpreter, a subprocess) and tinyrace's on the same folders."""
+    python = tinycarlo_python()
+    if python is None:
+        return {"error": "not installed (pip install 'tinycarlo==1.1.*', e.g. in a venv /tmp/tc)"}
+    folders = one_camera_copies(generated_dir)
+    tracks = [f"{name}={folder}" for name, folder in folders.items()]
+    seconds = str(max(budget.seconds / 2, 1.0))
+    command = [python, str(TINYCARLO_SCRIPT), "--seconds", seconds, *tracks]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=1800)
+    if done.returncode != 0:
+        lines = done.stderr.strip().splitlines() or [f"exit code {done.returncode}"]
+        return {"error": f"unavailable: {lines[-1]}", "interpreter": python}
+    results: dict[str, Any] = {"interpreter": python}
+    for name, entry in json.loads(done.stdout.strip().splitlines()[-1]).items():
+        results[f"tinycarlo_{name}"] = entry
+    steppers = {}
+    for name, folder in folders.items():
+        try:
+            steppers[f"tinyrace_{name}"] = Stepper(make_image_track(folder))
+        except Exception as error:
+            results[f"tinyrace_{name}"] = unavailable(error)
+    return {**results, **timed(steppers, budget)}
+
+
 def measure_vector_ceiling(budget: Budget, throughput: dict[str, Any]) -> dict[str, Any]:
     """One stand-in env and AsyncVectorEnv(2) of them, for step times measured in this run:
     what AsyncVectorEnv makes of a step that long here, whatever the env does in it.
@@ -292,6 +364,39 @@ def report_informational(results: dict[str, Any]) -> None:
             )
         )
     print_table("Informational", ["measure", "value", "target", "result"], rows)
+    report_scaling(results.get("vector_scaling", {}))
+    report_tinycarlo(results.get("tinycarlo", {}))
+
+
+def report_scaling(scaling: dict[str, Any]) -> None:
+    """The 1..32 envs table: env-steps/s in one process and the ratio to one env."""
+    single = scaling.get("single")
+    rows = []
+    for n in SCALING_ENVS:
+        entry = scaling.get(f"one_process_{n}")
+        target = TARGETS["one_process_8"] if n == 8 else 0.0
+        row = ratio_row(f"{n} envs in one process (SyncVectorEnv)", entry, single, target)
+        rows.append(row if n == 8 else [*row[:2], "", ""])
+    print_table("Envs in one process vs one env", ["measure", "value", "target", "result"], rows)
+
+
+def report_tinycarlo(tinycarlo: dict[str, Any]) -> None:
+    """tinyrace (one 120x160 camera) over tinycarlo 1.1, per tinycarlo example."""
+    if "error" in tinycarlo:
+        print(f"\ntinycarlo 1.1: {tinycarlo['error']}")
+        return
+    names = [k.removeprefix("tinycarlo_") for k in tinycarlo if k.startswith("tinycarlo_")]
+    print(f"\ntinycarlo 1.1 ran in {tinycarlo.get('interpreter')}; both with one 120x160 camera")
+    rows = [
+        ratio_row(
+            f"{name}, 1 camera 120x160: tinyrace vs tinycarlo 1.1",
+            tinycarlo.get(f"tinyrace_{name}"),
+            tinycarlo.get(f"tinycarlo_{name}"),
+            TARGETS["vs_tinycarlo"],
+        )
+        for name in names
+    ]
+    print_table("Image tracks vs tinycarlo 1.1", ["measure", "value", "target", "result"], rows)
 
 
 def timed(steppers: dict[str, Stepper], budget: Budget) -> dict[str, Any]:
@@ -411,6 +516,12 @@ def run(budget: Budget) -> dict[str, Any]:
         results["reset"] = guarded("reset time", measure_reset, budget)
         results["image_tracks"] = guarded("image tracks", measure_image_tracks, budget, generated)
         results["vector"] = guarded("vector envs", measure_vector, budget)
+        results["vector_scaling"] = guarded(
+            "envs in one process (1..32)", measure_vector_scaling, budget
+        )
+        results["tinycarlo"] = guarded(
+            "tinycarlo 1.1 (subprocess)", measure_tinycarlo, budget, generated
+        )
         results["vector_ceiling"] = guarded(
             "vector env ceiling (stand-in envs)",
             measure_vector_ceiling,

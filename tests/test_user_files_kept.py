@@ -69,3 +69,24 @@ def test_show_default_name_outside_the_track_folder(track, tmp_path: Path, monke
     assert cli.main(["show", str(track)]) == 0
     assert (work / "formula_student.png").is_file()
     assert cli.main(["show", str(track)]) != 0  # a second time: the file exists now
+
+
+def test_run_inside_a_track_folder_writes_nothing_there(track, monkeypatch, capsys):
+    monkeypatch.chdir(track)
+    before = _digests(track)
+    assert cli.main(["run", "carolo_cup", "--episodes", "1", "--no-video", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("tinyrace: error: output.dir") and "track folder" in err
+    assert _digests(track) == before and not (track / "runs").exists()
+
+
+def test_run_out_into_a_track_folder_only_when_forced(track, tmp_path: Path, capsys):
+    argv = ["run", "carolo_cup", "--episodes", "1", "--no-video", "--quiet"]
+    argv += ["--seed", "0", "-o", str(track / "runs")]
+    assert cli.main(argv) == 2
+    assert "-o/--out" in capsys.readouterr().err and not (track / "runs").exists()
+    experiment = tmp_path / "short.yaml"
+    experiment.write_text("env: {environment: carolo_cup, sim: {step_limit: 5}}\nepisodes: 1\n")
+    forced = ["run", str(experiment), "--no-video", "--quiet", "-o", str(track / "runs")]
+    assert cli.main([*forced, "--force"]) == 0
+    assert len(list((track / "runs").iterdir())) == 1

@@ -7,10 +7,15 @@ import dataclasses
 import json
 import os
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_example, find_experiment
+
+if TYPE_CHECKING:
+    from tinyrace.experiment import Experiment, RunResult
 
 
 class UsageError(Exception):
@@ -20,7 +25,7 @@ class UsageError(Exception):
 class _Parser(argparse.ArgumentParser):
     """argparse, but a usage error is one line (``tinyrace: error: ...``), exit 2."""
 
-    def error(self, message: str):  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         raise UsageError(message)
 
 
@@ -36,7 +41,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     try:
-        return args.handler(args)
+        code: int = args.handler(args)
+        return code
     except (ConfigError, UsageError) as exc:
         if args.debug:
             raise
@@ -67,7 +73,7 @@ def _one_line(exc: Exception) -> str:
     return " ".join(str(exc).split())
 
 
-def _count(low: int, what: str):
+def _count(low: int, what: str) -> Callable[[str], int]:
     """An argparse type: a whole number >= ``low``."""
 
     def parse(text: str) -> int:
@@ -103,6 +109,7 @@ def _parser() -> argparse.ArgumentParser:
         "--seed", type=_count(0, "a whole number >= 0"), help="override the first seed"
     )
     run.add_argument("--no-video", action="store_true", help="write no videos")
+    run.add_argument("--force", action="store_true", help="allow run folders inside a track folder")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--json", action="store_true", help="print the results summary as JSON")
     run.set_defaults(handler=_run)
@@ -135,7 +142,7 @@ def _parser() -> argparse.ArgumentParser:
     play.add_argument(
         "path", nargs="?", help="track folder, track.yaml or experiment (default: procedural)"
     )
-    play.add_argument("--seed", type=int, default=None)
+    play.add_argument("--seed", type=_count(0, "a whole number >= 0"), default=None)
     play.set_defaults(handler=_play)
     _examples_parser(commands)
     for command in commands.choices.values():  # also after the command: tinyrace run --debug
@@ -143,7 +150,7 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _examples_parser(commands) -> None:
+def _examples_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
     examples = commands.add_parser(
         "examples", help="list the shipped tracks and configs; copy one out to edit"
     )
@@ -172,7 +179,7 @@ def _run(args: argparse.Namespace) -> int:
             "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
         )
     experiment = _overridden(load_experiment(path), args)
-    out = _out_folder(args.out)
+    out = _out_folder(args.out, experiment.config.output.dir, args.force)
     config = experiment.config
     if not (args.quiet or args.json):
         what = f"{config.episodes} episodes, driver {config.driver}"
@@ -192,7 +199,7 @@ def _run(args: argparse.Namespace) -> int:
     return 128 + result.interrupted
 
 
-def _overridden(experiment, args: argparse.Namespace):
+def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
     """The experiment with the command line's --episodes, --seed and --no-video."""
     config = experiment.config
     if args.episodes is not None:
@@ -204,16 +211,24 @@ def _overridden(experiment, args: argparse.Namespace):
     return dataclasses.replace(experiment, config=config)
 
 
-def _out_folder(out: str | None) -> Path | None:
-    if out is None:
-        return None
-    path = Path(out)
+def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
+    """``--out`` checked: a folder, and (unless ``force``) not inside a track folder."""
+    from tinyrace.validate import track_folder_holding
+
+    path = Path(out if out is not None else default)
     if path.exists() and not path.is_dir():
-        raise UsageError(f"argument -o/--out: {out!r} is a file; expected a folder")
-    return path
+        raise UsageError(f"argument -o/--out: {str(path)!r} is a file; expected a folder")
+    inside = track_folder_holding(path.resolve())
+    if inside is not None and not force:
+        where = "argument -o/--out" if out is not None else "output.dir (run folders)"
+        raise UsageError(
+            f"{where}: {str(path)!r} lies inside the track folder {str(inside)!r}; "
+            "expected a folder outside it (run elsewhere, give -o, or --force)"
+        )
+    return None if out is None else path
 
 
-def _json_summary(result) -> dict:
+def _json_summary(result: RunResult) -> dict[str, Any]:
     from dataclasses import asdict
 
     return {

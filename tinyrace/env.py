@@ -26,6 +26,7 @@ from tinyrace.sensors.registry import sensor_type
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.image import ImageTrack
 from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 
 Episode = ProceduralEpisode | ImageEpisode
@@ -148,12 +149,20 @@ class TinyRaceEnv(gym.Env):
         return observation, self._info({})
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        self.control(action)
+        return self.conclude(self._episode().step(self.dt))
+
+    # A step in parts, for a vector env that moves many cars between them:
+    # control(action); the car's forces; facts = episode.advance(dt); conclude(facts).
+    def control(self, action: Any) -> None:
+        """Check ``action`` and hand it to the car (the first part of a step)."""
         episode = self.episode
         if episode is None:
             raise ResetNeeded("call reset() before step()")
-        controls = self._actions.read(action)
-        episode.car.control(*controls)
-        facts = episode.step(self.dt)
+        episode.car.control(*self._actions.read(action))
+
+    def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Rewards, episode end, observation and info of a step whose physics is done."""
         self.t += self.dt
         self.steps += 1
         terms = reward_terms(facts, self.config.reward_design, self._shaping)

@@ -135,6 +135,12 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
 PICTURE_SUFFIXES = (".png", ".jpg", ".jpeg")
 
 
+def track_folder_holding(path: Path) -> Path | None:
+    """The nearest folder at or above ``path`` that holds a track.yaml, or None."""
+    folders = (path, *path.parents) if path.is_dir() else path.parents
+    return next((f for f in folders if (f / TRACK_FILE).is_file()), None)
+
+
 def _check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     where = "-o/--output"
     if output.suffix.lower() not in PICTURE_SUFFIXES:
@@ -152,8 +158,8 @@ def _check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
         allowed = "a path that does not exist yet (or --force to replace the file)"
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
     track_folders = [p.parent for p in inputs if p.name == TRACK_FILE]
-    track_folders += [f for f in resolved.parents if (f / TRACK_FILE).is_file()]
     inside = next((f for f in track_folders if resolved.is_relative_to(f)), None)
+    inside = inside or track_folder_holding(resolved)
     if inside is not None:
         allowed = (
             f"a path outside the track folder {inside} (it holds {TRACK_FILE}): "

@@ -161,47 +161,72 @@ class DynamicCar:
             wheel.brake = brake
 
     # -- physics -----------------------------------------------------------------------------
+    def __post_init__(self) -> None:
+        self._prepare()
+
+    def _prepare(self) -> None:
+        """Per-car constants of the hot path, computed as the formulas below would."""
+        spec, scale = self.spec, self.scale
+        cx, cy = self.body.center_of_gravity
+        self._offsets = [(w.x - cx, w.y - cy) for w in self.wheels]  # [track units] from the CoG
+        self._road_limit = spec.friction_limit * scale * 1.0  # [mass track units/s^2]
+        self._grass_limit = spec.friction_limit * scale * spec.grass_friction
+        self._spin_moment = spec.wheel_moment * scale**2  # [mass track units^2]
+
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
-        """Spin the wheels, compute tyre forces and set them on the body for the next space step."""
+        """Spin the wheels, compute tyre forces and set them on the body for the next space step.
+
+        Written for speed (one body read, no per-wheel method calls); each formula keeps
+        the operation order of CarRacing's model, so results are bit-identical.
+        """
         spec, body = self.spec, self.body
-        angle, (vx, vy), spin = body.angle, body.velocity, body.angular_velocity
+        angle, spin = body.angle, body.angular_velocity
+        vx, vy = body.velocity
         cos_a, sin_a = math.cos(angle), math.sin(angle)
-        cx, cy = body.center_of_gravity
+        radius, gain, moment = self.wheel_radius, spec.slip_gain, self._spin_moment
+        drive = dt * spec.engine_power  # [mass u^2/s^2] per unit of gas
         fx_total = fy_total = torque = 0.0
         for index, wheel in enumerate(self.wheels):
-            self._spin(wheel, dt)
-            # wheel position relative to the centre of gravity, in the world frame
-            lx, ly = wheel.x - cx, wheel.y - cy
-            rx, ry = cos_a * lx - sin_a * ly, sin_a * lx + cos_a * ly
+            _spin(wheel, dt, drive, spec)
+            lx, ly = self._offsets[index]
+            rx, ry = cos_a * lx - sin_a * ly, sin_a * lx + cos_a * ly  # world frame
             wvx, wvy = vx - spin * ry, vy + spin * rx
-            heading = angle + wheel.steer
-            side_x, side_y = math.cos(heading), math.sin(heading)
-            forward_x, forward_y = -side_y, side_x
-            limit = (
-                spec.friction_limit * self.scale * (1.0 if on_road[index] else spec.grass_friction)
-            )
-            v_forward = forward_x * wvx + forward_y * wvy
-            f, p = self._tyre_force(wheel, v_forward, side_x * wvx + side_y * wvy, limit)
-            wheel.omega -= dt * f * self.wheel_radius / (spec.wheel_moment * self.scale**2)
-            fx, fy = p * side_x + f * forward_x, p * side_y + f * forward_y
+            if wheel.steer:
+                heading = angle + wheel.steer
+                side_x, side_y = math.cos(heading), math.sin(heading)
+            else:  # angle + 0.0 is angle: the hull's own axes
+                side_x, side_y = cos_a, sin_a
+            limit = self._road_limit if on_road[index] else self._grass_limit
+            # tyre force from slip, capped at the friction limit (forward f, sideways p)
+            f = (wheel.omega * radius - (-side_y * wvx + side_x * wvy)) * gain
+            p = -(side_x * wvx + side_y * wvy) * gain
+            total = math.hypot(f, p)
+            wheel.skidding = total > spec.skid_ratio * limit
+            if total > limit:
+                f, p = f * limit / total, p * limit / total
+            wheel.omega -= dt * f * radius / moment
+            fx, fy = p * side_x + f * -side_y, p * side_y + f * side_x
             fx_total, fy_total = fx_total + fx, fy_total + fy
             torque += rx * fy - ry * fx
             if wheel.skidding or self._skid_start[index] or self._skid_open[index]:
                 self._track_skid(index, wheel, on_road[index])
-        self._accelerate(dt, fx_total, fy_total, torque)
+        self._accelerate(dt, vx, vy, fx_total, fy_total, torque)
         self._steer(dt)
 
-    def _accelerate(self, dt: float, fx: float, fy: float, torque: float) -> None:
+    def _accelerate(
+        self, dt: float, vx: float, vy: float, fx: float, fy: float, torque: float
+    ) -> None:
         """Change the velocities now, so that the coming space step moves with the new ones.
 
         Box2D updates velocities before positions (semi-implicit Euler); pymunk moves
         positions with the old velocities first. Setting ``body.force`` would leave the
         car one step behind the reference (dt * speed, about 2 u at top speed).
         Box2D also caps a body's travel per step; the same cap keeps the same top speed.
+        ``vx, vy`` are the body's velocity now.
         """
         body = self.body
-        vx, vy = body.velocity
-        vx, vy = vx + fx / body.mass * dt, vy + fy / body.mass * dt
+        mass = body.mass
+        vx, vy = vx + fx / mass * dt, vy + fy / mass * dt
         cap = self.spec.max_translation * self.scale / dt  # [track units/s]
         speed = math.hypot(vx, vy)
         if speed > cap:
@@ -209,40 +234,10 @@ class DynamicCar:
         body.velocity = (vx, vy)
         body.angular_velocity += torque / body.moment * dt
 
-    def _spin(self, wheel: Wheel, dt: float) -> None:
-        """Engine and brake act on the wheel's spin."""
-        spec = self.spec
-        wheel.omega += (
-            dt
-            * spec.engine_power
-            * wheel.gas
-            / spec.wheel_moment
-            / (abs(wheel.omega) + spec.spin_floor)
-        )
-        if wheel.brake >= spec.brake_lock:
-            wheel.omega = 0.0
-        elif wheel.brake > 0:
-            slow = min(spec.brake_rate * wheel.brake, abs(wheel.omega))
-            wheel.omega -= math.copysign(slow, wheel.omega)
-        wheel.phase += wheel.omega * dt
-
     @property
     def wheel_radius(self) -> float:
         """[track units]"""
         return WHEEL_RADIUS * SIZE * self.scale
-
-    def _tyre_force(
-        self, wheel: Wheel, v_forward: float, v_side: float, limit: float
-    ) -> tuple[float, float]:
-        """Forward and sideways tyre force from slip, capped at the friction limit."""
-        rim = wheel.omega * self.wheel_radius
-        f = (rim - v_forward) * self.spec.slip_gain
-        p = -v_side * self.spec.slip_gain
-        total = math.hypot(f, p)
-        wheel.skidding = total > self.spec.skid_ratio * limit
-        if total > limit:
-            f, p = f * limit / total, p * limit / total
-        return f, p
 
     def _steer(self, dt: float) -> None:
         """Front wheels turn toward the target like the reference's joint motor."""
@@ -317,6 +312,19 @@ class DynamicCar:
         rear, base, _ = _footprint(self.scale)
         point = self.body.local_to_world((0.0, rear + base))
         return point.x, point.y
+
+
+def _spin(wheel: Wheel, dt: float, drive: float, spec: DynamicCarSpec) -> None:
+    """Engine and brake act on the wheel's spin (``drive`` is dt * engine power)."""
+    omega = wheel.omega
+    omega += drive * wheel.gas / spec.wheel_moment / (abs(omega) + spec.spin_floor)
+    brake = wheel.brake
+    if brake >= spec.brake_lock:
+        omega = 0.0
+    elif brake > 0:
+        omega -= math.copysign(min(spec.brake_rate * brake, abs(omega)), omega)
+    wheel.omega = omega
+    wheel.phase += omega * dt
 
 
 def _footprint(scale: float) -> tuple[float, float, float]:

@@ -79,8 +79,11 @@ class Parser:
 
     def union_of_dataclasses(self, options: tuple[type, ...], data: object, path: str) -> Any:
         """Pick the member whose ``type`` matches ``data["type"]`` (the first if absent)."""
-        kinds = {
-            f.default: cls for cls in options for f in dataclasses.fields(cls) if f.name == "type"
+        kinds: dict[str, type] = {
+            str(f.default): cls
+            for cls in options
+            for f in dataclasses.fields(cls)
+            if f.name == "type"
         }
         kind = (
             data.get("type", next(iter(kinds))) if isinstance(data, Mapping) else next(iter(kinds))
@@ -104,7 +107,7 @@ class Parser:
             if isinstance(raw, Mapping) and all(isinstance(k, str) for k in raw):
                 return dict(raw)
             return self.problem(path, raw, "expected a mapping with string keys")
-        if dataclasses.is_dataclass(hint):
+        if isinstance(hint, type) and dataclasses.is_dataclass(hint):
             return self.dataclass(hint, raw, path)
         if hint is Color:
             try:
@@ -113,7 +116,7 @@ class Parser:
                 return self.problem(path, raw, str(exc))
         return self.scalar(hint, raw, path, meta)
 
-    def union(self, args: tuple, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+    def union(self, args: tuple[Any, ...], raw: object, path: str, meta: Mapping[str, Any]) -> Any:
         members = [a for a in args if a is not type(None)]
         if raw is None:
             if len(members) < len(args):
@@ -129,7 +132,7 @@ class Parser:
         allowed = " or ".join(_describe(m, meta) for m in members)
         return self.problem(path, raw, f"expected {allowed}")
 
-    def tuple(self, args: tuple, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+    def tuple(self, args: tuple[Any, ...], raw: object, path: str, meta: Mapping[str, Any]) -> Any:
         if isinstance(raw, Mapping) and len(args) == 2 and args[1] is Ellipsis:
             raw = [raw]  # tinycarlo's singular sections: a mapping stands for a list of one
         if not isinstance(raw, (list, tuple)):
@@ -179,7 +182,7 @@ class Parser:
         return hint(raw)
 
 
-def _required(f: dataclasses.Field) -> bool:
+def _required(f: dataclasses.Field[Any]) -> bool:
     return f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
 
 
@@ -213,7 +216,7 @@ def _describe(hint: Any, meta: Mapping[str, Any]) -> str:
     return getattr(hint, "__name__", str(hint))
 
 
-def _describe_tuple(args: tuple, meta: Mapping[str, Any]) -> str:
+def _describe_tuple(args: tuple[Any, ...], meta: Mapping[str, Any]) -> str:
     if len(args) == 2 and args[1] is Ellipsis:
         return f"each {_describe(args[0], meta)}"
     if len(set(args)) == 1:  # the unit already names every element: [px, px, rad]

@@ -116,6 +116,7 @@ def _factory(spec: str) -> DriverFactory:
         return DRIVERS[spec]
     module_name, _, attribute = spec.partition(":")
     try:
-        return getattr(importlib.import_module(module_name), attribute)
+        factory: Callable[..., Driver] = getattr(importlib.import_module(module_name), attribute)
+        return factory
     except (ImportError, AttributeError) as exc:
         raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None

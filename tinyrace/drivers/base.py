@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import copy
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Protocol, cast, runtime_checkable
 
 import gymnasium as gym
 import numpy as np
@@ -31,7 +31,7 @@ class ActionAdapter:
     kinematic car); Discrete(5): see ``DiscreteChooser``.
     """
 
-    def __init__(self, space: spaces.Space, dt: float = 1 / 50):
+    def __init__(self, space: spaces.Space[Any], dt: float = 1 / 50):
         self.space = space
         self._discrete = DiscreteChooser(dt) if isinstance(space, spaces.Discrete) else None
         if self._discrete is None and not (
@@ -43,8 +43,9 @@ class ActionAdapter:
         if self._discrete is not None:
             return self._discrete.choose(controls)
         steer, gas, brake = controls
-        values = (steer,) if self.space.shape == (1,) else (steer, gas, brake)
-        return np.clip(np.array(values, np.float32), self.space.low, self.space.high)
+        box = cast(spaces.Box, self.space)  # __init__ let only Box and Discrete through
+        values = (steer,) if box.shape == (1,) else (steer, gas, brake)
+        return np.clip(np.array(values, np.float32), box.low, box.high)
 
 
 class DiscreteChooser:
@@ -110,7 +111,7 @@ class RandomDriver:
 
     def __init__(self, seed: int | None = None) -> None:
         self.seed = seed
-        self._space: spaces.Space | None = None
+        self._space: spaces.Space[Any] | None = None
         self._episodes = 0
 
     def reset(self, env: gym.Env) -> None:
@@ -121,4 +122,6 @@ class RandomDriver:
         self._episodes += 1
 
     def act(self, observation: Any, info: dict[str, Any]) -> Any:
+        if self._space is None:
+            raise RuntimeError("call reset(env) before act()")
         return self._space.sample()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -13,6 +13,9 @@ from gymnasium import spaces
 
 from tinyrace.cars.dynamic import SIZE, DynamicCarSpec
 from tinyrace.drivers.base import ActionAdapter, Controls
+
+if TYPE_CHECKING:
+    from tinyrace.env import TinyRaceEnv
 
 CARRACING_WHEELBASE = (80 + 82) * SIZE  # [u] axle to axle of CarRacing's car
 
@@ -33,7 +36,7 @@ def route_of(env: gym.Env) -> Route:
     """The route of the env's current track: the procedural centreline, or the trajectory
     drawn into an image track (``reward_design.cross_track_error.use_cte``), put in order
     from the car's pose."""
-    unwrapped = env.unwrapped
+    unwrapped = cast("TinyRaceEnv", env.unwrapped)
     track, car = unwrapped.track, unwrapped.car
     unit = car.footprint[0] / CARRACING_WHEELBASE  # the car's wheelbase sets the scale
     if unwrapped.config.car.model == "kinematic":
@@ -143,9 +146,9 @@ class CenterlineDriver:
         self._adapt: ActionAdapter | None = None
 
     def reset(self, env: gym.Env) -> None:
-        self.follow(route_of(env), env.action_space, env.unwrapped.dt)
+        self.follow(route_of(env), env.action_space, cast("TinyRaceEnv", env.unwrapped).dt)
 
-    def follow(self, route: Route, action_space: spaces.Space, dt: float) -> None:
+    def follow(self, route: Route, action_space: spaces.Space[Any], dt: float) -> None:
         """Start on ``route`` (what ``reset`` does with the env's route); ``dt`` [s] per step."""
         self.route = route
         steps = np.linalg.norm(np.diff(route.points, axis=0), axis=1)
@@ -161,11 +164,13 @@ class CenterlineDriver:
         self._adapt = ActionAdapter(action_space, dt)
 
     def act(self, observation: Any, info: dict[str, Any]) -> Any:
+        if self._adapt is None:
+            raise RuntimeError("call reset(env) before act()")
         return self._adapt(self.controls(info["pose"], info["speed"]))
 
     def controls(self, pose: Sequence[float], speed: float) -> Controls:
         """(steer, gas, brake) for the car at ``pose`` moving at ``speed`` [track units/s]."""
-        route = self.route
+        route = self._following()
         x, y, heading = pose
         nearest = self._find_nearest(x, y)
         ahead = (self.lookahead * route.unit + self.lookahead_per_speed * speed) / self._spacing
@@ -186,19 +191,26 @@ class CenterlineDriver:
         brake = 0.8 if speed > limit + self.brake_margin * route.unit else 0.0
         return steer, gas, brake
 
+    def _following(self) -> Route:
+        if self.route is None:
+            raise RuntimeError("call reset(env) or follow(route, ...) first")
+        return self.route
+
     def _index(self, i: int) -> int:
-        n = len(self.route.points)
-        return i % n if self.route.closed else min(i, n - 1)
+        route = self._following()
+        n = len(route.points)
+        return i % n if route.closed else min(i, n - 1)
 
     def _find_nearest(self, x: float, y: float) -> int:
         """Nearest route index, searched near the last one (a track may pass close by)."""
-        n = len(self.route.points)
+        route = self._following()
+        n = len(route.points)
         if self._nearest < 0:
             candidates = np.arange(n)
         else:
             candidates = np.arange(self._nearest - 5, self._nearest + 25)
-            candidates = candidates % n if self.route.closed else candidates.clip(0, n - 1)
-        offsets = self.route.points[candidates] - (x, y)
+            candidates = candidates % n if route.closed else candidates.clip(0, n - 1)
+        offsets = route.points[candidates] - (x, y)
         best = int(candidates[np.argmin(np.einsum("ij,ij->i", offsets, offsets))])
         self._nearest = best
         return best

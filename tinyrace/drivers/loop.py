@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, Protocol
 
 import gymnasium as gym
@@ -60,14 +61,14 @@ def run_episode(
     return total, steps, info
 
 
-def _call(method, what: str, *args: Any) -> Any:
+def _call(method: Callable[..., Any], what: str, *args: Any) -> Any:
     try:
         return method(*args)
     except Exception as exc:  # the driver is user code: any failure is reported as its own
         raise DriverError(f"{what} raised {type(exc).__name__}: {exc}") from exc
 
 
-def check_action(action: Any, space: spaces.Space, what: str = "the action") -> None:
+def check_action(action: Any, space: spaces.Space[Any], what: str = "the action") -> None:
     """Raise DriverError unless ``action`` is a finite action inside ``space``."""
     if isinstance(space, spaces.Discrete):
         valid = isinstance(action, (int, np.integer)) and not isinstance(action, bool)

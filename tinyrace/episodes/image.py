@@ -76,7 +76,15 @@ class ImageEpisode:
 
     def step(self, dt: float) -> StepFacts:
         """Drive ``dt`` seconds and report what the sensors saw."""
-        self.car.apply_forces(dt, _ALL_ROAD)
+        self.car.apply_forces(dt, self.wheels_on_road())
+        return self.advance(dt)
+
+    def wheels_on_road(self) -> tuple[bool, ...]:
+        """An image track has no grass: every wheel grips as on road."""
+        return _ALL_ROAD
+
+    def advance(self, dt: float) -> StepFacts:
+        """The world's step once the car's forces are applied; what the sensors saw."""
         return self._sense(dt)
 
     def _sense(self, dt: float) -> StepFacts:

@@ -64,9 +64,16 @@ class ProceduralEpisode:
         return self.step(dt)
 
     def step(self, dt: float) -> StepFacts:
+        self.car.apply_forces(dt, self.wheels_on_road())
+        return self.advance(dt)
+
+    def wheels_on_road(self) -> list[bool]:
+        """Per wheel: does it touch a road tile now (else it is on grass)."""
+        return [bool(tiles) for tiles in self.world.contacts.wheel_tiles]
+
+    def advance(self, dt: float) -> StepFacts:
+        """The world's step once the car's forces are applied; the facts it produced."""
         contacts = self.world.contacts
-        on_road = [bool(tiles) for tiles in contacts.wheel_tiles]
-        self.car.apply_forces(dt, on_road)
         self.world.step(dt)
         facts = self._visit(contacts.new_tile_touches)
         facts.wheels_on_grass = sum(not tiles for tiles in contacts.wheel_tiles)

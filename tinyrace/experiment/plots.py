@@ -36,14 +36,15 @@ def speed_colors(speed: np.ndarray, top: float) -> np.ndarray:
     """(N, 3) RGB of each speed on OpenCV's turbo map, 0 (blue) .. ``top`` (red)."""
     level = np.clip(np.nan_to_num(speed) / max(top, 1e-9), 0, 1) * 255
     bgr = cv2.applyColorMap(level.astype(np.uint8).reshape(-1, 1), cv2.COLORMAP_TURBO)
-    return bgr.reshape(-1, 3)[:, ::-1]
+    rgb: np.ndarray = bgr.reshape(-1, 3)[:, ::-1]
+    return rgb
 
 
 def trajectories(
     background: np.ndarray, paths: Sequence[Path2D], lap_line: np.ndarray | None, unit: str
 ) -> np.ndarray:
     """The track with each path coloured by speed; start, lap line, crashes, hits marked."""
-    image = background.copy()
+    image: np.ndarray = background.copy()
     scale = max(1, round(max(image.shape[:2]) / 800))  # thicker marks on big pictures
     if lap_line is not None:
         a, b = (tuple(round(float(v)) for v in p) for p in lap_line)
@@ -155,7 +156,10 @@ def _frame(image: np.ndarray, axes: Axes, title: str, x_label: str) -> None:
 
 
 def bar_chart(
-    values: Sequence[float | None], labels: Sequence[str], title: str, size=(560, 260)
+    values: Sequence[float | None],
+    labels: Sequence[str],
+    title: str,
+    size: tuple[int, int] = (560, 260),
 ) -> np.ndarray:
     """One bar per value (None: no bar, marked '-')."""
     width, height = size

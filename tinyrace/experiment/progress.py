@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
     from tinyrace.experiment.record import EpisodeRecorder
@@ -70,7 +70,7 @@ class Progress:
         self.stream.flush()
 
 
-def _lap(info: dict) -> str:
+def _lap(info: dict[str, Any]) -> str:
     """Lap progress: the share of tiles visited (procedural tracks); '-' where laps are not
     counted (image tracks)."""
     total = info.get("tiles_total")

@@ -38,7 +38,7 @@ class EpisodeRecorder:
 
     def __init__(
         self,
-        space: spaces.Space,
+        space: spaces.Space[Any],
         dt: float,
         video: VideoWriter | None = None,
         frame: Callable[[Any], np.ndarray] | None = None,
@@ -54,13 +54,21 @@ class EpisodeRecorder:
         self.obstacle_hits = 0
         self.end = "max_steps"
         self.info: dict[str, Any] = {}
-        self.rows: list[tuple] = []
+        self.rows: list[tuple[Any, ...]] = []
 
     def start(self, observation: Any, info: dict[str, Any]) -> None:
         self._record(0.0, 0.0, info)
         self._film(observation)
 
-    def step(self, action, observation, reward, terminated, truncated, info) -> None:
+    def step(
+        self,
+        action: Any,
+        observation: Any,
+        reward: float,
+        terminated: bool,
+        truncated: bool,
+        info: dict[str, Any],
+    ) -> None:
         self.episode_return += reward
         self.steps += 1
         self.obstacle_hits += bool(info.get("obstacles_hit"))
@@ -125,7 +133,7 @@ class EpisodeRecorder:
             writer.writerows(_rounded(row) for row in self.rows)
 
 
-def _rounded(row: tuple) -> tuple:
+def _rounded(row: tuple[Any, ...]) -> tuple[Any, ...]:
     return tuple(round(v, 6) if isinstance(v, float) else v for v in row)
 
 

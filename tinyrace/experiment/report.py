@@ -9,6 +9,7 @@ import base64
 import html
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -28,7 +29,7 @@ def rebuild_report(run_dir: Path) -> Path:
     return write_report(run_dir, header, results)
 
 
-def write_report(run_dir: Path, header: dict, results: Sequence[EpisodeResult]) -> Path:
+def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]) -> Path:
     """Draw the pictures, save them as PNG and write report.html; returns its path."""
     pictures = _track_pictures(run_dir, header, results)
     labels = [str(r.episode) for r in results]
@@ -63,7 +64,7 @@ def write_report(run_dir: Path, header: dict, results: Sequence[EpisodeResult]) 
     return path
 
 
-def _unit(header: dict) -> str:
+def _unit(header: dict[str, Any]) -> str:
     return "u" if header.get("track_kind") == "procedural" else "px"
 
 
@@ -73,11 +74,11 @@ def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None
 
 
 def _track_pictures(
-    run_dir: Path, header: dict, results: Sequence[EpisodeResult]
+    run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]
 ) -> list[tuple[str, str, np.ndarray]]:
     """One picture per track with the trajectories of the episodes run on it."""
     pictures = []
-    tracks: dict = header.get("tracks") or {}
+    tracks: dict[str, Any] = header.get("tracks") or {}
     for key, entry in tracks.items():
         background = cv2.imread(str(run_dir / entry["image"]))
         if background is None:
@@ -105,7 +106,9 @@ def _track_pictures(
     return pictures
 
 
-def _html(header: dict, results: Sequence[EpisodeResult], blobs: list[tuple[str, bytes]]) -> str:
+def _html(
+    header: dict[str, Any], results: Sequence[EpisodeResult], blobs: list[tuple[str, bytes]]
+) -> str:
     title = f"tinyrace run {header.get('started', '')}"
     state = []
     if header.get("interrupted"):

@@ -91,7 +91,9 @@ def summary_text(stats: dict[str, dict[str, float]]) -> str:
     return "\n".join(f"{key:>18}: {s['mean']:.2f} ± {s['std']:.2f}" for key, s in stats.items())
 
 
-def write_files(run_dir: Path, results: Sequence[EpisodeResult], header: dict) -> dict:
+def write_files(
+    run_dir: Path, results: Sequence[EpisodeResult], header: dict[str, Any]
+) -> dict[str, Any]:
     """results.json (everything) and episodes.csv (one row per episode); returns the payload."""
     rows = [asdict(r) for r in results]
     payload = {**header, "episodes": rows, "summary": summary(results)}
@@ -104,7 +106,7 @@ def write_files(run_dir: Path, results: Sequence[EpisodeResult], header: dict) -
     return payload
 
 
-def read_files(run_dir: Path) -> tuple[dict, list[EpisodeResult]]:
+def read_files(run_dir: Path) -> tuple[dict[str, Any], list[EpisodeResult]]:
     """results.json's header and the episodes of episodes.csv (what ``tinyrace report`` reads)."""
     header = json.loads((run_dir / RESULTS_FILE).read_text())
     with (run_dir / EPISODES_FILE).open(newline="") as handle:

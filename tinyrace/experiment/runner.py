@@ -20,7 +20,7 @@ from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.interrupt import Interrupted, StopSignals
-from tinyrace.experiment.load import Experiment, importable_from
+from tinyrace.experiment.load import Experiment, check_view, importable_from
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
@@ -59,7 +59,7 @@ def run_experiment(
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
     env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
     try:
-        _check_view(experiment, env)
+        check_view(experiment.config, env.config, experiment.source)
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
@@ -159,7 +159,13 @@ class _Run:
 
     def _frame(self, observation: Any) -> np.ndarray:
         view = self.config.output.view
-        return self.env.render() if view == "default" else observation[view]
+        if view != "default":
+            frame: np.ndarray = observation[view]
+            return frame
+        rendered = self.env.render()  # the env was made with render_mode rgb_array
+        if rendered is None:
+            raise RuntimeError("the env rendered no frame for the video")
+        return rendered
 
     def _track_picture(self, seed: int) -> str:
         key, entry = save_track_picture(self.env, seed, self.run_dir, self.tracks)
@@ -194,20 +200,12 @@ class _Run:
             self._write(None, error=f"{type(exc).__name__}: {exc}")
 
 
-def _driver(spec: str, args: dict, source: str) -> Driver:
+def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
     """The experiment's driver; problems name the experiment file and its ``driver`` key."""
     try:
         return load_driver(spec, **args)
     except ValueError as exc:  # DriverError included: the factory raised
         raise ConfigError(Problem(source, "driver", spec, str(exc))) from None
-
-
-def _check_view(experiment: Experiment, env: TinyRaceEnv) -> None:
-    view = experiment.config.output.view
-    ids = [c.id for c in env.config.cameras]
-    if view != "default" and view not in ids:
-        allowed = f"default or a camera id: {', '.join(ids) or '(this env has no cameras)'}"
-        raise ConfigError(Problem(experiment.source, "output.view", view, allowed))
 
 
 def new_run_dir(root: Path, name: str) -> Path:

@@ -4,10 +4,11 @@ frame, start and lap line: what the report draws trajectories over."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import cv2
 
+from tinyrace.config import ProceduralTrackConfig
 from tinyrace.env import TinyRaceEnv
 from tinyrace.render.track_picture import image_ground, procedural_ground
 
@@ -28,7 +29,8 @@ def save_track_picture(
         return key, known[key]
     if procedural:
         track = episode.track
-        image, frame = procedural_ground(track, episode.colors, env.config.tracks[0].playfield)
+        playfield = cast(ProceduralTrackConfig, env.config.tracks[0]).playfield  # [u]
+        image, frame = procedural_ground(track, episode.colors, playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
     else:

@@ -37,7 +37,7 @@ def even_frame(frame: np.ndarray) -> np.ndarray:
 def h264_available() -> bool:
     """Whether imageio-ffmpeg (with its bundled ffmpeg and libx264) can be used."""
     try:
-        import imageio_ffmpeg  # type: ignore[import-untyped]
+        import imageio_ffmpeg
 
         imageio_ffmpeg.get_ffmpeg_exe()
     except (ImportError, RuntimeError):
@@ -68,7 +68,7 @@ class H264Writer:
         self._pipe.send(frame)
 
     def _start(self, size: tuple[int, int]) -> None:
-        import imageio_ffmpeg  # type: ignore[import-untyped]
+        import imageio_ffmpeg
 
         self._size = size
         self._pipe = imageio_ffmpeg.write_frames(

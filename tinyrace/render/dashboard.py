@@ -8,7 +8,6 @@ sub-pixel information.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any
 
 import cv2
 import numpy as np
@@ -16,7 +15,6 @@ import numpy as np
 from tinyrace.cars.dynamic import DynamicCar
 
 RGB = tuple[int, int, int]
-Bar = tuple[str, int, int, RGB]  # (v or h, place, length in 1/(8 factor) units, colour)
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
 _GREEN, _RED = (0, 255, 0), (255, 0, 0)
 
@@ -31,6 +29,17 @@ WHEEL_COLUMNS = (7, 8, 9, 10)  # FL, FR, RL, RR spin, vertical
 WHEEL_GAIN = 0.01  # [layout units per rad/s]
 STEER_COLUMN, STEER_GAIN = 20, -10.0  # [layout units per rad] front wheel angle, horizontal
 GYRO_COLUMN, GYRO_GAIN = 30, -0.8  # [layout units per rad/s] yaw rate, horizontal
+# (kind, layout column, colour) of each bar, in the order draw() measures them
+_BARS: tuple[tuple[str, int, RGB], ...] = (
+    ("v", SPEED_COLUMN, _WHITE),
+    ("v", WHEEL_COLUMNS[0], _BLUE),
+    ("v", WHEEL_COLUMNS[1], _BLUE),
+    ("v", WHEEL_COLUMNS[2], _PURPLE),
+    ("v", WHEEL_COLUMNS[3], _PURPLE),
+    ("h", STEER_COLUMN, _GREEN),
+    ("h", GYRO_COLUMN, _RED),
+)
+_LAYER_CACHE_BYTES = 8_000_000  # [bytes] of cached instrument layers per dashboard
 
 
 class Dashboard:
@@ -47,39 +56,67 @@ class Dashboard:
         self.factor = supersample
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
         self._patches: dict[tuple[str, int, int], tuple[int, np.ndarray]] = {}
-        self._shown: tuple[Any, ...] | None = None  # what the strip holds now
+        self._shown: tuple[int, ...] | None = None  # what the strip holds now
+        # one layer per instrument (the bars, then the score); the strip is their maximum,
+        # so a step redraws only the layers whose value changed, from layers cached per value
+        self._layers = np.zeros((len(_BARS) + 1, *self.strip.shape), np.uint8)
+        self._layer_values: list[int | None] = [None] * len(self._layers)
+        self._cached_layers: dict[tuple[int, int], np.ndarray] = {}
+        self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
 
     def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
         wheels, sign = car.wheels, car.steer_sign
         q = BAR_STEPS * self.factor  # bar steps per layout unit
-        fl, fr, rl, rr = WHEEL_COLUMNS
-        bars = (
-            ("v", SPEED_COLUMN, round(SPEED_GAIN * car.speed / car.scale * q), _WHITE),
-            ("v", fl, round(WHEEL_GAIN * wheels[0].omega * q), _BLUE),
-            ("v", fr, round(WHEEL_GAIN * wheels[1].omega * q), _BLUE),
-            ("v", rl, round(WHEEL_GAIN * wheels[2].omega * q), _PURPLE),
-            ("v", rr, round(WHEEL_GAIN * wheels[3].omega * q), _PURPLE),
-            ("h", STEER_COLUMN, round(STEER_GAIN * wheels[0].steer * sign * q), _GREEN),
-            ("h", GYRO_COLUMN, round(GYRO_GAIN * car.body.angular_velocity * sign * q), _RED),
+        shown = (  # bar lengths in steps, in _BARS's order, then the score
+            round(SPEED_GAIN * car.speed / car.scale * q),
+            round(WHEEL_GAIN * wheels[0].omega * q),
+            round(WHEEL_GAIN * wheels[1].omega * q),
+            round(WHEEL_GAIN * wheels[2].omega * q),
+            round(WHEEL_GAIN * wheels[3].omega * q),
+            round(STEER_GAIN * wheels[0].steer * sign * q),
+            round(GYRO_GAIN * car.body.angular_velocity * sign * q),
+            int(score),
         )
-        shown = (bars, int(score))
         if shown != self._shown:  # redraw the strip only when an instrument moved
             self._shown = shown
-            self._redraw(bars, int(score))
+            self._redraw(shown)
         image[self.top :] = self.strip
 
-    def _redraw(self, bars: tuple[Bar, ...], score: int) -> None:
-        strip = self.strip
-        strip[:] = 0
-        for kind, place, steps, color in bars:
-            if steps:
-                first, patch = self._bar(kind, place, steps, color)
-                region = strip[:, first : first + patch.shape[1]]
-                np.maximum(region, patch[:, : region.shape[1]], out=region)
+    def _redraw(self, shown: tuple[int, ...]) -> None:
+        drawn = self._layer_values
+        for index, value in enumerate(shown):
+            if drawn[index] != value:
+                drawn[index] = value
+                self._layers[index] = self._layer(index, value)
+        np.maximum.reduce(self._layers, axis=0, out=self.strip)
+
+    def _layer(self, index: int, value: int) -> np.ndarray:
+        """Instrument ``index`` showing ``value``, alone in a strip-sized picture (cached)."""
+        layer = self._cached_layers.get((index, value))
+        if layer is None:
+            if len(self._cached_layers) >= self._max_cached:
+                self._cached_layers.clear()
+            layer = np.zeros_like(self.strip)
+            if index < len(_BARS):
+                kind, place, color = _BARS[index]
+                self._draw_bar(layer, kind, place, value, color)
+            else:
+                self._draw_score(layer, value)
+            layer.setflags(write=False)
+            self._cached_layers[index, value] = layer
+        return layer
+
+    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, steps: int, color: RGB) -> None:
+        if steps:
+            first, patch = self._bar(kind, place, steps, color)
+            region = layer[:, first : first + patch.shape[1]]
+            region[:] = patch[:, : region.shape[1]]
+
+    def _draw_score(self, layer: np.ndarray, score: int) -> None:
         mask, x0, y0 = _text_mask(f"{score:04d}", self.width, self.height)
         top = max(y0 - self.top, 0)
-        region = strip[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
-        np.maximum(region, mask[: region.shape[0], : region.shape[1], None], out=region)
+        region = layer[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
+        region[:] = mask[: region.shape[0], : region.shape[1], None]
 
     def _bar(self, kind: str, place: int, steps: int, color: RGB) -> tuple[int, np.ndarray]:
         key = (kind, place, steps)
