@@ -71,18 +71,22 @@ class KinematicCar:
         self.body.angular_velocity = turn_rate
 
     def state(self) -> CarState:
-        """A copy of the car's state for sensors and pictures."""
-        vx, vy = self.body.velocity
+        """A copy of the car's state for sensors and pictures (body read once: per step)."""
+        body = self.body
+        x, y = body.position
+        heading = body.angle
+        vx, vy = body.velocity
+        front = (x + self.wheelbase * math.cos(heading), y + self.wheelbase * math.sin(heading))
         return CarState(
             model="kinematic",
-            pose=self.pose,
+            pose=(x, y, heading),
             velocity=(vx, vy),
-            speed=self.speed,
-            yaw_rate=self.body.angular_velocity,
+            speed=self.velocity,
+            yaw_rate=body.angular_velocity,
             steer=self.steer,
-            front_axle=self.front_axle,
-            rear_axle=self.rear_axle,
-            footprint=self.footprint,
+            front_axle=front,
+            rear_axle=(x, y),
+            footprint=(self.wheelbase, self.track_width),
         )
 
     @property
