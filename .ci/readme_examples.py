@@ -2,8 +2,9 @@
 
 Usage: python .ci/readme_examples.py [README]   (the interpreter running this is the one
 used, so run it with the virtualenv that has the wheel installed). Examples that import
-an optional training library (stable_baselines3, ray) are listed but not run: the train
-extra's own test covers the first, and RLlib is documented, not installed.
+an optional training library (stable_baselines3, ray) or whose first line says
+``# needs: <extra>`` are listed but not run: the train extra's own test covers the first,
+RLlib is documented, not installed, and the README names what the others need.
 """
 
 from __future__ import annotations
@@ -28,6 +29,9 @@ def examples(readme: Path) -> list[tuple[int, str]]:
 
 
 def needs_optional(code: str) -> str | None:
+    marker = re.match(r"#\s*needs:\s*(.+)", code)
+    if marker:
+        return marker.group(1).strip()
     for module in OPTIONAL:
         if re.search(rf"^\s*(from|import) {module}\b", code, flags=re.M):
             return module

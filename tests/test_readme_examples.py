@@ -43,3 +43,12 @@ def test_a_broken_example_fails_the_runner(tmp_path: Path):
         [sys.executable, str(SCRIPT), str(readme)], capture_output=True, text=True, timeout=120
     )
     assert done.returncode == 1 and "FAILED (exit 3)" in done.stdout
+
+
+def test_examples_that_name_an_extra_are_listed_not_run(tmp_path: Path):
+    readme = tmp_path / "README.md"
+    readme.write_text("```python\n# needs: gymnasium[other]\nraise SystemExit(4)\n```\n")
+    done = subprocess.run(
+        [sys.executable, str(SCRIPT), str(readme)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0 and "needs gymnasium[other]" in done.stdout
