@@ -3,6 +3,7 @@
 # and, from an empty temporary folder, run the command and make every shipped track by name.
 # Usage: .ci/wheel_smoke.sh DIST_DIR   (DIST_DIR holds tinyrace-*.whl)
 set -euo pipefail
+repo="$(cd "$(dirname "$0")/.." && pwd)"
 dist="$(cd "$1" && pwd)"
 wheel="$(ls "$dist"/tinyrace-*.whl)"
 work="$(mktemp -d)"
@@ -36,6 +37,9 @@ for name in track_names():
     print(f"  {name}: {shapes}")
 print(f"  tinyrace {tinyrace.__version__}; configs: {', '.join(config_names())}")
 PY
+
+echo "== every README example that needs no optional extra, each from an empty folder"
+"$venv_python" "$repo/.ci/readme_examples.py" "$repo/README.md"
 
 echo "== the wheel holds its licence; nothing was written into the installed package"
 site="$("$venv_python" -c 'import pathlib, tinyrace; print(pathlib.Path(tinyrace.__file__).parent.parent)')"

@@ -346,6 +346,8 @@ def apply(
                 continue
             path = inner[selector % len(inner)]
             del _get(tree, path[:-1])[path[-1]]
+            if isinstance(path[-1], int):  # the later entries move up: the list is touched
+                path = path[:-1]
         elif op == "add":
             maps = [p for p, v in nodes if isinstance(v, dict)]
             if not maps:
