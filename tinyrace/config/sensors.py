@@ -98,7 +98,7 @@ class LidarConfig:
     cell: float | None = knob(
         None,
         "cell size of the distance map built once per track (null: 1 on picture tracks, "
-        "otherwise 1/40 car length)",
+        "otherwise 1/8 car length)",
         LENGTH,
         low=0,
         low_open=True,
