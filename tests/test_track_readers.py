@@ -7,6 +7,7 @@ generator; every bad file must be a ConfigError naming the file and the line.
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError
 from tinyrace.examples import DATA_DIR, TRACKS_DIR
 from tinyrace.tracks import polyline
@@ -306,3 +308,42 @@ def test_the_examples_read_without_problems(name):
     else:
         loop = read_loop(path, "t", "k")
         assert 2000 < polyline.perimeter(loop.points) < 2500
+
+
+# -- bounded input (the same rules as track.yaml and its images) ----------------------------
+def test_a_map_picture_outside_the_yaml_folder_is_refused(tmp_path):
+    inner = tmp_path / "maps"
+    inner.mkdir()
+    map_folder(tmp_path, GOOD_YAML)  # m.png one folder up
+    path = write(inner, "m.yaml", GOOD_YAML.replace("image: m.png", "image: ../m.png"))
+    with pytest.raises(ConfigError) as error:
+        read_map(path, "t", "k")
+    (problem,) = error.value.problems
+    assert (
+        problem.source == str(path) and "image" in problem.path and "../m.png" in str(error.value)
+    )
+    allowed = FilesConfig(paths_outside_folder=True)
+    assert read_map(path, "t", "k", allowed).free.any()  # the documented opt-in
+
+
+def test_a_map_picture_above_the_pixel_cap_is_refused_before_decoding(tmp_path):
+    path = map_folder(tmp_path, GOOD_YAML)  # a 4 x 6 picture
+    with pytest.raises(ConfigError, match=r"m\.png"):
+        read_map(path, "t", "k", FilesConfig(max_image_pixels=20))
+    assert read_map(path, "t", "k", FilesConfig(max_image_pixels=24)).free.any()
+
+
+def test_a_map_yaml_with_duplicate_keys_is_refused(tmp_path):
+    path = map_folder(tmp_path, GOOD_YAML + "resolution: 0.1\n")
+    with pytest.raises(ConfigError, match="resolution"):
+        read_map(path, "t", "k")
+
+
+def test_a_track_csv_that_is_a_fifo_is_refused_without_reading(tmp_path):
+    fifo = tmp_path / "circuit.csv"
+    os.mkfifo(fifo)  # reading it would block forever
+    with pytest.raises(ConfigError) as error:
+        read_loop(fifo, "exp.yaml", "track.file")
+    (problem,) = error.value.problems
+    assert (problem.source, problem.path) == ("exp.yaml", "track.file")
+    assert "regular file" in problem.allowed

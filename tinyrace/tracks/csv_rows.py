@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
 
 
@@ -36,15 +37,21 @@ class Table:
         return Problem(self.path, self.where(row, column, name), value, allowed)
 
 
+MAX_DATA_BYTES = 64 << 20  # [bytes] a track data file (a real circuit's CSV is ~50 kB)
+
+
 def read_text(path: Path, source: str, key: str) -> str:
-    """The file's text; a missing or unreadable file is a problem of ``key`` in ``source``."""
+    """The file's text; a missing, unreadable, oversize or non-regular file (a FIFO, a
+    device) is a problem of ``key`` in ``source``, found before the file is read whole."""
     try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        reason = (
-            "does not exist" if isinstance(exc, FileNotFoundError) else f"is unreadable ({exc})"
-        )
-        allowed = f"expected a readable file; it {reason}"
+        data = read_bytes(path, MAX_DATA_BYTES, "a track data file")
+    except ConfigError as error:
+        allowed = error.problems[0].allowed
+        raise ConfigError(Problem(source, key, str(path), allowed)) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        allowed = f"expected UTF-8 text (byte {exc.start} is not)"
         raise ConfigError(Problem(source, key, str(path), allowed)) from None
 
 

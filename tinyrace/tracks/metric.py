@@ -23,6 +23,7 @@ from tinyrace.config import (
     RosMapTrackConfig,
 )
 from tinyrace.config.paths import inside_folder
+from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
 from tinyrace.tracks.base import Surface, Track, TrackDraw, pick_index
 from tinyrace.tracks.centerline_csv import read_loop
@@ -31,6 +32,7 @@ from tinyrace.tracks.cone_map import RADII, read_cones, road_between
 from tinyrace.tracks.ros_map import OccupancyMap, read_map
 
 Pose = tuple[float, float, float]
+FILES = FilesConfig()  # the default bounds on the files a track names
 OFF_ROAD_FRICTION = 0.6  # CarRacing's grass grip, as a fraction of the road's
 
 
@@ -84,22 +86,22 @@ METRIC_CONFIGS = (CenterlineTrackConfig, ConeMapTrackConfig, RosMapTrackConfig)
 
 
 def load_metric_track(
-    config: MetricConfig, index: int, base_dir: Path, source: str, allow_outside: bool = False
+    config: MetricConfig, index: int, base_dir: Path, source: str, files: FilesConfig = FILES
 ) -> MetricTrack:
     """Read ``tracks[index]``; a ConfigError names the file (and line) of every problem.
 
-    Its files stay inside the config's folder unless ``allow_outside``
-    (``files.paths_outside_folder``)."""
+    Its files stay inside the config's folder unless ``files.paths_outside_folder``; a
+    picture is checked against ``files.max_image_pixels`` before it is decoded."""
     where = f"tracks[{index}]"
     for key in ("file", "waypoints"):
         name = getattr(config, key, None)
         if name is not None:
-            inside_folder(name, base_dir, allow_outside, source, f"{where}.{key}")
-    return LOADERS[config.type](config, where, base_dir, source)
+            inside_folder(name, base_dir, files.paths_outside_folder, source, f"{where}.{key}")
+    return LOADERS[config.type](config, where, base_dir, source, files)
 
 
 def _centerline(
-    config: CenterlineTrackConfig, where: str, base_dir: Path, source: str
+    config: CenterlineTrackConfig, where: str, base_dir: Path, source: str, files: FilesConfig
 ) -> MetricTrack:
     loop = read_loop(base_dir / config.file, source, f"{where}.file", config.scale)
     widths = loop.widths
@@ -115,7 +117,9 @@ def _centerline(
     )
 
 
-def _cone_map(config: ConeMapTrackConfig, where: str, base_dir: Path, source: str) -> MetricTrack:
+def _cone_map(
+    config: ConeMapTrackConfig, where: str, base_dir: Path, source: str, files: FilesConfig
+) -> MetricTrack:
     cones = read_cones(base_dir / config.file, source, f"{where}.file", config.scale)
     road = road_between(cones, config.spacing, config.max_cone_gap)
     circuit = Circuit.build(road.centerline, road.widths, config.spacing)
@@ -132,8 +136,10 @@ def _cone_map(config: ConeMapTrackConfig, where: str, base_dir: Path, source: st
     )
 
 
-def _ros_map(config: RosMapTrackConfig, where: str, base_dir: Path, source: str) -> MetricTrack:
-    occupancy = read_map(base_dir / config.file, source, f"{where}.file")
+def _ros_map(
+    config: RosMapTrackConfig, where: str, base_dir: Path, source: str, files: FilesConfig
+) -> MetricTrack:
+    occupancy = read_map(base_dir / config.file, source, f"{where}.file", files)
     circuit = None
     if config.waypoints is not None:
         loop = read_loop(base_dir / config.waypoints, source, f"{where}.waypoints")
@@ -194,8 +200,9 @@ class MetricSource:
         for index, track_config in enumerate(config.tracks):
             assert isinstance(track_config, METRIC_CONFIGS)  # one kind per env, checked at load
             try:
-                outside = config.files.paths_outside_folder
-                loaded.append(load_metric_track(track_config, index, base_dir, source, outside))
+                loaded.append(
+                    load_metric_track(track_config, index, base_dir, source, config.files)
+                )
             except ConfigError as error:
                 problems += error.problems
         if problems:

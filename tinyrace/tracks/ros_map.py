@@ -19,10 +19,15 @@ import cv2
 import numpy as np
 import yaml
 
+from tinyrace.config.image_file import read_image_bgr
+from tinyrace.config.paths import inside_folder
+from tinyrace.config.schema import FilesConfig
+from tinyrace.config.yaml_file import parse_yaml
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.csv_rows import read_text
 
 MODES = ("trinary", "scale", "raw")
+DEFAULT_FILES = FilesConfig()
 
 
 @dataclass(frozen=True)
@@ -129,29 +134,26 @@ def _rotate(points: np.ndarray, angle: float) -> np.ndarray:
     return np.asarray(points @ np.array([[c, s], [-s, c]]), float)
 
 
-def read_map(path: Path, source: str, key: str) -> OccupancyMap:
-    """Read the map YAML and its picture; problems name the YAML file and the key's line."""
+def read_map(path: Path, source: str, key: str, files: FilesConfig = DEFAULT_FILES) -> OccupancyMap:
+    """Read the map YAML and its picture; problems name the YAML file and the key's line.
+
+    The YAML is read within the bounds of a track.yaml; the picture stays in the YAML's
+    folder (unless ``files.paths_outside_folder``) and its size is checked from its header
+    against ``files.max_image_pixels`` before it is decoded."""
     text = read_text(path, source, key)
-    info = read_info(path, text)
-    gray = cv2.imread(str(info.image), cv2.IMREAD_GRAYSCALE)
-    if gray is None:
-        where = _where(text, "image")
-        allowed = "expected a readable picture (PGM, PNG, ...) relative to the YAML"
-        raise ConfigError(Problem(str(path), where, str(info.image), allowed))
+    info = read_info(path, text, files.paths_outside_folder)
+    where = _where(text, "image")
+    bgr = read_image_bgr(info.image, files.max_image_pixels, str(path), where, str(info.image))
+    gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)  # equal channels: the grey values unchanged
     occupancy = gray.astype(np.float32) / 255.0
     if not info.negate:
         occupancy = 1.0 - occupancy
     return OccupancyMap(info, occupancy < info.free_thresh, occupancy > info.occupied_thresh)
 
 
-def read_info(path: Path, text: str) -> MapInfo:
+def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
     """The map YAML's keys, checked; every problem names the file and the key's line."""
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark else ""
-        raise ConfigError(Problem(str(path), where, "", f"invalid YAML: {exc}")) from None
+    data = parse_yaml(text, str(path))  # bounded: nesting, aliases, duplicate keys
     if not isinstance(data, dict):
         raise ConfigError(Problem(str(path), "", data, "expected a mapping of map_server keys"))
     problems: list[Problem] = []
@@ -162,8 +164,14 @@ def read_info(path: Path, text: str) -> MapInfo:
     image = data.get("image")
     if not isinstance(image, str) or not image.strip():
         bad("image", "expected the picture's file name, relative to the YAML")
-    elif not (path.parent / image).is_file():
-        bad("image", f"expected an existing picture; {path.parent / image} does not exist")
+    else:
+        try:
+            inside_folder(image, path.parent, allow_outside, str(path), _where(text, "image"))
+        except ConfigError as error:
+            problems += error.problems
+        else:
+            if not (path.parent / image).is_file():
+                bad("image", f"expected an existing picture; {path.parent / image} does not exist")
     resolution = data.get("resolution")
     if not _number(resolution) or resolution <= 0:
         bad("resolution", "expected a number > 0 [m/px]")
