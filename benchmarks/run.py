@@ -219,6 +219,26 @@ def measure_image_tracks(budget: Budget, generated_dir: Path) -> dict[str, Any]:
     return {name: results[name] for name in cases}
 
 
+METRIC_TRACKS = ("circuit", "autocross", "f1tenth_loop")  # the shipped tracks in metres
+
+
+def measure_track_sources(budget: Budget) -> dict[str, Any]:
+    """steps/s of each shipped metric track (its own track.yaml: camera, throttle car) beside
+    the procedural track's (CarRacing-v0), random actions, in one interleaved run."""
+    cases: dict[str, Callable[[], gym.Env]] = {"procedural": make_tinyrace}
+    for name in METRIC_TRACKS:
+        cases[name] = lambda name=name: make_tinyrace("tinyrace/TinyRace-v0", environment=name)
+    return timed({name: Stepper(make()) for name, make in cases.items()}, budget)
+
+
+def print_track_sources(results: dict[str, Any]) -> None:
+    print(f"\n{'track':<14}{'steps/s':>10}{'vs procedural':>16}")
+    base = results["procedural"]["steps_per_s"]
+    for name, timing in results.items():
+        rate = timing["steps_per_s"]
+        print(f"{name:<14}{rate:>10,.0f}{rate / base:>15.2f}x")
+
+
 def measure_vector(budget: Budget) -> dict[str, Any]:
     """Env-steps/s of one env, SyncVectorEnv(2), AsyncVectorEnv(2 workers) and
     BatchVectorEnv(8 envs, 2 workers), interleaved."""
@@ -517,6 +537,7 @@ def run(budget: Budget) -> dict[str, Any]:
         results["throughput"] = guarded("throughput", measure_throughput, budget)
         results["reset"] = guarded("reset time", measure_reset, budget)
         results["image_tracks"] = guarded("image tracks", measure_image_tracks, budget, generated)
+        results["track_sources"] = guarded("metric tracks", measure_track_sources, budget)
         results["vector"] = guarded("vector envs", measure_vector, budget)
         results["vector_scaling"] = guarded(
             "envs in one process (1..32)", measure_vector_scaling, budget
@@ -545,6 +566,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--quick", action="store_true", help="smoke run, under a minute")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON file to write")
     parser.add_argument("--sensors", action="store_true", help="only the per-sensor costs")
+    parser.add_argument(
+        "--tracks", action="store_true", help="only the metric tracks beside the procedural one"
+    )
     parser.add_argument("--rss-child", help=argparse.SUPPRESS)  # internal: one RSS process
     args = parser.parse_args(argv)
     if args.rss_child:
@@ -561,6 +585,11 @@ def main(argv: list[str] | None = None) -> None:
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(results, indent=2) + "\n")
         print(f"\nwrote {out}")
+        return
+    if args.tracks:
+        with quiet_gym_warnings():
+            tracks = measure_track_sources(QUICK if args.quick else FULL)
+        print_track_sources(tracks)
         return
     results = run(QUICK if args.quick else FULL)
     report(results, RSS_STEPS)
