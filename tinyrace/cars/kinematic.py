@@ -16,8 +16,43 @@ from tinyrace.cars.collision import footprint_sensor
 from tinyrace.cars.state import CarState
 
 
+class RearAxleBicycle:
+    """Geometry of a bicycle-model car whose body sits at the middle of its rear axle and
+    turns with its heading; shared by the kinematic cars (lengths in track units)."""
+
+    body: pymunk.Body
+    wheelbase: float  # [track units] rear to front axle
+    track_width: float  # [track units]
+    velocity: float  # [track units/s] speed along the heading
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        x, y = self.body.position
+        return x, y, self.body.angle
+
+    @property
+    def speed(self) -> float:
+        return self.velocity
+
+    @property
+    def footprint(self) -> tuple[float, float]:
+        """(wheelbase, track width) [track units]."""
+        return self.wheelbase, self.track_width
+
+    @property
+    def rear_axle(self) -> tuple[float, float]:
+        x, y = self.body.position
+        return x, y
+
+    @property
+    def front_axle(self) -> tuple[float, float]:
+        x, y = self.body.position
+        heading = self.body.angle
+        return x + self.wheelbase * math.cos(heading), y + self.wheelbase * math.sin(heading)
+
+
 @dataclass
-class KinematicCar:
+class KinematicCar(RearAxleBicycle):
     """Constant-speed bicycle; ``control(steer)`` takes the normalised angle -1..1."""
 
     body: pymunk.Body
@@ -88,28 +123,3 @@ class KinematicCar:
             rear_axle=(x, y),
             footprint=(self.wheelbase, self.track_width),
         )
-
-    @property
-    def pose(self) -> tuple[float, float, float]:
-        x, y = self.body.position
-        return x, y, self.body.angle
-
-    @property
-    def speed(self) -> float:
-        return self.velocity
-
-    @property
-    def footprint(self) -> tuple[float, float]:
-        """(wheelbase, track width) in px."""
-        return self.wheelbase, self.track_width
-
-    @property
-    def rear_axle(self) -> tuple[float, float]:
-        x, y = self.body.position
-        return x, y
-
-    @property
-    def front_axle(self) -> tuple[float, float]:
-        x, y = self.body.position
-        heading = self.body.angle
-        return x + self.wheelbase * math.cos(heading), y + self.wheelbase * math.sin(heading)

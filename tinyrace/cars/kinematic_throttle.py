@@ -15,11 +15,12 @@ from dataclasses import dataclass
 import pymunk
 
 from tinyrace.cars.collision import footprint_sensor
+from tinyrace.cars.kinematic import RearAxleBicycle
 from tinyrace.cars.state import CarState
 
 
 @dataclass
-class KinematicThrottleCar:
+class KinematicThrottleCar(RearAxleBicycle):
     """Bicycle model with a speed state; ``control(steer, throttle)`` takes -1..1 each."""
 
     body: pymunk.Body
@@ -108,28 +109,3 @@ class KinematicThrottleCar:
             rear_axle=self.rear_axle,
             footprint=self.footprint,
         )
-
-    @property
-    def pose(self) -> tuple[float, float, float]:
-        x, y = self.body.position
-        return x, y, self.body.angle
-
-    @property
-    def speed(self) -> float:
-        return self.velocity
-
-    @property
-    def footprint(self) -> tuple[float, float]:
-        """(wheelbase, track width) [m]."""
-        return self.wheelbase, self.track_width
-
-    @property
-    def rear_axle(self) -> tuple[float, float]:
-        x, y = self.body.position
-        return x, y
-
-    @property
-    def front_axle(self) -> tuple[float, float]:
-        x, y = self.body.position
-        heading = self.body.angle
-        return x + self.wheelbase * math.cos(heading), y + self.wheelbase * math.sin(heading)
