@@ -18,7 +18,7 @@ from tinyrace.cars.base import Car, Pose
 from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
-from tinyrace.config import CarConfig, EnvConfig
+from tinyrace.config import METRIC_KINDS, CarConfig, EnvConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Track
 
@@ -79,9 +79,6 @@ def _kinematic_throttle_actions(config: CarConfig) -> ActionSpec:
     return ActionSpec.for_car("kinematic_throttle", config.actions)
 
 
-METRIC_KINDS = frozenset({"centerline", "cone_map", "ros_map"})  # tracks in metres
-
-
 def _dynamic_actions(config: CarConfig) -> ActionSpec:
     return ActionSpec.for_car("dynamic", config.actions)
 
@@ -93,7 +90,7 @@ def _kinematic_actions(config: CarConfig) -> ActionSpec:
 CAR_MODELS: dict[str, CarModel] = {
     "dynamic": CarModel(
         name="dynamic",
-        track_kinds=frozenset({"procedural", "image"}) | METRIC_KINDS,
+        track_kinds=frozenset({"procedural", "image", *METRIC_KINDS}),
         default_for=frozenset({"procedural"}),
         action_kinds=frozenset({"continuous", "discrete"}),
         build=_build_dynamic,
@@ -111,8 +108,8 @@ CAR_MODELS: dict[str, CarModel] = {
     ),
     "kinematic_throttle": CarModel(
         name="kinematic_throttle",
-        track_kinds=METRIC_KINDS,
-        default_for=METRIC_KINDS,
+        track_kinds=frozenset(METRIC_KINDS),
+        default_for=frozenset(METRIC_KINDS),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic_throttle,
         actions=_kinematic_throttle_actions,
