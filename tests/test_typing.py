@@ -24,5 +24,5 @@ def test_mypy_strict_is_clean():
 def test_mypy_runs_in_strict_mode():
     config = (ROOT / "pyproject.toml").read_text()
     assert "[tool.mypy]\nstrict = true" in config
-    test_extra = config.split("\ntest = [", 1)[1].split("]", 1)[0]
+    test_extra = config.split("\ntest = [", 1)[1].split("\n]", 1)[0]
     assert '"mypy' in test_extra  # the README's test command installs what this test runs
