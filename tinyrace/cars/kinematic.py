@@ -24,6 +24,17 @@ class RearAxleBicycle:
     wheelbase: float  # [track units] rear to front axle
     track_width: float  # [track units]
     velocity: float  # [track units/s] speed along the heading
+    steer: float  # [rad] current wheel angle
+    steer_target: float  # [rad]
+    max_rate: float | None  # [rad/s] steering rate limit, None: unlimited
+
+    def steer_toward_target(self, dt: float) -> None:
+        """Turn the wheel toward its target, at most ``max_rate`` for ``dt`` seconds."""
+        change = self.steer_target - self.steer
+        if self.max_rate is not None:
+            limit = self.max_rate * dt
+            change = min(max(change, -limit), limit)
+        self.steer += change
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -90,11 +101,7 @@ class KinematicCar(RearAxleBicycle):
 
     def apply_forces(self, dt: float, on_road: object = None) -> None:
         """Move the steering toward its target, then set the velocities for this step."""
-        change = self.steer_target - self.steer
-        if self.max_rate is not None:
-            limit = self.max_rate * dt
-            change = min(max(change, -limit), limit)
-        self.steer += change
+        self.steer_toward_target(dt)
         turn_rate = self.velocity * math.tan(self.steer) / self.wheelbase  # [rad/s]
         # pymunk moves the body along a straight line per step: aim it along the chord of the
         # arc the bicycle drives (as tinycarlo steps it), so poses land exactly on that arc

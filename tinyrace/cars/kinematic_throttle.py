@@ -72,11 +72,7 @@ class KinematicThrottleCar(RearAxleBicycle):
 
     def apply_forces(self, dt: float, on_road: object = None) -> None:
         """Steer toward the target, change the speed by the pedal, set this step's velocities."""
-        change = self.steer_target - self.steer
-        if self.max_rate is not None:
-            limit = self.max_rate * dt
-            change = min(max(change, -limit), limit)
-        self.steer += change
+        self.steer_toward_target(dt)
         if self.throttle >= 0:
             self.velocity += self.throttle * self.max_acceleration * dt
         else:
