@@ -9,6 +9,7 @@ to the nearest trajectory pixel.
 from __future__ import annotations
 
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -313,6 +314,9 @@ def assert_nearest(points: np.ndarray, queries, cell: float) -> None:
     index = NearestPoint(points, cell)
     for x, y in queries:
         distance, nx, ny = index.query(x, y)
+        # a second query reads the cell's cached candidates; a copy starts with none
+        assert index.query(x, y) == (distance, nx, ny)
+        assert pickle.loads(pickle.dumps(index)).query(x, y) == (distance, nx, ny)
         brute = np.sqrt(((points - (x, y)) ** 2).sum(axis=1))
         assert distance == pytest.approx(brute.min(), rel=1e-12, abs=1e-9)
         assert math.hypot(nx - x, ny - y) == pytest.approx(distance, rel=1e-12, abs=1e-9)

@@ -3,15 +3,20 @@
 Points are bucketed in a grid and sorted by cell, so that a row of cells is one
 contiguous slice. A coarse distance transform of the occupied cells tells, for
 any cell, how many rings around it can hold the nearest point; a query reads
-only those rows: O(points near the query), never a scan of all points.
+only those rows: O(points near the query), never a scan of all points. Inside the
+grid, a cell's candidates depend on the cell alone, so they are gathered once per cell
+(a bounded cache) and a query is then three numpy calls.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import cv2
 import numpy as np
+
+CACHED_CELLS = 4096  # cells whose candidates are kept (cleared when full)
 
 
 class NearestPoint:
@@ -35,6 +40,7 @@ class NearestPoint:
         empty = (counts.reshape(self.rows, self.cols) == 0).astype(np.uint8)
         # distance (in cells, centre to centre) from each cell to the nearest occupied cell
         self.reach = cv2.distanceTransform(empty, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        self._cells: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def query(self, x: float, y: float) -> tuple[float, float, float]:
         """(distance, nearest x, nearest y) for the point (x, y)."""
@@ -42,6 +48,23 @@ class NearestPoint:
         col = min(max(math.floor(fx), 0), self.cols - 1)
         row = min(max(math.floor(fy), 0), self.rows - 1)
         outside = math.hypot(fx - min(max(fx, 0), self.cols), fy - min(max(fy, 0), self.rows))
+        if outside:
+            xs, ys = self._candidates(row, col, outside)
+        else:
+            found = self._cells.get((row, col))
+            if found is None:
+                if len(self._cells) >= CACHED_CELLS:
+                    self._cells.clear()
+                found = self._cells[row, col] = self._candidates(row, col, 0.0)
+            xs, ys = found
+        dx, dy = xs - x, ys - y
+        d2 = dx * dx + dy * dy
+        best = int(np.argmin(d2))
+        return math.sqrt(d2[best]), float(xs[best]), float(ys[best])
+
+    def _candidates(self, row: int, col: int, outside: float) -> tuple[np.ndarray, np.ndarray]:
+        """(x, y) of every point that can be the nearest from cell (row, col), ``outside``
+        [cells] the query's distance beyond the grid; in a fixed order."""
         # every point closer than the nearest occupied cell's far corner lies within this many rings
         rings = math.ceil(self.reach[row, col] + outside) + 2
         r0, r1 = max(row - rings, 0), min(row + rings, self.rows - 1)
@@ -49,6 +72,7 @@ class NearestPoint:
         starts = self.offsets[np.arange(r0, r1 + 1) * self.cols + c0]
         ends = self.offsets[np.arange(r0, r1 + 1) * self.cols + c1 + 1]
         candidates = np.concatenate([self.points[a:b] for a, b in zip(starts, ends, strict=True)])
-        d2 = (candidates[:, 0] - x) ** 2 + (candidates[:, 1] - y) ** 2
-        best = int(np.argmin(d2))
-        return math.sqrt(d2[best]), float(candidates[best, 0]), float(candidates[best, 1])
+        return np.ascontiguousarray(candidates[:, 0]), np.ascontiguousarray(candidates[:, 1])
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_cells": {}}  # a cache: refilled when queried
