@@ -112,62 +112,53 @@ def _trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.nd
     Returns rows (alpha [rad], beta [rad], x [u], y [u]): the point's polar
     angle (shifted by 2*pi past the last checkpoint), the mean heading over the
     step, and the point reached.
+
+    This loop is most of a reset's track generation, so it is one flat loop over
+    Python floats (no calls but math's): each step depends on the one before, so
+    numpy cannot help. The arithmetic is CarRacing's, operation for operation.
     """
-    cp_alpha, cp_x, cp_y = (list(column) for column in checkpoints.T)
+    cp_alpha, cp_x, cp_y = (column.tolist() for column in checkpoints.T)
+    count = len(cp_alpha)
+    turn_rate, step = params.turn_rate, params.detail_step  # [rad], [u]
+    full_turn, unwrap_limit = 2 * math.pi, 1.5 * math.pi  # [rad]
+    atan2, cos, sin = math.atan2, math.cos, math.sin
     x, y, beta = _START_RADIUS_FACTOR * params.radius, 0.0, 0.0  # [u], [u], [rad]
-    target, laps, below_axis = 0, 0, False
-    points = []
+    target, laps, below_axis = 0, 0, False  # target: index of the checkpoint aimed at
+    rows: list[float] = []  # alpha, beta, x, y of each point, flat
     for _ in range(_MAX_STEPS):
-        alpha = math.atan2(y, x)
+        alpha = atan2(y, x)  # [rad]
         if below_axis and alpha > 0:
             laps, below_axis = laps + 1, False
         if alpha < 0:
-            below_axis, alpha = True, alpha + 2 * math.pi
-        alpha, target = _aim(alpha, target, cp_alpha)
-        target_index = target % len(cp_alpha)
-        cos_beta, sin_beta = math.cos(beta), math.sin(beta)
-        proj = cos_beta * (cp_x[target_index] - x) + sin_beta * (cp_y[target_index] - y)  # [u]
-        beta = _unwrap_near(beta, alpha)
+            below_axis, alpha = True, alpha + full_turn
+        # aim at the first checkpoint not behind alpha; past the last one, wrap to the first
+        while alpha > cp_alpha[target]:
+            target += 1
+            if target == count:
+                target, alpha = 0, alpha - full_turn
+        cos_beta, sin_beta = cos(beta), sin(beta)
+        proj = cos_beta * (cp_x[target] - x) + sin_beta * (cp_y[target] - y)  # [u]
+        # unwrap beta to within 1.5*pi of alpha
+        while beta - alpha > unwrap_limit:
+            beta -= full_turn
+        while beta - alpha < -unwrap_limit:
+            beta += full_turn
         prev_beta = beta
-        beta = _steer(beta, proj * _STEER_SCALE, params.turn_rate)
-        # The step runs along the heading's normal, using the heading before this turn.
-        x, y = x - sin_beta * params.detail_step, y + cos_beta * params.detail_step
-        points.append((alpha, prev_beta * 0.5 + beta * 0.5, x, y))
+        # steer towards the target: the law reads the projection in Box2D units
+        proj *= _STEER_SCALE
+        turn = abs(_STEER_GAIN * proj)  # [rad]
+        if turn > turn_rate:
+            turn = turn_rate
+        if proj > _STEER_DEADBAND:
+            beta -= turn
+        elif proj < -_STEER_DEADBAND:
+            beta += turn
+        # the step runs along the heading's normal, using the heading before this turn
+        x, y = x - sin_beta * step, y + cos_beta * step
+        rows += (alpha, prev_beta * 0.5 + beta * 0.5, x, y)
         if laps > _MAX_LAPS:
             break
-    return np.array(points)
-
-
-def _aim(alpha: float, target: int, cp_alpha: list[float]) -> tuple[float, int]:
-    """Advance target to the first checkpoint not behind polar angle alpha [rad].
-
-    Past the last checkpoint, alpha drops by 2*pi and the search wraps to
-    checkpoint 0. ``target`` only grows; callers use ``target % len(cp_alpha)``.
-    """
-    while alpha > cp_alpha[target % len(cp_alpha)]:
-        target += 1
-        if target % len(cp_alpha) == 0:
-            alpha -= 2 * math.pi
-    return alpha, target
-
-
-def _unwrap_near(beta: float, alpha: float) -> float:
-    """Shift heading beta [rad] by whole turns to within 1.5*pi of polar angle alpha."""
-    while beta - alpha > 1.5 * math.pi:
-        beta -= 2 * math.pi
-    while beta - alpha < -1.5 * math.pi:
-        beta += 2 * math.pi
-    return beta
-
-
-def _steer(beta: float, proj: float, turn_rate: float) -> float:
-    """Turn heading beta [rad] towards the target, given its projection [Box2D units]."""
-    turn = min(turn_rate, abs(_STEER_GAIN * proj))  # [rad]
-    if proj > _STEER_DEADBAND:
-        return beta - turn
-    if proj < -_STEER_DEADBAND:
-        return beta + turn
-    return beta
+    return np.array(rows).reshape(-1, 4)
 
 
 def _extract_lap(path: np.ndarray, params: ProceduralTrackParams) -> np.ndarray | None:
