@@ -193,7 +193,8 @@ def _build_track(lap: np.ndarray, params: ProceduralTrackParams, attempts: int) 
     """Turn a closed lap's rows (alpha, beta, x, y) into tiles and kerbs."""
     centerline, headings = lap[:, 2:4].copy(), lap[:, 1].copy()
     normals = np.column_stack((np.cos(headings), np.sin(headings)))
-    tiles = _quads(centerline, normals, -params.half_width, params.half_width)
+    every = np.arange(len(lap))
+    tiles = _quads(centerline, normals, every, -params.half_width, params.half_width)
     kerbs, kerb_red = _kerbs(centerline, headings, normals, params)
     arrays = (centerline, headings, tiles, kerbs, kerb_red)
     for array in arrays:
@@ -204,26 +205,38 @@ def _build_track(lap: np.ndarray, params: ProceduralTrackParams, attempts: int) 
 def _quads(
     points: np.ndarray,
     normals: np.ndarray,
+    rows: np.ndarray,
     inner: float | np.ndarray,
     outer: float | np.ndarray,
 ) -> np.ndarray:
-    """Quads (N, 4, 2) between each point i and point i-1 (cyclic) [u].
+    """Quads (len(rows), 4, 2) between each point i in ``rows`` and point i-1 (cyclic) [u].
 
     Vertices: point i + inner, point i + outer, point i-1 + outer, point i-1 + inner,
-    each offset along that point's normal by the given distance [u].
+    each offset along that point's normal by the given distance [u] (one per row, or one
+    for all).
     """
-    inner = np.broadcast_to(inner, len(points))[:, None]
-    outer = np.broadcast_to(outer, len(points))[:, None]
-    prev_points, prev_normals = np.roll(points, 1, axis=0), np.roll(normals, 1, axis=0)
+    inner, outer = _column(inner), _column(outer)
+    here, before = rows, rows - 1  # index -1 is the last point: the lap is a loop
     return np.stack(
         (
-            points + inner * normals,
-            points + outer * normals,
-            prev_points + outer * prev_normals,
-            prev_points + inner * prev_normals,
+            points[here] + inner * normals[here],
+            points[here] + outer * normals[here],
+            points[before] + outer * normals[before],
+            points[before] + inner * normals[before],
         ),
         axis=1,
     )
+
+
+def _column(value: float | np.ndarray) -> float | np.ndarray:
+    """A per-row array as a column (it scales the rows of an (N, 2) array); a number as is."""
+    return value[:, None] if isinstance(value, np.ndarray) else value
+
+
+def _cyclic_windows(length: int, offsets: range) -> np.ndarray:
+    """(len(offsets), length) indices: row k holds (i + offsets[k]) mod length for each i."""
+    windows: np.ndarray = (np.arange(length) + np.array(offsets)[:, None]) % length
+    return windows
 
 
 def _kerbs(
@@ -233,17 +246,18 @@ def _kerbs(
     params: ProceduralTrackParams,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Kerb quads (K, 4, 2) [u] on the outer side of hard turns, and their red flags (K,)."""
-    turns = headings - np.roll(headings, 1)  # [rad] turn into each point from the one before
+    turns = headings - headings[np.arange(-1, len(headings) - 1)]  # [rad] into each point
     flagged = _spread_back(_hard_turns(turns, params), params.border_min_count)
     index = np.flatnonzero(flagged)
-    side = np.sign(-turns)  # +1 or -1: the outer side of the turn along the normal
+    side = np.sign(-turns[index])  # +1 or -1: the outer side of the turn along the normal
     kerbs = _quads(
         centerline,
         normals,
+        index,
         side * params.half_width,
         side * (params.half_width + params.border),
     )
-    return kerbs[index], index % 2 == 1
+    return kerbs, index % 2 == 1
 
 
 def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
@@ -252,9 +266,10 @@ def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
     Indices wrap: the first points look back across the seam to the lap's
     last points, as CarRacing does (headings there differ by well under a turn).
     """
-    window = np.stack([np.roll(turns, k) for k in range(params.border_min_count)])
+    count = params.border_min_count
+    window = turns[_cyclic_windows(len(turns), range(0, -count, -1))]  # row k: turn k back
     sharp = np.all(np.abs(window) > params.turn_rate * _KERB_TURN_FRACTION, axis=0)
-    one_way = np.abs(np.sign(window).sum(axis=0)) == params.border_min_count
+    one_way = np.abs(np.sign(window).sum(axis=0)) == count
     hard: np.ndarray = sharp & one_way
     return hard
 
@@ -268,5 +283,5 @@ def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
     spread = flags.copy()
     for k in range(1, count):
         spread[-k % len(spread)] |= flags[: count - k].any()  # wraps on laps shorter than count
-    spread_back: np.ndarray = np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
+    spread_back: np.ndarray = spread[_cyclic_windows(len(spread), range(count))].any(axis=0)
     return spread_back
