@@ -11,6 +11,7 @@ is printed.
 from __future__ import annotations
 
 import collections
+import contextlib
 import hashlib
 import itertools
 import os
@@ -124,9 +125,16 @@ class Worker:
         return data
 
     def stop(self) -> None:
-        if self.process is not None and self.process.poll() is None:
+        if self.process is None:
+            return
+        if self.process.poll() is None:
             self.process.kill()
             self.process.wait()
+        # Closed now, the pipes cannot warn "unclosed file" whenever the garbage collector
+        # next meets the old Popen (which may be inside another test's warnings check).
+        for pipe in (self.process.stdin, self.process.stdout):
+            with contextlib.suppress(OSError):  # a worker that died mid-case broke its pipe
+                pipe.close()
 
 
 class Campaign:

@@ -112,62 +112,53 @@ def _trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.nd
     Returns rows (alpha [rad], beta [rad], x [u], y [u]): the point's polar
     angle (shifted by 2*pi past the last checkpoint), the mean heading over the
     step, and the point reached.
+
+    This loop is most of a reset's track generation, so it is one flat loop over
+    Python floats (no calls but math's): each step depends on the one before, so
+    numpy cannot help. The arithmetic is CarRacing's, operation for operation.
     """
-    cp_alpha, cp_x, cp_y = (list(column) for column in checkpoints.T)
+    cp_alpha, cp_x, cp_y = (column.tolist() for column in checkpoints.T)
+    count = len(cp_alpha)
+    turn_rate, step = params.turn_rate, params.detail_step  # [rad], [u]
+    full_turn, unwrap_limit = 2 * math.pi, 1.5 * math.pi  # [rad]
+    atan2, cos, sin = math.atan2, math.cos, math.sin
     x, y, beta = _START_RADIUS_FACTOR * params.radius, 0.0, 0.0  # [u], [u], [rad]
-    target, laps, below_axis = 0, 0, False
-    points = []
+    target, laps, below_axis = 0, 0, False  # target: index of the checkpoint aimed at
+    rows: list[float] = []  # alpha, beta, x, y of each point, flat
     for _ in range(_MAX_STEPS):
-        alpha = math.atan2(y, x)
+        alpha = atan2(y, x)  # [rad]
         if below_axis and alpha > 0:
             laps, below_axis = laps + 1, False
         if alpha < 0:
-            below_axis, alpha = True, alpha + 2 * math.pi
-        alpha, target = _aim(alpha, target, cp_alpha)
-        target_index = target % len(cp_alpha)
-        cos_beta, sin_beta = math.cos(beta), math.sin(beta)
-        proj = cos_beta * (cp_x[target_index] - x) + sin_beta * (cp_y[target_index] - y)  # [u]
-        beta = _unwrap_near(beta, alpha)
+            below_axis, alpha = True, alpha + full_turn
+        # aim at the first checkpoint not behind alpha; past the last one, wrap to the first
+        while alpha > cp_alpha[target]:
+            target += 1
+            if target == count:
+                target, alpha = 0, alpha - full_turn
+        cos_beta, sin_beta = cos(beta), sin(beta)
+        proj = cos_beta * (cp_x[target] - x) + sin_beta * (cp_y[target] - y)  # [u]
+        # unwrap beta to within 1.5*pi of alpha
+        while beta - alpha > unwrap_limit:
+            beta -= full_turn
+        while beta - alpha < -unwrap_limit:
+            beta += full_turn
         prev_beta = beta
-        beta = _steer(beta, proj * _STEER_SCALE, params.turn_rate)
-        # The step runs along the heading's normal, using the heading before this turn.
-        x, y = x - sin_beta * params.detail_step, y + cos_beta * params.detail_step
-        points.append((alpha, prev_beta * 0.5 + beta * 0.5, x, y))
+        # steer towards the target: the law reads the projection in Box2D units
+        proj *= _STEER_SCALE
+        turn = abs(_STEER_GAIN * proj)  # [rad]
+        if turn > turn_rate:
+            turn = turn_rate
+        if proj > _STEER_DEADBAND:
+            beta -= turn
+        elif proj < -_STEER_DEADBAND:
+            beta += turn
+        # the step runs along the heading's normal, using the heading before this turn
+        x, y = x - sin_beta * step, y + cos_beta * step
+        rows += (alpha, prev_beta * 0.5 + beta * 0.5, x, y)
         if laps > _MAX_LAPS:
             break
-    return np.array(points)
-
-
-def _aim(alpha: float, target: int, cp_alpha: list[float]) -> tuple[float, int]:
-    """Advance target to the first checkpoint not behind polar angle alpha [rad].
-
-    Past the last checkpoint, alpha drops by 2*pi and the search wraps to
-    checkpoint 0. ``target`` only grows; callers use ``target % len(cp_alpha)``.
-    """
-    while alpha > cp_alpha[target % len(cp_alpha)]:
-        target += 1
-        if target % len(cp_alpha) == 0:
-            alpha -= 2 * math.pi
-    return alpha, target
-
-
-def _unwrap_near(beta: float, alpha: float) -> float:
-    """Shift heading beta [rad] by whole turns to within 1.5*pi of polar angle alpha."""
-    while beta - alpha > 1.5 * math.pi:
-        beta -= 2 * math.pi
-    while beta - alpha < -1.5 * math.pi:
-        beta += 2 * math.pi
-    return beta
-
-
-def _steer(beta: float, proj: float, turn_rate: float) -> float:
-    """Turn heading beta [rad] towards the target, given its projection [Box2D units]."""
-    turn = min(turn_rate, abs(_STEER_GAIN * proj))  # [rad]
-    if proj > _STEER_DEADBAND:
-        return beta - turn
-    if proj < -_STEER_DEADBAND:
-        return beta + turn
-    return beta
+    return np.array(rows).reshape(-1, 4)
 
 
 def _extract_lap(path: np.ndarray, params: ProceduralTrackParams) -> np.ndarray | None:
@@ -202,7 +193,8 @@ def _build_track(lap: np.ndarray, params: ProceduralTrackParams, attempts: int) 
     """Turn a closed lap's rows (alpha, beta, x, y) into tiles and kerbs."""
     centerline, headings = lap[:, 2:4].copy(), lap[:, 1].copy()
     normals = np.column_stack((np.cos(headings), np.sin(headings)))
-    tiles = _quads(centerline, normals, -params.half_width, params.half_width)
+    every = np.arange(len(lap))
+    tiles = _quads(centerline, normals, every, -params.half_width, params.half_width)
     kerbs, kerb_red = _kerbs(centerline, headings, normals, params)
     arrays = (centerline, headings, tiles, kerbs, kerb_red)
     for array in arrays:
@@ -213,26 +205,38 @@ def _build_track(lap: np.ndarray, params: ProceduralTrackParams, attempts: int) 
 def _quads(
     points: np.ndarray,
     normals: np.ndarray,
+    rows: np.ndarray,
     inner: float | np.ndarray,
     outer: float | np.ndarray,
 ) -> np.ndarray:
-    """Quads (N, 4, 2) between each point i and point i-1 (cyclic) [u].
+    """Quads (len(rows), 4, 2) between each point i in ``rows`` and point i-1 (cyclic) [u].
 
     Vertices: point i + inner, point i + outer, point i-1 + outer, point i-1 + inner,
-    each offset along that point's normal by the given distance [u].
+    each offset along that point's normal by the given distance [u] (one per row, or one
+    for all).
     """
-    inner = np.broadcast_to(inner, len(points))[:, None]
-    outer = np.broadcast_to(outer, len(points))[:, None]
-    prev_points, prev_normals = np.roll(points, 1, axis=0), np.roll(normals, 1, axis=0)
+    inner, outer = _column(inner), _column(outer)
+    here, before = rows, rows - 1  # index -1 is the last point: the lap is a loop
     return np.stack(
         (
-            points + inner * normals,
-            points + outer * normals,
-            prev_points + outer * prev_normals,
-            prev_points + inner * prev_normals,
+            points[here] + inner * normals[here],
+            points[here] + outer * normals[here],
+            points[before] + outer * normals[before],
+            points[before] + inner * normals[before],
         ),
         axis=1,
     )
+
+
+def _column(value: float | np.ndarray) -> float | np.ndarray:
+    """A per-row array as a column (it scales the rows of an (N, 2) array); a number as is."""
+    return value[:, None] if isinstance(value, np.ndarray) else value
+
+
+def _cyclic_windows(length: int, offsets: range) -> np.ndarray:
+    """(len(offsets), length) indices: row k holds (i + offsets[k]) mod length for each i."""
+    windows: np.ndarray = (np.arange(length) + np.array(offsets)[:, None]) % length
+    return windows
 
 
 def _kerbs(
@@ -242,17 +246,18 @@ def _kerbs(
     params: ProceduralTrackParams,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Kerb quads (K, 4, 2) [u] on the outer side of hard turns, and their red flags (K,)."""
-    turns = headings - np.roll(headings, 1)  # [rad] turn into each point from the one before
+    turns = headings - headings[np.arange(-1, len(headings) - 1)]  # [rad] into each point
     flagged = _spread_back(_hard_turns(turns, params), params.border_min_count)
     index = np.flatnonzero(flagged)
-    side = np.sign(-turns)  # +1 or -1: the outer side of the turn along the normal
+    side = np.sign(-turns[index])  # +1 or -1: the outer side of the turn along the normal
     kerbs = _quads(
         centerline,
         normals,
+        index,
         side * params.half_width,
         side * (params.half_width + params.border),
     )
-    return kerbs[index], index % 2 == 1
+    return kerbs, index % 2 == 1
 
 
 def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
@@ -261,9 +266,10 @@ def _hard_turns(turns: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
     Indices wrap: the first points look back across the seam to the lap's
     last points, as CarRacing does (headings there differ by well under a turn).
     """
-    window = np.stack([np.roll(turns, k) for k in range(params.border_min_count)])
+    count = params.border_min_count
+    window = turns[_cyclic_windows(len(turns), range(0, -count, -1))]  # row k: turn k back
     sharp = np.all(np.abs(window) > params.turn_rate * _KERB_TURN_FRACTION, axis=0)
-    one_way = np.abs(np.sign(window).sum(axis=0)) == params.border_min_count
+    one_way = np.abs(np.sign(window).sum(axis=0)) == count
     hard: np.ndarray = sharp & one_way
     return hard
 
@@ -277,5 +283,5 @@ def _spread_back(flags: np.ndarray, count: int) -> np.ndarray:
     spread = flags.copy()
     for k in range(1, count):
         spread[-k % len(spread)] |= flags[: count - k].any()  # wraps on laps shorter than count
-    spread_back: np.ndarray = np.logical_or.reduce([np.roll(spread, -k) for k in range(count)])
+    spread_back: np.ndarray = spread[_cyclic_windows(len(spread), range(count))].any(axis=0)
     return spread_back

@@ -17,10 +17,10 @@ from tinyrace.cars.collision import (
     OBSTACLE,
     OBSTACLE_FILTER,
     TILE,
-    TILE_FILTER,
     WALL,
     WHEEL,
 )
+from tinyrace.world.tile_sensors import tile_sensors
 
 
 @dataclass
@@ -51,11 +51,7 @@ class World:
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
         """Road tiles (N x 4 x 2 quads) as static sensors; a wheel on none of them is on grass."""
-        shapes = [
-            self._static_sensor(quad.tolist(), TILE, index, TILE_FILTER)
-            for index, quad in enumerate(tiles)
-        ]
-        self.space.add(*shapes)
+        self.space.add(*tile_sensors(self.space.static_body, tiles))
 
     def add_obstacle_cells(self, boxes: np.ndarray) -> None:
         """Axis-aligned boxes (M x 4: x0, y0, x1, y1) around obstacle pixels, as static sensors."""
