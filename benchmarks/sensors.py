@@ -70,7 +70,7 @@ CASES: dict[str, dict[str, Any]] = {
 def f1tenth_distance(field) -> np.ndarray:
     """F1TENTH's map preparation: the Euclidean distance transform [cells] of the occupied
     cells (here the lidar's own blocking cells), once per map."""
-    free = np.where(field.steps == 0, 0, 255).astype(np.uint8)
+    free = np.where(field.blocking() > 0, 0, 255).astype(np.uint8)  # the edge blocks too
     return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
 
 
