@@ -172,8 +172,9 @@ class Fan:
     flat indices relative to the origin's cell plus LEAD rows.
     """
 
-    coarse: np.ndarray  # (V, rows, WORDS) int32: segment middles, then FAR
-    fine: np.ndarray  # (V, rows, (segments + 2) * FINE_SAMPLES) int32: samples along a row,
+    # offsets are intp: np.take converts other index types first, at a cost
+    coarse: np.ndarray  # (V, rows, WORDS) intp: segment middles, then FAR
+    fine: np.ndarray  # (V, rows, (segments + 2) * FINE_SAMPLES) intp: samples along a row,
     #                   the last FINE_SAMPLES FAR
     ranges: np.ndarray  # ((segments + 2) * FINE_SAMPLES,) float32 [cells] per sample (the
     #                     middle between it and the previous one); inf past the tables
@@ -193,7 +194,6 @@ class Fan:
     table_range: float  # [cells] how far the tables reach
     limit: float  # [cells] max range
     max_range: float  # [track units]
-
 
 
 def beam_fan(
@@ -224,7 +224,7 @@ def beam_fan(
     for sx in shifts:
         for sy in shifts:
             middle = _flat(sx + c[:, None] * middles, sy + s[:, None] * middles, width)
-            far = np.full((len(c), WORDS - segments), FAR, np.int32)
+            far = np.full((len(c), WORDS - segments), FAR, np.intp)
             coarse.append(np.concatenate([middle, far], 1))
             samples = _flat(sx + c[:, None] * radii, sy + s[:, None] * radii, width)
             fine.append(np.concatenate([samples, np.full((len(c), FINE_SAMPLES), FAR)], 1))
@@ -243,8 +243,8 @@ def beam_fan(
 
 
 def _flat(x: np.ndarray, y: np.ndarray, width: int) -> np.ndarray:
-    """int32 flat offsets (plus LEAD rows) of the cells nearest to offsets x, y [cells]."""
-    return (np.floor(y + 0.5) * width + np.floor(x + 0.5) + LEAD * width).astype(np.int32)
+    """intp flat offsets (plus LEAD rows) of the cells nearest to offsets x, y [cells]."""
+    return (np.floor(y + 0.5) * width + np.floor(x + 0.5) + LEAD * width).astype(np.intp)
 
 
 def cast(
