@@ -11,11 +11,14 @@ of the origin inside its cell.
 A scan takes two gathers, whatever the heading and the walls: a coarse pass samples the
 middle of every COARSE_STEP segment of every beam in its direction's NEAR map and finds each
 beam's first flagged segment; a fine pass samples that segment every FINE_STEP in the
-blocking map and finds the cell the beam enters; the range is where the beam from the exact
-origin enters that cell. Beams whose flagged segment only passed blocking cells by (false
-alarms) get one more pass that samples the rest of their table row: two or three passes,
-never a loop over beams. Beyond TABLE_RANGE, beams march on by sphere tracing on a distance
-field (``cv2.distanceTransform``), built only for lidars that reach that far.
+blocking map and finds the first blocked sample; the range is the middle between it and the
+sample before (from the origin rounded to 1 / ORIGIN_STEPS of a cell, the fan turned to the
+nearest table row). The first flag of each beam is found by packing its 16 flags into bits
+and a lookup table, never a loop over rows. Beams whose flagged segment only passed blocking
+cells by (false alarms) go on to their next flagged segment while they are many, and sample
+their whole row when few: a few passes, never a loop over beams. Beyond TABLE_RANGE, beams
+march on by sphere tracing on a distance field (``cv2.distanceTransform``), built only for
+lidars that reach that far.
 
 With ``hit_classes``, each beam also reports what it hit: 0 nothing (max_range), 1 a wall
 (off-road, walls, obstacles, the edge of the map), 1 + k a cone of class k
