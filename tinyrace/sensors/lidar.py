@@ -107,8 +107,8 @@ class DistanceField:
 
     def cells(self, point: tuple[float, float]) -> tuple[float, float]:
         """[cells] of a track point in the padded map."""
-        x, y = self.to_cells @ (point[0], point[1], 1.0)
-        return float(x), float(y)
+        (a, b, c), (d, e, f) = self.to_cells.tolist()
+        return a * point[0] + b * point[1] + c, d * point[0] + e * point[1] + f
 
 
 def distance_field(
@@ -179,10 +179,11 @@ class Fan:
     coarse: np.ndarray  # (V, rows, WORDS) intp: segment middles, then FAR
     fine: np.ndarray  # (V, rows, (segments + 2) * FINE_SAMPLES) intp: samples along a row,
     #                   the last FINE_SAMPLES FAR
-    ranges: np.ndarray  # ((segments + 2) * FINE_SAMPLES,) float32 [cells] per sample (the
-    #                     middle between it and the previous one); inf past the tables
-    found: np.ndarray  # ((segments + 1) * (FINE_SAMPLES + 1),) float32 [cells] by segment and
-    #                    first hit in its window: ``ranges``, then -1 for none (inf past)
+    ranges: np.ndarray  # ((segments + 2) * FINE_SAMPLES,) float32 [track units] per sample
+    #                     (the middle between it and the previous one, at most max_range);
+    #                     past the tables: inf (sphere tracing goes on) or max_range
+    found: np.ndarray  # ((segments + 1) * (FINE_SAMPLES + 1),) float32 [track units] by
+    #                    segment and first hit in its window: ``ranges``, then -1 for none
     bits: np.ndarray  # (rows, WORDS) uint8 the NEAR bit of each row's direction
     cos: np.ndarray  # (rows,) float64 direction of each row [cells]
     sin: np.ndarray
@@ -231,11 +232,14 @@ def beam_fan(
             coarse.append(np.concatenate([middle, far], 1))
             samples = _flat(sx + c[:, None] * radii, sy + s[:, None] * radii, width)
             fine.append(np.concatenate([samples, np.full((len(c), FINE_SAMPLES), FAR)], 1))
-    ranges = np.full((segments + 2) * FINE_SAMPLES, np.inf, np.float32)
-    ranges[: segments * FINE_SAMPLES] = radii[: segments * FINE_SAMPLES] - FINE_STEP / 2
+    past = np.inf if table_range < limit else max_range  # [track units] past the tables
+    ranges = np.full((segments + 2) * FINE_SAMPLES, past)
+    middles_units = (radii[: segments * FINE_SAMPLES] - FINE_STEP / 2) / field.cells_per_unit
+    ranges[: segments * FINE_SAMPLES] = np.minimum(middles_units, past)
+    ranges = ranges.astype(np.float32)
     found = np.full((segments + 1, FINE_SAMPLES + 1), -1.0, np.float32)
     found[:, :-1] = ranges[: (segments + 1) * FINE_SAMPLES].reshape(segments + 1, -1)
-    found[-1] = np.inf
+    found[-1] = past
     orientation = np.rint(angle / (math.pi / ORIENTATIONS)).astype(np.int64) % ORIENTATIONS
     bits = np.repeat((1 << orientation).astype(np.uint8)[:, None], WORDS, 1)
     return Fan(
@@ -276,16 +280,15 @@ def cast(
     j = round(((first - fan.anchor) % (2 * math.pi)) / fan.step)
     top = (j % fan.spacing) * fan.phase_rows + j // fan.spacing  # the first beam's row
     rows = slice(top, top + fan.beams)
-    t = _passes(field, fan, base, vx * ORIGIN_STEPS + vy, rows)
+    ranges = _passes(field, fan, base, vx * ORIGIN_STEPS + vy, rows)
     if fan.table_range < fan.limit:
-        t = _beyond(field, fan, (x, y), rows, t)
-    # clipped after the division: limit / cells_per_unit may round past max_range in float32
-    ranges = np.minimum(t / np.float32(field.cells_per_unit), np.float32(fan.max_range))
+        ranges = _beyond(field, fan, (x, y), rows, ranges)
     return ranges[::-1] if reverse else ranges
 
 
 def _passes(field: DistanceField, fan: Fan, base: int, variant: int, rows: slice) -> np.ndarray:
-    """[cells] range of each beam within the tables (inf: none), from the origin cell ``base``
+    """[track units] range of each beam within the tables (past them: inf, or max_range when
+    the tables reach it), from the origin cell ``base``
     (flat, padded map), its ``variant`` and the table ``rows`` of the beams."""
     near, blocked = field.near[base:], field.blocked[base:]
     flags = near.take(fan.coarse[variant, rows], mode="clip")
@@ -312,7 +315,7 @@ def _window(
     blocked: np.ndarray, fan: Fan, windows: np.ndarray, segment: np.ndarray, starts: np.ndarray
 ) -> np.ndarray:
     """The fine pass over one ``segment`` of each beam (its windows from ``starts``): range
-    [cells]; -1 for a false alarm (no hit in a flagged segment)."""
+    [track units]; -1 for a false alarm (no hit in a flagged segment)."""
     samples = blocked.take(windows.take(segment + starts, 0), mode="clip")  # (n, FINE_SAMPLES)
     found: np.ndarray = fan.found.take(segment * (FINE_SAMPLES + 1) + _first(samples))
     return found
@@ -329,8 +332,8 @@ def _first(rows: np.ndarray) -> np.ndarray:
 def _beyond(
     field: DistanceField, fan: Fan, origin: tuple[float, float], rows: slice, t: np.ndarray
 ) -> np.ndarray:
-    """``t`` [cells] with the beams that hit nothing within the tables (inf) marched on by
-    sphere tracing from the tables' end to the fan's limit."""
+    """``t`` [track units] with the beams that hit nothing within the tables (inf) marched
+    on by sphere tracing from the tables' end to the fan's limit."""
     assert field.steps is not None, "distance_field(..., reach=...) past TABLE_RANGE"
     far = np.flatnonzero(np.isinf(t))
     if len(far) == 0:
@@ -340,7 +343,9 @@ def _beyond(
     start = np.array(origin, np.float32)
     reached = np.full(len(far), fan.table_range, np.float32)
     reached = _march(field.steps, start, dx, dy, reached, np.float32(fan.limit))
-    t[far] = _refine(field.steps, start, dx, dy, reached)
+    cells = _refine(field.steps, start, dx, dy, reached)
+    # clipped after the division: limit / cells_per_unit may round past max_range in float32
+    t[far] = np.minimum(cells / np.float32(field.cells_per_unit), np.float32(fan.max_range))
     return t
 
 
