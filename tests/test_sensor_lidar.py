@@ -126,3 +126,37 @@ def test_a_beam_that_hits_nothing_reports_max_range_exactly(cell, max_range):
     centre = side * cell / 2
     ranges = _scan(field, (centre, centre), beam_angles(360, 2 * math.pi), max_range)
     assert (ranges == np.float32(max_range)).all()
+
+
+def test_the_edge_of_the_map_blocks_where_it_is():
+    """Beams that leave an empty map stop at its edge, not wherever a step took them."""
+    cell = 1.0
+    _, _, to_cells = _centres(cell)
+    field = distance_field(np.zeros((SIZE, SIZE), bool), to_cells)
+    half = SIZE / 2 * cell  # [track units] centre to the outer side of the last cells
+    ranges = _scan(field, (0.0, 0.0), [0.0, math.pi / 2, math.pi], max_range=10 * half)
+    np.testing.assert_allclose(ranges, [half, half, half], atol=cell)
+
+
+def test_ranges_match_dense_sampling_on_a_random_map():
+    """Away from corners clipped by less than half a cell, every range is within half a
+    cell of the first blocking cell found by sampling each beam every 1/100 cell."""
+    rng = np.random.default_rng(0)
+    blocking = rng.random((SIZE, SIZE)) < 0.01
+    _, _, to_cells = _centres(1.0)
+    field = distance_field(blocking, to_cells)
+    angles = beam_angles(720, 2 * math.pi)
+    origin = (0.0, 0.0)  # the centre of a cell: the tables' origin is exact
+    ranges = _scan(field, origin, angles, max_range=60.0)
+    t = np.arange(0, 60.0, 0.01)
+    ends = np.rint(
+        to_cells[:, 2] + t[:, None, None] * np.stack([np.cos(angles), -np.sin(angles)], axis=1)
+    ).astype(int)  # (T, B, 2) cells of every dense sample, y up on the map
+    hit = blocking[ends[..., 1], ends[..., 0]]
+    first = np.where(hit.any(0), t[hit.argmax(0)], 60.0)
+    assert 0.3 < (first < 60.0).mean() < 0.7  # many beams hit something, many do not
+    error = np.abs(ranges - first)
+    close = error <= 1.0
+    assert close.mean() > 0.9 and error[close].max() <= 0.5 * 1.01  # half a fine step
+    # the rest clipped a corner the samples stepped over (salt and pepper has many): longer
+    assert (ranges[~close] > first[~close]).all()
