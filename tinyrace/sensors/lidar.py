@@ -67,7 +67,8 @@ WORDS = 16  # columns of the coarse table and samples of a fine window: two uint
 # (b0 + b1 * 2^8 + ... + b7 * 2^56) * PACK >> 56 has bit i = b_i when every b_i is 0 or 1
 PACK = np.uint64(0x0102040810204080)
 # FIRST[lo + 256 * hi]: index of the first 1 among the 16 bits of two packed bytes; 16: none
-FIRST = np.array([(v & -v).bit_length() - 1 if v else 16 for v in range(1 << 16)], np.int64)
+_LOWEST = np.arange(1 << 16) & -np.arange(1 << 16)  # the lowest set bit of each index
+FIRST = np.where(_LOWEST > 0, np.log2(np.maximum(_LOWEST, 1)), 16).astype(np.int64)
 PAD = COARSE_STEP // 2 + 4  # [cells] blocking border around the map
 LEAD = TABLE_RANGE + 2 * COARSE_STEP + PAD + 2  # [rows] around the flat maps: no sample leaves
 FAR = 1 << 30  # a table offset past the end of the flat maps (np.take clips it to the end)
