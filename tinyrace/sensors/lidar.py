@@ -127,7 +127,8 @@ def distance_field(
     width = padded.shape[1]
     near = np.zeros_like(padded)
     for o in range(ORIENTATIONS):
-        near |= cv2.dilate(padded, _segment_kernel(o)) << o
+        dilated: np.ndarray = cv2.dilate(padded, _segment_kernel(o))
+        np.bitwise_or(near, np.left_shift(dilated, o), out=near)
     lead = np.ones(LEAD * width, np.uint8)
     blocked = np.concatenate([lead, padded.ravel(), lead])
     near = np.concatenate([lead * 255, near.ravel(), lead * 255])
@@ -162,7 +163,7 @@ def _steps(padded: np.ndarray) -> np.ndarray:
     distance to the nearest blocking cell's centre less half a cell, at least MIN_STEP."""
     free = np.where(padded > 0, 0, 255).astype(np.uint8)
     distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)  # [cells]
-    steps = np.floor(2 * np.clip(distance - 0.5, MIN_STEP, STEP_CAP)).astype(np.uint8)
+    steps: np.ndarray = np.floor(2 * np.clip(distance - 0.5, MIN_STEP, STEP_CAP)).astype(np.uint8)
     steps[padded > 0] = 0
     return steps
 
@@ -360,7 +361,7 @@ def _march(
 ) -> np.ndarray:
     """Distance [cells] each beam travels, from ``t``, before it stops in a blocking cell or
     passes ``limit``. Every CHECK_EVERY rounds the beams that stopped leave the working arrays."""
-    t_all = t.copy()
+    t_all: np.ndarray = t.copy()
     index = np.arange(len(dx))
     px, py = start[0] + t * dx, start[1] + t * dy
     for round_ in range(MAX_ROUNDS):
