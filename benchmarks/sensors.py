@@ -11,7 +11,11 @@ Also timed: a reference lidar in the style of F1TENTH's gym (its ``ScanSimulator
 a Euclidean distance transform of the occupied cells, then per beam a loop that steps
 by the distance to the nearest obstacle until it is below a small epsilon or past the
 range). F1TENTH's gym is not on PyPI and its loop is compiled with numba there; here it is
-reimplemented in plain Python, on the same map and beams as tinyrace's lidar.
+reimplemented in plain Python, on the same map and beams as tinyrace's lidar (whose padded
+border makes the map's edge block, for both). The reference steps by the distance between
+cell centres, so its tip ends up to about 1.2 cells inside the blocking cell it stops in (and
+may step over an object a cell thick); tinyrace's lidar reports where the beam enters that
+cell, within about half a cell. Hence the agreement is given within one and within two cells.
 
 Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
 costs no more than a 96x96 bird's-eye camera; a 120x160 perspective camera no more than
@@ -70,7 +74,7 @@ CASES: dict[str, dict[str, Any]] = {
 def f1tenth_distance(field) -> np.ndarray:
     """F1TENTH's map preparation: the Euclidean distance transform [cells] of the occupied
     cells (here the lidar's own blocking cells), once per map."""
-    free = np.where(field.steps == 0, 0, 255).astype(np.uint8)
+    free = np.where(field.blocking() > 0, 0, 255).astype(np.uint8)  # the edge blocks too
     return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
 
 
@@ -158,6 +162,9 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         "lidar_beams_within_a_cell_of_reference": float(
             np.mean(np.concatenate(differences) <= cell)
         ),
+        "lidar_beams_within_two_cells_of_reference": float(
+            np.mean(np.concatenate(differences) <= 2 * cell)
+        ),
     }
 
 
@@ -190,7 +197,11 @@ def print_sensors(results: dict[str, Any]) -> None:
         for key, value in sorted(result["us_per_step"].items(), key=lambda kv: kv[1]):
             print(f"  {key:32s} {value:10.1f}")
         agree, cell = result["lidar_beams_within_a_cell_of_reference"], result["lidar_cell"]
-        print(f"  lidar vs reference: {100 * agree:.1f} % of beams within a cell ({cell:.3g})")
+        two = result["lidar_beams_within_two_cells_of_reference"]
+        print(
+            f"  lidar vs reference: {100 * agree:.1f} % of beams within a cell ({cell:.3g}),"
+            f" {100 * two:.1f} % within two"
+        )
         for check, passed in result["checks"].items():
             print(f"  {'PASS' if passed else 'FAIL'}  {check}")
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ import pytest
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
+from tinyrace.sensors.common import color_mask
 from tinyrace.sensors.lidar import WALL_CLASS
 from tinyrace.tracks.cone_map import CLASSES
 
@@ -73,3 +75,30 @@ def test_sensor_entries_are_checked():
     with pytest.raises(ConfigError) as error:
         make("autocross", [{"type": "lidar", "id": "x"}, {"type": "cones", "id": "x"}])
     assert error.value.problems[0].path == "sensors[1].id"
+
+
+def test_picture_cones_smaller_than_a_cell_still_stop_beams():
+    """formula_student's cones are 25 px discs; the default cell is 1/8 car length (18.75 px):
+    the picture pools into cells, so the lidar still sees cones of both colours."""
+    lidar = {"id": "lidar", "type": "lidar", "blocks": ["cones"], "hit_classes": True}
+    env = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment=str(TRACKS_DIR / "formula_student"),
+        sensors=[{**lidar, "fov": 360, "max_range": 1500.0}],
+        cameras=[],
+    )
+    observation, _ = env.reset(seed=0)
+    sensor = env.unwrapped.sensors[-1]
+    assert sensor.cell == pytest.approx(150 / 8)  # the track's wheelbase is 150 px
+    seen = set(np.unique(observation["lidar"]["classes"]).tolist())
+    assert {WALL_CLASS + 1, WALL_CLASS + 2} <= seen  # blue and yellow picture cones
+    picture = env.unwrapped.layout.picture
+    field = sensor.field
+    for class_id, rgb in enumerate([(0, 0, 255), (255, 255, 0)], start=1):
+        count, _, _, centres = cv2.connectedComponentsWithStats(
+            color_mask(picture, rgb).astype(np.uint8)
+        )
+        assert count > 10
+        cells = np.rint(centres[1:] @ field.to_cells[:, :2].T + field.to_cells[:, 2]).astype(int)
+        # every cone's centre lies in a cell of its class: none fell between cell centres
+        assert (field.classes[cells[:, 1], cells[:, 0]] == WALL_CLASS + class_id).all()

@@ -7,14 +7,25 @@ import math
 import numpy as np
 import pytest
 
-from tinyrace.sensors.lidar import add_noise, beam_angles, cast, directions, distance_field
+from tinyrace.sensors.lidar import (
+    add_noise,
+    beam_angles,
+    beam_fan,
+    cast,
+    directions,
+    distance_field,
+    fan_angle,
+)
 
 SIZE = 401  # cells per side of the test maps
 
 
-def _dirs(angles) -> np.ndarray:
-    """Unit vectors of world angles [rad] on a y-up map."""
-    return directions(np.asarray(angles, np.float64), 0.0, y_down=False)
+def _scan(field, origin, angles, max_range: float, heading: float = 0.0) -> np.ndarray:
+    """Ranges of beams at evenly spaced ``angles`` [rad] from a car at ``heading`` on a y-up
+    map, as the lidar sensor casts them."""
+    angles = np.asarray(angles, np.float64)
+    fan = beam_fan(field, angles, max_range)
+    return cast(field, fan, origin, *fan_angle(field, angles, heading, y_down=False))
 
 
 def _centres(cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -34,7 +45,7 @@ def test_circular_wall_from_its_centre(cell, radius_cells):
     blocking = np.hypot(x, y) >= radius
     field = distance_field(blocking, to_cells)
     angles = np.linspace(-math.pi, math.pi, 1080, endpoint=False)
-    ranges = cast(field, (0.0, 0.0), _dirs(angles), max_range=10 * radius)
+    ranges = _scan(field, (0.0, 0.0), angles, max_range=10 * radius)
     assert ranges.dtype == np.float32 and ranges.shape == (1080,)
     tolerance = max(cell, 0.01 * radius)
     assert np.abs(ranges - radius).max() <= tolerance
@@ -48,7 +59,7 @@ def test_square_room_gives_the_analytic_ranges(origin):
     blocking = (np.abs(x) > half_side) | (np.abs(y) > half_side)
     field = distance_field(blocking, to_cells)
     angles = np.linspace(-math.pi, math.pi, 720, endpoint=False)
-    ranges = cast(field, origin, _dirs(angles), max_range=1000.0)
+    ranges = _scan(field, origin, angles, max_range=1000.0)
     c, s = np.cos(angles), np.sin(angles)
     ox, oy = origin
     with np.errstate(divide="ignore"):
@@ -62,9 +73,9 @@ def test_beyond_max_range_reports_max_range_and_inside_a_wall_zero():
     x, _, to_cells = _centres(1.0)
     blocking = np.abs(x) >= 100
     field = distance_field(blocking, to_cells)
-    ranges = cast(field, (0.0, 0.0), _dirs([0.0, math.pi / 2, math.pi]), max_range=50.0)
+    ranges = _scan(field, (0.0, 0.0), [0.0, math.pi / 2, math.pi], max_range=50.0)
     np.testing.assert_array_equal(ranges, [50.0, 50.0, 50.0])
-    assert cast(field, (150.0, 0.0), _dirs([0.0]), max_range=50.0)[0] == 0.0
+    assert _scan(field, (150.0, 0.0), [0.0], max_range=50.0)[0] == 0.0
 
 
 def test_a_flipped_map_measures_the_same_distances():
@@ -73,9 +84,8 @@ def test_a_flipped_map_measures_the_same_distances():
     x, _, to_cells = _centres(cell)
     blocking = x >= 60.5
     down = to_cells * [[1], [-1]] + [[0, 0, 0], [0, 0, SIZE - 1]]
-    beams = _dirs([0.0, 0.5])
-    up = cast(distance_field(blocking, to_cells), (0, 0), beams, 500.0)
-    flipped = cast(distance_field(blocking[::-1], down), (0, 0), beams, 500.0)
+    up = _scan(distance_field(blocking, to_cells), (0, 0), [0.0, 0.5], 500.0)
+    flipped = _scan(distance_field(blocking[::-1], down), (0, 0), [0.0, 0.5], 500.0)
     np.testing.assert_allclose(up, flipped, atol=1e-4)
     assert abs(up[0] - 60.0) <= cell and abs(up[1] - 60.0 / math.cos(0.5)) <= cell
 
@@ -114,7 +124,39 @@ def test_a_beam_that_hits_nothing_reports_max_range_exactly(cell, max_range):
         np.zeros((side, side), bool), np.array([[1 / cell, 0, 0], [0, 1 / cell, 0]])
     )
     centre = side * cell / 2
-    ranges = cast(
-        field, (centre, centre), directions(beam_angles(360, 2 * math.pi), 0.0, False), max_range
-    )
+    ranges = _scan(field, (centre, centre), beam_angles(360, 2 * math.pi), max_range)
     assert (ranges == np.float32(max_range)).all()
+
+
+def test_the_edge_of_the_map_blocks_where_it_is():
+    """Beams that leave an empty map stop at its edge, not wherever a step took them."""
+    cell = 1.0
+    _, _, to_cells = _centres(cell)
+    field = distance_field(np.zeros((SIZE, SIZE), bool), to_cells)
+    half = SIZE / 2 * cell  # [track units] centre to the outer side of the last cells
+    ranges = _scan(field, (0.0, 0.0), [0.0, math.pi / 2, math.pi], max_range=10 * half)
+    np.testing.assert_allclose(ranges, [half, half, half], atol=cell)
+
+
+def test_ranges_match_dense_sampling_on_a_random_map():
+    """Away from corners clipped by less than half a cell, every range is within half a
+    cell of the first blocking cell found by sampling each beam every 1/100 cell."""
+    rng = np.random.default_rng(0)
+    blocking = rng.random((SIZE, SIZE)) < 0.01
+    _, _, to_cells = _centres(1.0)
+    field = distance_field(blocking, to_cells)
+    angles = beam_angles(720, 2 * math.pi)
+    origin = (0.0, 0.0)  # the centre of a cell: the tables' origin is exact
+    ranges = _scan(field, origin, angles, max_range=60.0)
+    t = np.arange(0, 60.0, 0.01)
+    ends = np.rint(
+        to_cells[:, 2] + t[:, None, None] * np.stack([np.cos(angles), -np.sin(angles)], axis=1)
+    ).astype(int)  # (T, B, 2) cells of every dense sample, y up on the map
+    hit = blocking[ends[..., 1], ends[..., 0]]
+    first = np.where(hit.any(0), t[hit.argmax(0)], 60.0)
+    assert 0.3 < (first < 60.0).mean() < 0.7  # many beams hit something, many do not
+    error = np.abs(ranges - first)
+    close = error <= 1.0
+    assert close.mean() > 0.9 and error[close].max() <= 0.5 * 1.01  # half a fine step
+    # the rest clipped a corner the samples stepped over (salt and pepper has many): longer
+    assert (ranges[~close] > first[~close]).all()

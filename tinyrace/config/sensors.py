@@ -97,8 +97,8 @@ class LidarConfig:
     )
     cell: float | None = knob(
         None,
-        "cell size of the distance map built once per track (null: 1 on picture tracks, "
-        "otherwise 1/8 car length)",
+        "cell size of the blocking map built once per track (null: 1/8 car length; picture "
+        "pixels pool into cells, so that small cones and obstacles stay)",
         LENGTH,
         low=0,
         low_open=True,
