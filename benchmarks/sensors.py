@@ -65,24 +65,22 @@ CASES: dict[str, dict[str, Any]] = {
         },
     },
 }
-# the shipped metric tracks: bird's-eye windows about the size of their own camera's [m]
+# the shipped metric tracks: bird's-eye windows about as long as their own camera's [m]
 METRIC_WINDOWS = {"circuit": 30.0, "autocross": 12.0, "f1tenth_loop": 3.0}
 CONE_TRACKS = ("autocross",)  # metric tracks that list cones
-for _name, _ahead in METRIC_WINDOWS.items():
-    CASES[_name] = {
-        "environment": _name,
-        "config": {
-            "cameras": [
-                {"id": "birdseye_96x96", "resolution": [96, 96], "roi": [_ahead, _ahead]},
-                {
-                    "id": "birdseye_120x160",
-                    "resolution": [120, 160],
-                    "roi": [_ahead, _ahead * 4 / 3],
-                },
-            ],
-            "sensors": [*SENSORS, *([{"id": "cones", "type": "cones"}] * (_name in CONE_TRACKS))],
-        },
-    }
+
+
+def metric_case(name: str, ahead: float) -> dict[str, Any]:
+    """The case of a shipped metric track: bird's-eye windows ``ahead`` [m] long."""
+    cameras = [
+        {"id": "birdseye_96x96", "resolution": [96, 96], "roi": [ahead, ahead]},
+        {"id": "birdseye_120x160", "resolution": [120, 160], "roi": [ahead, ahead * 4 / 3]},
+    ]
+    cones = [{"id": "cones", "type": "cones"}] if name in CONE_TRACKS else []
+    return {"environment": name, "config": {"cameras": cameras, "sensors": [*SENSORS, *cones]}}
+
+
+CASES.update({name: metric_case(name, ahead) for name, ahead in METRIC_WINDOWS.items()})
 
 
 def f1tenth_distance(field) -> np.ndarray:
