@@ -10,6 +10,7 @@ The table of the current track is ``labels`` (and ``info['sensor_labels'][id]``)
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import cv2
 import numpy as np
@@ -25,7 +26,7 @@ from tinyrace.sensors.common import (
     label_table,
     paint_labels,
 )
-from tinyrace.sensors.pinhole import Pinhole, car_to_world, render
+from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, warp_below_sky
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -62,6 +63,11 @@ class PerspectiveCamera:
         self._grounds: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()
         self.ground: GroundImage | None = None
         self.labels: tuple[str, ...] = ()
+        self._scratch: np.ndarray | None = None  # RGBx warp of the rows below the sky
+        self._conversion = cv2.COLOR_RGBA2RGB if config.format == "rgb" else cv2.COLOR_RGBA2GRAY
+        # the sky in the output format (gray: as cv2 converts the sky colour)
+        sky = np.array([[(*config.sky_color, 255)]], np.uint8)
+        self._sky = np.asarray(cv2.cvtColor(sky, self._conversion)[0, 0])
 
     @property
     def id(self) -> str:
@@ -92,10 +98,31 @@ class PerspectiveCamera:
                 (SKY_LABEL,),
                 cv2.INTER_NEAREST,
             )
-        sky = (*self.config.sky_color, 255)
-        rgbx = render(self.pinhole, ground.image, ground.to_pixels, placed, sky)
-        code = cv2.COLOR_RGBA2RGB if self.config.format == "rgb" else cv2.COLOR_RGBA2GRAY
-        return cv2.cvtColor(rgbx, code)
+        return self._colors(ground, placed)
+
+    def _colors(self, ground: GroundImage, placed: np.ndarray) -> np.ndarray:
+        """The ``rgb`` or ``gray`` image: the ground below the sky rows warped in RGBx (cv2's
+        fast layout) into a buffer that is converted straight into the new image."""
+        width, height = self.pinhole.size
+        rows, flat = self.pinhole.sky_pixels
+        image = np.empty(self.space.shape, np.uint8)
+        image[:rows] = self._sky
+        if rows < height:
+            if self._scratch is None:
+                self._scratch = np.empty((height - rows, width, 4), np.uint8)
+            scratch = self._scratch
+            warp_below_sky(
+                self.pinhole, ground.image, ground.to_pixels, placed, cv2.INTER_LINEAR, scratch
+            )
+            below = image[rows:]
+            converted = cv2.cvtColor(scratch, self._conversion, dst=below)
+            assert converted is below, "cv2 wrote into its own array"
+        if len(flat):
+            image.reshape(-1, *self.space.shape[2:])[flat] = self._sky
+        return image
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_scratch": None}  # a warp buffer, made again on first use
 
 
 def build(config: PerspectiveCameraConfig, context: SensorContext) -> PerspectiveCamera:

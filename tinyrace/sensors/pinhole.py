@@ -5,7 +5,9 @@ from the car's reference point, turned by yaw (+ right), pitch (+ down) and roll
 as the camera sees it), maps ground points to pixels by one homography; the image is the
 ground texture pushed through it by one ``cv2.warpPerspective``. Pixels whose ray misses the
 ground (above the horizon) or meets it beyond ``max_range`` get the sky colour, from a mask
-that depends on the camera alone and is computed once.
+that depends on the camera alone and is computed once. The whole rows of sky at the top
+(above the horizon of a level camera) are filled in one slice and never warped: only the
+rows below them are (``warp_below_sky``).
 
 Pixels: u right, v down, a pixel's centre on integer coordinates; the principal point is the
 image centre; the focal length follows from the horizontal field of view.
@@ -90,6 +92,15 @@ class Pinhole:
         return missed
 
     @cached_property
+    def below_sky_to_ground(self) -> np.ndarray:
+        """H (3x3): pixel (u, v) of the image below the whole rows of sky, v counted from the
+        first row below them -> ground point (ahead, right, 1) in the car frame."""
+        rows = self.sky_pixels[0]
+        shift = np.array([[1.0, 0, 0], [0, 1.0, rows], [0, 0, 1.0]])
+        below: np.ndarray = self.image_to_ground @ shift
+        return below
+
+    @cached_property
     def sky_pixels(self) -> tuple[int, np.ndarray]:
         """The sky as the number of whole top rows, and the flat indices of the rest."""
         full = np.asarray(self.sky.all(axis=1))
@@ -115,6 +126,35 @@ def car_to_world(front: tuple[float, float], heading: float, y_down: bool) -> np
     return np.array([[fx, rx, front[0]], [fy, ry, front[1]], [0, 0, 1]])
 
 
+def warp_below_sky(
+    camera: Pinhole,
+    ground: np.ndarray,
+    world_to_ground: np.ndarray,
+    placed: np.ndarray,
+    interpolation: int,
+    out: np.ndarray,
+) -> None:
+    """Draw the image rows below the whole rows of sky into ``out`` (H - rows, W, ground's
+    channels): the ground texture seen through one homography (texture pixels of
+    ``world_to_ground``, 2x3, car placed by ``placed``, 3x3 car frame -> track)."""
+    # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
+    # the homography's last row
+    below = camera.below_sky_to_ground
+    image_to_texture = np.empty((3, 3))
+    image_to_texture[:2] = world_to_ground @ (placed @ below)
+    image_to_texture[2] = below[2]
+    warped = cv2.warpPerspective(
+        ground,
+        image_to_texture,
+        (out.shape[1], out.shape[0]),
+        dst=out,
+        flags=interpolation | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=0,
+    )
+    assert warped is out, "cv2 wrote into its own array"
+
+
 def render(
     camera: Pinhole,
     ground: np.ndarray,
@@ -128,23 +168,12 @@ def render(
     ``world_to_ground`` (2x3) of the track, seen from a car placed by ``placed`` (3x3, car
     frame -> track: ``car_to_world``);
     sky pixels set to ``sky`` (one value per channel of ``ground``)."""
-    # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
-    # the homography's last row
-    image_to_car = camera.image_to_ground
-    image_to_texture = np.empty((3, 3))
-    image_to_texture[:2] = world_to_ground @ (placed @ image_to_car)
-    image_to_texture[2] = image_to_car[2]
-    image = cv2.warpPerspective(
-        ground,
-        image_to_texture,
-        camera.size,
-        dst=out,
-        flags=interpolation | cv2.WARP_INVERSE_MAP,
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=0,
-    )
+    width, height = camera.size
+    image = np.empty((height, width, *ground.shape[2:]), ground.dtype) if out is None else out
     rows, flat = camera.sky_pixels
     image[:rows] = sky  # whole rows of sky (a level camera): one slice
+    if rows < height:
+        warp_below_sky(camera, ground, world_to_ground, placed, interpolation, image[rows:])
     if len(flat):
         image.reshape(-1, *image.shape[2:])[flat] = sky
     return image
