@@ -66,8 +66,8 @@ class PerspectiveCamera:
         self._scratch: np.ndarray | None = None  # RGBx warp of the rows below the sky
         self._conversion = cv2.COLOR_RGBA2RGB if config.format == "rgb" else cv2.COLOR_RGBA2GRAY
         # the sky in the output format (gray: as cv2 converts the sky colour)
-        sky = np.array([[(*config.sky_color, 255)]], np.uint8)
-        self._sky = np.asarray(cv2.cvtColor(sky, self._conversion)[0, 0])
+        sky = cv2.cvtColor(np.array([[(*config.sky_color, 255)]], np.uint8), self._conversion)
+        self._sky = self.pinhole.sky_paint(tuple(sky.reshape(-1).tolist()), shape[2:])
 
     @property
     def id(self) -> str:
@@ -104,9 +104,8 @@ class PerspectiveCamera:
         """The ``rgb`` or ``gray`` image: the ground below the sky rows warped in RGBx (cv2's
         fast layout) into a buffer that is converted straight into the new image."""
         width, height = self.pinhole.size
-        rows, flat = self.pinhole.sky_pixels
+        rows = self.pinhole.sky_rows
         image = np.empty(self.space.shape, np.uint8)
-        image[:rows] = self._sky
         if rows < height:
             if self._scratch is None:
                 self._scratch = np.empty((height - rows, width, 4), np.uint8)
@@ -117,8 +116,7 @@ class PerspectiveCamera:
             below = image[rows:]
             converted = cv2.cvtColor(scratch, self._conversion, dst=below)
             assert converted is below, "cv2 wrote into its own array"
-        if len(flat):
-            image.reshape(-1, *self.space.shape[2:])[flat] = self._sky
+        self._sky.paint(image)
         return image
 
     def __getstate__(self) -> dict[str, Any]:

@@ -92,22 +92,64 @@ class Pinhole:
         return missed
 
     @cached_property
+    def sky_rows(self) -> int:
+        """How many whole rows at the top of the image are sky."""
+        full = np.asarray(self.sky.all(axis=1))
+        return int(np.argmin(full)) if not full.all() else len(full)
+
+    @cached_property
     def below_sky_to_ground(self) -> np.ndarray:
         """H (3x3): pixel (u, v) of the image below the whole rows of sky, v counted from the
         first row below them -> ground point (ahead, right, 1) in the car frame."""
-        rows = self.sky_pixels[0]
-        shift = np.array([[1.0, 0, 0], [0, 1.0, rows], [0, 0, 1.0]])
+        shift = np.array([[1.0, 0, 0], [0, 1.0, self.sky_rows], [0, 0, 1.0]])
         below: np.ndarray = self.image_to_ground @ shift
         return below
 
+    def sky_paint(self, value: tuple[int, ...], channels: tuple[int, ...] = ()) -> SkyPaint:
+        """The sky of this camera's images with ``channels`` (() for one) set to ``value`` (one
+        number per channel), made once per value."""
+        key = (value, channels)
+        paint = self._sky_paints.get(key)
+        if paint is None:
+            paint = self._sky_paints[key] = SkyPaint.make(self, value, channels)
+        return paint
+
     @cached_property
-    def sky_pixels(self) -> tuple[int, np.ndarray]:
-        """The sky as the number of whole top rows, and the flat indices of the rest."""
-        full = np.asarray(self.sky.all(axis=1))
-        rows = int(np.argmin(full)) if not full.all() else len(full)
-        rest = self.sky.copy()
-        rest[:rows] = False
-        return rows, np.flatnonzero(rest)
+    def _sky_paints(self) -> dict[tuple[tuple[int, ...], tuple[int, ...]], SkyPaint]:
+        return {}
+
+
+@dataclass(frozen=True, eq=False)
+class SkyPaint:
+    """A camera's sky in one pixel format (uint8), made once: the whole rows at the top are
+    one slice copy; the sky below them (a rolled horizon, ground beyond max_range) one masked
+    copy. (Broadcasting a colour into an image costs numpy about 2 ns per byte: as much as
+    the warp.)"""
+
+    rows: np.ndarray  # (rows, W, *channels) sky
+    below: np.ndarray | None  # (H - rows, W, *channels) sky; None: no sky below the rows
+    mask: np.ndarray | None  # (H - rows, W) uint8, nonzero where the sky is below the rows
+
+    @classmethod
+    def make(cls, camera: Pinhole, value: tuple[int, ...], channels: tuple[int, ...]) -> SkyPaint:
+        """The sky of ``camera`` with ``channels`` set to ``value``."""
+        width, height = camera.size
+        rows = camera.sky_rows
+        sky = np.empty((height, width, *channels), np.uint8)
+        sky[...] = np.asarray(value, np.uint8).reshape(channels) if channels else value[0]
+        below_mask = camera.sky[rows:]
+        if not below_mask.any():
+            return cls(sky[:rows].copy(), None, None)
+        return cls(sky[:rows].copy(), sky[rows:].copy(), below_mask.astype(np.uint8))
+
+    def paint(self, image: np.ndarray) -> None:
+        """Set the sky pixels of ``image`` (H, W, *channels)."""
+        rows = len(self.rows)
+        image[:rows] = self.rows
+        if self.mask is not None:
+            below = image[rows:]
+            done = cv2.copyTo(self.below, self.mask, below)
+            assert done is below, "cv2 wrote into its own array"
 
 
 def world_to_car(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
@@ -170,10 +212,8 @@ def render(
     sky pixels set to ``sky`` (one value per channel of ``ground``)."""
     width, height = camera.size
     image = np.empty((height, width, *ground.shape[2:]), ground.dtype) if out is None else out
-    rows, flat = camera.sky_pixels
-    image[:rows] = sky  # whole rows of sky (a level camera): one slice
-    if rows < height:
-        warp_below_sky(camera, ground, world_to_ground, placed, interpolation, image[rows:])
-    if len(flat):
-        image.reshape(-1, *image.shape[2:])[flat] = sky
+    if camera.sky_rows < height:
+        below = image[camera.sky_rows :]
+        warp_below_sky(camera, ground, world_to_ground, placed, interpolation, below)
+    camera.sky_paint(tuple(sky), ground.shape[2:]).paint(image)
     return image
