@@ -111,7 +111,11 @@ class StateConfig:
 
     id: str = knob(REQUIRED, _ID)
     type: Literal["state"] = _type("state")
-    pose: bool = knob(False, "append x, y [track units] and heading [rad]")
+    pose: bool = knob(
+        False,
+        "append x, y [track units] (bounded by the playfield on procedural tracks, unbounded "
+        "elsewhere) and heading [rad]",
+    )
 
 
 @dataclass(frozen=True)
