@@ -74,9 +74,12 @@ class ConeTable:
         offset turned by -heading (a y-down track is the mirror image of a y-up one)."""
         x, y, heading = pose
         c, s = math.cos(heading), math.sin(heading)
+        local: np.ndarray
         if y_down:
-            return (self.mirrored - complex(x, -y)) * complex(c, s)
-        return (self.points - complex(x, y)) * complex(c, -s)
+            local = (self.mirrored - complex(x, -y)) * complex(c, s)
+        else:
+            local = (self.points - complex(x, y)) * complex(c, -s)
+        return local
 
 
 def detect(
@@ -192,7 +195,7 @@ class ConesSensor:
         colors = {
             k + 1: rgb for k, rgb in enumerate((c.blue_color, c.yellow_color, c.orange_color))
         }
-        used = {k: v for k, v in colors.items() if v is not None}
+        used: dict[int, tuple[int, int, int]] = {k: v for k, v in colors.items() if v is not None}
         return ConeTable(cones_from_picture(track.picture, used))
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> dict[str, Any]:

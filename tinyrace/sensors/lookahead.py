@@ -219,7 +219,8 @@ class LookaheadSensor:
         pose = (x, y, car.pose[2])
         rows = lookahead(line, index, pose, track.y_down, self.config.points)
         np.minimum(rows, self.space.high, out=rows)  # np.clip's wrapper costs more than both
-        return np.maximum(rows, self.space.low, out=rows)
+        clamped: np.ndarray = np.maximum(rows, self.space.low, out=rows)
+        return clamped
 
 
 def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:

@@ -127,8 +127,9 @@ class SkyPaint:
     the warp.)"""
 
     rows: np.ndarray  # (rows, W, *channels) sky
-    below: np.ndarray | None  # (H - rows, W, *channels) sky; None: no sky below the rows
-    mask: np.ndarray | None  # (H - rows, W) uint8, nonzero where the sky is below the rows
+    # below the rows: (H - rows, W, *channels) sky and its (H - rows, W) uint8 mask, nonzero
+    # where the sky is; None when no pixel below the rows is sky
+    below: tuple[np.ndarray, np.ndarray] | None
 
     @classmethod
     def make(cls, camera: Pinhole, value: tuple[int, ...], channels: tuple[int, ...]) -> SkyPaint:
@@ -138,17 +139,17 @@ class SkyPaint:
         sky = np.empty((height, width, *channels), np.uint8)
         sky[...] = np.asarray(value, np.uint8).reshape(channels) if channels else value[0]
         below_mask = camera.sky[rows:]
-        if not below_mask.any():
-            return cls(sky[:rows].copy(), None, None)
-        return cls(sky[:rows].copy(), sky[rows:].copy(), below_mask.astype(np.uint8))
+        below = (sky[rows:].copy(), below_mask.astype(np.uint8)) if below_mask.any() else None
+        return cls(sky[:rows].copy(), below)
 
     def paint(self, image: np.ndarray) -> None:
         """Set the sky pixels of ``image`` (H, W, *channels)."""
         rows = len(self.rows)
         image[:rows] = self.rows
-        if self.mask is not None:
+        if self.below is not None:
+            sky, mask = self.below
             below = image[rows:]
-            done = cv2.copyTo(self.below, self.mask, below)
+            done = cv2.copyTo(sky, mask, below)
             assert done is below, "cv2 wrote into its own array"
 
 

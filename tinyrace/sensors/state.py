@@ -132,7 +132,8 @@ class StateSensor:
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         vector = state_vector(snapshot.car, self.y_down, self.wheels, self.config.pose)
         np.minimum(vector, self.space.high, out=vector)  # np.clip's wrapper costs more
-        return np.maximum(vector, self.space.low, out=vector)
+        clamped: np.ndarray = np.maximum(vector, self.space.low, out=vector)
+        return clamped
 
 
 def build(config: StateConfig, context: SensorContext) -> StateSensor:
