@@ -22,7 +22,13 @@ from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
 from tinyrace.sensors.base import Ground, SensorContext
-from tinyrace.sensors.common import GroundImage, PerTrack, label_table, paint_labels
+from tinyrace.sensors.common import (
+    GroundImage,
+    PerTrack,
+    label_names,
+    label_table,
+    paint_labels,
+)
 from tinyrace.sensors.texture import GroundTexture, compose
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -91,8 +97,8 @@ class BirdseyeCamera:
         channels = (3,) if config.format == "rgb" else ()
         self.space = spaces.Box(0, 255, (*config.resolution, *channels), np.uint8)
         self._camera: RoiCamera | None = None  # on the current episode's ground
-        self._labels: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()  # classes
-        self.labels: tuple[str, ...] = ()
+        self._labels: PerTrack[tuple[GroundImage, dict[int, str]]] = PerTrack()  # classes
+        self.labels: dict[int, str] = {}
 
     @property
     def id(self) -> str:
@@ -103,10 +109,10 @@ class BirdseyeCamera:
         if self.config.format == "classes":
             self._label_ground, self.labels = self._labels.get(track, self._paint_labels)
 
-    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
         ppu = self.camera(track).pixels_per_unit  # [label px per track unit] as the output's
-        return paint_labels(track, table, ppu), tuple(name for name, _ in table)
+        return paint_labels(track, table, ppu), label_names(table)
 
     def camera(self, track: Track) -> RoiCamera:
         """The camera on the current episode's ground texture."""

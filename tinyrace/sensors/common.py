@@ -122,6 +122,11 @@ def label_table(track: Track) -> LabelTable:
     return tuple(table)
 
 
+def label_names(table: LabelTable) -> dict[int, str]:
+    """The name of each label value of ``table`` (label = position), as info shows them."""
+    return {label: name for label, (name, _) in enumerate(table)}
+
+
 def _hex(rgb: Sequence[float]) -> str:
     return "".join(f"{int(c):02x}" for c in rgb)
 

@@ -4,7 +4,8 @@ Formats: ``rgb`` (H, W, 3) uint8; ``gray`` (H, W) uint8; ``classes`` (H, W) uint
 of the track's ground, sampled without interpolation so that no pixel blends two labels.
 Labels (``label_table``): 0 background, 1 road (tracks with road surfaces), then each
 obstacle colour of a picture track, then the picture's other colours (markings); 255 sky.
-The table of the current track is ``labels`` (and ``info['sensor_labels'][id]``).
+The table of the current track, {label: name} with the sky, is ``labels`` (and
+``info['sensor_labels'][id]``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from tinyrace.sensors.common import (
     GroundImage,
     PerTrack,
     car_length,
+    label_names,
     label_table,
     paint_labels,
 )
@@ -60,9 +62,9 @@ class PerspectiveCamera:
         self.pixels_per_unit = pixels_per_unit  # ground texture of tracks without a picture
         shape = (h, w, 3) if config.format == "rgb" else (h, w)
         self.space = spaces.Box(0, 255, shape, np.uint8)
-        self._grounds: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()
+        self._grounds: PerTrack[tuple[GroundImage, dict[int, str]]] = PerTrack()
         self.ground: GroundImage | None = None
-        self.labels: tuple[str, ...] = ()
+        self.labels: dict[int, str] = {}
         self._scratch: np.ndarray | None = None  # RGBx warp of the rows below the sky
         self._conversion = cv2.COLOR_RGBA2RGB if config.format == "rgb" else cv2.COLOR_RGBA2GRAY
         # the sky in the output format (gray: as cv2 converts the sky colour)
@@ -80,9 +82,10 @@ class PerspectiveCamera:
             texture = self.episode_ground.texture(track)
             self.ground = GroundImage(texture.image(0), texture.to_pixels[0])
 
-    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
-        return paint_labels(track, table, self.pixels_per_unit), tuple(n for n, _ in table)
+        names = {**label_names(table), SKY_LABEL: "sky"}
+        return paint_labels(track, table, self.pixels_per_unit), names
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
