@@ -10,9 +10,7 @@ A track that lists its cones (a cone map) is read as it is, by class; on picture
 cones are the connected components of the cone colours (``cones_from_picture``), found once
 per track.
 
-Speed: a track's cones are kept as complex numbers x + iy (``ConeTable``), so that moving
-them into the car's frame is one subtraction and one multiplication by a unit complex
-number; at a hundred cones each numpy call costs more than its arithmetic.
+Speed: a track's cones are kept as complex numbers (``ConeTable``, ``PlanePoints``).
 """
 
 from __future__ import annotations
@@ -27,7 +25,7 @@ from gymnasium import spaces
 
 from tinyrace.config.sensors import ConesConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, Unsupported, car_length
+from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported, car_length
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
@@ -57,29 +55,15 @@ def to_car_frame(points: np.ndarray, pose: tuple[float, float, float], y_down: b
 
 
 class ConeTable:
-    """A track's cones ready for detection: positions as x + iy [track units] (and as x - iy,
-    their mirror image, for y-down tracks) and class ids."""
+    """A track's cones ready for detection: positions (``PlanePoints``) and class ids."""
 
     def __init__(self, cones: np.ndarray):
-        rows = np.asarray(cones, np.float64).reshape(-1, 3)  # x, y, class id
-        self.points = rows[:, 0] + 1j * rows[:, 1]
-        self.mirrored = self.points.conj()
+        rows = np.asarray(cones, np.float64).reshape(-1, 3)  # x, y [track units], class id
+        self.plane = PlanePoints.of(rows[:, :2])
         self.classes = rows[:, 2].copy()
 
     def __len__(self) -> int:
         return len(self.classes)
-
-    def local(self, pose: tuple[float, float, float], y_down: bool) -> np.ndarray:
-        """(K,) complex ahead + i left [track units] of each cone seen from ``pose``: the
-        offset turned by -heading (a y-down track is the mirror image of a y-up one)."""
-        x, y, heading = pose
-        c, s = math.cos(heading), math.sin(heading)
-        local: np.ndarray
-        if y_down:
-            local = (self.mirrored - complex(x, -y)) * complex(c, s)
-        else:
-            local = (self.points - complex(x, y)) * complex(c, -s)
-        return local
 
 
 def detect(
@@ -97,7 +81,7 @@ def detect(
     [track units] and ``fov`` [rad] centred ahead. Extra detections beyond ``capacity`` (the
     farthest) are dropped."""
     table = cones if isinstance(cones, ConeTable) else ConeTable(cones)
-    local = table.local(pose, y_down)
+    local = table.plane.seen_from(pose, y_down)  # ahead + i left
     distance = np.abs(local)
     # within the fov: the bearing's cosine is at least cos(fov / 2), i.e. x >= cos * distance
     half = math.cos(min(fov, 2 * math.pi) / 2)

@@ -12,8 +12,7 @@ left turn, on y-up and y-down tracks alike.
 
 Speed: at K = 10 points each numpy call costs more than its arithmetic, so an observation
 makes few: the grid is kept padded (windows and the points ahead are slices, never index
-arithmetic) and as complex numbers x + iy, so that moving K points into the car's frame is
-one subtraction and one multiplication by a unit complex number.
+arithmetic) and as complex numbers (``PlanePoints``).
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from gymnasium import spaces
 from tinyrace.config.schema import RosMapTrackConfig
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, Unsupported, car_length
+from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported, car_length
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -69,13 +68,11 @@ class ReferenceLine:
     def _pad(self, after: int) -> None:
         """Keep the grid with WINDOW rows before it and ``after`` rows after it (wrapped round
         a closed line, repeats of the end rows of an open one), so that windows and the points
-        ahead are slices: grid point i is element i + WINDOW. Points as x + iy, and as
-        x - iy (their mirror image, for y-down tracks)."""
+        ahead are slices: grid point i is element i + WINDOW."""
         m = len(self.table)
         rows = np.arange(-WINDOW, m + after)
         padded = self.table[rows % m if self.closed else np.clip(rows, 0, m - 1)]
-        self._complex = padded[:, 0] + 1j * padded[:, 1]
-        self._mirrored = self._complex.conj()
+        self._plane = PlanePoints.of(padded[:, :2])
         self._curvature = padded[:, 2].copy()
 
     def nearest(self, x: float, y: float, near: int | None) -> int:
@@ -83,23 +80,25 @@ class ReferenceLine:
         along the whole line when the best of that window is at its edge)."""
         m = len(self.table)
         if near is not None:
-            window = self._complex[near : near + 2 * WINDOW + 1]
+            window = self._plane.points[near : near + 2 * WINDOW + 1]
             best = int(np.abs(window - complex(x, y)).argmin())
             if 0 < best < 2 * WINDOW:
                 index = near + best - WINDOW
                 return index % m if self.closed else min(max(index, 0), m - 1)
-        grid = self._complex[WINDOW : WINDOW + m]
+        grid = self._plane.points[WINDOW : WINDOW + m]
         return int(np.abs(grid - complex(x, y)).argmin())
 
-    def ahead(self, index: int, count: int, y_down: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        """The points 1, 2, ... ``count`` spacings after grid point ``index`` as complex
-        numbers x + iy (x - iy with ``y_down``), and their curvatures (views)."""
-        if len(self._complex) < len(self.table) + WINDOW + FINE * count:
+    def ahead(self, index: int, count: int) -> tuple[PlanePoints, slice]:
+        """The padded points and the part of them 1, 2, ... ``count`` spacings after grid
+        point ``index``; their curvatures are ``curvature(part)``."""
+        if len(self._curvature) < len(self.table) + WINDOW + FINE * count:
             self._pad(max(WINDOW, FINE * count))
         start = index + WINDOW + FINE
-        ahead = slice(start, start + FINE * count, FINE)
-        points = self._mirrored if y_down else self._complex
-        return points[ahead], self._curvature[ahead]
+        return self._plane, slice(start, start + FINE * count, FINE)
+
+    def curvature(self, part: slice) -> np.ndarray:
+        """[1/track unit] of a ``part`` of the padded points (see ``ahead``)."""
+        return self._curvature[part]
 
 
 def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
@@ -127,17 +126,11 @@ def lookahead(
     """(count, 3) float32 rows x, y [track units, car frame: ahead, left] and curvature
     [1/track unit] of the points one, two, ... ``line.spacing`` ahead of grid point
     ``index`` (an open line stops at its end)."""
-    points, curvature = line.ahead(index, count, y_down)
-    x, y, heading = pose
-    # (p - car) turned by -heading is (ahead + i left) on y-up tracks; a y-down track is the
-    # mirror image of one (conjugates) whose headings turn the other way
-    if y_down:
-        local = (points - complex(x, -y)) * complex(math.cos(heading), math.sin(heading))
-    else:
-        local = (points - complex(x, y)) * complex(math.cos(heading), -math.sin(heading))
+    plane, part = line.ahead(index, count)
+    local = plane.seen_from(pose, y_down, part)  # ahead + i left
     out = np.empty((count, 3), np.float32)
     out[:, :2] = local.view(np.float64).reshape(count, 2)
-    out[:, 2] = curvature
+    out[:, 2] = line.curvature(part)
     return out
 
 
