@@ -73,7 +73,7 @@ class ReferenceLine:
         rows = np.arange(-WINDOW, m + after)
         padded = self.table[rows % m if self.closed else np.clip(rows, 0, m - 1)]
         self._plane = PlanePoints.of(padded[:, :2])
-        self._curvature = padded[:, 2].copy()
+        self._curvature: np.ndarray = padded[:, 2].copy()
 
     def nearest(self, x: float, y: float, near: int | None) -> int:
         """Index of the grid point nearest (x, y), searched around ``near`` when given (and
@@ -98,7 +98,8 @@ class ReferenceLine:
 
     def curvature(self, part: slice) -> np.ndarray:
         """[1/track unit] of a ``part`` of the padded points (see ``ahead``)."""
-        return self._curvature[part]
+        values: np.ndarray = self._curvature[part]
+        return values
 
 
 def _menger(points: np.ndarray, offset: int, closed: bool) -> np.ndarray:
