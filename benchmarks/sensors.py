@@ -13,6 +13,10 @@ by the distance to the nearest obstacle until it is below a small epsilon or pas
 range). F1TENTH's gym is not on PyPI and its loop is compiled with numba there; here it is
 reimplemented in plain Python, on the same map and beams as tinyrace's lidar.
 
+Cases: the procedural track, formula_student (a picture track with cones) and the shipped
+metric tracks (circuit, autocross with its cone map, f1tenth_loop), each with bird's-eye
+windows about as large as its own camera's.
+
 Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
 costs no more than a 96x96 bird's-eye camera; a 120x160 perspective camera no more than
 1.5x a 120x160 bird's-eye camera.
