@@ -98,16 +98,22 @@ class BirdseyeCamera:
         self.space = spaces.Box(0, 255, (*config.resolution, *channels), np.uint8)
         self._camera: RoiCamera | None = None  # on the current episode's ground
         self._labels: PerTrack[tuple[GroundImage, dict[int, str]]] = PerTrack()  # classes
-        self.labels: dict[int, str] = {}
+        self._names: dict[int, str] = {}  # by label value, on the current track
 
     @property
     def id(self) -> str:
         return self.config.id
 
+    @property
+    def labels(self) -> dict[int, str]:
+        """The name of each label value of a ``classes`` image on the current track (a new
+        dict each time: infos never share it)."""
+        return dict(self._names)
+
     def reset(self, track: Track) -> None:
         self._camera = None  # a new episode may have a new ground
         if self.config.format == "classes":
-            self._label_ground, self.labels = self._labels.get(track, self._paint_labels)
+            self._label_ground, self._names = self._labels.get(track, self._paint_labels)
 
     def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)

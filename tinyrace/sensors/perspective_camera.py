@@ -64,7 +64,7 @@ class PerspectiveCamera:
         self.space = spaces.Box(0, 255, shape, np.uint8)
         self._grounds: PerTrack[tuple[GroundImage, dict[int, str]]] = PerTrack()
         self.ground: GroundImage | None = None
-        self.labels: dict[int, str] = {}
+        self._names: dict[int, str] = {}  # by label value, on the current track
         self._scratch: np.ndarray | None = None  # RGBx warp of the rows below the sky
         self._conversion = cv2.COLOR_RGBA2RGB if config.format == "rgb" else cv2.COLOR_RGBA2GRAY
         # the sky in the output format (gray: as cv2 converts the sky colour)
@@ -75,9 +75,15 @@ class PerspectiveCamera:
     def id(self) -> str:
         return self.config.id
 
+    @property
+    def labels(self) -> dict[int, str]:
+        """The name of each label value of a ``classes`` image on the current track (a new
+        dict each time: infos never share it)."""
+        return dict(self._names)
+
     def reset(self, track: Track) -> None:
         if self.config.format == "classes":
-            self.ground, self.labels = self._grounds.get(track, self._paint_labels)
+            self.ground, self._names = self._grounds.get(track, self._paint_labels)
         else:  # the episode's own ground (CarRacing's tiles and grass, or the picture)
             texture = self.episode_ground.texture(track)
             self.ground = GroundImage(texture.image(0), texture.to_pixels[0])
