@@ -17,6 +17,10 @@ cell centres, so its tip ends up to about 1.2 cells inside the blocking cell it 
 may step over an object a cell thick); tinyrace's lidar reports where the beam enters that
 cell, within about half a cell. Hence the agreement is given within one and within two cells.
 
+Cases: the procedural track, formula_student (a picture track with cones) and the shipped
+metric tracks (circuit, autocross with its cone map, f1tenth_loop), each with bird's-eye
+windows about as large as its own camera's.
+
 Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
 costs no more than a 96x96 bird's-eye camera; a 120x160 perspective camera no more than
 1.5x a 120x160 bird's-eye camera.
@@ -69,6 +73,22 @@ CASES: dict[str, dict[str, Any]] = {
         },
     },
 }
+# the shipped metric tracks: bird's-eye windows about as long as their own camera's [m]
+METRIC_WINDOWS = {"circuit": 30.0, "autocross": 12.0, "f1tenth_loop": 3.0}
+CONE_TRACKS = ("autocross",)  # metric tracks that list cones
+
+
+def metric_case(name: str, ahead: float) -> dict[str, Any]:
+    """The case of a shipped metric track: bird's-eye windows ``ahead`` [m] long."""
+    cameras = [
+        {"id": "birdseye_96x96", "resolution": [96, 96], "roi": [ahead, ahead]},
+        {"id": "birdseye_120x160", "resolution": [120, 160], "roi": [ahead, ahead * 4 / 3]},
+    ]
+    cones = [{"id": "cones", "type": "cones"}] if name in CONE_TRACKS else []
+    return {"environment": name, "config": {"cameras": cameras, "sensors": [*SENSORS, *cones]}}
+
+
+CASES.update({name: metric_case(name, ahead) for name, ahead in METRIC_WINDOWS.items()})
 
 
 def f1tenth_distance(field) -> np.ndarray:

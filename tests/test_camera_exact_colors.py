@@ -54,9 +54,9 @@ def test_gray_and_classes_formats_of_a_birdseye_camera():
     table = info["sensor_labels"]["labels"]
     rgb, labels = observation["rgb"], observation["labels"]
     assert observation["gray"].shape == (60, 80) and labels.shape == (60, 80)
-    assert set(np.unique(labels)) <= set(range(len(table)))
+    assert set(np.unique(labels)) <= set(table)  # {label: name}, no sky from above
     checked = 0
-    for label, name in enumerate(table):
+    for label, name in table.items():
         if "#" not in name:
             continue
         rgb_color = tuple(int(name[-6:][i : i + 2], 16) for i in (0, 2, 4))

@@ -1,14 +1,19 @@
-"""State core: speeds, rates and wheel slip in the car's frame on both track conventions."""
+"""State core: speeds, rates and wheel slip in the car's frame on both track conventions; pose
+bounds."""
 
 from __future__ import annotations
 
 import math
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
+import tinyrace  # noqa: F401  (registers the envs)
 from tinyrace.cars.state import CarState, WheelState
 from tinyrace.sensors.state import fields, state_vector
+
+ID = "tinyrace/TinyRace-v0"
 
 
 def _car(pose, velocity, yaw_rate=0.0, steer=0.0, wheels=()):
@@ -48,3 +53,29 @@ def test_wheel_speeds_and_slip_and_pose():
     assert [value[f"wheel_speed_{w}"] for w in ("fl", "fr", "rl", "rr")] == [5, 5, 6, 4]
     assert [value[f"slip_{w}"] for w in ("fl", "fr", "rl", "rr")] == pytest.approx([1, 1, 2, 0])
     assert value["heading"] == pytest.approx(-math.pi) and (value["x"], value["y"]) == (5, 6)
+
+
+def test_pose_bounds_hold_the_last_pose_before_leaving_the_playfield():
+    """On a procedural track x and y are bounded by the playfield widened by a step's travel:
+    the pose of the step that leaves the playfield is still inside the box, unclipped."""
+    env = gym.make(ID, sensors=[{"id": "s", "type": "state", "pose": True}])
+    space = env.observation_space["s"]
+    playfield = env.unwrapped.config.tracks[0].playfield
+    assert playfield < space.high[-3] < 1.1 * playfield and space.high[-3] == space.high[-2]
+    observation, _ = env.reset(seed=0)
+    for _ in range(2000):  # straight on at a fifth of the throttle: off the playfield
+        observation, _, terminated, truncated, info = env.step(np.array([0.0, 0.2, 0.0]))
+        if terminated or truncated:
+            break
+    assert info["termination"] == "out_of_bounds"
+    x, y = observation["s"][-3:-1]
+    assert max(abs(x), abs(y)) > playfield and space.contains(observation["s"])
+    pose = env.unwrapped.episode.car.state().pose
+    np.testing.assert_allclose((x, y), pose[:2], rtol=1e-6)  # not clipped
+    env.close()
+
+
+def test_pose_is_unbounded_where_the_extent_is_read_at_reset():
+    env = gym.make(ID, environment="circuit", sensors=[{"id": "s", "type": "state", "pose": True}])
+    assert np.isinf(env.observation_space["s"].high[-3:-1]).all()
+    env.close()

@@ -116,11 +116,12 @@ def test_noise_differs_between_seeds():
 def test_classes_format_is_labels_with_a_table_in_info():
     env = gym.make(ID, sensors=[CLASSES], **KINDS["image"])
     observation, info = env.reset(seed=0)
-    table = info["sensor_labels"]["labels"]
-    assert table[:2] == ("background", "road") and any("obstacle" in n for n in table)
+    table = info["sensor_labels"]["labels"]  # {label: name}
+    assert (table[0], table[1], table[255]) == ("background", "road", "sky")
+    assert any("obstacle" in name for name in table.values())
     labels = observation["labels"]
     assert labels.dtype == np.uint8 and labels.shape == (24, 32)
-    assert set(np.unique(labels)) <= set(range(len(table))) | {255}
+    assert set(np.unique(labels)) <= set(table) and 255 in labels  # the sky is named too
 
 
 def _vector_rollout(vector, steps: int = 12) -> list:

@@ -19,7 +19,7 @@ LENGTH = "track units"
 _ID = "observation key of this sensor"
 _FORMAT = (
     "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the track's "
-    "layers (never blended; the table is in info['sensor_labels'])"
+    "layers, 255 the sky (never blended; the table {label: name} is in info['sensor_labels'])"
 )
 
 
@@ -111,7 +111,11 @@ class StateConfig:
 
     id: str = knob(REQUIRED, _ID)
     type: Literal["state"] = _type("state")
-    pose: bool = knob(False, "append x, y [track units] and heading [rad]")
+    pose: bool = knob(
+        False,
+        "append x, y [track units] (bounded by the playfield on procedural tracks, unbounded "
+        "elsewhere) and heading [rad]",
+    )
 
 
 @dataclass(frozen=True)

@@ -53,11 +53,12 @@ class Sensor(Protocol):
 @runtime_checkable
 class Labelled(Protocol):
     """A sensor whose observation holds class labels (a ``classes`` camera); ``labels``
-    names them by value for the current track (empty: it observes no labels)."""
+    names each label value it may observe on the current track (empty: it observes no
+    labels), sky included."""
 
     @property
-    def labels(self) -> tuple[str, ...]:
-        """The name of each label value, by position."""
+    def labels(self) -> dict[int, str]:
+        """The name of each label value."""
         ...
 
 

@@ -22,7 +22,13 @@ from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
 from tinyrace.sensors.base import Ground, SensorContext
-from tinyrace.sensors.common import GroundImage, PerTrack, label_table, paint_labels
+from tinyrace.sensors.common import (
+    GroundImage,
+    PerTrack,
+    label_names,
+    label_table,
+    paint_labels,
+)
 from tinyrace.sensors.texture import GroundTexture, compose
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -91,22 +97,28 @@ class BirdseyeCamera:
         channels = (3,) if config.format == "rgb" else ()
         self.space = spaces.Box(0, 255, (*config.resolution, *channels), np.uint8)
         self._camera: RoiCamera | None = None  # on the current episode's ground
-        self._labels: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()  # classes
-        self.labels: tuple[str, ...] = ()
+        self._labels: PerTrack[tuple[GroundImage, dict[int, str]]] = PerTrack()  # classes
+        self._names: dict[int, str] = {}  # by label value, on the current track
 
     @property
     def id(self) -> str:
         return self.config.id
 
+    @property
+    def labels(self) -> dict[int, str]:
+        """The name of each label value of a ``classes`` image on the current track (a new
+        dict each time: infos never share it)."""
+        return dict(self._names)
+
     def reset(self, track: Track) -> None:
         self._camera = None  # a new episode may have a new ground
         if self.config.format == "classes":
-            self._label_ground, self.labels = self._labels.get(track, self._paint_labels)
+            self._label_ground, self._names = self._labels.get(track, self._paint_labels)
 
-    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
         ppu = self.camera(track).pixels_per_unit  # [label px per track unit] as the output's
-        return paint_labels(track, table, ppu), tuple(name for name, _ in table)
+        return paint_labels(track, table, ppu), label_names(table)
 
     def camera(self, track: Track) -> RoiCamera:
         """The camera on the current episode's ground texture."""

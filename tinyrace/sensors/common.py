@@ -59,6 +59,39 @@ def mount(
 
 
 @dataclass(frozen=True, eq=False)
+class PlanePoints:
+    """Track points ready to be seen from a car: as complex numbers x + iy and as their
+    mirror image x - iy (a y-down track is the mirror image of a y-up one), so that moving
+    them into the car's frame is one subtraction and one multiplication (few numpy calls: at
+    tens of points each call costs more than its arithmetic)."""
+
+    points: np.ndarray  # (N,) complex x + iy [track units]
+    mirrored: np.ndarray  # (N,) complex x - iy
+
+    @classmethod
+    def of(cls, xy: np.ndarray) -> PlanePoints:
+        """From (N, 2) track points."""
+        xy = np.asarray(xy, np.float64).reshape(-1, 2)
+        points = xy[:, 0] + 1j * xy[:, 1]
+        return cls(points, points.conj())
+
+    def seen_from(
+        self, pose: tuple[float, float, float], y_down: bool, part: slice = slice(None)
+    ) -> np.ndarray:
+        """(N,) complex ahead + i left [track units] of the points (``part`` of them) in the
+        frame of a car at ``pose`` (heading counter-clockwise on y-up tracks, clockwise on
+        y-down ones): the offset turned by -heading."""
+        x, y, heading = pose
+        c, s = math.cos(heading), math.sin(heading)
+        local: np.ndarray
+        if y_down:
+            local = (self.mirrored[part] - complex(x, -y)) * complex(c, s)
+        else:
+            local = (self.points[part] - complex(x, y)) * complex(c, -s)
+        return local
+
+
+@dataclass(frozen=True, eq=False)
 class GroundImage:
     """A whole-track image (colours RGBx, or labels) and the track -> pixel affine."""
 
@@ -120,6 +153,11 @@ def label_table(track: Track) -> LabelTable:
             if rgb not in named and rgb != (0, 0, 0):
                 table.append((f"marking #{_hex(rgb)}", rgb))
     return tuple(table)
+
+
+def label_names(table: LabelTable) -> dict[int, str]:
+    """The name of each label value of ``table`` (label = position), as info shows them."""
+    return {label: name for label, (name, _) in enumerate(table)}
 
 
 def _hex(rgb: Sequence[float]) -> str:

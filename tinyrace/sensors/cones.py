@@ -9,6 +9,8 @@ generator given, in a fixed order, so that the same seed gives the same detectio
 A track that lists its cones (a cone map) is read as it is, by class; on picture tracks the
 cones are the connected components of the cone colours (``cones_from_picture``), found once
 per track.
+
+Speed: a track's cones are kept as complex numbers (``ConeTable``, ``PlanePoints``).
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from gymnasium import spaces
 
 from tinyrace.config.sensors import ConesConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, Unsupported, car_length
+from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported, car_length
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
@@ -52,8 +54,20 @@ def to_car_frame(points: np.ndarray, pose: tuple[float, float, float], y_down: b
     return np.stack([ahead, left], axis=1)
 
 
+class ConeTable:
+    """A track's cones ready for detection: positions (``PlanePoints``) and class ids."""
+
+    def __init__(self, cones: np.ndarray):
+        rows = np.asarray(cones, np.float64).reshape(-1, 3)  # x, y [track units], class id
+        self.plane = PlanePoints.of(rows[:, :2])
+        self.classes = rows[:, 2].copy()
+
+    def __len__(self) -> int:
+        return len(self.classes)
+
+
 def detect(
-    cones: np.ndarray,
+    cones: np.ndarray | ConeTable,
     pose: tuple[float, float, float],
     y_down: bool,
     max_range: float,
@@ -63,25 +77,24 @@ def detect(
     rng: np.random.Generator,
 ) -> tuple[np.ndarray, int]:
     """((capacity, 3) float32 rows x, y, class, count) of ``cones`` (K, 3: x, y, class id
-    1-3 [track units]) seen from ``pose`` within ``max_range`` [track units] and ``fov`` [rad]
-    centred ahead. Extra detections beyond ``capacity`` (the farthest) are dropped."""
-    x, y, heading = pose
-    c, s = math.cos(heading), math.sin(heading)
-    rotation = np.array([[c, s], [s, -c]] if y_down else [[c, -s], [s, c]])
-    local = (cones[:, :2] - (x, y)) @ rotation  # ahead, left
-    squared = np.einsum("ij,ij->i", local, local)
+    1-3 [track units], or their ``ConeTable``) seen from ``pose`` within ``max_range``
+    [track units] and ``fov`` [rad] centred ahead. Extra detections beyond ``capacity`` (the
+    farthest) are dropped."""
+    table = cones if isinstance(cones, ConeTable) else ConeTable(cones)
+    local = table.plane.seen_from(pose, y_down)  # ahead + i left
+    distance = np.abs(local)
     # within the fov: the bearing's cosine is at least cos(fov / 2), i.e. x >= cos * distance
-    seen = np.flatnonzero(
-        (squared <= max_range * max_range)
-        & (local[:, 0] >= math.cos(min(fov, 2 * math.pi) / 2) * np.sqrt(squared))
-    )
+    half = math.cos(min(fov, 2 * math.pi) / 2)
+    seen = ((distance <= max_range) & (local.real >= half * distance)).nonzero()[0]
     if noise.miss_probability > 0 or noise.position_std > 0 or noise.false_positives > 0:
-        return _noisy(local[seen], cones[seen, 2], capacity, noise, rng, max_range, fov)
-    order = seen[np.argsort(squared[seen], kind="stable")[:capacity]]
+        found = local[seen].view(np.float64).reshape(-1, 2)
+        return _noisy(found, table.classes[seen], capacity, noise, rng, max_range, fov)
+    order = seen[distance[seen].argsort(kind="stable")[:capacity]]
+    count = len(order)
     rows = np.zeros((capacity, 3), np.float32)
-    rows[: len(order), :2] = local[order]
-    rows[: len(order), 2] = cones[order, 2]
-    return rows, len(order)
+    rows[:count, :2] = local[order].view(np.float64).reshape(count, 2)
+    rows[:count, 2] = table.classes[order]
+    return rows, count
 
 
 def _noisy(
@@ -148,8 +161,9 @@ class ConesSensor:
         self.space = spaces.Dict(
             {"cones": spaces.Box(low, high, dtype=np.float32), "count": spaces.Discrete(n + 1)}
         )
-        self._cones: PerTrack[np.ndarray] = PerTrack()  # (K, 3) per track
-        self.cones: np.ndarray = np.zeros((0, 3))  # of the current track
+        self._cones: PerTrack[ConeTable] = PerTrack()
+        self.cones = ConeTable(np.zeros((0, 3)))  # of the current track
+        self.fov = math.radians(config.fov)  # [rad]
 
     @property
     def id(self) -> str:
@@ -158,14 +172,15 @@ class ConesSensor:
     def reset(self, track: Track) -> None:
         self.cones = self._cones.get(track, self._track_cones)
 
-    def _track_cones(self, track: Track) -> np.ndarray:
+    def _track_cones(self, track: Track) -> ConeTable:
         if track.picture is None or len(track.cones):
-            return np.asarray(track.cones, np.float64)
+            return ConeTable(np.asarray(track.cones, np.float64))
         c = self.config
         colors = {
             k + 1: rgb for k, rgb in enumerate((c.blue_color, c.yellow_color, c.orange_color))
         }
-        return cones_from_picture(track.picture, {k: v for k, v in colors.items() if v is not None})
+        used: dict[int, tuple[int, int, int]] = {k: v for k, v in colors.items() if v is not None}
+        return ConeTable(cones_from_picture(track.picture, used))
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> dict[str, Any]:
         car = snapshot.car
@@ -175,7 +190,7 @@ class ConesSensor:
             (x, y, car.pose[2]),
             track.y_down,
             self.max_range,
-            math.radians(self.config.fov),
+            self.fov,
             self.config.max_cones,
             self.noise,
             rng,

@@ -4,12 +4,14 @@ Formats: ``rgb`` (H, W, 3) uint8; ``gray`` (H, W) uint8; ``classes`` (H, W) uint
 of the track's ground, sampled without interpolation so that no pixel blends two labels.
 Labels (``label_table``): 0 background, 1 road (tracks with road surfaces), then each
 obstacle colour of a picture track, then the picture's other colours (markings); 255 sky.
-The table of the current track is ``labels`` (and ``info['sensor_labels'][id]``).
+The table of the current track, {label: name} with the sky, is ``labels`` (and
+``info['sensor_labels'][id]``).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import cv2
 import numpy as np
@@ -22,10 +24,11 @@ from tinyrace.sensors.common import (
     GroundImage,
     PerTrack,
     car_length,
+    label_names,
     label_table,
     paint_labels,
 )
-from tinyrace.sensors.pinhole import Pinhole, car_to_world, render
+from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, warp_below_sky
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -59,24 +62,36 @@ class PerspectiveCamera:
         self.pixels_per_unit = pixels_per_unit  # ground texture of tracks without a picture
         shape = (h, w, 3) if config.format == "rgb" else (h, w)
         self.space = spaces.Box(0, 255, shape, np.uint8)
-        self._grounds: PerTrack[tuple[GroundImage, tuple[str, ...]]] = PerTrack()
+        self._grounds: PerTrack[tuple[GroundImage, dict[int, str]]] = PerTrack()
         self.ground: GroundImage | None = None
-        self.labels: tuple[str, ...] = ()
+        self._names: dict[int, str] = {}  # by label value, on the current track
+        self._scratch: np.ndarray | None = None  # RGBx warp of the rows below the sky
+        self._conversion = cv2.COLOR_RGBA2RGB if config.format == "rgb" else cv2.COLOR_RGBA2GRAY
+        # the sky in the output format (gray: as cv2 converts the sky colour)
+        sky = cv2.cvtColor(np.array([[(*config.sky_color, 255)]], np.uint8), self._conversion)
+        self._sky = self.pinhole.sky_paint(tuple(sky.reshape(-1).tolist()), shape[2:])
 
     @property
     def id(self) -> str:
         return self.config.id
 
+    @property
+    def labels(self) -> dict[int, str]:
+        """The name of each label value of a ``classes`` image on the current track (a new
+        dict each time: infos never share it)."""
+        return dict(self._names)
+
     def reset(self, track: Track) -> None:
         if self.config.format == "classes":
-            self.ground, self.labels = self._grounds.get(track, self._paint_labels)
+            self.ground, self._names = self._grounds.get(track, self._paint_labels)
         else:  # the episode's own ground (CarRacing's tiles and grass, or the picture)
             texture = self.episode_ground.texture(track)
             self.ground = GroundImage(texture.image(0), texture.to_pixels[0])
 
-    def _paint_labels(self, track: Track) -> tuple[GroundImage, tuple[str, ...]]:
+    def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
-        return paint_labels(track, table, self.pixels_per_unit), tuple(n for n, _ in table)
+        names = {**label_names(table), SKY_LABEL: "sky"}
+        return paint_labels(track, table, self.pixels_per_unit), names
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car
@@ -92,10 +107,29 @@ class PerspectiveCamera:
                 (SKY_LABEL,),
                 cv2.INTER_NEAREST,
             )
-        sky = (*self.config.sky_color, 255)
-        rgbx = render(self.pinhole, ground.image, ground.to_pixels, placed, sky)
-        code = cv2.COLOR_RGBA2RGB if self.config.format == "rgb" else cv2.COLOR_RGBA2GRAY
-        return cv2.cvtColor(rgbx, code)
+        return self._colors(ground, placed)
+
+    def _colors(self, ground: GroundImage, placed: np.ndarray) -> np.ndarray:
+        """The ``rgb`` or ``gray`` image: the ground below the sky rows warped in RGBx (cv2's
+        fast layout) into a buffer that is converted straight into the new image."""
+        width, height = self.pinhole.size
+        rows = self.pinhole.sky_rows
+        image = np.empty(self.space.shape, np.uint8)
+        if rows < height:
+            if self._scratch is None:
+                self._scratch = np.empty((height - rows, width, 4), np.uint8)
+            scratch = self._scratch
+            warp_below_sky(
+                self.pinhole, ground.image, ground.to_pixels, placed, cv2.INTER_LINEAR, scratch
+            )
+            below = image[rows:]
+            converted = cv2.cvtColor(scratch, self._conversion, dst=below)
+            assert converted is below, "cv2 wrote into its own array"
+        self._sky.paint(image)
+        return image
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_scratch": None}  # a warp buffer, made again on first use
 
 
 def build(config: PerspectiveCameraConfig, context: SensorContext) -> PerspectiveCamera:

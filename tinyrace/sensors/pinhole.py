@@ -5,7 +5,9 @@ from the car's reference point, turned by yaw (+ right), pitch (+ down) and roll
 as the camera sees it), maps ground points to pixels by one homography; the image is the
 ground texture pushed through it by one ``cv2.warpPerspective``. Pixels whose ray misses the
 ground (above the horizon) or meets it beyond ``max_range`` get the sky colour, from a mask
-that depends on the camera alone and is computed once.
+that depends on the camera alone and is computed once. The whole rows of sky at the top
+(above the horizon of a level camera) are filled in one slice and never warped: only the
+rows below them are (``warp_below_sky``).
 
 Pixels: u right, v down, a pixel's centre on integer coordinates; the principal point is the
 image centre; the focal length follows from the horizontal field of view.
@@ -90,13 +92,65 @@ class Pinhole:
         return missed
 
     @cached_property
-    def sky_pixels(self) -> tuple[int, np.ndarray]:
-        """The sky as the number of whole top rows, and the flat indices of the rest."""
+    def sky_rows(self) -> int:
+        """How many whole rows at the top of the image are sky."""
         full = np.asarray(self.sky.all(axis=1))
-        rows = int(np.argmin(full)) if not full.all() else len(full)
-        rest = self.sky.copy()
-        rest[:rows] = False
-        return rows, np.flatnonzero(rest)
+        return int(np.argmin(full)) if not full.all() else len(full)
+
+    @cached_property
+    def below_sky_to_ground(self) -> np.ndarray:
+        """H (3x3): pixel (u, v) of the image below the whole rows of sky, v counted from the
+        first row below them -> ground point (ahead, right, 1) in the car frame."""
+        shift = np.array([[1.0, 0, 0], [0, 1.0, self.sky_rows], [0, 0, 1.0]])
+        below: np.ndarray = self.image_to_ground @ shift
+        return below
+
+    def sky_paint(self, value: tuple[int, ...], channels: tuple[int, ...] = ()) -> SkyPaint:
+        """The sky of this camera's images with ``channels`` (() for one) set to ``value`` (one
+        number per channel), made once per value."""
+        key = (value, channels)
+        paint = self._sky_paints.get(key)
+        if paint is None:
+            paint = self._sky_paints[key] = SkyPaint.make(self, value, channels)
+        return paint
+
+    @cached_property
+    def _sky_paints(self) -> dict[tuple[tuple[int, ...], tuple[int, ...]], SkyPaint]:
+        return {}
+
+
+@dataclass(frozen=True, eq=False)
+class SkyPaint:
+    """A camera's sky in one pixel format (uint8), made once: the whole rows at the top are
+    one slice copy; the sky below them (a rolled horizon, ground beyond max_range) one masked
+    copy. (Broadcasting a colour into an image costs numpy about 2 ns per byte: as much as
+    the warp.)"""
+
+    rows: np.ndarray  # (rows, W, *channels) sky
+    # below the rows: (H - rows, W, *channels) sky and its (H - rows, W) uint8 mask, nonzero
+    # where the sky is; None when no pixel below the rows is sky
+    below: tuple[np.ndarray, np.ndarray] | None
+
+    @classmethod
+    def make(cls, camera: Pinhole, value: tuple[int, ...], channels: tuple[int, ...]) -> SkyPaint:
+        """The sky of ``camera`` with ``channels`` set to ``value``."""
+        width, height = camera.size
+        rows = camera.sky_rows
+        sky = np.empty((height, width, *channels), np.uint8)
+        sky[...] = np.asarray(value, np.uint8).reshape(channels) if channels else value[0]
+        below_mask = camera.sky[rows:]
+        below = (sky[rows:].copy(), below_mask.astype(np.uint8)) if below_mask.any() else None
+        return cls(sky[:rows].copy(), below)
+
+    def paint(self, image: np.ndarray) -> None:
+        """Set the sky pixels of ``image`` (H, W, *channels)."""
+        rows = len(self.rows)
+        image[:rows] = self.rows
+        if self.below is not None:
+            sky, mask = self.below
+            below = image[rows:]
+            done = cv2.copyTo(sky, mask, below)
+            assert done is below, "cv2 wrote into its own array"
 
 
 def world_to_car(front: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
@@ -115,6 +169,35 @@ def car_to_world(front: tuple[float, float], heading: float, y_down: bool) -> np
     return np.array([[fx, rx, front[0]], [fy, ry, front[1]], [0, 0, 1]])
 
 
+def warp_below_sky(
+    camera: Pinhole,
+    ground: np.ndarray,
+    world_to_ground: np.ndarray,
+    placed: np.ndarray,
+    interpolation: int,
+    out: np.ndarray,
+) -> None:
+    """Draw the image rows below the whole rows of sky into ``out`` (H - rows, W, ground's
+    channels): the ground texture seen through one homography (texture pixels of
+    ``world_to_ground``, 2x3, car placed by ``placed``, 3x3 car frame -> track)."""
+    # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
+    # the homography's last row
+    below = camera.below_sky_to_ground
+    image_to_texture = np.empty((3, 3))
+    image_to_texture[:2] = world_to_ground @ (placed @ below)
+    image_to_texture[2] = below[2]
+    warped = cv2.warpPerspective(
+        ground,
+        image_to_texture,
+        (out.shape[1], out.shape[0]),
+        dst=out,
+        flags=interpolation | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_CONSTANT,
+        borderValue=0,
+    )
+    assert warped is out, "cv2 wrote into its own array"
+
+
 def render(
     camera: Pinhole,
     ground: np.ndarray,
@@ -128,23 +211,10 @@ def render(
     ``world_to_ground`` (2x3) of the track, seen from a car placed by ``placed`` (3x3, car
     frame -> track: ``car_to_world``);
     sky pixels set to ``sky`` (one value per channel of ``ground``)."""
-    # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
-    # the homography's last row
-    image_to_car = camera.image_to_ground
-    image_to_texture = np.empty((3, 3))
-    image_to_texture[:2] = world_to_ground @ (placed @ image_to_car)
-    image_to_texture[2] = image_to_car[2]
-    image = cv2.warpPerspective(
-        ground,
-        image_to_texture,
-        camera.size,
-        dst=out,
-        flags=interpolation | cv2.WARP_INVERSE_MAP,
-        borderMode=cv2.BORDER_CONSTANT,
-        borderValue=0,
-    )
-    rows, flat = camera.sky_pixels
-    image[:rows] = sky  # whole rows of sky (a level camera): one slice
-    if len(flat):
-        image.reshape(-1, *image.shape[2:])[flat] = sky
+    width, height = camera.size
+    image = np.empty((height, width, *ground.shape[2:]), ground.dtype) if out is None else out
+    if camera.sky_rows < height:
+        below = image[camera.sky_rows :]
+        warp_below_sky(camera, ground, world_to_ground, placed, interpolation, below)
+    camera.sky_paint(tuple(sky), ground.shape[2:]).paint(image)
     return image

@@ -11,14 +11,19 @@ Car frame: x ahead, y to the left; angles and rates are positive to the left
 | steer | rad | front-wheel angle, + left |
 | wheel_speed_{fl,fr,rl,rr} | track units/s | rim speed (spin x radius), dynamic car only |
 | slip_{fl,fr,rl,rr} | track units/s | rim speed less body speed along the wheel, dynamic car |
-| x, y | track units | reference point, with ``pose`` |
+| x, y | track units | reference point, with ``pose`` (bounds below) |
 | heading | rad | in the track's own convention, wrapped to [-pi, pi), with ``pose`` |
+
+Bounds of x and y: on procedural tracks the playfield (leaving it ends the episode) widened by
+one step's top travel and the car's length, so that even the last pose is inside; elsewhere
+unbounded, because the track's extent (a picture's size, a centreline's or a map's reach) is
+read when a track is drawn at reset, after the observation space is fixed.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from gymnasium import spaces
@@ -26,9 +31,10 @@ from gymnasium import spaces
 from tinyrace.cars.dynamic import DynamicCarSpec
 from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
+from tinyrace.config.schema import ProceduralTrackConfig
 from tinyrace.config.sensors import StateConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import KINEMATIC_MODELS, dynamic_scale, known
+from tinyrace.sensors.common import KINEMATIC_MODELS, car_length, dynamic_scale, known
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -74,12 +80,12 @@ class Limits:
     speed: float  # [track units/s] top speed (the dynamic car's per-step travel cap)
     yaw_rate: float  # [rad/s]
     steer: float  # [rad] full lock
+    extent: float = math.inf  # [track units] |x| and |y| of the pose (see the module's doc)
 
     def bounds(self, names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
-        """(low, high) float32 per component; wheel rims may spin up to 10x the top speed;
-        x and y are unbounded."""
+        """(low, high) float32 per component; wheel rims may spin up to 10x the top speed."""
         by_name = {"speed_long": self.speed, "speed_lat": self.speed, "yaw_rate": self.yaw_rate}
-        by_name.update(steer=self.steer, heading=math.pi, x=np.inf, y=np.inf)
+        by_name.update(steer=self.steer, heading=math.pi, x=self.extent, y=self.extent)
         high = np.array(
             [by_name.get(n, 10 * self.speed) for n in names], np.float32
         )  # wheel_speed_*, slip_*
@@ -87,16 +93,22 @@ class Limits:
 
 
 def limits(env: EnvConfig) -> Limits:
-    """The configured car's limits: top speed, yaw rate and steering lock."""
+    """The configured car's limits: top speed, yaw rate, steering lock and pose extent."""
     fps = env.sim.fps or 50.0
     car = env.car
     if car.model in KINEMATIC_MODELS:  # velocity: the constant or the top speed
         lock = math.radians(car.max_steering_angle)
         speed, wheelbase = known(car.velocity), known(car.wheelbase)
-        return Limits(speed, speed * math.tan(lock) / wheelbase, lock)
-    scale = dynamic_scale(env)
-    spec = DynamicCarSpec()
-    return Limits(spec.max_translation * scale * fps, 2 * math.pi * fps, spec.steer_limit)
+        motion = Limits(speed, speed * math.tan(lock) / wheelbase, lock)
+    else:
+        scale = dynamic_scale(env)
+        spec = DynamicCarSpec()
+        motion = Limits(spec.max_translation * scale * fps, 2 * math.pi * fps, spec.steer_limit)
+    if env.kind != "procedural":
+        return motion
+    # the playfield bounds the body's centre after a step (the next one ends the episode)
+    playfield = max(t.playfield for t in env.tracks if isinstance(t, ProceduralTrackConfig))
+    return replace(motion, extent=playfield + motion.speed / fps + car_length(env))
 
 
 class StateSensor:
@@ -119,7 +131,9 @@ class StateSensor:
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         vector = state_vector(snapshot.car, self.y_down, self.wheels, self.config.pose)
-        return np.clip(vector, self.space.low, self.space.high, out=vector)
+        np.minimum(vector, self.space.high, out=vector)  # np.clip's wrapper costs more
+        clamped: np.ndarray = np.maximum(vector, self.space.low, out=vector)
+        return clamped
 
 
 def build(config: StateConfig, context: SensorContext) -> StateSensor:
