@@ -129,4 +129,5 @@ class KinematicCar(RearAxleBicycle):
             front_axle=front,
             rear_axle=(x, y),
             footprint=(self.wheelbase, self.track_width),
+            hull_angle=heading,
         )

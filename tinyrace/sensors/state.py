@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.cars.dynamic import DynamicCarSpec
+from tinyrace.cars.dynamic_shape import DynamicCarSpec
 from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import StateConfig
