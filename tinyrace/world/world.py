@@ -200,7 +200,8 @@ class World:
         return self.contacts
 
     def states(self) -> tuple[CarState, ...]:
-        """Every car's state now, copied once per step (the controlled car first)."""
+        """Every car's state, copied once per step (the controlled car first); a body
+        changed by hand between steps shows in the next step's states."""
         if self._states is None:
             self._states = tuple(car.state() for car in self.cars)
         return self._states
