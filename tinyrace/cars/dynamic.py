@@ -220,6 +220,12 @@ class DynamicCar:
         body.velocity = (vx, vy)
         body.angular_velocity += torque / body.moment * dt
 
+    def stop(self) -> None:
+        """A crash: body and wheels stand still."""
+        self.body.velocity, self.body.angular_velocity = (0.0, 0.0), 0.0
+        for wheel in self.wheels:
+            wheel.omega = 0.0
+
     @property
     def wheel_radius(self) -> float:
         """[track units]"""

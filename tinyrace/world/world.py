@@ -28,7 +28,6 @@ from tinyrace.cars.collision import (
     WALL,
     WHEEL,
 )
-from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.state import CarState
 from tinyrace.world.snapshot import Snapshot
 
@@ -256,13 +255,8 @@ def _place(body: pymunk.Body) -> Place:
 
 def _crash(car: Car, before: Place) -> None:
     """Against a wall: back to where the car stood before the step, at a standstill."""
-    body = car.body
-    body.position, body.angle = before
-    body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
-    if isinstance(car, KinematicThrottleCar):
-        car.stop()
-    for wheel in getattr(car, "wheels", ()):
-        wheel.omega = 0.0
+    car.body.position, car.body.angle = before
+    car.stop()
 
 
 def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:
