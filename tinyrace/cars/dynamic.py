@@ -262,7 +262,7 @@ class DynamicCar:
         body = self.body
         position, velocity, angle = body.position, body.velocity, body.angle
         radius = self.wheel_radius
-        rear, base, _ = _footprint(self.scale)
+        rear, base, width = _footprint(self.scale)
         front, back = body.local_to_world((0.0, rear + base)), body.local_to_world((0.0, rear))
         return CarState(
             model="dynamic",
@@ -273,8 +273,8 @@ class DynamicCar:
             steer=self.wheels[0].steer,
             front_axle=(front.x, front.y),
             rear_axle=(back.x, back.y),
-            footprint=self.footprint,
-            wheels=tuple(WheelState(w.omega, w.steer, radius, (w.x, w.y)) for w in self.wheels),
+            footprint=(base, width),
+            wheels=tuple([WheelState(w.omega, w.steer, radius, (w.x, w.y)) for w in self.wheels]),
             hull_angle=angle,
             scale=self.scale,
             steer_sign=self.steer_sign,

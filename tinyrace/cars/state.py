@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -15,9 +16,8 @@ Point = tuple[float, float]  # [track units]
 Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
 
 
-@dataclass(frozen=True)
-class WheelState:
-    """One wheel of a car that models its wheels."""
+class WheelState(NamedTuple):
+    """One wheel of a car that models its wheels (a tuple: four are made every step)."""
 
     omega: float  # [rad/s] spin
     steer: float  # [rad] steering angle, + turns toward growing heading
