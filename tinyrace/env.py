@@ -154,10 +154,11 @@ class TinyRaceEnv(gym.Env):
         terms = reward_terms(facts, self.config.reward_design, self._shaping, charge_time=False)
         self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
         self.score += sum(self._carry.values())
-        observation = self._observe()
+        snapshot = self.snapshot()
+        observation = self._observe(snapshot)
         if self.render_mode == "human":
             self.render()
-        info = self._info({})
+        info = self._info({}, snapshot)
         labels = {s.id: s.labels for s in self.sensors if isinstance(s, Labelled) and s.labels}
         if labels:
             info["sensor_labels"] = labels  # classes cameras: names by label
@@ -191,8 +192,9 @@ class TinyRaceEnv(gym.Env):
         reason = ends_episode(facts, self.config.reward_design)
         limit = self.config.sim.step_limit
         truncated = reason is None and limit is not None and self.steps >= limit
-        observation = self._observe()
-        info = self._info(terms)
+        snapshot = self.snapshot()
+        observation = self._observe(snapshot)
+        info = self._info(terms, snapshot)
         if reason is not None:
             info["termination"] = reason
             info["lap_finished"] = reason == "lap_finished"
@@ -200,8 +202,7 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, reward, reason is not None, truncated, info
 
-    def _observe(self) -> Any:
-        snapshot = self.snapshot()
+    def _observe(self, snapshot: Snapshot) -> Any:
         if not self.sensors:  # CarRacing's view, or a top view on tracks in metres
             return self.pictures.observe(snapshot, self.score)
         observation = {
@@ -219,8 +220,8 @@ class TinyRaceEnv(gym.Env):
             raise ResetNeeded(f"call reset() before reading {reading}")
         return self.episode
 
-    def _info(self, terms: dict[str, float]) -> dict[str, Any]:
-        info: dict[str, Any] = self._episode().info(self.snapshot())
+    def _info(self, terms: dict[str, float], snapshot: Snapshot) -> dict[str, Any]:
+        info: dict[str, Any] = self._episode().info(snapshot)
         info["reward_terms"] = terms
         return info
 
