@@ -38,12 +38,13 @@ class ProceduralPictures:
         self.track: ProceduralTrack | None = None
         self.colors: GroundColors | None = None
         self.visited: Sequence[int] = ()
-        self._textures: dict[float, tuple[GroundTexture, list[int]]] = {}  # and tiles painted
+        self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
+        self._painted = 0  # visited tiles repainted on every texture
         self._views: dict[tuple[int, int], ChaseView] = {}
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
         self.track, self.colors, self.visited = draw.track.detail, self.source.colors, visited
-        self._textures, self._views = {}, {}
+        self._textures, self._views, self._painted = {}, {}, 0
 
     def observe(self, snapshot: Snapshot, score: float) -> np.ndarray:
         """CarRacing's 96x96 view (the observation when no camera is configured)."""
@@ -61,13 +62,14 @@ class ProceduralPictures:
 
     def chase_view(self, size: tuple[int, int]) -> ChaseView:
         """CarRacing's view at ``size`` (w, h); small views share the observation texture."""
-        small = max(size) <= SMALL_VIEW
-        ppu = self.track_config.pixels_per_unit if small else self._video_pixels_per_unit()
-        texture = self.texture(ppu)  # brought up to date with the tiles visited
+        if self._painted < len(self.visited):
+            self._repaint_visited()
         view = self._views.get(size)
         if view is None:
+            small = max(size) <= SMALL_VIEW
+            ppu = self.track_config.pixels_per_unit if small else self._video_pixels_per_unit()
             dashboard, patches = self.cache.for_view(size)
-            view = self._views[size] = ChaseView(size, texture, dashboard, patches)
+            view = self._views[size] = ChaseView(size, self.texture(ppu), dashboard, patches)
         return view
 
     def _video_pixels_per_unit(self) -> float:
@@ -77,16 +79,23 @@ class ProceduralPictures:
     def texture(self, pixels_per_unit: float) -> GroundTexture:
         """The ground at ``pixels_per_unit``, with every tile visited so far repainted."""
         assert self.track is not None and self.colors is not None, "reset() first"
-        entry = self._textures.get(pixels_per_unit)
-        if entry is None:
+        if self._painted < len(self.visited):
+            self._repaint_visited()
+        texture = self._textures.get(pixels_per_unit)
+        if texture is None:
             texture = self.cache.painter.paint(self.track, self.colors, pixels_per_unit)
-            entry = self._textures[pixels_per_unit] = (texture, [0])
-        texture, painted = entry
-        if painted[0] < len(self.visited):  # repainting in visit order redraws the same pixels
-            for tile in self.visited[painted[0] :]:
+            for tile in self.visited[: self._painted]:  # in visit order: the same pixels
                 repaint_tile(texture, self.track, tile, self.colors.road)
-            painted[0] = len(self.visited)
+            self._textures[pixels_per_unit] = texture
         return texture
+
+    def _repaint_visited(self) -> None:
+        """Repaint the tiles visited since the last picture on every texture, in visit order."""
+        assert self.track is not None and self.colors is not None, "reset() first"
+        for tile in self.visited[self._painted :]:
+            for texture in self._textures.values():
+                repaint_tile(texture, self.track, tile, self.colors.road)
+        self._painted = len(self.visited)
 
     def __getstate__(self) -> dict[str, Any]:
         """Leave out the pictures (tens of MB): they are redrawn from the track when next asked."""

@@ -175,8 +175,9 @@ class World:
         the car's forces with each wheel's grip from its contacts, the space stepped, a car
         that ran into a wall put back and stopped. Returns this step's contact facts (the
         world's own object, valid until the next step)."""
-        for car, controls in zip(self.cars, actions, strict=False):
-            car.control(*controls)
+        if actions:
+            for car, controls in zip(self.cars, actions, strict=False):
+                car.control(*controls)
         car = self.cars[0]
         contacts = self.contacts
         before = _place(car.body) if self._walls else None
