@@ -154,7 +154,7 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())
         if terminated or truncated:
             env.reset()
-        snapshot = Snapshot(raw.t, raw.steps, (raw.episode.car.state(),))
+        snapshot = raw.snapshot()
         probes = _probes(raw, snapshot, rng)
         shift = step % len(probes)
         for probe_id, probe in probes[shift:] + probes[:shift]:

@@ -18,7 +18,7 @@ DEFAULT_ROAD = (102, 102, 102)
 def colours(env) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     unwrapped = env.unwrapped
     if hasattr(unwrapped, "course"):
-        c = unwrapped.course.colors
+        c = unwrapped.track_source.colors  # drawn per reset, before the track
         return c.road, c.background, c.grass
     return unwrapped.road_color, unwrapped.bg_color, unwrapped.grass_color
 

@@ -216,3 +216,21 @@ def test_different_seeds_give_different_procedural_tracks():
             assert tracks[i].shape != tracks[j].shape or not np.allclose(tracks[i], tracks[j])
     env.reset(seed=3)
     np.testing.assert_array_equal(env.track.centerline, tracks[3])  # and the same seed repeats
+
+
+class InParts(gym.Wrapper):
+    """Steps its env in the parts a batched stepper uses: control, the episode's step
+    (the world's step and the rules), conclude."""
+
+    def step(self, action):
+        raw = self.env.unwrapped
+        raw.control(action)
+        return raw.conclude(raw.episode.step(raw.dt))
+
+
+@pytest.mark.parametrize("kind", ["procedural", "image_dynamic_two_cameras"])
+def test_a_step_in_parts_is_a_step(kind):
+    whole = KINDS[kind]()
+    parts = InParts(KINDS[kind]())
+    actions = actions_for(whole, 60, seed=3)
+    assert_same_rollouts(rollout(parts, 5, actions), rollout(whole, 5, actions))

@@ -162,6 +162,29 @@ def test_imports_only_from_its_layer_or_below(module):
     assert upward == [], f"{module} (layer {_layer(module)}) imports from above: {upward}"
 
 
+# Read-only layers see cars only as data: no physics engine, no live car classes.
+PURE_CAR_DATA = ("tinyrace.cars.state", "tinyrace.cars.dynamic_shape")
+
+
+@pytest.mark.parametrize(
+    "module", sorted(m for m in GRAPH if m.split(".")[1:2] in (["render"], ["sensors"]))
+)
+def test_sensors_and_pictures_read_snapshots_not_the_physics(module):
+    """render/ and sensors/ import no pymunk and no cars module but pure data."""
+    targets = GRAPH[module]
+    assert "+pymunk" not in targets
+    cars = sorted(t for t in targets if t.startswith("tinyrace.cars") and t not in PURE_CAR_DATA)
+    assert cars == [], f"{module} imports live car modules: {cars}"
+
+
+def test_episodes_hold_rules_not_pictures():
+    """episodes/ import no cv2 and nothing from render/."""
+    for module in (m for m in GRAPH if m.startswith("tinyrace.episodes")):
+        targets = GRAPH[module]
+        assert "+cv2" not in targets, module
+        assert not [t for t in targets if t.startswith("tinyrace.render")], module
+
+
 def test_the_cycle_finder_finds_cycles():
     assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert _cycle({"a": {"b"}, "b": set()}) is None

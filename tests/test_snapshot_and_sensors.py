@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
@@ -22,7 +20,7 @@ def test_a_snapshot_is_a_copy_that_later_steps_leave_alone(carracing):
     assert len(snapshot.car.wheels) == 4 and snapshot.car.wheels[2].omega > 0  # rear drive
     carracing.step(np.array([0.0, 1.0, 0.0], np.float32))
     assert unwrapped.car.pose != snapshot.car.pose
-    with pytest.raises(dataclasses.FrozenInstanceError):
+    with pytest.raises(AttributeError):  # read-only
         snapshot.car.pose = (0.0, 0.0, 0.0)  # type: ignore[misc]
 
 

@@ -15,9 +15,12 @@ from gymnasium.error import ResetNeeded
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.image import ImageEpisode
 from tinyrace.episodes.metric import MetricEpisode
-from tinyrace.episodes.procedural import OBSERVATION_SIZE, ProceduralEpisode
+from tinyrace.episodes.procedural import ProceduralEpisode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.render.pictures import Pictures
+from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
+from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
 from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
@@ -93,13 +96,14 @@ class TinyRaceEnv(gym.Env):
         self.verbose = verbose
         self.track_source = parts.source
         self.course = parts.course
+        self.pictures: Pictures = make_pictures(self.config, parts.source)
         fps = self.config.sim.fps
         assert fps is not None  # resolved by the config loader
         self.dt = 1.0 / fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(fps)}
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
-        self._ground = EpisodeGround()
+        self._ground = EpisodeGround(self.pictures)
         context = SensorContext(self.config, self._ground)
         self.sensors: list[Sensor] = [
             *_cameras(self.config, context),
@@ -133,7 +137,8 @@ class TinyRaceEnv(gym.Env):
         options = _check_options(options, self.config.kind)
         draw = self.track_source.draw(self.np_random, options)
         self.episode = episode = self.course.new_episode(draw)
-        self._ground.episode, self.layout = episode, draw.track
+        self.pictures.reset(draw, episode.visit_order)
+        self.layout = draw.track
         for sensor in self.sensors:
             sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
@@ -149,10 +154,11 @@ class TinyRaceEnv(gym.Env):
         terms = reward_terms(facts, self.config.reward_design, self._shaping, charge_time=False)
         self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
         self.score += sum(self._carry.values())
-        observation = self._observe()
+        snapshot = self.snapshot()
+        observation = self._observe(snapshot)
         if self.render_mode == "human":
             self.render()
-        info = self._info({})
+        info = self._info({}, snapshot)
         labels = {s.id: s.labels for s in self.sensors if isinstance(s, Labelled) and s.labels}
         if labels:
             info["sensor_labels"] = labels  # classes cameras: names by label
@@ -163,13 +169,14 @@ class TinyRaceEnv(gym.Env):
         return self.conclude(self._episode().step(self.dt))
 
     # A step in parts, for a vector env that moves many cars between them:
-    # control(action); the car's forces; facts = episode.advance(dt); conclude(facts).
+    # control(action); facts = env.episode.step(env.dt) (the world's step and the rules);
+    # conclude(facts).
     def control(self, action: Any) -> None:
         """Check ``action`` and hand it to the car (the first part of a step)."""
         episode = self.episode
         if episode is None:
             raise ResetNeeded("call reset() before step()")
-        episode.car.control(*self._actions.read(action))
+        episode.world.control(self._actions.read(action))
 
     def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Rewards, episode end, observation and info of a step whose physics is done."""
@@ -185,8 +192,9 @@ class TinyRaceEnv(gym.Env):
         reason = ends_episode(facts, self.config.reward_design)
         limit = self.config.sim.step_limit
         truncated = reason is None and limit is not None and self.steps >= limit
-        observation = self._observe()
-        info = self._info(terms)
+        snapshot = self.snapshot()
+        observation = self._observe(snapshot)
+        info = self._info(terms, snapshot)
         if reason is not None:
             info["termination"] = reason
             info["lap_finished"] = reason == "lap_finished"
@@ -194,10 +202,9 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, reward, reason is not None, truncated, info
 
-    def _observe(self) -> Any:
-        if not self.sensors:  # CarRacing's view (only procedural tracks have no camera)
-            return cast(ProceduralEpisode, self._episode()).observe(self.t, self.score)
-        snapshot = self.snapshot()
+    def _observe(self, snapshot: Snapshot) -> Any:
+        if not self.sensors:  # CarRacing's view, or a top view on tracks in metres
+            return self.pictures.observe(snapshot, self.score)
         observation = {
             sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
             for sensor in self.sensors
@@ -206,15 +213,15 @@ class TinyRaceEnv(gym.Env):
 
     def snapshot(self) -> Snapshot:
         """A copy of the world's state now (what sensors and pictures read)."""
-        return Snapshot(self.t, self.steps, (self._episode().car.state(),))
+        return self._episode().world.snapshot(self.t, self.steps)
 
     def _episode(self, reading: str = "a snapshot") -> Episode:
         if self.episode is None:
             raise ResetNeeded(f"call reset() before reading {reading}")
         return self.episode
 
-    def _info(self, terms: dict[str, float]) -> dict[str, Any]:
-        info: dict[str, Any] = self._episode().info()
+    def _info(self, terms: dict[str, float], snapshot: Snapshot) -> dict[str, Any]:
+        info: dict[str, Any] = self._episode().info(snapshot)
         info["reward_terms"] = terms
         return info
 
@@ -225,8 +232,9 @@ class TinyRaceEnv(gym.Env):
 
     @property
     def car(self) -> Any:
-        """The current episode's car (a pymunk body plus its state)."""
-        return self._episode("the car").car
+        """The current episode's live car (a pymunk body plus its state); read ``snapshot()``
+        for a copy."""
+        return self._episode("the car").world.car
 
     # -- pictures ------------------------------------------------------------------------------
     def render(self) -> np.ndarray | None:
@@ -237,8 +245,8 @@ class TinyRaceEnv(gym.Env):
             return None
         if self.episode is None:
             raise ResetNeeded("call reset() before render()")
-        frame: np.ndarray = self.episode.frame(
-            self.render_mode, self.t, self.score, self._camera_views()
+        frame: np.ndarray = self.pictures.frame(
+            self.render_mode, self.snapshot(), self.score, self._camera_views()
         )
         if self.render_mode != "human":
             return frame
@@ -275,12 +283,11 @@ class TinyRaceEnv(gym.Env):
 class EpisodeGround:
     """The cameras' ground: the current episode's texture (CarRacing repaints visited tiles)."""
 
-    def __init__(self) -> None:
-        self.episode: Any = None
+    def __init__(self, pictures: Pictures) -> None:
+        self.pictures = pictures
 
     def texture(self, track: Track) -> GroundTexture:
-        texture: GroundTexture = self.episode.ground_texture()
-        return texture
+        return self.pictures.ground_texture()
 
 
 def _rgb(image: np.ndarray) -> np.ndarray:

@@ -94,6 +94,7 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
+    from tinyrace.render.metric_pictures import MetricPictures
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
 
     if target == "procedural":
@@ -107,8 +108,8 @@ def picture(target: str, seed: int) -> Picture:
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
     if isinstance(parts.course, MetricCourse):
-        prepared = parts.course.prepared[0]
-        return Picture(metric_picture(prepared.track, prepared.texture), name, inputs)
+        texture = MetricPictures(parts.config, parts.course.source).textures[0]
+        return Picture(metric_picture(parts.course.tracks[0], texture), name, inputs)
     assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
 

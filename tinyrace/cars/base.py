@@ -3,7 +3,9 @@
 How to add a car model:
 1. Write ``tinyrace/cars/<model>.py`` with a class satisfying ``Car`` (a pymunk body plus
    its own state; ``control`` takes the controls of one action, ``apply_forces`` moves it
-   for one step, ``state()`` copies what sensors and pictures may read).
+   for one step, ``stop`` halts it after a crash, ``state()`` copies what sensors and
+   pictures may read). The world (``tinyrace/world/world.py``) owns the built car and
+   calls these; nothing above the world sees the car itself.
 2. Register it in ``tinyrace/cars/registry.py``: a ``CarModel`` entry with its builder,
    the track kinds it can drive on, the track kinds it is the default for, and its
    action spaces. That entry is the only place that decides which car a config gets.
@@ -36,6 +38,10 @@ class Car(Protocol):
 
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
         """Prepare the body for a world step of ``dt`` seconds; ``on_road`` per wheel."""
+
+    def stop(self) -> None:
+        """A crash: the car stands still (as far as its model lets it; the world has put the
+        body back where it stood before the step)."""
 
     @property
     def pose(self) -> Pose: ...

@@ -20,41 +20,15 @@ import numpy as np
 import pymunk
 
 from tinyrace.cars.collision import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
-from tinyrace.cars.state import CarState, Point, WheelState
-
-SIZE = 0.02  # [u per model unit] CarRacing's car model scale
-
-HULL_POLYGONS = (  # [model units], the nose along +y
-    ((-60, 130), (60, 130), (60, 110), (-60, 110)),
-    ((-15, 120), (15, 120), (20, 20), (-20, 20)),
-    ((25, 20), (50, -10), (50, -40), (20, -90), (-20, -90), (-50, -40), (-50, -10), (-25, 20)),
-    ((-50, -120), (50, -120), (50, -90), (-50, -90)),
+from tinyrace.cars.dynamic_shape import (
+    HULL_POLYGONS,
+    SIZE,
+    WHEEL_HALF_WIDTH,
+    WHEEL_POSITIONS,
+    WHEEL_RADIUS,
+    DynamicCarSpec,
 )
-WHEEL_POSITIONS = ((-55, 80), (55, 80), (-55, -82), (55, -82))  # [model units] FL, FR, RL, RR
-WHEEL_RADIUS = 27  # [model units]
-WHEEL_HALF_WIDTH = 14  # [model units]
-
-
-@dataclass(frozen=True)
-class DynamicCarSpec:
-    """CarRacing-v3's car constants, in world units (u), kilograms-ish and seconds."""
-
-    hull_density: float = 1.0  # [mass/u^2]
-    wheel_density: float = 0.1  # [mass/u^2]
-    engine_power: float = 1e8 * SIZE**2  # [mass u^2/s^3]
-    wheel_moment: float = 4000 * SIZE**2  # [mass u^2]
-    friction_limit: float = 1e6 * SIZE**2  # [mass u/s^2] on road; grass has grass_friction of it
-    grass_friction: float = 0.6  # fraction of the road's friction limit
-    slip_gain: float = 205000 * SIZE**2  # [mass/s] tyre force per unit of slip speed
-    brake_rate: float = 15.0  # [rad/s per step] spin removed by full (non-locking) brake
-    brake_lock: float = 0.9  # brake input at which the wheels lock
-    gas_rise: float = 0.1  # max gas increase per step
-    steer_gain: float = 50.0  # [1/s] steering motor speed per rad of error
-    steer_speed: float = 3.0  # [rad/s] max steering motor speed
-    steer_limit: float = 0.4  # [rad] front wheel lock
-    max_translation: float = 2.0  # [u per step] Box2D's speed cap, kept for identical top speed
-    spin_floor: float = 5.0  # [rad/s] added to |spin| where the engine's torque is divided by it
-    skid_ratio: float = 2.0  # a tyre skids (draws a mark) beyond this multiple of its grip
+from tinyrace.cars.state import CarState, Point, SkidView, WheelState, read_only
 
 
 @dataclass
@@ -81,6 +55,18 @@ class SkidMarks:
         self.serial = np.zeros(capacity, np.int64)  # which mark a slot holds now
         self._next = 0
         self._count = 0
+        self._view: SkidView | None = None
+
+    def view(self) -> SkidView:
+        """Read-only views of the ring (made once; a pickled copy makes its own)."""
+        if self._view is None:
+            self._view = SkidView(
+                read_only(self.points), read_only(self.lengths), read_only(self.on_grass)
+            )
+        return self._view
+
+    def __getstate__(self) -> dict[str, object]:
+        return {**self.__dict__, "_view": None}  # views would unpickle as detached copies
 
     def start(self, first: Point, second: Point, on_grass: bool) -> tuple[int, int]:
         """A new two-point mark (evicting the oldest); returns its handle (slot, serial)."""
@@ -234,6 +220,12 @@ class DynamicCar:
         body.velocity = (vx, vy)
         body.angular_velocity += torque / body.moment * dt
 
+    def stop(self) -> None:
+        """A crash: body and wheels stand still."""
+        self.body.velocity, self.body.angular_velocity = (0.0, 0.0), 0.0
+        for wheel in self.wheels:
+            wheel.omega = 0.0
+
     @property
     def wheel_radius(self) -> float:
         """[track units]"""
@@ -266,20 +258,27 @@ class DynamicCar:
 
     # -- state -------------------------------------------------------------------------------
     def state(self) -> CarState:
-        """A copy of the car's state for sensors and pictures."""
-        vx, vy = self.body.velocity
+        """A copy of the car's state for sensors and pictures (the body read once: per step)."""
+        body = self.body
+        position, velocity, angle = body.position, body.velocity, body.angle
         radius = self.wheel_radius
+        rear, base, width = _footprint(self.scale)
+        front, back = body.local_to_world((0.0, rear + base)), body.local_to_world((0.0, rear))
         return CarState(
             model="dynamic",
-            pose=self.pose,
-            velocity=(vx, vy),
-            speed=self.speed,
-            yaw_rate=self.body.angular_velocity,
+            pose=(position.x, position.y, angle + math.pi / 2),
+            velocity=(velocity.x, velocity.y),
+            speed=abs(velocity),
+            yaw_rate=body.angular_velocity,
             steer=self.wheels[0].steer,
-            front_axle=self.front_axle,
-            rear_axle=self.rear_axle,
-            footprint=self.footprint,
-            wheels=tuple(WheelState(w.omega, w.steer, radius) for w in self.wheels),
+            front_axle=(front.x, front.y),
+            rear_axle=(back.x, back.y),
+            footprint=(base, width),
+            wheels=tuple([WheelState(w.omega, w.steer, radius, (w.x, w.y)) for w in self.wheels]),
+            hull_angle=angle,
+            scale=self.scale,
+            steer_sign=self.steer_sign,
+            skids=self.skids.view(),
         )
 
     @property

@@ -112,6 +112,10 @@ class KinematicCar(RearAxleBicycle):
         self.body.velocity = (speed * math.cos(direction), speed * math.sin(direction))
         self.body.angular_velocity = turn_rate
 
+    def stop(self) -> None:
+        """A crash: the body stands still until the next step drives it on at the set speed."""
+        self.body.velocity, self.body.angular_velocity = (0.0, 0.0), 0.0
+
     def state(self) -> CarState:
         """A copy of the car's state for sensors and pictures (body read once: per step)."""
         body = self.body
@@ -129,4 +133,5 @@ class KinematicCar(RearAxleBicycle):
             front_axle=front,
             rear_axle=(x, y),
             footprint=(self.wheelbase, self.track_width),
+            hull_angle=heading,
         )

@@ -94,9 +94,10 @@ class KinematicThrottleCar(RearAxleBicycle):
     def state(self) -> CarState:
         """A copy of the car's state for sensors and pictures."""
         vx, vy = self.body.velocity
+        pose = self.pose
         return CarState(
             model="kinematic_throttle",
-            pose=self.pose,
+            pose=pose,
             velocity=(vx, vy),
             speed=self.speed,
             yaw_rate=self.body.angular_velocity,
@@ -104,4 +105,5 @@ class KinematicThrottleCar(RearAxleBicycle):
             front_axle=self.front_axle,
             rear_axle=self.rear_axle,
             footprint=self.footprint,
+            hull_angle=pose[2],
         )

@@ -1,25 +1,54 @@
-"""A car's state as sensors and pictures read it: copies, never the live pymunk body."""
+"""A car's state as sensors and pictures read it: copies, never the live pymunk body.
+
+Everything here is plain data (floats, tuples, read-only arrays), so that the layers
+above the world can read a car without importing the physics.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
 
 Point = tuple[float, float]  # [track units]
 Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
 
 
-@dataclass(frozen=True)
-class WheelState:
-    """One wheel of a car that models its wheels."""
+class WheelState(NamedTuple):
+    """One wheel of a car that models its wheels (a tuple: four are made every step)."""
 
     omega: float  # [rad/s] spin
     steer: float  # [rad] steering angle, + turns toward growing heading
     radius: float  # [track units]
+    position: Point = (0.0, 0.0)  # [track units] in the hull's frame (see CarState.hull_angle)
 
 
-@dataclass(frozen=True)
-class CarState:
-    """A copy of one car's state: what sensors and pictures read, never the live body."""
+@dataclass(frozen=True, eq=False)
+class SkidView:
+    """Read-only views of a car's skid-mark ring (they follow the car: not a copy).
+
+    Mark ``i`` is ``points[i, :lengths[i]]`` [track units]; ``lengths[i] == 0``: no mark.
+    """
+
+    points: np.ndarray  # (marks, max points, 2) float
+    lengths: np.ndarray  # (marks,) int
+    on_grass: np.ndarray  # (marks,) bool: drawn in mud colour
+
+
+def read_only(array: np.ndarray) -> np.ndarray:
+    """A view of ``array`` that cannot be written through."""
+    view: np.ndarray = array.view()
+    view.flags.writeable = False
+    return view
+
+
+class CarState(NamedTuple):
+    """A copy of one car's state: what sensors and pictures read, never the live body.
+
+    A named tuple (immutable, made every step at a fraction of a frozen dataclass's cost).
+    """
 
     model: str  # the car model's registry name
     pose: Pose  # the car's reference point and heading (see ``Car.pose``)
@@ -31,3 +60,24 @@ class CarState:
     rear_axle: Point  # middle of the rear axle
     footprint: tuple[float, float]  # (length rear to front axle, width) [track units]
     wheels: tuple[WheelState, ...] = ()  # FL, FR, RL, RR on the dynamic car; () if not modelled
+    hull_angle: float = 0.0  # [rad] the body's angle at ``pose``'s point (pictures turn by it)
+    scale: float = 1.0  # [track units per CarRacing u] the dynamic car's size on the track
+    steer_sign: float = 1.0  # +1 with y up, -1 on a y-down picture (shown directions)
+    skids: SkidView | None = None  # skid marks, on cars that leave them
+
+
+def footprint_corners(car: CarState) -> np.ndarray:
+    """(4, 2) corners of the car's footprint: its width wide, rear axle to front axle."""
+    x, y = car.rear_axle
+    heading = car.pose[2]
+    length, width = car.footprint
+    fx, fy = math.cos(heading), math.sin(heading)
+    rx, ry = -fy * width / 2, fx * width / 2  # half the width to the right (y down)
+    return np.array(
+        [
+            (x - rx, y - ry),
+            (x + rx, y + ry),
+            (x + rx + length * fx, y + ry + length * fy),
+            (x - rx + length * fx, y - ry + length * fy),
+        ]
+    )

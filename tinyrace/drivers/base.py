@@ -10,7 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.actions import DISCRETE_CONTROLS
-from tinyrace.cars.dynamic import DynamicCarSpec
+from tinyrace.cars.dynamic_shape import DynamicCarSpec
 
 Controls = tuple[float, float, float]  # (steer -1..1, +1 right; gas 0..1; brake 0..1)
 

@@ -11,7 +11,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.cars.dynamic import SIZE, DynamicCarSpec
+from tinyrace.cars.dynamic_shape import SIZE, DynamicCarSpec
 from tinyrace.drivers.base import ActionAdapter, Controls
 
 if TYPE_CHECKING:

@@ -10,131 +10,81 @@ step (a reward term per step, and optionally the end).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import numpy as np
 
-from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.registry import CarModel
-from tinyrace.config import CameraConfig, EnvConfig
-from tinyrace.episodes.image import footprint_corners
-from tinyrace.episodes.procedural import CameraViews
-from tinyrace.render.metric_ground import MetricOverview, paint_ground
-from tinyrace.sensors.birdseye_camera import RoiCamera
-from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.config import EnvConfig
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.metric import MetricSource, MetricTrack
 from tinyrace.world.facts import StepFacts
+from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
 
-DEFAULT_VIEW = (96, 96)  # [px] (h, w) the observation when no camera is configured
-VIEW_SPAN = 14.0  # [wheelbases] the default view's side
 NO_REFERENCE = "no reference line: this ros_map track has no waypoints (track.waypoints)"
-CAR_COLOR = (204, 0, 0)  # RGB, the car drawn into the default view
-
-
-@dataclass(eq=False)
-class PreparedMetricTrack:
-    """One track and its ground texture, made once per env; the overview when first drawn."""
-
-    track: MetricTrack
-    texture: GroundTexture
-    overview: MetricOverview | None = None
 
 
 class MetricEpisode:
     """One reset on a track in metres: a world with the track's cones and walls, one car."""
 
-    def __init__(
-        self,
-        config: EnvConfig,
-        prepared: PreparedMetricTrack,
-        draw: TrackDraw,
-        car_model: CarModel,
-    ):
+    def __init__(self, config: EnvConfig, draw: TrackDraw, car_model: CarModel):
         self.config = config
-        self.prepared = prepared
         self.layout = draw.track  # the generic view (tinyrace.tracks.base.Track)
         self.track: MetricTrack = draw.track.detail
         self.track_index = draw.track_index
         self.track_config = config.tracks[draw.track_index]
         self.lap_percent: float = getattr(self.track_config, "lap_complete_percent", 0.95)
-        self.world = World()
-        if len(self.track.tiles) and config.car.model == "dynamic":
-            self.world.add_tiles(self.track.tiles)  # grip: wheels on the road
+        tiles = len(self.track.tiles)
+        self.grip_tiles = tiles > 0 and config.car.model == "dynamic"  # wheels feel the road
+        self.world = World(grass_off_tiles=self.grip_tiles and self.track.occupancy is None)
+        if self.grip_tiles:
+            self.world.add_tiles(self.track.tiles)
         self.world.add_cones(self.track.cones[:, :2], self.track.cone_radii)
         self.world.add_walls(self.track.walls)
-        self.car = car_model.build(self.world.space, draw.spawn, config.car, draw.track)
-        tiles = len(self.track.tiles)
+        self.world.add_car(car_model.build(self.world.space, draw.spawn, config.car, draw.track))
         self.visited = np.zeros(tiles, bool)
         self.visited_count = 0
+        self.visit_order: list[int] = []  # tiles in the order first visited
         self.knocked: set[int] = set()
         self.nearest = -1  # centreline index near the car (-1: search all)
         self.tile = -1  # the tile under the car at the last step (-1: none yet)
         self.cte: float | None = None
         self.on_road = True
         self.walls_hit = 0
-        self.view = self._default_view()  # the observation when no camera is configured
 
-    def _default_view(self) -> RoiCamera:
-        span = VIEW_SPAN * self.car.footprint[0]  # [m]
-        view = CameraConfig(
-            id="view", resolution=DEFAULT_VIEW, roi=(span, span), position=(-span / 4, 0.0)
-        )
-        return RoiCamera(view, self.prepared.texture, y_down=False)
-
-    # -- physics and facts -------------------------------------------------------------------
+    # -- rules ---------------------------------------------------------------------------------
     def start(self, dt: float) -> StepFacts:
         """The reset's look at the spawn: sensors only, the car does not move."""
-        self.world.step(dt)
+        self.world.look(dt)
         return self._progress(StepFacts(tiles_total=len(self.visited)))
 
     def step(self, dt: float) -> StepFacts:
-        body = self.car.body
-        x, y = body.position
-        before = ((float(x), float(y)), float(body.angle))
-        on_road = [bool(tiles) for tiles in self.world.contacts.wheel_tiles]
-        if self.track.occupancy is not None or not len(self.track.tiles):
-            on_road = [True] * 4  # a map's free space grips everywhere
-        self.car.apply_forces(dt, on_road)
+        """The world's step (a wall stops the car there); cones, bounds, tiles and laps."""
         contacts = self.world.step(dt)
         facts = StepFacts(tiles_total=len(self.visited))
-        if contacts.walls:
+        if contacts.crashed:
             facts.wall_hit = True
             self.walls_hit += 1
-            self._crash(before)
             facts.collision_ends = getattr(self.track_config, "wall_hit_ends_episode", False)
         new_cones = contacts.cones - self.knocked
         if new_cones:
             self.knocked |= new_cones
             facts.cones_hit = len(new_cones)
             facts.collision_ends |= getattr(self.track_config, "cone_hit_ends_episode", False)
-        x, y, _ = self.car.pose
+        x, y, _ = self.world.states()[0].pose
         x0, y0, x1, y1 = self.track.bounds
         facts.out_of_bounds = not (x0 <= x <= x1 and y0 <= y <= y1)
-        wheels = self.world.contacts.wheel_tiles
-        if self.config.car.model == "dynamic" and len(self.track.tiles):
-            facts.wheels_on_grass = sum(not tiles for tiles in wheels)
+        if self.grip_tiles:
+            facts.wheels_on_grass = sum(not tiles for tiles in contacts.wheel_tiles)
         return self._progress(facts)
-
-    def _crash(self, before: tuple[tuple[float, float], float]) -> None:
-        """Against a wall: back to where the car stood before the step, at a standstill."""
-        body = self.car.body
-        body.position, body.angle = before
-        body.velocity, body.angular_velocity = (0.0, 0.0), 0.0
-        if isinstance(self.car, KinematicThrottleCar):
-            self.car.stop()
-        for wheel in getattr(self.car, "wheels", ()):
-            wheel.omega = 0.0
 
     def _progress(self, facts: StepFacts) -> StepFacts:
         """Tiles passed since the last step (along the centreline), the lap rule, the cte."""
         circuit = self.track.circuit
         if circuit is None:
             return facts
-        x, y = self.car.rear_axle
+        x, y = self.world.states()[0].rear_axle
         previous, (index, lateral) = self.tile, self._locate(x, y)
         self.tile = index
         self.cte = abs(lateral)
@@ -149,6 +99,7 @@ class MetricEpisode:
             if not self.visited[tile]:
                 self.visited[tile] = True
                 self.visited_count += 1
+                self.visit_order.append(tile)
                 facts.new_tiles += 1
             if tile == 0 and self.visited_count / n > self.lap_percent:
                 facts.lap_finished = True
@@ -177,11 +128,11 @@ class MetricEpisode:
         self.nearest = nearest
         return tile, lateral
 
-    def info(self) -> dict[str, Any]:
-        x, y, heading = self.car.pose
+    def info(self, snapshot: Snapshot) -> dict[str, Any]:
+        car = snapshot.car
         info = {
-            "pose": (x, y, heading),
-            "speed": self.car.speed,  # [m/s]
+            "pose": car.pose,
+            "speed": car.speed,  # [m/s]
             "track": self.track_index,
             "unit": "m",
             "tiles_visited": self.visited_count,
@@ -196,33 +147,6 @@ class MetricEpisode:
             info["cte"] = self.cte  # [m]
         return info
 
-    # -- pictures ----------------------------------------------------------------------------
-    def observe(self, t: float, score: float) -> np.ndarray:
-        """The observation without cameras: a 96x96 top view of the road ahead, with the car."""
-        front, heading = self.car.front_axle, self.car.pose[2]
-        image = self.view.render(front, heading)
-        matrix = self.view.matrix(front, heading)
-        corners = transform_points(matrix, footprint_corners(self.car))
-        cv2.fillConvexPoly(
-            image, np.round(corners * 16).astype(np.int32), CAR_COLOR, cv2.LINE_AA, 4
-        )
-        return image
-
-    def frame(self, mode: str, t: float, score: float, cameras: CameraViews = ()) -> np.ndarray:
-        """state_pixels: the first camera or the default view; rgb_array and human: the
-        overview. ``cameras``: each camera's (image, window corners) now."""
-        images = [image for image, _ in cameras] or [self.observe(t, score)]
-        if mode == "state_pixels":
-            return images[0]
-        windows = [corners for _, corners in cameras]
-        if self.prepared.overview is None:
-            self.prepared.overview = MetricOverview(self.track, self.prepared.texture)
-        return self.prepared.overview.render(footprint_corners(self.car), windows, images)
-
-    def ground_texture(self) -> GroundTexture:
-        """The track picture the cameras see."""
-        return self.prepared.texture
-
 
 def _between(previous: int, current: int, n: int) -> list[int]:
     """Tiles from ``previous`` to ``current`` going forward (a short way), ``current`` last."""
@@ -233,21 +157,16 @@ def _between(previous: int, current: int, n: int) -> list[int]:
 
 
 class MetricCourse:
-    """What lasts across resets: the ground texture of every track of the source."""
+    """What lasts across resets: the source (its tracks, loaded once)."""
 
     def __init__(self, config: EnvConfig, source: MetricSource, car_model: CarModel):
         self.config = config
         self.source = source
         self.car_model = car_model
-        self.prepared = []
-        for layout, track_config in zip(source.tracks, config.tracks, strict=True):
-            texture = paint_ground(layout.detail, getattr(track_config, "pixels_per_meter", 20.0))
-            self.prepared.append(PreparedMetricTrack(layout.detail, texture))
 
     @property
     def tracks(self) -> list[MetricTrack]:
-        return [p.track for p in self.prepared]
+        return [layout.detail for layout in self.source.tracks]
 
     def new_episode(self, draw: TrackDraw) -> MetricEpisode:
-        prepared = self.prepared[draw.track_index]
-        return MetricEpisode(self.config, prepared, draw, self.car_model)
+        return MetricEpisode(self.config, draw, self.car_model)

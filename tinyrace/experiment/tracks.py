@@ -22,7 +22,8 @@ def save_track_picture(
     picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox, py = y * sy + oy), the
     start pose and, on procedural tracks, the lap line (two points) in track units.
     """
-    episode: Any = env.episode  # ProceduralEpisode or ImageEpisode
+    episode: Any = env.episode  # ProceduralEpisode, ImageEpisode or MetricEpisode
+    pictures: Any = env.pictures  # its colours (procedural) and ground texture
     procedural = env.config.kind == "procedural"
     key = f"seed{seed}" if procedural else f"track{episode.track_index}"
     if key in known:
@@ -30,12 +31,12 @@ def save_track_picture(
     if procedural:
         track = episode.track
         playfield = cast(ProceduralTrackConfig, env.config.tracks[0]).playfield  # [u]
-        image, frame = procedural_ground(track, episode.colors, playfield)
+        image, frame = procedural_ground(track, pictures.colors, playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
     elif env.config.kind in METRIC_KINDS:
         track = episode.track
-        image, frame = metric_ground(track, episode.prepared.texture)
+        image, frame = metric_ground(track, pictures.ground_texture())
         start = track.spawn
         lap_line = None if track.circuit is None else track.tiles[0][[0, 1]].tolist()
     else:

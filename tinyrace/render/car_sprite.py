@@ -15,14 +15,8 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-from tinyrace.cars.dynamic import (
-    HULL_POLYGONS,
-    SIZE,
-    WHEEL_HALF_WIDTH,
-    WHEEL_RADIUS,
-    DynamicCar,
-    SkidMarks,
-)
+from tinyrace.cars.dynamic_shape import HULL_POLYGONS, SIZE, WHEEL_HALF_WIDTH, WHEEL_RADIUS
+from tinyrace.cars.state import CarState, SkidView
 from tinyrace.sensors.texture import compose, transform_points
 
 HULL_COLOR = (204, 0, 0)  # RGB
@@ -42,19 +36,20 @@ _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
 
 
 class CarSprite:
-    """Draws one DynamicCar; polygons are prepared once, transformed per frame."""
+    """Draws CarRacing's car from its state; polygons are prepared per car size, transformed
+    per frame."""
 
-    def __init__(self, car: DynamicCar, supersample: bool, patches: Patches | None = None):
-        unit = SIZE * car.scale
-        self.car = car
-        self.hull = [np.array(poly, float) * unit for poly in HULL_POLYGONS]
-        self.wheel_box = _WHEEL_BOX * unit
+    def __init__(self, supersample: bool, patches: Patches | None = None):
         self.supersample = supersample
         self._patches: Patches = {} if patches is None else patches
+        self._scale: float | None = None  # the car size the polygons below are for
+        self.hull: list[np.ndarray] = []
+        self.wheel_box = _WHEEL_BOX
 
     def draw(
         self,
         image: np.ndarray,
+        car: CarState,
         world_to_out: np.ndarray,
         skid_width: int,
         cache_key: float | None = None,
@@ -64,15 +59,22 @@ class CarSprite:
         ``cache_key`` (e.g. the zoom) promises that the car's placement in the frame
         depends only on it and the steering angle, which allows reusing patches.
         """
-        if skid_width and self.car.skids.lengths.any():
-            _draw_skids(image, world_to_out, self.car.skids, skid_width)
+        if car.scale != self._scale:
+            unit = SIZE * car.scale
+            self.hull = [np.array(poly, float) * unit for poly in HULL_POLYGONS]
+            self.wheel_box = _WHEEL_BOX * unit
+            self._scale = car.scale
+        if skid_width and car.skids is not None and car.skids.lengths.any():
+            _draw_skids(image, world_to_out, car.skids, skid_width)
         if self.supersample:
-            steer = round(self.car.wheels[0].steer / _STEER_STEP)
+            steer = round(car.wheels[0].steer / _STEER_STEP)
             key = None if cache_key is None else (cache_key, steer)
             patch = None if key is None else self._patches.get(key)
             if patch is None:
-                local_to_out = self._local_to_out(world_to_out)
-                patch = _clip(image.shape, *self._render_patch(local_to_out, steer * _STEER_STEP))
+                local_to_out = _local_to_out(car, world_to_out)
+                patch = _clip(
+                    image.shape, *self._render_patch(car, local_to_out, steer * _STEER_STEP)
+                )
                 if key is not None:
                     if len(self._patches) >= _MAX_PATCHES:
                         self._patches.clear()
@@ -82,32 +84,26 @@ class CarSprite:
                 region = image[rows, cols]
                 region[:] = region * weight + color
             return
-        polygons = self._polygons(self.car.wheels[0].steer)
-        local_to_out = self._local_to_out(world_to_out)
+        polygons = self._polygons(car, car.wheels[0].steer)
+        local_to_out = _local_to_out(car, world_to_out)
         _fill(image, local_to_out, polygons[:4], WHEEL_COLOR)
         _fill(image, local_to_out, polygons[4:], HULL_COLOR)
 
-    def _local_to_out(self, world_to_out: np.ndarray) -> np.ndarray:
-        body = self.car.body
-        x, y = body.position
-        cos_a, sin_a = math.cos(body.angle), math.sin(body.angle)
-        return compose(world_to_out, np.array([[cos_a, -sin_a, x], [sin_a, cos_a, y]]))
-
-    def _polygons(self, steer: float) -> list[np.ndarray]:
+    def _polygons(self, car: CarState, steer: float) -> list[np.ndarray]:
         """Four wheels (front ones steered) then the hull, in the body's frame."""
         cos_s, sin_s = math.cos(steer), math.sin(steer)
         turn = np.array([[cos_s, sin_s], [-sin_s, cos_s]])
         wheels = [
-            (self.wheel_box @ turn if i < 2 else self.wheel_box) + (w.x, w.y)
-            for i, w in enumerate(self.car.wheels)
+            (self.wheel_box @ turn if i < 2 else self.wheel_box) + w.position
+            for i, w in enumerate(car.wheels)
         ]
         return wheels + self.hull
 
     def _render_patch(
-        self, local_to_out: np.ndarray, steer: float
+        self, car: CarState, local_to_out: np.ndarray, steer: float
     ) -> tuple[int, int, np.ndarray, np.ndarray]:
         """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha)."""
-        polygons = [transform_points(local_to_out, p) for p in self._polygons(steer)]
+        polygons = [transform_points(local_to_out, p) for p in self._polygons(car, steer)]
         points = np.concatenate(polygons)
         x0, y0 = np.floor(points.min(axis=0)).astype(int) - 1
         x1, y1 = np.ceil(points.max(axis=0)).astype(int) + 1
@@ -128,6 +124,13 @@ class CarSprite:
         return int(x0), int(y0), color, weight
 
 
+def _local_to_out(car: CarState, world_to_out: np.ndarray) -> np.ndarray:
+    """The car's body frame -> output pixels."""
+    x, y, _ = car.pose
+    cos_a, sin_a = math.cos(car.hull_angle), math.sin(car.hull_angle)
+    return compose(world_to_out, np.array([[cos_a, -sin_a, x], [sin_a, cos_a, y]]))
+
+
 def _clip(
     shape: tuple[int, ...], x0: int, y0: int, color: np.ndarray, weight: np.ndarray
 ) -> Patch | None:
@@ -140,7 +143,7 @@ def _clip(
     return slice(ay, by), slice(ax, bx), weight[inside].copy(), color[inside].copy()
 
 
-def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidMarks, width: int) -> None:
+def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidView, width: int) -> None:
     """All skid marks in one transform and one polyline call per colour."""
     points = np.round(transform_points(world_to_out, skids.points) * (1 << _BITS)).astype(np.int32)
     road: list[np.ndarray] = []

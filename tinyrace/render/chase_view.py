@@ -11,10 +11,10 @@ import math
 
 import numpy as np
 
-from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.render.car_sprite import CarSprite, Patches
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.sensors.texture import GroundTexture
+from tinyrace.world.snapshot import Snapshot
 
 WINDOW = (1000, 800)  # [px] the reference's layout size (w, h)
 ZOOM = 2.7 * 6.0  # [window px/u] after the first second
@@ -48,34 +48,33 @@ class ChaseView:
         self,
         size: tuple[int, int],
         texture: GroundTexture,
-        car: DynamicCar,
         dashboard: Dashboard,
         patches: Patches,
     ):
         """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes."""
         self.size = size  # (w, h)
         self.texture = texture
-        self.car = car
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
-        self.sprite = CarSprite(car, supersample=small, patches=patches)
+        self.sprite = CarSprite(supersample=small, patches=patches)
         self.dashboard = dashboard
         self.frame = np.zeros((size[1], size[0], 3), np.uint8)
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
-    def render(self, t: float, score: float) -> np.ndarray:
-        """The view t seconds after reset, with ``score`` on the dashboard. Returns a new array."""
-        body = self.car.body
-        zoom = zoom_at(t)
-        position = (body.position.x, body.position.y)
-        matrix = chase_matrix(position, body.angle, zoom / self.car.scale, self.size)
+    def render(self, snapshot: Snapshot, score: float) -> np.ndarray:
+        """The view of the controlled car at ``snapshot.t`` seconds after reset, with
+        ``score`` on the dashboard. Returns a new array."""
+        car = snapshot.car
+        zoom = zoom_at(snapshot.t)
+        x, y, _ = car.pose
+        matrix = chase_matrix((x, y), car.hull_angle, zoom / car.scale, self.size)
         pixels_per_unit = (
-            zoom / self.car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
+            zoom / car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
         )
         self.texture.warp(matrix, self.size, out=self.frame, pixels_per_unit=pixels_per_unit)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
-        self.sprite.draw(self.frame, matrix, self.skid_width, cache_key=zoom)
-        self.dashboard.draw(self.frame, self.car, score)
+        self.sprite.draw(self.frame, car, matrix, self.skid_width, cache_key=zoom)
+        self.dashboard.draw(self.frame, car, score)
         frame: np.ndarray = self.frame.copy()
         return frame

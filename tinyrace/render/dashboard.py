@@ -12,7 +12,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.state import CarState
 
 RGB = tuple[int, int, int]
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
@@ -64,7 +64,8 @@ class Dashboard:
         self._cached_layers: dict[tuple[int, int], np.ndarray] = {}
         self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
 
-    def draw(self, image: np.ndarray, car: DynamicCar, score: float) -> None:
+    def draw(self, image: np.ndarray, car: CarState, score: float) -> None:
+        """The instruments of ``car`` (a car with four wheels) and ``score`` into ``image``."""
         wheels, sign = car.wheels, car.steer_sign
         q = BAR_STEPS * self.factor  # bar steps per layout unit
         shown = (  # bar lengths in steps, in _BARS's order, then the score
@@ -74,7 +75,7 @@ class Dashboard:
             round(WHEEL_GAIN * wheels[2].omega * q),
             round(WHEEL_GAIN * wheels[3].omega * q),
             round(STEER_GAIN * wheels[0].steer * sign * q),
-            round(GYRO_GAIN * car.body.angular_velocity * sign * q),
+            round(GYRO_GAIN * car.yaw_rate * sign * q),
             int(score),
         )
         if shown != self._shown:  # redraw the strip only when an instrument moved

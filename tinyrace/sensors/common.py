@@ -15,7 +15,7 @@ from typing import Generic, TypeVar
 import cv2
 import numpy as np
 
-from tinyrace.cars.dynamic import SIZE, WHEEL_POSITIONS
+from tinyrace.cars.dynamic_shape import SIZE, WHEEL_POSITIONS
 from tinyrace.config import EnvConfig
 from tinyrace.tracks.base import Track
 

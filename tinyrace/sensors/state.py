@@ -28,7 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.cars.dynamic import DynamicCarSpec
+from tinyrace.cars.dynamic_shape import DynamicCarSpec
 from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.schema import ProceduralTrackConfig

@@ -1,16 +1,23 @@
-"""The pymunk space: the car's body, the track's sensors and the contact facts they produce.
+"""The pymunk space: the track's static shapes, the car, and the contact facts they produce.
 
-Collision callbacks only record facts (which tile a wheel touches, which obstacle
-cell the footprint overlaps); rewards are decided elsewhere from those facts.
+``World.step`` hands the controls to the car, gives each wheel the grip of the ground
+its own contacts report, steps the space and applies the physical consequences (a wall
+stops the car); it returns the contacts as the step's physical facts. ``snapshot``
+copies the car's state for the layers above. Collision callbacks only record facts
+(which tile a wheel touches, which obstacle cell the footprint overlaps); rules and
+rewards are decided elsewhere from those facts.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pymunk
 
+from tinyrace.cars.base import Car
 from tinyrace.cars.collision import (
     CONE,
     FOOTPRINT,
@@ -20,6 +27,8 @@ from tinyrace.cars.collision import (
     WALL,
     WHEEL,
 )
+from tinyrace.cars.state import CarState
+from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.tile_sensors import tile_sensors
 
 
@@ -32,21 +41,45 @@ class Contacts:
     obstacle_cells: set[int] = field(default_factory=set)  # cells the footprint overlaps now
     walls: set[int] = field(default_factory=set)  # wall boxes the footprint overlaps now
     cones: set[int] = field(default_factory=set)  # cones the footprint overlaps now
+    crashed: bool = False  # this step ran into a wall: the car was put back and stopped
 
 
 class World:
     """A pymunk space holding static track sensors and one car.
 
     Units are the track's: world units on procedural tracks, pixels on image tracks.
+    ``grass_off_tiles``: a wheel touching no road tile grips as on grass (CarRacing);
+    otherwise every wheel grips as on road.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, grass_off_tiles: bool = False) -> None:
         self.space = pymunk.Space()
         self.contacts = Contacts()
+        self.grass_off_tiles = grass_off_tiles
+        self.cars: list[Car] = []
+        self._states: tuple[CarState, ...] | None = None  # the cars' states since the last step
+        self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
         self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
         self.space.on_collision(FOOTPRINT, WALL, begin=self._wall_on, separate=self._wall_off)
         self.space.on_collision(FOOTPRINT, CONE, begin=self._cone_on, separate=self._cone_off)
+
+    # -- cars ----------------------------------------------------------------------------------
+    def add_car(self, car: Car) -> None:
+        """Take ``car`` (already built into ``self.space``) as the world's car."""
+        if self.cars:
+            raise ValueError("a world holds one car: its contacts are that car's")
+        self.cars.append(car)
+        self._states = None
+
+    @property
+    def car(self) -> Car:
+        """The controlled car (the live body: the layers above read ``snapshot()``)."""
+        return self.cars[0]
+
+    def control(self, controls: Sequence[Any]) -> None:
+        """Hand the controls of one action (e.g. steer, gas, brake) to the controlled car."""
+        self.cars[0].control(*controls)
 
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
@@ -70,6 +103,7 @@ class World:
             shapes.append(self._static_sensor(corners, WALL, index, OBSTACLE_FILTER))
         if shapes:
             self.space.add(*shapes)
+            self._walls = True
 
     def add_cones(self, positions: np.ndarray, radii: np.ndarray) -> None:
         """Cones (K x 2 centres, K radii) as static circles the footprint reports touching."""
@@ -105,8 +139,13 @@ class World:
         for body in list(self.space.bodies):
             self.space.remove(body, *body.shapes)
         self.contacts = Contacts()
+        self.cars = []
+        self._states = None
 
     # -- pickling ----------------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, object]:
+        return {**self.__dict__, "_states": None}  # skid views would unpickle detached
+
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
         self._rebind_contacts()
@@ -127,11 +166,45 @@ class World:
             body.velocity, body.angular_velocity = velocity, spin
 
     # -- stepping ----------------------------------------------------------------------------
-    def step(self, dt: float) -> Contacts:
-        """Advance the space by ``dt`` seconds; return the contact facts of this step."""
+    def step(self, dt: float, actions: Sequence[Sequence[Any]] = ()) -> Contacts:
+        """One step of ``dt`` seconds: ``actions`` (controls per car, if given) handed over,
+        the car's forces with each wheel's grip from its contacts, the space stepped, a car
+        that ran into a wall put back and stopped. Returns this step's contact facts (the
+        world's own object, valid until the next step)."""
+        if actions:
+            for car, controls in zip(self.cars, actions, strict=False):
+                car.control(*controls)
+        car = self.cars[0]
+        contacts = self.contacts
+        before = _place(car.body) if self._walls else None
+        if self.grass_off_tiles:
+            car.apply_forces(dt, [bool(tiles) for tiles in contacts.wheel_tiles])
+        else:
+            car.apply_forces(dt, _ALL_ROAD)
+        self.look(dt)
+        if before is not None and contacts.walls:
+            _crash(car, before)
+            contacts.crashed = True
+        return contacts
+
+    def look(self, dt: float) -> Contacts:
+        """Step the space by ``dt`` seconds without driving (a reset's look at the spawn)."""
         self.contacts.new_tile_touches.clear()
+        self.contacts.crashed = False
+        self._states = None
         self.space.step(dt)
         return self.contacts
+
+    def states(self) -> tuple[CarState, ...]:
+        """Every car's state, copied once per step (the controlled car first); a body
+        changed by hand between steps shows in the next step's states."""
+        if self._states is None:
+            self._states = tuple(car.state() for car in self.cars)
+        return self._states
+
+    def snapshot(self, t: float, steps: int) -> Snapshot:
+        """The world now, labelled with the episode's clock (``t`` [s], ``steps``)."""
+        return Snapshot(t, steps, self.states())
 
     @property
     def counts(self) -> tuple[int, int, int]:
@@ -166,6 +239,21 @@ class World:
 
     def _cone_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         self.contacts.cones.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+
+
+_ALL_ROAD = (True, True, True, True)  # per wheel: grips as on road
+Place = tuple[tuple[float, float], float]  # a body's (position, angle)
+
+
+def _place(body: pymunk.Body) -> Place:
+    x, y = body.position
+    return (float(x), float(y)), float(body.angle)
+
+
+def _crash(car: Car, before: Place) -> None:
+    """Against a wall: back to where the car stood before the step, at a standstill."""
+    car.body.position, car.body.angle = before
+    car.stop()
 
 
 def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:

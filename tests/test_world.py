@@ -1,0 +1,105 @@
+"""The physics world without an env: controls and a time step in, contacts and snapshots out."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
+from tinyrace.world.world import World
+
+DT = 1 / 50  # [s]
+GAS = (0.0, 1.0, 0.0)  # steer, gas, brake
+ROAD = np.array([[(-100.0, -100.0), (100.0, -100.0), (100.0, 100.0), (-100.0, 100.0)]])
+
+
+def dynamic_world(grass_off_tiles: bool, road: bool) -> World:
+    """A CarRacing car at the origin, nose along +y, on one big road tile or on none."""
+    world = World(grass_off_tiles=grass_off_tiles)
+    if road:
+        world.add_tiles(ROAD)
+    world.add_car(DynamicCar.build(world.space, (0.0, 0.0, math.pi / 2)))
+    return world
+
+
+def speed_after(world: World, steps: int) -> float:
+    world.look(DT)  # the contacts of the spawn
+    for _ in range(steps):
+        world.step(DT, [GAS])
+    return world.snapshot(steps * DT, steps).car.speed
+
+
+def test_wheels_on_a_tile_report_it_and_grip_as_on_road():
+    world = dynamic_world(grass_off_tiles=True, road=True)
+    contacts = world.look(DT)
+    assert contacts.new_tile_touches == [0, 0, 0, 0]  # each wheel began touching tile 0
+    assert all(tiles == {0} for tiles in contacts.wheel_tiles)
+    assert world.step(DT, [GAS]).new_tile_touches == []  # refilled every step
+
+
+def test_a_wheel_off_the_tiles_grips_as_on_grass_only_where_the_world_says_so():
+    on_road = speed_after(dynamic_world(grass_off_tiles=True, road=True), 40)
+    on_grass = speed_after(dynamic_world(grass_off_tiles=True, road=False), 40)
+    grip_everywhere = speed_after(dynamic_world(grass_off_tiles=False, road=False), 40)
+    assert on_grass < 0.9 * on_road  # wheelspin capped at 0.6 of the road's grip
+    assert grip_everywhere == on_road
+
+
+def test_a_snapshot_is_a_copy_that_later_steps_leave_alone():
+    world = dynamic_world(grass_off_tiles=True, road=True)
+    for _ in range(20):
+        world.step(DT, [(0.5, 1.0, 0.0)])
+    snapshot = world.snapshot(20 * DT, 20)
+    car = world.car
+    assert snapshot.car.pose == car.pose and snapshot.car.speed == car.speed
+    assert snapshot.car.hull_angle == car.body.angle
+    assert [w.omega for w in snapshot.car.wheels] == [w.omega for w in car.wheels]
+    world.step(DT, [GAS])
+    assert world.snapshot(21 * DT, 21).car.pose != snapshot.car.pose
+    with pytest.raises(AttributeError):  # read-only
+        snapshot.car.speed = 0.0  # type: ignore[misc]
+
+
+def test_skid_marks_are_seen_read_only():
+    world = dynamic_world(grass_off_tiles=True, road=True)
+    for _ in range(30):
+        world.step(DT, [(1.0, 1.0, 0.0)])  # full gas from standstill: the rear wheels spin
+    skids = world.snapshot(0.6, 30).car.skids
+    assert skids is not None and skids.lengths.any()
+    with pytest.raises(ValueError):
+        skids.points[0, 0] = (0.0, 0.0)
+
+
+def test_looking_steps_the_contacts_but_does_not_drive():
+    world = dynamic_world(grass_off_tiles=True, road=True)
+    world.control(GAS)
+    world.look(DT)
+    assert world.snapshot(DT, 0).car.speed == 0.0
+
+
+def test_a_wall_puts_the_car_back_and_stops_it():
+    world = World()
+    world.add_walls(np.array([[3.0, -5.0, 4.0, 5.0]]))  # [m] across the way ahead
+    car = KinematicThrottleCar.build(
+        world.space, (0.0, 0.0, 0.0), (2.0, 1.0), (10.0, 5.0, 5.0), (30.0, None)
+    )
+    world.add_car(car)
+    for step in range(200):
+        before = world.snapshot(step * DT, step).car.pose
+        contacts = world.step(DT, [(0.0, 1.0)])
+        if contacts.crashed:
+            break
+    else:
+        pytest.fail("the car never reached the wall")
+    after = world.snapshot(0.0, 0).car
+    assert after.pose == before and after.speed == 0.0 and car.body.velocity == (0.0, 0.0)
+    assert 0.5 < after.pose[0] <= 1.0  # its front stopped short of the wall at x = 3
+
+
+def test_a_world_holds_one_car():
+    world = dynamic_world(grass_off_tiles=False, road=False)
+    with pytest.raises(ValueError, match="one car"):
+        world.add_car(DynamicCar.build(world.space, (5.0, 0.0, 0.0)))
