@@ -70,7 +70,7 @@ def test_pose_bounds_hold_the_last_pose_before_leaving_the_playfield():
     assert info["termination"] == "out_of_bounds"
     x, y = observation["s"][-3:-1]
     assert max(abs(x), abs(y)) > playfield and space.contains(observation["s"])
-    pose = env.unwrapped.episode.car.state().pose
+    pose = env.unwrapped.snapshot().car.pose
     np.testing.assert_allclose((x, y), pose[:2], rtol=1e-6)  # not clipped
     env.close()
 
