@@ -22,11 +22,6 @@ import pymunk
 from tinyrace.cars.collision import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
 from tinyrace.cars.state import CarState, Point, WheelState
 
-# pymunk sends every attribute set through a Python ``__setattr__`` hook; the properties'
-# setters called directly skip it (about 0.5 us each, twice per step)
-_set_velocity = pymunk.Body.velocity.fset
-_set_angular_velocity = pymunk.Body.angular_velocity.fset
-
 SIZE = 0.02  # [u per model unit] CarRacing's car model scale
 
 HULL_POLYGONS = (  # [model units], the nose along +y
@@ -111,6 +106,12 @@ class SkidMarks:
         self.points[slot, n] = point
         self.lengths[slot] = n + 1
         return True
+
+
+# pymunk sends every attribute set through a Python ``__setattr__`` hook; the properties'
+# setters called directly skip it (about 0.5 us each, twice per step)
+_set_velocity = pymunk.Body.velocity.fset
+_set_angular_velocity = pymunk.Body.angular_velocity.fset
 
 
 @dataclass
