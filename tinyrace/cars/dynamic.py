@@ -177,12 +177,9 @@ class DynamicCar:
         cx, cy = body.center_of_gravity
         road = spec.friction_limit * scale * 1.0  # [mass track units/s^2]
         grass = spec.friction_limit * scale * spec.grass_friction
-        # per wheel: offset from the CoG [track units]; per surface: (grip, skid threshold)
+        # per wheel: offset from the CoG [track units]; road, grass: (grip, skid threshold)
         self._offsets = [(w.x - cx, w.y - cy) for w in self.wheels]
-        self._limits = {
-            True: (road, spec.skid_ratio * road),
-            False: (grass, spec.skid_ratio * grass),
-        }
+        self._limits = ((road, spec.skid_ratio * road), (grass, spec.skid_ratio * grass))
         self._radius = self.wheel_radius  # [track units]
         self._spin_moment = spec.wheel_moment * scale**2  # [mass track units^2]
         self._mass, self._moment = body.mass, body.moment  # the shapes are fixed once built
@@ -203,7 +200,8 @@ class DynamicCar:
         drive = dt * spec.engine_power  # [mass u^2/s^2] per unit of gas
         inertia, floor = spec.wheel_moment, spec.spin_floor
         lock, brake_rate = spec.brake_lock, spec.brake_rate
-        limits, offsets = self._limits, self._offsets
+        road_limits, grass_limits = self._limits
+        offsets, starts, opens = self._offsets, self._skid_start, self._skid_open
         fx_total = fy_total = torque = 0.0
         for index, wheel in enumerate(self.wheels):
             # engine and brake act on the wheel's spin
@@ -225,7 +223,7 @@ class DynamicCar:
             else:  # angle + 0.0 is angle: the hull's own axes
                 side_x, side_y = cos_a, sin_a
             road = on_road[index]
-            limit, skid_limit = limits[bool(road)]
+            limit, skid_limit = road_limits if road else grass_limits
             # tyre force from slip, capped at the friction limit (forward f, sideways p)
             f = (omega * radius - (-side_y * wvx + side_x * wvy)) * gain
             p = -(side_x * wvx + side_y * wvy) * gain
@@ -237,7 +235,7 @@ class DynamicCar:
             fx_total, fy_total = fx_total + fx, fy_total + fy
             torque += rx * fy - ry * fx
             skidding = wheel.skidding = total > skid_limit
-            if skidding or self._skid_start[index] or self._skid_open[index]:
+            if skidding or starts[index] or opens[index]:
                 self._track_skid(index, wheel, road)
         self._accelerate(dt, vx, vy, spin, fx_total, fy_total, torque)
         self._steer(dt)
