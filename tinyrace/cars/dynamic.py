@@ -110,8 +110,8 @@ class SkidMarks:
 
 # pymunk sends every attribute set through a Python ``__setattr__`` hook; the properties'
 # setters called directly skip it (about 0.5 us each, twice per step)
-_set_velocity = pymunk.Body.velocity.fset
-_set_angular_velocity = pymunk.Body.angular_velocity.fset
+_set_velocity = vars(pymunk.Body)["velocity"].fset
+_set_angular_velocity = vars(pymunk.Body)["angular_velocity"].fset
 
 
 @dataclass
