@@ -28,6 +28,7 @@ DISCRETE_CONTROLS = (
     (0.0, 0.2, 0.0),
     (0.0, 0.0, 0.8),
 )
+_FLOAT32 = np.dtype(np.float32)
 
 
 @dataclass(frozen=True)
@@ -53,22 +54,25 @@ class ActionSpec:
         if isinstance(self.space, spaces.Box):  # plain floats: cheaper to compare per step
             bounds = list(zip(self.space.low.tolist(), self.space.high.tolist(), strict=True))
             object.__setattr__(self, "_bounds", bounds)
+            object.__setattr__(self, "_shape", self.space.shape)
 
     _bounds: list[tuple[float, float]] = dataclasses.field(
         default_factory=list, init=False, repr=False, compare=False
     )  # Box bounds as floats
+    _shape: tuple[int, ...] = dataclasses.field(default=(), init=False, repr=False, compare=False)
 
     def read(self, action: object) -> tuple[float, ...]:
         """The controls of a valid action: (steer, gas, brake), (steer,) or (steer, throttle)."""
         if self.kind == "discrete":
             return DISCRETE_CONTROLS[self._index(action)]
-        if (
-            type(action) is np.ndarray
-            and action.dtype == np.float32
-            and action.shape == self.space.shape
-        ):
-            values = action.tolist()  # the common case, checked without numpy calls
-            if all(low <= v <= high for v, (low, high) in zip(values, self._bounds, strict=True)):
+        # the common case, a float32 array of the space's shape, checked without numpy calls
+        # (native float32 is one dtype object; any other dtype takes the general path)
+        if type(action) is np.ndarray and action.dtype is _FLOAT32 and action.shape == self._shape:
+            values = action.tolist()
+            for value, (low, high) in zip(values, self._bounds, strict=True):
+                if not low <= value <= high:  # NaN too: checked and refused below
+                    break
+            else:
                 return tuple(values)
         return tuple(self._vector(action).tolist())
 

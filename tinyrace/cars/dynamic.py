@@ -94,6 +94,12 @@ class SkidMarks:
         return True
 
 
+# pymunk sends every attribute set through a Python ``__setattr__`` hook; the properties'
+# setters called directly skip it (about 0.5 us each, twice per step)
+_set_velocity = vars(pymunk.Body)["velocity"].fset
+_set_angular_velocity = vars(pymunk.Body)["angular_velocity"].fset
+
+
 @dataclass
 class DynamicCar:
     """The car: a pymunk body plus wheel states. Controls are set, then ``apply_forces(dt)``."""
@@ -140,10 +146,11 @@ class DynamicCar:
     def control(self, steer: float, gas: float, brake: float) -> None:
         """steer -1 (left) .. 1 (right), gas 0..1, brake 0..1, as CarRacing's action."""
         self.steer_target = -steer * self.steer_sign
-        gas = min(max(gas, 0.0), 1.0)
-        for wheel in self.wheels[2:]:
-            wheel.gas += min(gas - wheel.gas, self.spec.gas_rise)
-        for wheel in self.wheels:
+        gas, rise = min(max(gas, 0.0), 1.0), self.spec.gas_rise
+        wheels = self.wheels
+        for wheel in wheels[2:]:
+            wheel.gas += min(gas - wheel.gas, rise)
+        for wheel in wheels:
             wheel.brake = brake
 
     # -- physics -----------------------------------------------------------------------------
@@ -151,56 +158,76 @@ class DynamicCar:
         self._prepare()
 
     def _prepare(self) -> None:
-        """Per-car constants of the hot path, computed as the formulas below would."""
-        spec, scale = self.spec, self.scale
-        cx, cy = self.body.center_of_gravity
-        self._offsets = [(w.x - cx, w.y - cy) for w in self.wheels]  # [track units] from the CoG
-        self._road_limit = spec.friction_limit * scale * 1.0  # [mass track units/s^2]
-        self._grass_limit = spec.friction_limit * scale * spec.grass_friction
+        """Per-car constants of the hot path, each computed as the formula it replaces would."""
+        spec, scale, body = self.spec, self.scale, self.body
+        cx, cy = body.center_of_gravity
+        road = spec.friction_limit * scale * 1.0  # [mass track units/s^2]
+        grass = spec.friction_limit * scale * spec.grass_friction
+        # per wheel: offset from the CoG [track units]; road, grass: (grip, skid threshold)
+        self._offsets = [(w.x - cx, w.y - cy) for w in self.wheels]
+        self._limits = ((road, spec.skid_ratio * road), (grass, spec.skid_ratio * grass))
+        self._radius = self.wheel_radius  # [track units]
         self._spin_moment = spec.wheel_moment * scale**2  # [mass track units^2]
+        self._mass, self._moment = body.mass, body.moment  # the shapes are fixed once built
+        self._cap_dt = (0.0, 0.0)  # (dt, Box2D's speed cap at that dt [track units/s])
 
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
         """Spin the wheels, compute tyre forces and set them on the body for the next space step.
 
-        Written for speed (one body read, no per-wheel method calls); each formula keeps
-        the operation order of CarRacing's model, so results are bit-identical.
+        Written for speed: the body is read once, the four wheels' math is straight scalar
+        code and the summed force changes the velocities once. Each formula keeps the
+        operation order of CarRacing's model, so results are bit-identical to it.
         """
         spec, body = self.spec, self.body
         angle, spin = body.angle, body.angular_velocity
         vx, vy = body.velocity
         cos_a, sin_a = math.cos(angle), math.sin(angle)
-        radius, gain, moment = self.wheel_radius, spec.slip_gain, self._spin_moment
+        radius, gain, moment = self._radius, spec.slip_gain, self._spin_moment
         drive = dt * spec.engine_power  # [mass u^2/s^2] per unit of gas
+        inertia, floor = spec.wheel_moment, spec.spin_floor
+        lock, brake_rate = spec.brake_lock, spec.brake_rate
+        road_limits, grass_limits = self._limits
+        offsets, starts, opens = self._offsets, self._skid_start, self._skid_open
         fx_total = fy_total = torque = 0.0
         for index, wheel in enumerate(self.wheels):
-            _spin(wheel, dt, drive, spec)
-            lx, ly = self._offsets[index]
+            # engine and brake act on the wheel's spin
+            omega = wheel.omega
+            omega += drive * wheel.gas / inertia / (abs(omega) + floor)
+            brake = wheel.brake
+            if brake >= lock:
+                omega = 0.0
+            elif brake > 0:
+                omega -= math.copysign(min(brake_rate * brake, abs(omega)), omega)
+            wheel.phase += omega * dt
+            lx, ly = offsets[index]
             rx, ry = cos_a * lx - sin_a * ly, sin_a * lx + cos_a * ly  # world frame
             wvx, wvy = vx - spin * ry, vy + spin * rx
-            if wheel.steer:
-                heading = angle + wheel.steer
+            steer = wheel.steer
+            if steer:
+                heading = angle + steer
                 side_x, side_y = math.cos(heading), math.sin(heading)
             else:  # angle + 0.0 is angle: the hull's own axes
                 side_x, side_y = cos_a, sin_a
-            limit = self._road_limit if on_road[index] else self._grass_limit
+            road = on_road[index]
+            limit, skid_limit = road_limits if road else grass_limits
             # tyre force from slip, capped at the friction limit (forward f, sideways p)
-            f = (wheel.omega * radius - (-side_y * wvx + side_x * wvy)) * gain
+            f = (omega * radius - (-side_y * wvx + side_x * wvy)) * gain
             p = -(side_x * wvx + side_y * wvy) * gain
             total = math.hypot(f, p)
-            wheel.skidding = total > spec.skid_ratio * limit
             if total > limit:
                 f, p = f * limit / total, p * limit / total
-            wheel.omega -= dt * f * radius / moment
+            wheel.omega = omega - dt * f * radius / moment
             fx, fy = p * side_x + f * -side_y, p * side_y + f * side_x
             fx_total, fy_total = fx_total + fx, fy_total + fy
             torque += rx * fy - ry * fx
-            if wheel.skidding or self._skid_start[index] or self._skid_open[index]:
-                self._track_skid(index, wheel, on_road[index])
-        self._accelerate(dt, vx, vy, fx_total, fy_total, torque)
+            skidding = wheel.skidding = total > skid_limit
+            if skidding or starts[index] or opens[index]:
+                self._track_skid(index, wheel, road)
+        self._accelerate(dt, vx, vy, spin, fx_total, fy_total, torque)
         self._steer(dt)
 
     def _accelerate(
-        self, dt: float, vx: float, vy: float, fx: float, fy: float, torque: float
+        self, dt: float, vx: float, vy: float, spin: float, fx: float, fy: float, torque: float
     ) -> None:
         """Change the velocities now, so that the coming space step moves with the new ones.
 
@@ -208,17 +235,18 @@ class DynamicCar:
         positions with the old velocities first. Setting ``body.force`` would leave the
         car one step behind the reference (dt * speed, about 2 u at top speed).
         Box2D also caps a body's travel per step; the same cap keeps the same top speed.
-        ``vx, vy`` are the body's velocity now.
+        ``vx, vy, spin`` are the body's velocities now.
         """
-        body = self.body
-        mass = body.mass
+        mass = self._mass
         vx, vy = vx + fx / mass * dt, vy + fy / mass * dt
-        cap = self.spec.max_translation * self.scale / dt  # [track units/s]
+        if self._cap_dt[0] != dt:
+            self._cap_dt = (dt, self.spec.max_translation * self.scale / dt)  # [track units/s]
+        cap = self._cap_dt[1]
         speed = math.hypot(vx, vy)
         if speed > cap:
             vx, vy = vx * cap / speed, vy * cap / speed
-        body.velocity = (vx, vy)
-        body.angular_velocity += torque / body.moment * dt
+        _set_velocity(self.body, (vx, vy))
+        _set_angular_velocity(self.body, spin + torque / self._moment * dt)
 
     def stop(self) -> None:
         """A crash: body and wheels stand still."""
@@ -233,11 +261,12 @@ class DynamicCar:
 
     def _steer(self, dt: float) -> None:
         """Front wheels turn toward the target like the reference's joint motor."""
-        spec = self.spec
+        spec, target = self.spec, self.steer_target
+        gain, speed, limit = spec.steer_gain, spec.steer_speed, spec.steer_limit
         for wheel in self.wheels[:2]:
-            error = self.steer_target - wheel.steer
-            rate = math.copysign(min(spec.steer_gain * abs(error), spec.steer_speed), error)
-            wheel.steer = min(max(wheel.steer + rate * dt, -spec.steer_limit), spec.steer_limit)
+            error = target - wheel.steer
+            rate = math.copysign(min(gain * abs(error), speed), error)
+            wheel.steer = min(max(wheel.steer + rate * dt, -limit), limit)
 
     def _track_skid(self, index: int, wheel: Wheel, on_road: bool) -> None:
         """Skid marks: polylines where the tyre force exceeds twice the friction limit."""
@@ -311,19 +340,6 @@ class DynamicCar:
         rear, base, _ = _footprint(self.scale)
         point = self.body.local_to_world((0.0, rear + base))
         return point.x, point.y
-
-
-def _spin(wheel: Wheel, dt: float, drive: float, spec: DynamicCarSpec) -> None:
-    """Engine and brake act on the wheel's spin (``drive`` is dt * engine power)."""
-    omega = wheel.omega
-    omega += drive * wheel.gas / spec.wheel_moment / (abs(omega) + spec.spin_floor)
-    brake = wheel.brake
-    if brake >= spec.brake_lock:
-        omega = 0.0
-    elif brake > 0:
-        omega -= math.copysign(min(spec.brake_rate * brake, abs(omega)), omega)
-    wheel.omega = omega
-    wheel.phase += omega * dt
 
 
 def _footprint(scale: float) -> tuple[float, float, float]:
