@@ -289,19 +289,24 @@ class DynamicCar:
     def state(self) -> CarState:
         """A copy of the car's state for sensors and pictures (the body read once: per step)."""
         body = self.body
-        position, velocity, angle = body.position, body.velocity, body.angle
+        x, y = body.position
+        vx, vy = body.velocity
+        angle = body.angle
         radius = self.wheel_radius
         rear, base, width = _footprint(self.scale)
-        front, back = body.local_to_world((0.0, rear + base)), body.local_to_world((0.0, rear))
+        # the axles lie on the body's y axis: body.local_to_world((0, r)) computes
+        # (x - sin * r, y + cos * r) with the same libm sin and cos, so the bits are the same
+        cos_a, sin_a = math.cos(angle), math.sin(angle)
+        front = rear + base
         return CarState(
             model="dynamic",
-            pose=(position.x, position.y, angle + math.pi / 2),
-            velocity=(velocity.x, velocity.y),
-            speed=abs(velocity),
+            pose=(x, y, angle + math.pi / 2),
+            velocity=(vx, vy),
+            speed=math.sqrt(vx**2 + vy**2),  # as pymunk's Vec2d.length
             yaw_rate=body.angular_velocity,
             steer=self.wheels[0].steer,
-            front_axle=(front.x, front.y),
-            rear_axle=(back.x, back.y),
+            front_axle=(x - sin_a * front, y + cos_a * front),
+            rear_axle=(x - sin_a * rear, y + cos_a * rear),
             footprint=(base, width),
             wheels=tuple([WheelState(w.omega, w.steer, radius, (w.x, w.y)) for w in self.wheels]),
             hull_angle=angle,

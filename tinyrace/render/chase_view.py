@@ -71,10 +71,15 @@ class ChaseView:
         pixels_per_unit = (
             zoom / car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
         )
-        self.texture.warp(matrix, self.size, out=self.frame, pixels_per_unit=pixels_per_unit)
+        # a new frame each call (it is returned); the dashboard paints over its bottom rows,
+        # so the ground is sampled above them only
+        frame = np.empty_like(self.frame)
+        top = self.dashboard.top
+        self.texture.warp(
+            matrix, (self.size[0], top), out=frame[:top], pixels_per_unit=pixels_per_unit
+        )
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
-        self.sprite.draw(self.frame, car, matrix, self.skid_width, cache_key=zoom)
-        self.dashboard.draw(self.frame, car, score)
-        frame: np.ndarray = self.frame.copy()
+        self.sprite.draw(frame, car, matrix, self.skid_width, cache_key=zoom)
+        self.dashboard.draw(frame, car, score)
         return frame
