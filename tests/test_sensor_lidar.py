@@ -7,15 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from tinyrace.sensors.lidar import (
-    add_noise,
-    beam_angles,
-    beam_fan,
-    cast,
-    directions,
-    distance_field,
-    fan_angle,
-)
+from tinyrace.sensors.lidar import add_noise, beam_angles, directions
+from tinyrace.sensors.raycast import beam_fan, cast, distance_field, fan_angle
 
 SIZE = 401  # cells per side of the test maps
 

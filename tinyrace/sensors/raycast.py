@@ -1,0 +1,396 @@
+"""Ray casting on a blocking map: sample tables of a fan of beams, and two vectorised passes.
+
+Built once per track: the map of blocking cells, padded with a border that blocks too (the
+edge of the map stops a beam), and NEAR maps: for each of ORIENTATIONS directions, the
+cells from which a segment of a beam in that direction, COARSE_STEP long and centred there,
+could touch a blocking cell (a dilation of the blocking cells by that segment; one bit per
+direction). Built once per lidar and track: a ``Fan``, the flat offsets of every sample of
+every beam, for every heading (one table row per angle step) and ORIGIN_STEPS^2 positions
+of the origin inside its cell.
+
+A scan takes two gathers, whatever the heading and the walls: a coarse pass samples the
+middle of every COARSE_STEP segment of every beam in its direction's NEAR map and finds each
+beam's first flagged segment; a fine pass samples that segment every FINE_STEP in the
+blocking map and finds the first blocked sample; the range is the middle between it and the
+sample before (from the origin rounded to 1 / ORIGIN_STEPS of a cell, the fan turned to the
+nearest table row). The first flag of each beam is found by packing its 16 flags into bits
+and a lookup table, never a loop over rows. Beams whose flagged segment only passed blocking
+cells by (false alarms) go on to their next flagged segment while they are many, and sample
+their whole row when few: a few passes, never a loop over beams. Beyond TABLE_RANGE, beams
+march on by sphere tracing on a distance field (``cv2.distanceTransform``), built only for
+lidars that reach that far.
+
+Units: the maps work in cells; ``to_cells`` maps track units to cell coordinates (a cell's
+centre on integer coordinates, as image pixels) and ranges come back in track units.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+COARSE_STEP = 8  # [cells] length of the segments the coarse pass tests with one sample each
+FINE_SAMPLES = 16  # samples per segment in the fine pass (16: two uint64 words per beam)
+FINE_STEP = COARSE_STEP / FINE_SAMPLES  # [cells]
+ORIENTATIONS = 8  # directions of NEAR maps over half a turn (bits of a uint8)
+ORIGIN_STEPS = 3  # origin positions per axis inside a cell that the tables are made for
+ANGLE_STEP = math.radians(0.26)  # [rad] largest angle between two rows of a fan's tables
+FEW = 48  # beams with false alarms so few that sampling their whole rows is cheaper
+TABLE_RANGE = 120  # [cells] farthest sample of the tables (< 16 segments); beams march on beyond
+WORDS = 16  # columns of the coarse table and samples of a fine window: two uint64 words
+# (b0 + b1 * 2^8 + ... + b7 * 2^56) * PACK >> 56 has bit i = b_i when every b_i is 0 or 1
+PACK = np.uint64(0x0102040810204080)
+# FIRST[lo + 256 * hi]: index of the first 1 among the 16 bits of two packed bytes; 16: none
+_LOWEST = np.arange(1 << 16) & -np.arange(1 << 16)  # the lowest set bit of each index
+FIRST = np.where(_LOWEST > 0, np.log2(np.maximum(_LOWEST, 1)), 16).astype(np.int64)
+PAD = COARSE_STEP // 2 + 4  # [cells] blocking border around the map
+LEAD = TABLE_RANGE + 2 * COARSE_STEP + PAD + 2  # [rows] around the flat maps: no sample leaves
+FAR = 1 << 30  # a table offset past the end of the flat maps (np.take clips it to the end)
+MIN_STEP = 1.0  # [cells] smallest sphere-tracing step of a free beam
+STEP_CAP = 127.5  # [cells] largest sphere-tracing step (uint8 half cells)
+OVERSHOOT = 2.0  # [cells] a marching tip enters a blocking cell less than this far past its edge
+BISECTIONS = 3  # rounds that halve the overshoot bracket: error <= OVERSHOOT / 8
+CHECK_EVERY = 4  # marching rounds between checks whether every beam has stopped
+MAX_ROUNDS = 256  # marching rounds at most
+
+
+@dataclass(frozen=True, eq=False)
+class DistanceField:
+    """The blocking map of one track and what the passes sample, padded by PAD cells.
+
+    ``blocked`` (1: blocking) and ``near`` (bit o: near in direction o) are flat uint8 maps
+    with LEAD extra rows before and after, so that no table offset leaves them (blocking, all
+    bits set; FAR lands on the last one). ``steps``
+    are sphere-tracing steps in half cells (uint8, 0 in blocking cells, rounded down so that
+    they stay safe, at most STEP_CAP cells), when the field was made to reach that far.
+    """
+
+    blocked: np.ndarray  # (LEAD * w + H * w + LEAD * w,) uint8, w the padded width
+    near: np.ndarray  # same layout
+    shape: tuple[int, int]  # (H, w) rows and columns of the padded map
+    to_cells: np.ndarray  # 2x3 affine: track units -> cell coordinates of the padded map
+    cells_per_unit: float  # [cells per track unit]
+    steps: np.ndarray | None = None  # (H, w) uint8 [half cells]
+    classes: np.ndarray | None = None  # (H, w) uint8 hit class of blocking cells and their rim
+
+    def blocking(self) -> np.ndarray:
+        """(H, w) uint8 view of the padded map, 1 where blocking."""
+        height, width = self.shape
+        return self.blocked[LEAD * width : (LEAD + height) * width].reshape(height, width)
+
+    def cells(self, point: tuple[float, float]) -> tuple[float, float]:
+        """[cells] of a track point in the padded map."""
+        (a, b, c), (d, e, f) = self.to_cells.tolist()
+        return a * point[0] + b * point[1] + c, d * point[0] + e * point[1] + f
+
+
+def distance_field(
+    blocking: np.ndarray,
+    to_cells: np.ndarray,
+    classes: np.ndarray | None = None,
+    reach: float = math.inf,
+) -> DistanceField:
+    """The field of a boolean (H, W) map of blocking cells, ``to_cells`` track -> cell affine;
+    ``classes`` (H, W) uint8 hit classes of the blocking cells, when beams report them;
+    ``reach`` [cells] the longest range it serves. Outside the map blocks (as a wall)."""
+    padded = cv2.copyMakeBorder(
+        blocking.astype(np.uint8), PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1
+    )
+    width = padded.shape[1]
+    near = np.zeros_like(padded)
+    for o in range(ORIENTATIONS):
+        dilated: np.ndarray = cv2.dilate(padded, _segment_kernel(o))
+        np.bitwise_or(near, np.left_shift(dilated, o), out=near)
+    lead = np.ones(LEAD * width, np.uint8)
+    blocked = np.concatenate([lead, padded.ravel(), lead])
+    near = np.concatenate([lead * 255, near.ravel(), lead * 255])
+    shifted = np.asarray(to_cells, np.float64) + np.array([[0, 0, PAD], [0, 0, PAD]])
+    scale = math.sqrt(abs(np.linalg.det(shifted[:, :2])))
+    steps = _steps(padded) if reach > TABLE_RANGE else None
+    if classes is not None:  # an end may stop a rounding error short: the rim has the class too
+        classes = cv2.copyMakeBorder(classes, PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1)
+        classes = np.where(classes > 0, classes, cv2.dilate(classes, np.ones((3, 3), np.uint8)))
+    return DistanceField(blocked, near, padded.shape, shifted, scale, steps, classes)
+
+
+@functools.cache
+def _segment_kernel(orientation: int) -> np.ndarray:
+    """uint8 kernel: the cell offsets (x, y) within half a cell's diagonal, twice, of a
+    segment COARSE_STEP long centred on 0 in a direction within half an orientation step of
+    ``orientation`` (the sample's nearest cell and the blocking cell each add one)."""
+    r = math.ceil(COARSE_STEP / 2 + math.sqrt(2))
+    y, x = np.mgrid[-r : r + 1, -r : r + 1].astype(np.float64)
+    half = math.pi / ORIENTATIONS / 2
+    centre = orientation * math.pi / ORIENTATIONS
+    distance = np.full(x.shape, np.inf)
+    for a in np.linspace(centre - half, centre + half, 33):
+        along = np.clip(x * math.cos(a) + y * math.sin(a), -COARSE_STEP / 2, COARSE_STEP / 2)
+        distance = np.minimum(distance, np.hypot(x - along * math.cos(a), y - along * math.sin(a)))
+    kernel: np.ndarray = (distance <= math.sqrt(2) + 1e-6).astype(np.uint8)
+    return kernel
+
+
+def _steps(padded: np.ndarray) -> np.ndarray:
+    """Sphere-tracing steps [half cells] of a padded blocking map: a free cell's centre's
+    distance to the nearest blocking cell's centre less half a cell, at least MIN_STEP."""
+    free = np.where(padded > 0, 0, 255).astype(np.uint8)
+    distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)  # [cells]
+    steps: np.ndarray = np.floor(2 * np.clip(distance - 0.5, MIN_STEP, STEP_CAP)).astype(np.uint8)
+    steps[padded > 0] = 0
+    return steps
+
+
+@dataclass(frozen=True, eq=False)
+class Fan:
+    """Sample tables of evenly spaced beams on one field, for every heading.
+
+    Rows are angles ``step`` apart in the cell frame, ``spacing`` rows between neighbouring
+    beams, stored phase by phase so that the rows of one scan are contiguous. Offsets are
+    flat indices relative to the origin's cell plus LEAD rows.
+    """
+
+    # offsets are intp: np.take converts other index types first, at a cost
+    coarse: np.ndarray  # (V, rows, WORDS) intp: segment middles, then FAR
+    fine: np.ndarray  # (V, rows, (segments + 2) * FINE_SAMPLES) intp: samples along a row,
+    #                   the last FINE_SAMPLES FAR
+    ranges: np.ndarray  # ((segments + 2) * FINE_SAMPLES,) float32 [track units] per sample
+    #                     (the middle between it and the previous one, at most max_range);
+    #                     past the tables: inf (sphere tracing goes on) or max_range
+    found: np.ndarray  # ((segments + 1) * (FINE_SAMPLES + 1),) float32 [track units] by
+    #                    segment and first hit in its window: ``ranges``, then -1 for none
+    bits: np.ndarray  # (rows, WORDS) uint8 the NEAR bit of each row's direction
+    cos: np.ndarray  # (rows,) float64 direction of each row [cells]
+    sin: np.ndarray
+    beam_windows: np.ndarray  # (beams,) int: i * (segments + 2), beam i's first window
+    beam_samples: np.ndarray  # (beams,) int: i * FINE_SAMPLES
+    anchor: float  # [rad] angle of the row 0
+    step: float  # [rad] between rows
+    spacing: int  # rows between neighbouring beams
+    phase_rows: int  # rows per phase
+    beams: int
+    segments: int  # in the tables
+    table_range: float  # [cells] how far the tables reach
+    limit: float  # [cells] max range
+    max_range: float  # [track units]
+
+
+def beam_fan(
+    field: DistanceField, angles: np.ndarray, max_range: float, y_down: bool = False
+) -> Fan:
+    """The tables of beams at evenly spaced ``angles`` [rad], ascending, reaching
+    ``max_range`` [track units] on ``field`` (of a y-down track: ``y_down``). The rows are
+    placed so that a car at heading 0 gets its beams without turning them."""
+    beams = len(angles)
+    spread = float(angles[1] - angles[0]) if beams > 1 else ANGLE_STEP
+    assert beams == 1 or np.allclose(np.diff(angles), spread), "evenly spaced beams"
+    spacing = max(1, math.ceil(spread / ANGLE_STEP - 1e-9))
+    step = spread / spacing
+    count = math.ceil(2 * math.pi / step) + 1 + spacing * (beams - 1)  # angles j * step
+    phase_rows = math.ceil(count / spacing)
+    phase, u = np.divmod(np.arange(spacing * phase_rows), phase_rows)
+    anchor = fan_angle(field, angles, 0.0, y_down)[0]
+    angle = anchor + (u * spacing + phase) * step  # row -> its angle, phase-major
+    limit = max_range * field.cells_per_unit
+    table_range = min(limit, TABLE_RANGE)
+    segments = max(1, math.ceil(table_range / COARSE_STEP - 1e-9))
+    width = field.shape[1]
+    middles = (np.arange(segments) + 0.5) * COARSE_STEP  # [cells]
+    radii = np.arange(1, (segments + 1) * FINE_SAMPLES + 1) * FINE_STEP  # [cells]
+    shifts = (np.arange(ORIGIN_STEPS) + 0.5) / ORIGIN_STEPS - 0.5  # [cells] in the cell
+    c, s = np.cos(angle), np.sin(angle)
+    coarse, fine = [], []
+    for sx in shifts:
+        for sy in shifts:
+            middle = _flat(sx + c[:, None] * middles, sy + s[:, None] * middles, width)
+            far = np.full((len(c), WORDS - segments), FAR, np.intp)
+            coarse.append(np.concatenate([middle, far], 1))
+            samples = _flat(sx + c[:, None] * radii, sy + s[:, None] * radii, width)
+            fine.append(np.concatenate([samples, np.full((len(c), FINE_SAMPLES), FAR)], 1))
+    past = np.inf if table_range < limit else max_range  # [track units] past the tables
+    ranges = np.full((segments + 2) * FINE_SAMPLES, past)
+    middles_units = (radii[: segments * FINE_SAMPLES] - FINE_STEP / 2) / field.cells_per_unit
+    ranges[: segments * FINE_SAMPLES] = np.minimum(middles_units, past)
+    ranges = ranges.astype(np.float32)
+    found = np.full((segments + 1, FINE_SAMPLES + 1), -1.0, np.float32)
+    found[:, :-1] = ranges[: (segments + 1) * FINE_SAMPLES].reshape(segments + 1, -1)
+    found[-1] = past
+    orientation = np.rint(angle / (math.pi / ORIENTATIONS)).astype(np.int64) % ORIENTATIONS
+    bits = np.repeat((1 << orientation).astype(np.uint8)[:, None], WORDS, 1)
+    return Fan(
+        np.stack(coarse), np.stack(fine), ranges, found.ravel(), bits, c, s,
+        np.arange(beams) * (segments + 2), np.arange(beams) * FINE_SAMPLES,
+        anchor, step, spacing, phase_rows, beams, segments, table_range, limit, max_range,
+    )  # fmt: skip
+
+
+def _flat(x: np.ndarray, y: np.ndarray, width: int) -> np.ndarray:
+    """intp flat offsets (plus LEAD rows) of the cells nearest to offsets x, y [cells]."""
+    return (np.floor(y + 0.5) * width + np.floor(x + 0.5) + LEAD * width).astype(np.intp)
+
+
+def cast(
+    field: DistanceField,
+    fan: Fan,
+    origin: tuple[float, float],
+    first: float,
+    reverse: bool = False,
+) -> np.ndarray:
+    """Ranges [track units] (float32) of ``fan``'s beams from ``origin`` [track units], the
+    first beam at angle ``first`` [rad] in the cell frame and each next one ``spacing`` rows
+    further counter-clockwise; ``reverse``: return them last first (see ``fan_angle``).
+
+    A beam that hits nothing within max_range returns max_range; a beam that starts in a
+    blocking cell (or off the map) returns 0. The fan turns in steps of ``fan.step`` (to the
+    nearest).
+    """
+    x, y = field.cells(origin)
+    col, row = math.floor(x + 0.5), math.floor(y + 0.5)
+    height, width = field.shape
+    base = row * width + col
+    if not (0 <= row < height and 0 <= col < width) or field.blocked[LEAD * width + base]:
+        return np.zeros(fan.beams, np.float32)
+    vx = min(int((x + 0.5 - col) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
+    vy = min(int((y + 0.5 - row) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
+    j = round(((first - fan.anchor) % (2 * math.pi)) / fan.step)
+    top = (j % fan.spacing) * fan.phase_rows + j // fan.spacing  # the first beam's row
+    rows = slice(top, top + fan.beams)
+    ranges = _passes(field, fan, base, vx * ORIGIN_STEPS + vy, rows)
+    if fan.table_range < fan.limit:
+        ranges = _beyond(field, fan, (x, y), rows, ranges)
+    return ranges[::-1] if reverse else ranges
+
+
+def _passes(field: DistanceField, fan: Fan, base: int, variant: int, rows: slice) -> np.ndarray:
+    """[track units] range of each beam within the tables (past them: inf, or max_range when
+    the tables reach it), from the origin cell ``base``
+    (flat, padded map), its ``variant`` and the table ``rows`` of the beams."""
+    near, blocked = field.near[base:], field.blocked[base:]
+    flags = near.take(fan.coarse[variant, rows], mode="clip")
+    np.bitwise_and(flags, fan.bits[rows], out=flags)
+    flags = flags != 0
+    segment = np.minimum(_first(flags), fan.segments)  # first flagged; segments if none
+    fine = fan.fine[variant, rows]  # (B, (segments + 2) * FINE_SAMPLES)
+    per_row = fan.segments + 2
+    windows = fine.reshape(-1, FINE_SAMPLES)
+    t = _window(blocked, fan, windows, segment, fan.beam_windows)
+    missed = np.flatnonzero(t < 0)
+    while len(missed) > FEW:  # false alarms: on to the beam's next flagged segment
+        flags[missed, segment[missed]] = False
+        segment[missed] = np.minimum(_first(flags[missed]), fan.segments)
+        t[missed] = _window(blocked, fan, windows, segment[missed], missed * per_row)
+        missed = missed[t[missed] < 0]
+    if len(missed):  # the rest of the row decides
+        hit = blocked.take(fine.take(missed, 0), mode="clip").argmax(1)  # at worst FAR: inf
+        t[missed] = fan.ranges.take(hit)
+    return t
+
+
+def _window(
+    blocked: np.ndarray, fan: Fan, windows: np.ndarray, segment: np.ndarray, starts: np.ndarray
+) -> np.ndarray:
+    """The fine pass over one ``segment`` of each beam (its windows from ``starts``): range
+    [track units]; -1 for a false alarm (no hit in a flagged segment)."""
+    samples = blocked.take(windows.take(segment + starts, 0), mode="clip")  # (n, FINE_SAMPLES)
+    found: np.ndarray = fan.found.take(segment * (FINE_SAMPLES + 1) + _first(samples))
+    return found
+
+
+def _first(rows: np.ndarray) -> np.ndarray:
+    """Index of the first 1 in each row of an (n, 16) array of 0/1 bytes (16: none), from
+    the rows' two uint64 words packed into bits: no loop over rows."""
+    packed = (np.ascontiguousarray(rows).view(np.uint64) * PACK) >> np.uint64(56)
+    index: np.ndarray = FIRST.take(packed[:, 0] | (packed[:, 1] << np.uint64(8)))
+    return index
+
+
+def _beyond(
+    field: DistanceField, fan: Fan, origin: tuple[float, float], rows: slice, t: np.ndarray
+) -> np.ndarray:
+    """``t`` [track units] with the beams that hit nothing within the tables (inf) marched
+    on by sphere tracing from the tables' end to the fan's limit."""
+    assert field.steps is not None, "distance_field(..., reach=...) past TABLE_RANGE"
+    far = np.flatnonzero(np.isinf(t))
+    if len(far) == 0:
+        return t
+    index = far + rows.start
+    dx, dy = fan.cos[index].astype(np.float32), fan.sin[index].astype(np.float32)
+    start = np.array(origin, np.float32)
+    reached = np.full(len(far), fan.table_range, np.float32)
+    reached = _march(field.steps, start, dx, dy, reached, np.float32(fan.limit))
+    cells = _refine(field.steps, start, dx, dy, reached)
+    # clipped after the division: limit / cells_per_unit may round past max_range in float32
+    t[far] = np.minimum(cells / np.float32(field.cells_per_unit), np.float32(fan.max_range))
+    return t
+
+
+def _march(
+    steps: np.ndarray,
+    start: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    t: np.ndarray,
+    limit: np.float32,
+) -> np.ndarray:
+    """Distance [cells] each beam travels, from ``t``, before it stops in a blocking cell or
+    passes ``limit``. Every CHECK_EVERY rounds the beams that stopped leave the working arrays."""
+    t_all: np.ndarray = t.copy()
+    index = np.arange(len(dx))
+    px, py = start[0] + t * dx, start[1] + t * dy
+    for round_ in range(MAX_ROUNDS):
+        step = _sample(steps, px, py)
+        t += step
+        px += step * dx
+        py += step * dy
+        if round_ % CHECK_EVERY == CHECK_EVERY - 1:
+            going = (step > 0) & (t < limit)
+            if not going.all():
+                t_all[index] = t
+                index, t, px, py = index[going], t[going], px[going], py[going]
+                dx, dy = dx[going], dy[going]
+                if len(index) == 0:
+                    return t_all
+    t_all[index] = t
+    return t_all
+
+
+def _sample(steps: np.ndarray, px: np.ndarray, py: np.ndarray) -> np.ndarray:
+    """The step [cells] in the cell under each tip (nearest cell); 0 outside the map."""
+    found = cv2.remap(steps, px[None], py[None], cv2.INTER_NEAREST, borderMode=cv2.BORDER_CONSTANT)
+    step: np.ndarray = found[0] * np.float32(0.5)
+    return step
+
+
+def _refine(
+    steps: np.ndarray, start: np.ndarray, dx: np.ndarray, dy: np.ndarray, t: np.ndarray
+) -> np.ndarray:
+    """Bisect each hit back toward the edge of the blocking cell it entered: a tip overshoots
+    an edge by less than OVERSHOOT cells."""
+    blocked = _sample(steps, start[0] + t * dx, start[1] + t * dy) == 0
+    low = np.where(blocked, np.maximum(t - OVERSHOOT, 0), t)
+    high = t
+    for _ in range(BISECTIONS):
+        mid = (low + high) * np.float32(0.5)
+        hit = _sample(steps, start[0] + mid * dx, start[1] + mid * dy) == 0
+        high = np.where(hit, mid, high)
+        low = np.where(hit, low, mid)
+    refined: np.ndarray = np.where(blocked, high, t)
+    return refined
+
+
+def fan_angle(
+    field: DistanceField, angles: np.ndarray, heading: float, y_down: bool
+) -> tuple[float, bool]:
+    """The cell-frame angle [rad] that ``cast`` starts a fan of ``angles`` [rad, + left] at,
+    from a car at ``heading`` [rad] (counter-clockwise on y-up tracks, clockwise on y-down
+    image tracks), and whether the beams then come out last first."""
+    linear = field.to_cells[:, :2]
+    turn = math.atan2(linear[1, 0], linear[0, 0])
+    mirror = -1.0 if linear[0, 0] * linear[1, 1] < linear[0, 1] * linear[1, 0] else 1.0
+    sign = mirror * (-1.0 if y_down else 1.0)  # cell angle = turn + mirror * heading + sign * a
+    reverse = sign < 0
+    first = float(angles[-1] if reverse else angles[0])
+    return turn + mirror * heading + sign * first, reverse
