@@ -56,26 +56,31 @@ OVERSHOOT = 2.0  # [cells] a marching tip enters a blocking cell less than this 
 BISECTIONS = 3  # rounds that halve the overshoot bracket: error <= OVERSHOOT / 8
 CHECK_EVERY = 4  # marching rounds between checks whether every beam has stopped
 MAX_ROUNDS = 256  # marching rounds at most
+SKIP_BLOCKED = 255  # the skip map's value of blocking cells
+SKIP_MARGIN = 1.42  # [cells] > sqrt(2): two samples' distances to their nearest cells' centres
 
 
 @dataclass(frozen=True, eq=False)
 class DistanceField:
     """The blocking map of one track and what the passes sample, padded by PAD cells.
 
-    ``blocked`` (1: blocking) and ``near`` (bit o: near in direction o) are flat uint8 maps
-    with LEAD extra rows before and after, so that no table offset leaves them (blocking, all
-    bits set; FAR lands on the last one). ``steps``
-    are sphere-tracing steps in half cells (uint8, 0 in blocking cells, rounded down so that
-    they stay safe, at most STEP_CAP cells), when the field was made to reach that far.
+    ``blocked`` (1: blocking), ``near`` (bit o: near in direction o; the numpy passes) and
+    ``skips`` (samples a beam can skip; the compiled kernel) are flat uint8 maps with LEAD
+    extra rows before and after, so that no table offset leaves them (blocking, all bits
+    set, SKIP_BLOCKED; FAR lands on the last one); a field has ``near`` or ``skips``, as
+    made for one path or the other. ``steps`` are sphere-tracing steps in half cells (uint8,
+    0 in blocking cells, rounded down so that they stay safe, at most STEP_CAP cells), when
+    the field was made to reach that far.
     """
 
     blocked: np.ndarray  # (LEAD * w + H * w + LEAD * w,) uint8, w the padded width
-    near: np.ndarray  # same layout
+    near: np.ndarray | None  # same layout
     shape: tuple[int, int]  # (H, w) rows and columns of the padded map
     to_cells: np.ndarray  # 2x3 affine: track units -> cell coordinates of the padded map
     cells_per_unit: float  # [cells per track unit]
     steps: np.ndarray | None = None  # (H, w) uint8 [half cells]
     classes: np.ndarray | None = None  # (H, w) uint8 hit class of blocking cells and their rim
+    skips: np.ndarray | None = None  # same layout as ``blocked`` [FINE_STEP samples]
 
     def blocking(self) -> np.ndarray:
         """(H, w) uint8 view of the padded map, 1 where blocking."""
@@ -93,28 +98,43 @@ def distance_field(
     to_cells: np.ndarray,
     classes: np.ndarray | None = None,
     reach: float = math.inf,
+    near: bool = True,
 ) -> DistanceField:
     """The field of a boolean (H, W) map of blocking cells, ``to_cells`` track -> cell affine;
     ``classes`` (H, W) uint8 hit classes of the blocking cells, when beams report them;
-    ``reach`` [cells] the longest range it serves. Outside the map blocks (as a wall)."""
+    ``reach`` [cells] the longest range it serves; ``near``: the NEAR maps of the numpy
+    passes, else the skip map of the compiled kernel. Outside the map blocks (as a wall)."""
     padded = cv2.copyMakeBorder(
         blocking.astype(np.uint8), PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1
     )
     width = padded.shape[1]
+    lead = np.ones(LEAD * width, np.uint8)
+    blocked = np.concatenate([lead, padded.ravel(), lead])
+    distance = _distance(padded) if reach > TABLE_RANGE or not near else None
+    near_maps = skips = None
+    if near:
+        near_maps = np.concatenate([lead * 255, _near(padded).ravel(), lead * 255])
+    else:
+        assert distance is not None
+        skips = np.concatenate([lead * SKIP_BLOCKED, _skips(distance).ravel(), lead * SKIP_BLOCKED])
+    shifted = np.asarray(to_cells, np.float64) + np.array([[0, 0, PAD], [0, 0, PAD]])
+    scale = math.sqrt(abs(np.linalg.det(shifted[:, :2])))
+    steps = _steps(distance) if reach > TABLE_RANGE and distance is not None else None
+    if classes is not None:  # an end may stop a rounding error short: the rim has the class too
+        classes = cv2.copyMakeBorder(classes, PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1)
+        classes = np.where(classes > 0, classes, cv2.dilate(classes, np.ones((3, 3), np.uint8)))
+    shape = padded.shape
+    return DistanceField(blocked, near_maps, shape, shifted, scale, steps, classes, skips)
+
+
+def _near(padded: np.ndarray) -> np.ndarray:
+    """uint8 NEAR maps of a padded blocking map: bit o set where a segment in direction o
+    could touch a blocking cell."""
     near = np.zeros_like(padded)
     for o in range(ORIENTATIONS):
         dilated: np.ndarray = cv2.dilate(padded, _segment_kernel(o))
         np.bitwise_or(near, np.left_shift(dilated, o), out=near)
-    lead = np.ones(LEAD * width, np.uint8)
-    blocked = np.concatenate([lead, padded.ravel(), lead])
-    near = np.concatenate([lead * 255, near.ravel(), lead * 255])
-    shifted = np.asarray(to_cells, np.float64) + np.array([[0, 0, PAD], [0, 0, PAD]])
-    scale = math.sqrt(abs(np.linalg.det(shifted[:, :2])))
-    steps = _steps(padded) if reach > TABLE_RANGE else None
-    if classes is not None:  # an end may stop a rounding error short: the rim has the class too
-        classes = cv2.copyMakeBorder(classes, PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1)
-        classes = np.where(classes > 0, classes, cv2.dilate(classes, np.ones((3, 3), np.uint8)))
-    return DistanceField(blocked, near, padded.shape, shifted, scale, steps, classes)
+    return near
 
 
 @functools.cache
@@ -134,14 +154,32 @@ def _segment_kernel(orientation: int) -> np.ndarray:
     return kernel
 
 
-def _steps(padded: np.ndarray) -> np.ndarray:
-    """Sphere-tracing steps [half cells] of a padded blocking map: a free cell's centre's
-    distance to the nearest blocking cell's centre less half a cell, at least MIN_STEP."""
+def _distance(padded: np.ndarray) -> np.ndarray:
+    """float32 [cells] from each cell's centre to the nearest blocking cell's centre (exact
+    Euclidean), 0 in blocking cells."""
     free = np.where(padded > 0, 0, 255).astype(np.uint8)
-    distance = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)  # [cells]
+    distance: np.ndarray = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    return distance
+
+
+def _steps(distance: np.ndarray) -> np.ndarray:
+    """Sphere-tracing steps [half cells] of a padded blocking map of ``distance``es [cells]:
+    a free cell's centre's distance to the nearest blocking cell's centre less half a cell,
+    at least MIN_STEP."""
     steps: np.ndarray = np.floor(2 * np.clip(distance - 0.5, MIN_STEP, STEP_CAP)).astype(np.uint8)
-    steps[padded > 0] = 0
+    steps[distance == 0] = 0
     return steps
+
+
+def _skips(distance: np.ndarray) -> np.ndarray:
+    """uint8 samples (FINE_STEP apart) that a beam whose sample is nearest to a cell may
+    skip, from ``distance`` [cells] to the nearest blocking cell: n such that n FINE_STEPs
+    plus both samples' rounding to their nearest cells (half a diagonal each, SKIP_MARGIN
+    with room for float error) stay short of it; SKIP_BLOCKED in blocking cells."""
+    samples = np.floor((distance - SKIP_MARGIN) / FINE_STEP)
+    skips = np.clip(samples, 0, SKIP_BLOCKED - 1).astype(np.uint8)
+    skips[distance == 0] = SKIP_BLOCKED
+    return skips
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,10 +191,11 @@ class Fan:
     flat indices relative to the origin's cell plus LEAD rows.
     """
 
-    # offsets are intp: np.take converts other index types first, at a cost
-    coarse: np.ndarray  # (V, rows, WORDS) intp: segment middles, then FAR
-    fine: np.ndarray  # (V, rows, (segments + 2) * FINE_SAMPLES) intp: samples along a row,
-    #                   the last FINE_SAMPLES FAR
+    # offsets are intp: np.take converts other index types first, at a cost; None when the
+    # fan was made without them (the compiled kernel computes the same offsets per beam)
+    coarse: np.ndarray | None  # (V, rows, WORDS) intp: segment middles, then FAR
+    fine: np.ndarray | None  # (V, rows, (segments + 2) * FINE_SAMPLES) intp: samples along
+    #                          a row, the last FINE_SAMPLES FAR
     ranges: np.ndarray  # ((segments + 2) * FINE_SAMPLES,) float32 [track units] per sample
     #                     (the middle between it and the previous one, at most max_range);
     #                     past the tables: inf (sphere tracing goes on) or max_range
@@ -165,6 +204,7 @@ class Fan:
     bits: np.ndarray  # (rows, WORDS) uint8 the NEAR bit of each row's direction
     cos: np.ndarray  # (rows,) float64 direction of each row [cells]
     sin: np.ndarray
+    shifts: np.ndarray  # (ORIGIN_STEPS,) float64 [cells] origin positions inside a cell
     beam_windows: np.ndarray  # (beams,) int: i * (segments + 2), beam i's first window
     beam_samples: np.ndarray  # (beams,) int: i * FINE_SAMPLES
     anchor: float  # [rad] angle of the row 0
@@ -179,11 +219,17 @@ class Fan:
 
 
 def beam_fan(
-    field: DistanceField, angles: np.ndarray, max_range: float, y_down: bool = False
+    field: DistanceField,
+    angles: np.ndarray,
+    max_range: float,
+    y_down: bool = False,
+    tables: bool = True,
 ) -> Fan:
     """The tables of beams at evenly spaced ``angles`` [rad], ascending, reaching
     ``max_range`` [track units] on ``field`` (of a y-down track: ``y_down``). The rows are
-    placed so that a car at heading 0 gets its beams without turning them."""
+    placed so that a car at heading 0 gets its beams without turning them. ``tables``: build
+    the offset tables that ``cast`` gathers with (most of a fan's memory); the compiled
+    kernel (``raycast_numba``) needs only the rows' directions."""
     beams = len(angles)
     spread = float(angles[1] - angles[0]) if beams > 1 else ANGLE_STEP
     assert beams == 1 or np.allclose(np.diff(angles), spread), "evenly spaced beams"
@@ -203,7 +249,7 @@ def beam_fan(
     shifts = (np.arange(ORIGIN_STEPS) + 0.5) / ORIGIN_STEPS - 0.5  # [cells] in the cell
     c, s = np.cos(angle), np.sin(angle)
     coarse, fine = [], []
-    for sx in shifts:
+    for sx in shifts if tables else ():
         for sy in shifts:
             middle = _flat(sx + c[:, None] * middles, sy + s[:, None] * middles, width)
             far = np.full((len(c), WORDS - segments), FAR, np.intp)
@@ -221,7 +267,8 @@ def beam_fan(
     orientation = np.rint(angle / (math.pi / ORIENTATIONS)).astype(np.int64) % ORIENTATIONS
     bits = np.repeat((1 << orientation).astype(np.uint8)[:, None], WORDS, 1)
     return Fan(
-        np.stack(coarse), np.stack(fine), ranges, found.ravel(), bits, c, s,
+        np.stack(coarse) if tables else None, np.stack(fine) if tables else None,
+        ranges, found.ravel(), bits, c, s, shifts,
         np.arange(beams) * (segments + 2), np.arange(beams) * FINE_SAMPLES,
         anchor, step, spacing, phase_rows, beams, segments, table_range, limit, max_range,
     )  # fmt: skip
@@ -230,6 +277,38 @@ def beam_fan(
 def _flat(x: np.ndarray, y: np.ndarray, width: int) -> np.ndarray:
     """intp flat offsets (plus LEAD rows) of the cells nearest to offsets x, y [cells]."""
     return (np.floor(y + 0.5) * width + np.floor(x + 0.5) + LEAD * width).astype(np.intp)
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where a scan starts in a fan's tables."""
+
+    x: float  # [cells] the origin in the padded map
+    y: float
+    base: int  # flat index of the origin's cell in the padded map (without LEAD rows)
+    vx: int  # the origin's position inside its cell, 0 .. ORIGIN_STEPS - 1 per axis
+    vy: int
+    top: int  # the table row of the first beam
+
+
+def start(
+    field: DistanceField, fan: Fan, origin: tuple[float, float], first: float
+) -> Start | None:
+    """Where a scan of ``fan`` from ``origin`` [track units], the first beam at angle
+    ``first`` [rad] in the cell frame, starts; None when the origin is in a blocking cell or
+    off the map. The origin rounds to 1 / ORIGIN_STEPS of a cell, the fan to the nearest
+    row."""
+    x, y = field.cells(origin)
+    col, row = math.floor(x + 0.5), math.floor(y + 0.5)
+    height, width = field.shape
+    base = row * width + col
+    if not (0 <= row < height and 0 <= col < width) or field.blocked[LEAD * width + base]:
+        return None
+    vx = min(int((x + 0.5 - col) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
+    vy = min(int((y + 0.5 - row) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
+    j = round(((first - fan.anchor) % (2 * math.pi)) / fan.step)
+    top = (j % fan.spacing) * fan.phase_rows + j // fan.spacing  # the first beam's row
+    return Start(x, y, base, vx, vy, top)
 
 
 def cast(
@@ -245,22 +324,15 @@ def cast(
 
     A beam that hits nothing within max_range returns max_range; a beam that starts in a
     blocking cell (or off the map) returns 0. The fan turns in steps of ``fan.step`` (to the
-    nearest).
+    nearest). The numpy path: ``fan`` needs its tables (``beam_fan(..., tables=True)``).
     """
-    x, y = field.cells(origin)
-    col, row = math.floor(x + 0.5), math.floor(y + 0.5)
-    height, width = field.shape
-    base = row * width + col
-    if not (0 <= row < height and 0 <= col < width) or field.blocked[LEAD * width + base]:
+    at = start(field, fan, origin, first)
+    if at is None:
         return np.zeros(fan.beams, np.float32)
-    vx = min(int((x + 0.5 - col) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
-    vy = min(int((y + 0.5 - row) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
-    j = round(((first - fan.anchor) % (2 * math.pi)) / fan.step)
-    top = (j % fan.spacing) * fan.phase_rows + j // fan.spacing  # the first beam's row
-    rows = slice(top, top + fan.beams)
-    ranges = _passes(field, fan, base, vx * ORIGIN_STEPS + vy, rows)
+    rows = slice(at.top, at.top + fan.beams)
+    ranges = _passes(field, fan, at.base, at.vx * ORIGIN_STEPS + at.vy, rows)
     if fan.table_range < fan.limit:
-        ranges = _beyond(field, fan, (x, y), rows, ranges)
+        ranges = _beyond(field, fan, (at.x, at.y), rows, ranges)
     return ranges[::-1] if reverse else ranges
 
 
@@ -268,6 +340,8 @@ def _passes(field: DistanceField, fan: Fan, base: int, variant: int, rows: slice
     """[track units] range of each beam within the tables (past them: inf, or max_range when
     the tables reach it), from the origin cell ``base``
     (flat, padded map), its ``variant`` and the table ``rows`` of the beams."""
+    assert fan.coarse is not None and fan.fine is not None, "beam_fan(..., tables=True)"
+    assert field.near is not None, "distance_field(..., near=True)"
     near, blocked = field.near[base:], field.blocked[base:]
     flags = near.take(fan.coarse[variant, rows], mode="clip")
     np.bitwise_and(flags, fan.bits[rows], out=flags)
