@@ -17,19 +17,31 @@ cell centres, so its tip ends up to about 1.2 cells inside the blocking cell it 
 may step over an object a cell thick); tinyrace's lidar reports where the beam enters that
 cell, within about half a cell. Hence the agreement is given within one and within two cells.
 
+The lidar is timed on both of its paths in the same run: ``lidar_1080`` is the env's own
+(the compiled numba kernel when numba imports, what ``pip install tinyrace[fast]`` gives;
+else numpy) and ``lidar_1080_numpy`` a second lidar of the same config forced onto the numpy
+path, on the same snapshots; every step also checks that both give the same ranges, bit for
+bit. numba compiles on the env's first observation (in ``reset``), before any timing;
+``measure_compile`` times that first scan in fresh processes, with an empty and then a
+filled numba cache.
+
 Cases: the procedural track, formula_student (a picture track with cones) and the shipped
 metric tracks (circuit, autocross with its cone map, f1tenth_loop), each with bird's-eye
 windows about as large as its own camera's.
 
 Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
-costs no more than a 96x96 bird's-eye camera; a 120x160 perspective camera no more than
-1.5x a 120x160 bird's-eye camera.
+(the path ``tinyrace[fast]`` gives) costs no more than a 96x96 bird's-eye camera; a 120x160
+perspective camera no more than 1.5x a 120x160 bird's-eye camera.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+import os
+import subprocess
+import sys
+import tempfile
 import time
 from typing import Any
 
@@ -122,10 +134,17 @@ def f1tenth_scan(field, distance, origin, beams: np.ndarray, max_range: float, e
     return ranges
 
 
-def _probes(raw, snapshot: Snapshot, rng: np.random.Generator) -> list:
-    """(id, call) of every sensor's observe (the bird's-eye cameras are sensors too)."""
+def _probes(raw, extra: list, snapshot: Snapshot, rng: np.random.Generator) -> list:
+    """(id, call) of every sensor's observe (the bird's-eye cameras are sensors too), and of
+    the ``extra`` (id, sensor) pairs."""
     track = raw.layout
-    return [(s.id, functools.partial(s.observe, snapshot, track, rng)) for s in raw.sensors]
+    sensors = [(s.id, s) for s in raw.sensors] + extra
+    return [(i, functools.partial(s.observe, snapshot, track, rng)) for i, s in sensors]
+
+
+def numpy_twin(lidar: LidarSensor) -> LidarSensor:
+    """A lidar like ``lidar`` on the numpy path."""
+    return LidarSensor(lidar.config, lidar.max_range, lidar.cell, lidar.cone_colors, "numpy")
 
 
 def _fastest(call) -> float:
@@ -149,13 +168,19 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
     env.reset(seed=SEED)
     samples: dict[str, list[float]] = {}
     lidar = next(s for s in raw.sensors if isinstance(s, LidarSensor))
-    reference_seconds, differences = 0.0, []
+    twin = numpy_twin(lidar)
+    twin.reset(raw.layout)
+    extra = [(f"{lidar.id}_numpy", twin)] if lidar.kernel != "numpy" else []
+    reference_seconds, differences, identical = 0.0, [], 0
     for step in range(steps):
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())
         if terminated or truncated:
             env.reset()
+            twin.reset(raw.layout)
         snapshot = raw.snapshot()
-        probes = _probes(raw, snapshot, rng)
+        ranges, numpy_ranges = (s.observe(snapshot, raw.layout, rng) for s in (lidar, twin))
+        identical += ranges.tobytes() == numpy_ranges.tobytes()
+        probes = _probes(raw, extra, snapshot, rng)
         shift = step % len(probes)
         for probe_id, probe in probes[shift:] + probes[:shift]:
             samples.setdefault(probe_id, []).append(_fastest(probe))
@@ -175,6 +200,8 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
     cell = 1.0 / lidar.field.cells_per_unit
     return {
         "steps": steps,
+        "lidar_kernel": lidar.kernel,
+        "lidar_steps_identical_to_numpy": identical,
         "us_per_step": micros,
         "us_per_step_mean": means,
         "lidar_cell": cell,
@@ -188,19 +215,72 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
     }
 
 
+COMPILE_PROBE = """
+import time
+began = time.perf_counter()
+import numpy as np
+from tinyrace.sensors import raycast_numba
+from tinyrace.sensors.lidar import beam_angles
+from tinyrace.sensors.raycast import beam_fan, distance_field, fan_angle
+imported = time.perf_counter() - began
+blocking = np.random.default_rng(0).random((400, 400)) < 0.01
+field = distance_field(blocking, np.eye(2, 3), reach=200.0, near=False)
+angles = beam_angles(1080, 2 * np.pi)
+fan = beam_fan(field, angles, 200.0, tables=False)
+first, reverse = fan_angle(field, angles, 0.3, False)
+seconds = []
+for _ in range(2):
+    began = time.perf_counter()
+    raycast_numba.cast(field, fan, (200.2, 199.7), first, reverse)
+    seconds.append(time.perf_counter() - began)
+print(imported, *seconds)
+"""
+
+
+def measure_compile() -> dict[str, float]:
+    """[s] importing numba and the kernel, and the first and second scan of a 1080-beam
+    lidar (whose field reaches past the tables, so that every compiled function is needed),
+    each in a fresh process: with an empty numba cache (the first scan compiles) and then
+    with the cache it filled (the first scan loads the machine code)."""
+    result = {}
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        for label in ("cold_cache", "warm_cache"):
+            out = subprocess.run(
+                [sys.executable, "-c", COMPILE_PROBE], env=env, check=True,
+                capture_output=True, text=True,
+            ).stdout  # fmt: skip
+            imported, first, second = map(float, out.split())
+            result.update({f"{label}_import_s": imported, f"{label}_first_scan_s": first,
+                           f"{label}_second_scan_s": second})  # fmt: skip
+    return result
+
+
+def print_compile(result: dict[str, float]) -> None:
+    """The compile times of ``measure_compile``."""
+    print("\nLidar kernel (numba) start-up, fresh processes [s]:")
+    for label in ("cold_cache", "warm_cache"):
+        first, imported = result[f"{label}_first_scan_s"], result[f"{label}_import_s"]
+        second = result[f"{label}_second_scan_s"]
+        print(f"  {label}: import {imported:.3f}, first scan {first:.3f}, second {second:.6f}")
+
+
 def measure_sensors(steps: int = 2000, reference_steps: int = 20) -> dict[str, Any]:
     """Every case, and the budget checks."""
     results = {name: measure_case(name, steps, reference_steps) for name in CASES}
     for result in results.values():
         us = result["us_per_step"]
+        kernel = result["lidar_kernel"]
         result["checks"] = {
             **{
                 f"{k} <= {STATE_BUDGET:g} us": us[k] <= STATE_BUDGET
                 for k in ("state", "lookahead", "cones")
                 if k in us
             },
-            "lidar_1080 <= birdseye_96x96": us["lidar_1080"]
+            f"lidar_1080 ({kernel}) <= birdseye_96x96": us["lidar_1080"]
             <= LIDAR_PER_CAMERA * us["birdseye_96x96"],
+            "lidar_1080 identical to numpy every step": result["lidar_steps_identical_to_numpy"]
+            == result["steps"],
             "perspective_120x160 <= 1.5 x birdseye_120x160": us["perspective_120x160"]
             <= PERSPECTIVE_PER_CAMERA * us["birdseye_120x160"],
         }
@@ -214,8 +294,13 @@ def print_sensors(results: dict[str, Any]) -> None:
             print(f"\nSensors on {name}: {result['error']}")
             continue
         print(f"\nSensors on {name} (median us per step over {result['steps']} steps)")
+        us = result["us_per_step"]
         for key, value in sorted(result["us_per_step"].items(), key=lambda kv: kv[1]):
             print(f"  {key:32s} {value:10.1f}")
+        camera = us["birdseye_96x96"]
+        lidars = [k for k in us if k.startswith("lidar_1080") or k.startswith("f1tenth")]
+        ratios = ", ".join(f"{k} {us[k] / camera:.2f}x" for k in lidars)
+        print(f"  per birdseye_96x96 ({result['lidar_kernel']} path first): {ratios}")
         agree, cell = result["lidar_beams_within_a_cell_of_reference"], result["lidar_cell"]
         two = result["lidar_beams_within_two_cells_of_reference"]
         print(
@@ -228,3 +313,4 @@ def print_sensors(results: dict[str, Any]) -> None:
 
 if __name__ == "__main__":
     print_sensors(measure_sensors())
+    print_compile(measure_compile())

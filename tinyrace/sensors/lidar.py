@@ -174,10 +174,12 @@ def _picture_labels(
 Cast = Callable[[DistanceField, Fan, tuple[float, float], float, bool], np.ndarray]
 
 
-def kernel() -> tuple[str, Cast]:
-    """The ray-casting path for a lidar built now, by name, and its ``cast``: ``numba`` when
-    numba imports, else ``numpy``, unless ``TINYRACE_LIDAR`` (auto | numba | numpy) says."""
-    wanted = os.environ.get(KERNEL_VARIABLE, "auto").strip().lower() or "auto"
+def kernel(wanted: str | None = None) -> tuple[str, Cast]:
+    """The ray-casting path ``wanted`` (auto | numba | numpy; None: ``TINYRACE_LIDAR``'s,
+    else auto), by name, and its ``cast``: auto is ``numba`` when numba imports, else
+    ``numpy``."""
+    if wanted is None:
+        wanted = os.environ.get(KERNEL_VARIABLE, "auto").strip().lower() or "auto"
     if wanted not in ("auto", "numba", "numpy"):
         raise ValueError(f"{KERNEL_VARIABLE}={wanted!r}: expected auto, numba or numpy")
     if wanted == "numpy":
@@ -196,12 +198,18 @@ def kernel() -> tuple[str, Cast]:
 class LidarSensor:
     """``type: lidar``: (beams,) float32 ranges [track units], rightmost beam first.
 
-    ``kernel`` names the ray-casting path chosen when it was built (``kernel()``): ``numba``
-    (compiled, no sample tables) or ``numpy``; both give the same ranges bit for bit.
+    ``kernel`` names the ray-casting path chosen when it was built (``kernel(kernel_name)``,
+    by default ``TINYRACE_LIDAR``'s or auto): ``numba`` (compiled, no sample tables) or
+    ``numpy``; both give the same ranges bit for bit.
     """
 
     def __init__(
-        self, config: LidarConfig, max_range: float, cell: float, cone_colors: tuple[RGB, ...]
+        self,
+        config: LidarConfig,
+        max_range: float,
+        cell: float,
+        cone_colors: tuple[RGB, ...],
+        kernel_name: str | None = None,
     ):
         self.config = config
         self.max_range = max_range  # [track units]
@@ -217,7 +225,7 @@ class LidarSensor:
         self.field: DistanceField | None = None
         self.fan: Fan | None = None
         self._fans: dict[tuple[Any, ...], Fan] = {}
-        self.kernel, self._cast = kernel()
+        self.kernel, self._cast = kernel(kernel_name)
 
     @property
     def id(self) -> str:

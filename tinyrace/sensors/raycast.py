@@ -87,9 +87,22 @@ class DistanceField:
         height, width = self.shape
         return self.blocked[LEAD * width : (LEAD + height) * width].reshape(height, width)
 
+    @functools.cached_property
+    def affine(self) -> tuple[float, float, float, float, float, float]:
+        """``to_cells`` as floats (a, b, c, d, e, f): cells (a x + b y + c, d x + e y + f)."""
+        (a, b, c), (d, e, f) = self.to_cells.tolist()
+        return a, b, c, d, e, f
+
+    @functools.cached_property
+    def frame(self) -> tuple[float, float]:
+        """[rad] the angle of the track's x axis in the cell frame, and -1 if the cell frame
+        is mirrored (else 1)."""
+        a, b, _, d, e, _ = self.affine
+        return math.atan2(d, a), -1.0 if a * e < b * d else 1.0
+
     def cells(self, point: tuple[float, float]) -> tuple[float, float]:
         """[cells] of a track point in the padded map."""
-        (a, b, c), (d, e, f) = self.to_cells.tolist()
+        a, b, c, d, e, f = self.affine
         return a * point[0] + b * point[1] + c, d * point[0] + e * point[1] + f
 
 
@@ -461,9 +474,7 @@ def fan_angle(
     """The cell-frame angle [rad] that ``cast`` starts a fan of ``angles`` [rad, + left] at,
     from a car at ``heading`` [rad] (counter-clockwise on y-up tracks, clockwise on y-down
     image tracks), and whether the beams then come out last first."""
-    linear = field.to_cells[:, :2]
-    turn = math.atan2(linear[1, 0], linear[0, 0])
-    mirror = -1.0 if linear[0, 0] * linear[1, 1] < linear[0, 1] * linear[1, 0] else 1.0
+    turn, mirror = field.frame
     sign = mirror * (-1.0 if y_down else 1.0)  # cell angle = turn + mirror * heading + sign * a
     reverse = sign < 0
     first = float(angles[-1] if reverse else angles[0])

@@ -31,12 +31,14 @@ from numba import njit
 from tinyrace.sensors.raycast import (
     BISECTIONS,
     CHECK_EVERY,
+    COARSE_STEP,
     FINE_SAMPLES,
     FINE_STEP,
     LEAD,
     MAX_ROUNDS,
     OVERSHOOT,
     SKIP_BLOCKED,
+    TABLE_RANGE,
     DistanceField,
     Fan,
     start,
@@ -68,9 +70,11 @@ def _nearest(steps: Any, x: Any, y: Any) -> Any:
 
 
 @_compile
-def _flat(x: float, y: float, width: int) -> int:
-    """Flat offset (plus LEAD rows) of the cell nearest to (x, y) [cells]."""
-    return (math.floor(y + 0.5) + LEAD) * width + math.floor(x + 0.5)
+def _flat(x: float, y: float, width: int) -> Any:
+    """Flat offset (plus LEAD rows) of the cell nearest to (x, y) [cells], unsigned: within
+    TABLE_RANGE of the origin it is in the map (LEAD rows), and numba then skips the check
+    for negative indices."""
+    return np.uint64((math.floor(y + 0.5) + LEAD) * width + math.floor(x + 0.5))
 
 
 @_compile
@@ -82,13 +86,15 @@ def _first_hits(
     beam of row top + b (origin shifted sx, sy [cells] from its cell, ``skips`` flat from
     that cell); -1 for none. Each free sample's cell tells how many next samples cannot be
     blocked. LANES beams step together: their lookups overlap instead of waiting in turn."""
-    last = len(skips) - 1  # np.take(mode="clip")
+    # every beam's first samples are as free as the origin's cell says: its skip (samples
+    # (j + 1) FINE_STEP from the origin, which is within half a diagonal of its cell's centre)
+    first = skips[LEAD * width]
     index = np.empty(LANES, np.int64)  # the next sample of each lane's beam
     c, s = np.empty(LANES), np.empty(LANES)
     for group in range(0, len(hits), LANES):
         lanes = min(LANES, len(hits) - group)
         for k in range(lanes):
-            index[k], c[k], s[k] = 0, cos[top + group + k], sin[top + group + k]
+            index[k], c[k], s[k] = first, cos[top + group + k], sin[top + group + k]
             hits[group + k] = -1
         going = lanes
         while going:
@@ -98,7 +104,7 @@ def _first_hits(
                 if i >= samples:
                     continue
                 radius = (i + 1) * FINE_STEP
-                skip = skips[min(_flat(sx + c[k] * radius, sy + s[k] * radius, width), last)]
+                skip = skips[_flat(sx + c[k] * radius, sy + s[k] * radius, width)]
                 if skip == SKIP_BLOCKED:
                     hits[group + k], index[k] = i, samples
                 else:
@@ -134,20 +140,26 @@ def _march(steps: Any, ox: Any, oy: Any, dx: Any, dy: Any, t: Any, limit: Any) -
 @_compile
 def _scan(
     skips: Any, steps: Any, width: int, base: int, sx: float, sy: float, cos: Any, sin: Any,
-    top: int, samples: int, ranges: Any, past: Any, origin: Any, reach: Any, out: Any,
-) -> None:  # fmt: skip
-    """Fill ``out`` [track units] with the ranges of the beams of rows top, top + 1, ...:
-    ``ranges[i]`` of each first blocked sample i, else ``past``; when ``past`` is inf, the
-    march beyond the tables. ``origin`` float32 (x, y) [cells]; ``reach`` float32 (table
-    range, limit [cells], cells per unit, max range [track units])."""
-    hits = np.empty(len(out), np.int64)
+    top: int, beams: int, samples: int, ranges: Any, past: Any, x: float, y: float,
+    reach: tuple[float, float, float, float],
+) -> Any:  # fmt: skip
+    """float32 ranges [track units] of the beams of rows top .. top + beams - 1: ``ranges[i]``
+    of each first blocked sample i, else ``past``; when ``past`` is inf, the march beyond
+    the tables from the origin (x, y) [cells]. ``reach``: table range, limit [cells], cells
+    per track unit, max range [track units] (float32 in the march, as in ``_beyond``)."""
+    hits = np.empty(beams, np.int64)
     _first_hits(skips[base:], width, sx, sy, cos, sin, top, samples, hits)
-    for b in range(len(out)):
+    out = np.empty(beams, np.float32)
+    ox, oy = np.float32(x), np.float32(y)
+    table_range, limit = np.float32(reach[0]), np.float32(reach[1])
+    per_unit, max_range = np.float32(reach[2]), np.float32(reach[3])
+    for b in range(beams):
         out[b] = ranges[hits[b]] if hits[b] >= 0 else past
         if hits[b] < 0 and math.isinf(past):
             dx, dy = np.float32(cos[top + b]), np.float32(sin[top + b])
-            t = _march(steps, origin[0], origin[1], dx, dy, reach[0], reach[1])
-            out[b] = min(t / reach[2], reach[3])
+            t = _march(steps, ox, oy, dx, dy, table_range, limit)
+            out[b] = min(t / per_unit, max_range)
+    return out
 
 
 _NO_STEPS = np.zeros((1, 1), np.uint8)  # the fans that never march beyond their tables
@@ -160,20 +172,22 @@ def cast(
     first: float,
     reverse: bool = False,
 ) -> np.ndarray:
-    """``raycast.cast``, compiled: the same float32 ranges [track units], bit for bit; ``fan``
-    needs no offset tables."""
+    """``raycast.cast``, compiled: the same float32 ranges [track units], bit for bit. The
+    field needs its skip map (``distance_field(..., near=False)``), the fan no tables."""
     assert field.skips is not None, "distance_field(..., near=False)"
     at = start(field, fan, origin, first)
-    out = np.zeros(fan.beams, np.float32)
     if at is None:
-        return out
-    steps = field.steps if field.steps is not None else _NO_STEPS
-    beyond = fan.table_range < fan.limit
-    assert not beyond or field.steps is not None, "distance_field(..., reach=...)"
-    reach = np.array([fan.table_range, fan.limit, field.cells_per_unit, fan.max_range], np.float32)
-    _scan(
+        return np.zeros(fan.beams, np.float32)
+    steps = field.steps
+    if steps is None:
+        assert fan.table_range >= fan.limit, "distance_field(..., reach=...) past TABLE_RANGE"
+        steps = _NO_STEPS
+    reach = (fan.table_range, fan.limit, field.cells_per_unit, fan.max_range)
+    samples = fan.segments * FINE_SAMPLES
+    assert fan.segments * COARSE_STEP <= TABLE_RANGE < LEAD, "no sample leaves the map"
+    out: np.ndarray = _scan(
         field.skips, steps, field.shape[1], at.base, fan.shifts[at.vx], fan.shifts[at.vy],
-        fan.cos, fan.sin, at.top, fan.segments * FINE_SAMPLES, fan.ranges, fan.ranges[-1],
-        np.array([at.x, at.y], np.float32), reach, out,
+        fan.cos, fan.sin, at.top, fan.beams, samples, fan.ranges, fan.ranges[-1], at.x, at.y,
+        reach,
     )  # fmt: skip
     return out[::-1] if reverse else out
