@@ -1,4 +1,5 @@
-"""Lidar core against geometry: a circular wall and a square room, noise and dropout."""
+"""Lidar core against geometry: a circular wall and a square room, noise and dropout; the
+geometry on both ray-casting paths (numpy passes and the compiled numba kernel)."""
 
 from __future__ import annotations
 
@@ -7,17 +8,31 @@ import math
 import numpy as np
 import pytest
 
+from tinyrace.sensors import raycast, raycast_numba
 from tinyrace.sensors.lidar import add_noise, beam_angles, directions
-from tinyrace.sensors.raycast import beam_fan, cast, distance_field, fan_angle
+from tinyrace.sensors.raycast import beam_fan, fan_angle
 
 SIZE = 401  # cells per side of the test maps
+PATHS = ["numpy", "numba"]
+
+
+@pytest.fixture(params=PATHS)
+def distance_field(request):
+    """``raycast.distance_field`` made for one ray-casting path; its fields remember it."""
+
+    def make(*args, **kwargs):
+        return raycast.distance_field(*args, near=request.param == "numpy", **kwargs)
+
+    return make
 
 
 def _scan(field, origin, angles, max_range: float, heading: float = 0.0) -> np.ndarray:
     """Ranges of beams at evenly spaced ``angles`` [rad] from a car at ``heading`` on a y-up
-    map, as the lidar sensor casts them."""
+    map, as the lidar sensor casts them, on the path ``field`` was made for."""
     angles = np.asarray(angles, np.float64)
-    fan = beam_fan(field, angles, max_range)
+    numpy = field.near is not None
+    fan = beam_fan(field, angles, max_range, tables=numpy)
+    cast = raycast.cast if numpy else raycast_numba.cast
     return cast(field, fan, origin, *fan_angle(field, angles, heading, y_down=False))
 
 
@@ -32,7 +47,7 @@ def _centres(cell: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 @pytest.mark.parametrize("cell", [0.05, 1.0])
 @pytest.mark.parametrize("radius_cells", [30, 150])
-def test_circular_wall_from_its_centre(cell, radius_cells):
+def test_circular_wall_from_its_centre(cell, radius_cells, distance_field):
     x, y, to_cells = _centres(cell)
     radius = radius_cells * cell
     blocking = np.hypot(x, y) >= radius
@@ -45,7 +60,7 @@ def test_circular_wall_from_its_centre(cell, radius_cells):
 
 
 @pytest.mark.parametrize("origin", [(0.0, 0.0), (12.3, -30.7), (-55.0, 48.0)])
-def test_square_room_gives_the_analytic_ranges(origin):
+def test_square_room_gives_the_analytic_ranges(origin, distance_field):
     cell = 0.5
     x, y, to_cells = _centres(cell)
     half_side = 80.25  # walls at |x| = |y| = 80.25: the edges of the cells centred on 80.5
@@ -62,7 +77,7 @@ def test_square_room_gives_the_analytic_ranges(origin):
     assert np.abs(ranges - expected).max() <= cell
 
 
-def test_beyond_max_range_reports_max_range_and_inside_a_wall_zero():
+def test_beyond_max_range_reports_max_range_and_inside_a_wall_zero(distance_field):
     x, _, to_cells = _centres(1.0)
     blocking = np.abs(x) >= 100
     field = distance_field(blocking, to_cells)
@@ -71,7 +86,7 @@ def test_beyond_max_range_reports_max_range_and_inside_a_wall_zero():
     assert _scan(field, (150.0, 0.0), [0.0], max_range=50.0)[0] == 0.0
 
 
-def test_a_flipped_map_measures_the_same_distances():
+def test_a_flipped_map_measures_the_same_distances(distance_field):
     """y-down maps (image tracks): the affine's flip must not change ranges."""
     cell = 1.0
     x, _, to_cells = _centres(cell)
@@ -110,7 +125,7 @@ def test_directions_turn_with_the_heading_and_the_image_convention():
 
 
 @pytest.mark.parametrize(("cell", "max_range"), [(0.19375, 3.3), (0.3, 7.0), (0.07, 30.0)])
-def test_a_beam_that_hits_nothing_reports_max_range_exactly(cell, max_range):
+def test_a_beam_that_hits_nothing_reports_max_range_exactly(cell, max_range, distance_field):
     # cells whose max_range in cells, divided back, rounds past max_range in float32
     side = int(2 * max_range / cell) + 20
     field = distance_field(
@@ -121,7 +136,7 @@ def test_a_beam_that_hits_nothing_reports_max_range_exactly(cell, max_range):
     assert (ranges == np.float32(max_range)).all()
 
 
-def test_the_edge_of_the_map_blocks_where_it_is():
+def test_the_edge_of_the_map_blocks_where_it_is(distance_field):
     """Beams that leave an empty map stop at its edge, not wherever a step took them."""
     cell = 1.0
     _, _, to_cells = _centres(cell)
@@ -131,7 +146,7 @@ def test_the_edge_of_the_map_blocks_where_it_is():
     np.testing.assert_allclose(ranges, [half, half, half], atol=cell)
 
 
-def test_ranges_match_dense_sampling_on_a_random_map():
+def test_ranges_match_dense_sampling_on_a_random_map(distance_field):
     """Away from corners clipped by less than half a cell, every range is within half a
     cell of the first blocking cell found by sampling each beam every 1/100 cell."""
     rng = np.random.default_rng(0)

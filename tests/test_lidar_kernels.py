@@ -1,0 +1,232 @@
+"""The lidar's two ray-casting paths, the numpy passes and the compiled numba kernel, give the
+same float32 ranges and hit classes bit for bit, on any map, origin and heading; which path
+a lidar takes, and what each builds."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import tinyrace  # registers the env ids; tinyrace.sensors in a test below
+from tinyrace.examples import TRACKS_DIR
+from tinyrace.sensors import raycast, raycast_numba
+from tinyrace.sensors.lidar import KERNEL_VARIABLE, LidarSensor, beam_angles, kernel
+from tinyrace.sensors.raycast import FINE_STEP, SKIP_BLOCKED, SKIP_MARGIN, TABLE_RANGE
+
+FANS = [(1, 1.0), (2, 1.0), (7, 1.0), (7, 90.0), (360, 360.0), (1080, 270.0), (1080, 360.0)]
+
+
+def blocking_maps() -> st.SearchStrategy[np.ndarray]:
+    """Boolean maps: scattered cells, walls (rectangles) and discs, from empty to crowded."""
+
+    @st.composite
+    def make(draw):
+        height, width = draw(st.integers(20, 260)), draw(st.integers(20, 260))
+        rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+        blocking = rng.random((height, width)) < draw(st.sampled_from([0.0, 0.001, 0.01, 0.1]))
+        rows, cols = np.mgrid[:height, :width]
+        for _ in range(draw(st.integers(0, 6))):
+            r, c = rng.integers(0, height), rng.integers(0, width)
+            if rng.random() < 0.5:
+                blocking[r : r + rng.integers(1, 30), c : c + rng.integers(1, 30)] = True
+            else:
+                blocking |= np.hypot(rows - r, cols - c) <= rng.uniform(0.3, 12)
+        return blocking
+
+    return make()
+
+
+@st.composite
+def frames(draw, shape: tuple[int, int]) -> tuple[np.ndarray, bool]:
+    """A track -> cell affine of a map of ``shape`` (cell size, y up or down, any rotation,
+    perhaps mirrored) and whether the track is y-down."""
+    cell = draw(st.sampled_from([0.05, 0.3, 1.0, 1.7, 18.75]))  # [track units]
+    turn = draw(st.sampled_from([0.0, math.pi / 2, draw(st.floats(-math.pi, math.pi))]))
+    mirror = draw(st.booleans())
+    c, s = math.cos(turn) / cell, math.sin(turn) / cell
+    linear = np.array([[c, -s], [s, c]]) @ np.diag([1.0, -1.0 if mirror else 1.0])
+    centre = np.array(shape[::-1], np.float64) / 2
+    offset = centre - linear @ (centre * cell)
+    return np.column_stack([linear, offset]), draw(st.booleans())
+
+
+def scans(field_numpy, field_numba, angles, max_range, y_down, origins, headings):
+    """Ranges of both paths from every origin and heading."""
+    fans = [
+        raycast.beam_fan(field, angles, max_range, y_down, tables)
+        for field, tables in ((field_numpy, True), (field_numba, False))
+    ]
+    for origin in origins:
+        for heading in headings:
+            first, reverse = raycast.fan_angle(field_numpy, angles, heading, y_down)
+            a = raycast.cast(field_numpy, fans[0], origin, first, reverse)
+            b = raycast_numba.cast(field_numba, fans[1], origin, first, reverse)
+            yield a, b
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data(), blocking=blocking_maps())
+def test_both_paths_give_the_same_ranges_bit_for_bit(data, blocking):
+    to_cells, y_down = data.draw(frames(blocking.shape))
+    cell = 1 / math.sqrt(abs(np.linalg.det(to_cells[:, :2])))  # [track units]
+    # ranges within the tables, and far past them (sphere tracing)
+    reach = data.draw(st.sampled_from([0.5, 5.0, 40.0, 80.0, 119.9, 121.0, 300.0]))  # [cells]
+    max_range = reach * cell
+    # (beams, fov [deg]); the numpy path's tables grow as 1 / the angle between beams
+    beams, fov = data.draw(st.sampled_from(FANS))
+    angles = beam_angles(beams, math.radians(fov))
+    fields = [
+        raycast.distance_field(blocking, to_cells, reach=reach, near=near) for near in (True, False)
+    ]
+    height, width = blocking.shape
+    corners = np.array([[0, 0], [width, height]], np.float64)  # [cells], and a little beyond
+    inverse = np.linalg.inv(np.vstack([to_cells, [0, 0, 1]]))[:2]
+    points = st.tuples(st.floats(-0.1, 1.1), st.floats(-0.1, 1.1)).map(
+        lambda f: tuple(inverse @ (*(corners[0] + f * (corners[1] - corners[0])), 1.0))
+    )
+    origins = data.draw(st.lists(points, min_size=1, max_size=4))
+    headings = data.draw(st.lists(st.floats(-10.0, 10.0), min_size=1, max_size=3))
+    for a, b in scans(*fields, angles, max_range, y_down, origins, headings):
+        assert a.dtype == b.dtype == np.float32
+        np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+
+
+def test_the_paths_agree_on_a_crowded_map_in_the_numpy_paths_every_branch():
+    """Many false alarms (the numpy path's loop over next flagged segments), few (its
+    whole-row pass), beams that hit nothing in the tables and march on, origins in walls."""
+    rng = np.random.default_rng(7)
+    blocking = rng.random((300, 300)) < 0.004
+    blocking[150, :140] = True  # a wall the beams along it graze
+    to_cells = np.array([[1.0, 0, 0], [0, 1.0, 0]])
+    angles = beam_angles(1080, 2 * math.pi)
+    fields = [raycast.distance_field(blocking, to_cells, reach=250.0, near=n) for n in (1, 0)]
+    origins = [(151.3, 152.6), (40.0, 151.0), (150.0, 150.0), (10.2, 290.9), (-5.0, 3.0)]
+    headings = [0.0, 0.001, math.pi / 4, 2.0]
+    compared = 0
+    for a, b in scans(*fields, angles, 250.0, False, origins, headings):
+        np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+        compared += 1
+    assert compared == len(origins) * len(headings)
+
+
+@pytest.mark.parametrize(
+    ("folder", "blocks"),
+    [("autocross", ["walls", "cones"]), ("formula_student", None), ("f1tenth_loop", None)],
+)
+def test_lidar_sensors_on_both_paths_observe_the_same_ranges_and_classes(folder, blocks):
+    config = {"id": "lidar", "type": "lidar", "beams": 541, "fov": 270, "hit_classes": True}
+    if blocks:
+        config["blocks"] = blocks
+    env = gym.make("tinyrace/TinyRace-v0", environment=str(TRACKS_DIR / folder), sensors=[config])
+    env.reset(seed=1)
+    env.action_space.seed(1)
+    raw = env.unwrapped
+    lidar = next(s for s in raw.sensors if isinstance(s, LidarSensor))
+    twins = {
+        name: LidarSensor(lidar.config, lidar.max_range, lidar.cell, lidar.cone_colors, name)
+        for name in ("numpy", "numba")
+    }
+    for twin in twins.values():
+        twin.reset(raw.layout)
+    hits = 0
+    for _ in range(30):
+        env.step(env.action_space.sample())
+        snapshot = raw.snapshot()
+        seen = [twin.observe(snapshot, raw.layout, None) for twin in twins.values()]
+        for key in ("ranges", "classes"):
+            np.testing.assert_array_equal(seen[0][key], seen[1][key])
+        hits += int((seen[0]["classes"] > 0).sum())
+    assert hits > 0
+    env.close()
+
+
+def test_the_skip_map_never_skips_a_blocked_sample():
+    """From a free cell with skip n > 0, every cell whose centre is within n FINE_STEPs plus
+    two half diagonals is free (brute force over all pairs of a small map)."""
+    rng = np.random.default_rng(3)
+    blocking = rng.random((40, 50)) < 0.02
+    blocking[5:9, 30:44] = True
+    field = raycast.distance_field(blocking, np.array([[1.0, 0, 0], [0, 1.0, 0]]), near=False)
+    height, width = field.shape
+    lead = raycast.LEAD * width
+    skips = field.skips[lead : lead + height * width].reshape(height, width)
+    blocked = np.argwhere(field.blocking() > 0)
+    free = np.argwhere(field.blocking() == 0)
+    nearest = np.sqrt(((free[:, None, :] - blocked[None, :, :]) ** 2).sum(-1)).min(1)
+    n = skips[free[:, 0], free[:, 1]].astype(np.float64)
+    skipping = n > 0  # 0: the next sample is looked at
+    assert skipping.mean() > 0.5
+    assert (n * FINE_STEP + math.sqrt(2) < nearest)[skipping].all()
+    assert (n * FINE_STEP + SKIP_MARGIN + FINE_STEP > nearest).all()  # and skips what it can
+    assert (skips[field.blocking() > 0] == SKIP_BLOCKED).all()
+
+
+def test_each_path_builds_only_what_it_needs(monkeypatch):
+    env = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment=str(TRACKS_DIR / "circuit"),
+        sensors=[{"id": "lidar", "type": "lidar", "beams": 1080}],
+    )
+    env.reset(seed=0)
+    raw = env.unwrapped
+    lidar = next(s for s in raw.sensors if isinstance(s, LidarSensor))
+    assert lidar.kernel == "numba"  # numba is a test dependency: the default path when present
+    assert lidar.fan.coarse is None and lidar.fan.fine is None and lidar.field.near is None
+    assert lidar.field.skips is not None
+    monkeypatch.setenv(KERNEL_VARIABLE, "numpy")
+    twin = LidarSensor(lidar.config, lidar.max_range, lidar.cell, lidar.cone_colors)
+    twin.reset(raw.layout)
+    assert twin.kernel == "numpy" and twin.field.skips is None
+    assert twin.fan.coarse is not None and twin.fan.fine is not None
+    assert twin.fan.fine.nbytes > 10 * 2**20  # the tables the compiled kernel does without
+    env.close()
+
+
+def test_the_variable_chooses_the_path(monkeypatch):
+    monkeypatch.setenv(KERNEL_VARIABLE, "numpy")
+    assert kernel() == ("numpy", raycast.cast)
+    monkeypatch.setenv(KERNEL_VARIABLE, "NumBa")
+    assert kernel() == ("numba", raycast_numba.cast)
+    monkeypatch.delenv(KERNEL_VARIABLE)
+    assert kernel()[0] == "numba"
+    assert kernel("numpy")[0] == "numpy"  # an explicit choice wins over the variable
+    monkeypatch.setenv(KERNEL_VARIABLE, "fortran")
+    with pytest.raises(ValueError, match="auto, numba or numpy"):
+        kernel()
+
+
+def test_without_numba_auto_falls_back_to_numpy_and_numba_is_an_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
+    monkeypatch.delitem(sys.modules, "tinyrace.sensors.raycast_numba")
+    monkeypatch.delattr(tinyrace.sensors, "raycast_numba")
+    monkeypatch.delenv(KERNEL_VARIABLE, raising=False)
+    assert kernel() == ("numpy", raycast.cast)
+    with pytest.raises(ImportError, match=r"pip install tinyrace\[fast\]"):
+        kernel("numba")
+
+
+def test_an_uncachable_kernel_still_compiles(monkeypatch):
+    """numba refuses cache=True when no cache directory is writable: compile uncached."""
+    calls = []
+
+    def njit(**options):
+        calls.append(options)
+        if options.get("cache"):
+            raise RuntimeError("cannot cache function 'f': no locator available")
+        return lambda function: function
+
+    monkeypatch.setattr(raycast_numba, "njit", njit)
+    with pytest.warns(UserWarning, match="cannot cache"):
+        compiled = raycast_numba._compile(math.hypot)
+    assert compiled is math.hypot and calls == [{"cache": True, "nogil": True}, {"nogil": True}]
+
+
+def test_no_sample_leaves_the_lead_rows():
+    """The kernel indexes without clipping: the tables' reach stays inside the LEAD rows."""
+    assert TABLE_RANGE + 2 < raycast.LEAD
