@@ -124,15 +124,16 @@ def distance_field(
     lead = np.ones(LEAD * width, np.uint8)
     blocked = np.concatenate([lead, padded.ravel(), lead])
     distance = _distance(padded) if reach > TABLE_RANGE or not near else None
+    steps = _steps(distance) if reach > TABLE_RANGE and distance is not None else None
     near_maps = skips = None
     if near:
         near_maps = np.concatenate([lead * 255, _near(padded).ravel(), lead * 255])
     else:
         assert distance is not None
-        skips = np.concatenate([lead * SKIP_BLOCKED, _skips(distance).ravel(), lead * SKIP_BLOCKED])
+        skips = _skips(distance)  # the distances are gone: steps first
+        skips = np.concatenate([lead * SKIP_BLOCKED, skips.ravel(), lead * SKIP_BLOCKED])
     shifted = np.asarray(to_cells, np.float64) + np.array([[0, 0, PAD], [0, 0, PAD]])
     scale = math.sqrt(abs(np.linalg.det(shifted[:, :2])))
-    steps = _steps(distance) if reach > TABLE_RANGE and distance is not None else None
     if classes is not None:  # an end may stop a rounding error short: the rim has the class too
         classes = cv2.copyMakeBorder(classes, PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1)
         classes = np.where(classes > 0, classes, cv2.dilate(classes, np.ones((3, 3), np.uint8)))
@@ -170,7 +171,7 @@ def _segment_kernel(orientation: int) -> np.ndarray:
 def _distance(padded: np.ndarray) -> np.ndarray:
     """float32 [cells] from each cell's centre to the nearest blocking cell's centre (exact
     Euclidean), 0 in blocking cells."""
-    free = np.where(padded > 0, 0, 255).astype(np.uint8)
+    free = np.where(padded > 0, np.uint8(0), np.uint8(255))
     distance: np.ndarray = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
     return distance
 
@@ -188,10 +189,15 @@ def _skips(distance: np.ndarray) -> np.ndarray:
     """uint8 samples (FINE_STEP apart) that a beam whose sample is nearest to a cell may
     skip, from ``distance`` [cells] to the nearest blocking cell: n such that n FINE_STEPs
     plus both samples' rounding to their nearest cells (half a diagonal each, SKIP_MARGIN
-    with room for float error) stay short of it; SKIP_BLOCKED in blocking cells."""
-    samples = np.floor((distance - SKIP_MARGIN) / FINE_STEP)
-    skips = np.clip(samples, 0, SKIP_BLOCKED - 1).astype(np.uint8)
-    skips[distance == 0] = SKIP_BLOCKED
+    with room for float error) stay short of it; SKIP_BLOCKED in blocking cells. Works in
+    ``distance`` (float32), which it overwrites."""
+    blocking = distance == 0
+    np.subtract(distance, SKIP_MARGIN, out=distance)
+    np.divide(distance, FINE_STEP, out=distance)
+    np.floor(distance, out=distance)
+    np.clip(distance, 0, SKIP_BLOCKED - 1, out=distance)
+    skips = distance.astype(np.uint8)
+    skips[blocking] = SKIP_BLOCKED
     return skips
 
 

@@ -55,7 +55,7 @@ def _compile(function: F) -> F:
     try:
         return typed(F, njit(cache=True, nogil=True)(function))
     except RuntimeError as error:  # "cannot cache function ...: no locator available"
-        warnings.warn(f"numba cannot cache the lidar kernel: {error}", stacklevel=2)
+        warnings.warn(f"numba cannot cache the lidar kernel: {error}", stacklevel=1)
         return typed(F, njit(nogil=True)(function))
 
 
