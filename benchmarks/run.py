@@ -77,7 +77,7 @@ from report import (
     ratio_row,
     report,
 )
-from sensors import measure_sensors, print_sensors
+from sensors import measure_compile, measure_sensors, print_compile, print_sensors
 from standin import StandIn
 from stepping import SEED, Stepper, interleave, quiet_gym_warnings, time_resets, unavailable
 
@@ -579,8 +579,10 @@ def main(argv: list[str] | None = None) -> None:
             results = {
                 "machine": machine(),
                 "sensors": measure_sensors_for(QUICK if args.quick else FULL),
+                "lidar_compile": measure_compile(),
             }
         print_sensors(results["sensors"])
+        print_compile(results["lidar_compile"])
         out = args.out.with_name("sensors.json") if args.out == DEFAULT_OUT else args.out
         out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(results, indent=2) + "\n")

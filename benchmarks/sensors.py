@@ -37,6 +37,7 @@ perspective camera no more than 1.5x a 120x160 bird's-eye camera.
 from __future__ import annotations
 
 import functools
+import importlib.util
 import math
 import os
 import subprocess
@@ -241,8 +242,10 @@ def measure_compile() -> dict[str, float]:
     """[s] importing numba and the kernel, and the first and second scan of a 1080-beam
     lidar (whose field reaches past the tables, so that every compiled function is needed),
     each in a fresh process: with an empty numba cache (the first scan compiles) and then
-    with the cache it filled (the first scan loads the machine code)."""
-    result = {}
+    with the cache it filled (the first scan loads the machine code). Empty without numba."""
+    result: dict[str, float] = {}
+    if importlib.util.find_spec("numba") is None:
+        return result
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
         for label in ("cold_cache", "warm_cache"):
@@ -258,6 +261,9 @@ def measure_compile() -> dict[str, float]:
 
 def print_compile(result: dict[str, float]) -> None:
     """The compile times of ``measure_compile``."""
+    if not result:
+        print("\nLidar kernel: numba is not installed (pip install tinyrace[fast])")
+        return
     print("\nLidar kernel (numba) start-up, fresh processes [s]:")
     for label in ("cold_cache", "warm_cache"):
         first, imported = result[f"{label}_first_scan_s"], result[f"{label}_import_s"]
