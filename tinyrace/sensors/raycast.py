@@ -20,6 +20,11 @@ their whole row when few: a few passes, never a loop over beams. Beyond TABLE_RA
 march on by sphere tracing on a distance field (``cv2.distanceTransform``), built only for
 lidars that reach that far.
 
+A field is made for one of two paths: the numpy passes above (``near=True``: NEAR maps, and
+``beam_fan(..., tables=True)``), or ``raycast_numba``'s compiled kernel (``near=False``: a
+skip map from the distance transform, no tables), which finds the same first blocked sample
+of every beam and gives the same ranges, bit for bit.
+
 Units: the maps work in cells; ``to_cells`` maps track units to cell coordinates (a cell's
 centre on integer coordinates, as image pixels) and ranges come back in track units.
 """
@@ -29,6 +34,7 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -298,9 +304,8 @@ def _flat(x: np.ndarray, y: np.ndarray, width: int) -> np.ndarray:
     return (np.floor(y + 0.5) * width + np.floor(x + 0.5) + LEAD * width).astype(np.intp)
 
 
-@dataclass(frozen=True)
-class Start:
-    """Where a scan starts in a fan's tables."""
+class Start(NamedTuple):
+    """Where a scan starts in a fan's tables (a tuple: made on every scan)."""
 
     x: float  # [cells] the origin in the padded map
     y: float

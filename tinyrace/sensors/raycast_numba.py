@@ -28,6 +28,7 @@ from typing import cast as typed
 import numpy as np
 from numba import njit
 
+from tinyrace.sensors import raycast
 from tinyrace.sensors.raycast import (
     BISECTIONS,
     CHECK_EVERY,
@@ -45,6 +46,15 @@ from tinyrace.sensors.raycast import (
 )
 
 INT16 = (-32768, 32767)  # cv2.remap saturates map coordinates to int16
+# numba's cache is keyed by this file alone, and the compiled code holds raycast's constants:
+# they are spelled out here too, so that changing one there fails here until this file (and
+# so the cache) changes as well
+COMPILED_IN = {
+    "BISECTIONS": 3, "CHECK_EVERY": 4, "FINE_STEP": 0.5, "LEAD": 146, "MAX_ROUNDS": 256,
+    "OVERSHOOT": 2.0, "SKIP_BLOCKED": 255,
+}  # fmt: skip
+if any(getattr(raycast, name) != value for name, value in COMPILED_IN.items()):
+    raise RuntimeError(f"raycast's constants changed: update COMPILED_IN ({COMPILED_IN})")
 LANES = 16  # beams that step together (independent lookups the CPU overlaps)
 F = TypeVar("F")
 
