@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tinyrace  # registers the env ids; tinyrace.sensors in a test below
+from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.sensors import raycast, raycast_numba
 from tinyrace.sensors.lidar import KERNEL_VARIABLE, LidarSensor, beam_angles, kernel
@@ -230,3 +231,25 @@ def test_an_uncachable_kernel_still_compiles(monkeypatch):
 def test_no_sample_leaves_the_lead_rows():
     """The kernel indexes without clipping: the tables' reach stays inside the LEAD rows."""
     assert TABLE_RANGE + 2 < raycast.LEAD
+
+
+def test_beams_too_dense_for_the_numpy_tables_are_a_config_error_not_gigabytes(monkeypatch):
+    """1080 beams over 1 deg would need about 7.7 GB of numpy sample tables: refused before
+    anything is built, naming the entry, the knobs and the way out; the compiled path, which
+    needs no tables, takes the same lidar."""
+    dense = [{"id": "lidar", "type": "lidar", "beams": 1080, "fov": 1.0}]
+    circuit = str(TRACKS_DIR / "circuit")
+    assert raycast.table_bytes(beam_angles(1080, math.radians(1.0))) > 4 * 2**30
+    monkeypatch.setenv(KERNEL_VARIABLE, "numpy")
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", environment=circuit, sensors=dense)
+    text = str(caught.value)
+    for part in ("sensors[0]", "beams: 1080", "fov: 1.0", "MB", "tinyrace[fast]"):
+        assert part in text
+    default = [{"id": "lidar", "type": "lidar", "beams": 1080, "fov": 270.0}]
+    gym.make("tinyrace/TinyRace-v0", environment=circuit, sensors=default).close()
+    monkeypatch.setenv(KERNEL_VARIABLE, "numba")
+    env = gym.make("tinyrace/TinyRace-v0", environment=circuit, sensors=dense)
+    observation, _ = env.reset(seed=0)
+    assert observation["lidar"].shape == (1080,)
+    env.close()

@@ -29,6 +29,7 @@ from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
     PerTrack,
+    Unsupported,
     car_length,
     color_mask,
     fill_boxes,
@@ -36,12 +37,21 @@ from tinyrace.sensors.common import (
     grid,
     mount,
 )
-from tinyrace.sensors.raycast import DistanceField, Fan, beam_fan, cast, distance_field, fan_angle
+from tinyrace.sensors.raycast import (
+    DistanceField,
+    Fan,
+    beam_fan,
+    cast,
+    distance_field,
+    fan_angle,
+    table_bytes,
+)
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES, RADII
 from tinyrace.world.snapshot import Snapshot
 
 KERNEL_VARIABLE = "TINYRACE_LIDAR"  # environment variable: auto | numba | numpy
+TABLE_LIMIT = 256 * 2**20  # [bytes] the numpy path's sample tables of one lidar, at most
 NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
 CONE_RADII = np.array([0.0, *(RADII[name] for name in CLASSES)])  # [m] by cone class id
 
@@ -226,6 +236,8 @@ class LidarSensor:
         self.fan: Fan | None = None
         self._fans: dict[tuple[Any, ...], Fan] = {}
         self.kernel, self._cast = kernel(kernel_name)
+        if self.kernel == "numpy":
+            _check_tables(config, self.angles)
 
     @property
     def id(self) -> str:
@@ -273,6 +285,19 @@ class LidarSensor:
             return ranges
         classes[ranges >= self.max_range] = NO_HIT
         return {"ranges": ranges, "classes": classes}
+
+
+def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
+    """Unsupported when the numpy path's tables for these beams would exceed TABLE_LIMIT
+    (beams packed closer than the tables' angle step multiply their rows)."""
+    size = table_bytes(angles)
+    if size > TABLE_LIMIT:
+        raise Unsupported(
+            f"beams: {config.beams} over fov: {config.fov} deg would need "
+            f"{size / 2**20:,.0f} MB of ray-casting tables on the numpy path (at most "
+            f"{TABLE_LIMIT // 2**20} MB): use fewer beams or a wider fov, or "
+            "pip install tinyrace[fast] (its compiled lidar needs no tables)"
+        )
 
 
 def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
