@@ -20,6 +20,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import pymunk
 
 from tinyrace.cars.dynamic import DynamicCar, _set_angular_velocity, _set_velocity
 
@@ -31,6 +32,15 @@ REAR = slice(2, 4)
 _cos = np.frompyfunc(math.cos, 1, 1)
 _sin = np.frompyfunc(math.sin, 1, 1)
 _hypot = np.frompyfunc(math.hypot, 2, 1)
+
+
+def _motion(body: pymunk.Body | None) -> tuple[float, float, float, float, float, float]:
+    """A body's (angle, its cos and sin, angular velocity, vx, vy); zeros for no body."""
+    if body is None:
+        return 0.0, 1.0, 0.0, 0.0, 0.0, 0.0
+    angle = body.angle
+    vx, vy = body.velocity
+    return angle, math.cos(angle), math.sin(angle), body.angular_velocity, vx, vy
 
 
 def _float(values: np.ndarray) -> np.ndarray:
@@ -143,13 +153,9 @@ class DynamicBatch:
         step). ``dt`` [s] per row; ``on_road`` (rows x 4) is each wheel's grip.
         Skid marks are the caller's (``track_skids``), before the space steps."""
         bodies = [car.body if car is not None else None for car in self.cars]
-        poses = [
-            (b.angle, b.angular_velocity, *b.velocity) if b is not None else (0.0, 0.0, 0.0, 0.0)
-            for b in bodies
-        ]
-        angle, spin, vx, vy = (np.array(column)[:, None] for column in zip(*poses, strict=True))
+        motion = np.array([_motion(body) for body in bodies])  # rows x (angle cos sin w vx vy)
+        angle, cos_a, sin_a, spin, vx, vy = (motion[:, i : i + 1] for i in range(6))
         dt = dt[:, None]
-        cos_a, sin_a = _float(_cos(angle)), _float(_sin(angle))
         omega = self._spin_wheels(dt)
         # world-frame offsets of the wheels, and their ground velocities
         lx, ly = self.offset_x, self.offset_y
@@ -170,13 +176,12 @@ class DynamicBatch:
         self.omega = omega - dt * f * radius / self.spin_moment
         fx, fy = p * side_x + f * -side_y, p * side_y + f * side_x
         self.skidding = total > skid_limit
-        # summed over the wheels in order, from 0.0, as the scalar loop adds them
-        turn = rx * fy - ry * fx
-        fx_total = 0.0 + fx[:, 0] + fx[:, 1] + fx[:, 2] + fx[:, 3]
-        fy_total = 0.0 + fy[:, 0] + fy[:, 1] + fy[:, 2] + fy[:, 3]
-        torque = 0.0 + turn[:, 0] + turn[:, 1] + turn[:, 2] + turn[:, 3]
-        self._accelerate(bodies, rows, dt[:, 0], (vx[:, 0], vy[:, 0], spin[:, 0]), fx_total,
-                         fy_total, torque)
+        # force, torque summed over the wheels in order from 0.0, as the scalar loop adds them
+        terms = np.stack((fx, fy, rx * fy - ry * fx))  # 3 x rows x wheels
+        first, second, third, fourth = (terms[..., i] for i in range(WHEELS))
+        fx_total, fy_total, torque = 0.0 + first + second + third + fourth
+        velocity = (vx[:, 0], vy[:, 0], spin[:, 0])
+        self._accelerate(bodies, rows, dt[:, 0], velocity, fx_total, fy_total, torque)
         self._steer(dt)
 
     def _spin_wheels(self, dt: np.ndarray) -> np.ndarray:
@@ -206,7 +211,7 @@ class DynamicBatch:
 
     def _accelerate(
         self,
-        bodies: list[object],
+        bodies: list[pymunk.Body | None],
         rows: Sequence[int],
         dt: np.ndarray,
         velocity: tuple[np.ndarray, np.ndarray, np.ndarray],

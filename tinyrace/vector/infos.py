@@ -44,8 +44,11 @@ def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[s
             array = merge_infos(per_env, num_envs)
         else:
             array = _array(indices, values, num_envs)
-        mask = np.zeros(num_envs, dtype=np.bool_)
-        mask[indices] = True
+        if len(indices) == num_envs:
+            mask = np.ones(num_envs, dtype=np.bool_)
+        else:
+            mask = np.zeros(num_envs, dtype=np.bool_)
+            mask[indices] = True
         merged[key], merged[f"_{key}"] = array, mask
     return merged
 
@@ -55,10 +58,9 @@ def _array(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
     first = values[0]
     kind = type(first)
     if kind in _SCALARS or issubclass(kind, np.number):
+        if len(values) == num_envs and all(type(value) is kind for value in values):
+            return np.array(values, dtype=kind)  # every env, one type: cast as one by one
         array = np.zeros(num_envs, dtype=kind)
-        if all(type(value) is kind for value in values):
-            array[indices] = values
-            return array
     elif isinstance(first, np.ndarray):
         array = np.zeros((num_envs, *first.shape), dtype=first.dtype)
     else:
