@@ -122,7 +122,7 @@ def test_crash_stop_reaches_the_arrays() -> None:
     batch.load(0, car)
     car.stop()
     batch.stop(0)
-    assert batch.omega.tolist() == [[w.omega for w in car.wheels]] == [[0.0] * 4]
+    assert batch.wheels(batch.omega, 0).tolist() == [w.omega for w in car.wheels] == [0.0] * 4
 
 
 # -- the vector env against SyncVectorEnv --------------------------------------------------------
