@@ -169,7 +169,10 @@ def compare(make: functools.partial, num_envs: int, steps: int, seed: int = 7) -
         cars = [env.unwrapped.car for env in batch._local.envs]
         seen["skids"] = sum(int(car.skids.lengths.sum()) for car in cars)
         for env, twin in zip(sync.envs, batch._local.envs, strict=True):
-            assert env.unwrapped.car.skids.points.tobytes() == twin.unwrapped.car.skids.points.tobytes()
+            assert (
+                env.unwrapped.car.skids.points.tobytes()
+                == twin.unwrapped.car.skids.points.tobytes()
+            )
     finally:
         sync.close()
         batch.close()

@@ -34,7 +34,6 @@ from tinyrace.cars.dynamic import DynamicCar, _set_angular_velocity, _set_veloci
 WHEELS = 4  # FL, FR, RL, RR; the first two steer, the last two drive
 
 
-
 def _each(function: Callable[..., float], *arrays: np.ndarray) -> np.ndarray:
     """``function`` (one of Python's ``math``, which numpy's may differ from in the last
     bit) of the arrays' elements, as an array of their shape."""
@@ -53,6 +52,30 @@ def _motion(body: pymunk.Body | None) -> tuple[float, float, float, float, float
 
 class DynamicBatch:
     """The wheel states and constants of ``size`` dynamic cars (rows), wheel-major."""
+
+    # per wheel, from each car's spec and scale (see DynamicCar._prepare)
+    road_limit: np.ndarray  # [mass track units/s^2] grip on road
+    grass_limit: np.ndarray  # on grass
+    road_skid: np.ndarray  # skid threshold on road
+    grass_skid: np.ndarray  # on grass
+    radius: np.ndarray  # [track units]
+    spin_moment: np.ndarray  # [mass track units^2]
+    slip_gain: np.ndarray
+    engine_power: np.ndarray
+    wheel_moment: np.ndarray
+    spin_floor: np.ndarray
+    brake_lock: np.ndarray
+    brake_rate: np.ndarray
+    gas_rise: np.ndarray
+    steer_gain: np.ndarray
+    steer_speed: np.ndarray
+    steer_limit: np.ndarray
+    neg_steer_limit: np.ndarray
+    # per car
+    mass: np.ndarray
+    moment: np.ndarray
+    translation: np.ndarray  # [track units per step] Box2D's speed cap
+    steer_sign: np.ndarray
 
     def __init__(self, size: int) -> None:
         self.size = n = size
@@ -285,8 +308,8 @@ class DynamicBatch:
 
 
 _WHEEL_CONSTANTS = (
-    "road_limit grass_limit road_skid grass_skid radius spin_moment slip_gain engine_power "
-    "wheel_moment spin_floor brake_lock brake_rate gas_rise steer_gain steer_speed steer_limit "
-    "neg_steer_limit"
-).split()
+    *("road_limit", "grass_limit", "road_skid", "grass_skid", "radius", "spin_moment"),
+    *("slip_gain", "engine_power", "wheel_moment", "spin_floor", "brake_lock", "brake_rate"),
+    *("gas_rise", "steer_gain", "steer_speed", "steer_limit", "neg_steer_limit"),
+)
 _CAR_CONSTANTS = ("mass", "moment", "translation", "steer_sign")

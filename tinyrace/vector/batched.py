@@ -20,7 +20,7 @@ goes through the wrappers, so that the env checker makes its one-time checks.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -34,7 +34,7 @@ from tinyrace.env import TinyRaceEnv
 
 KNOWN_WRAPPERS = (TimeLimit, OrderEnforcing, PassiveEnvChecker)  # gym.make's own
 BATCHED_ACTIONS = ("dynamic", "discrete")  # action kinds of the dynamic car
-Step = tuple[Any, float, bool, bool, dict[str, Any]]
+Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 Write = Callable[[int, Any], None]  # (env index in the slice, observation)
 
 
@@ -132,9 +132,7 @@ class BatchStepper:
                 self.physics.load(row, car)
             stale[row] = False
 
-    def _controls(
-        self, actions: Any, rows: list[int]
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _controls(self, actions: Any, rows: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(steer, gas, brake) per env as float64 columns; checked as ``ActionSpec.read``
         checks, for the envs in ``rows`` (an invalid one raises before anything changes)."""
         spec = self.actions
@@ -170,7 +168,9 @@ class BatchStepper:
             controls[row] = values
         return controls[:, 0], controls[:, 1], controls[:, 2]
 
-    def _step_one_by_one(self, actions: Any, autoreset: np.ndarray, write: Write) -> list[Step | None]:
+    def _step_one_by_one(
+        self, actions: Any, autoreset: np.ndarray, write: Write
+    ) -> list[Step | None]:
         """Each env's own ``step`` through its wrappers (the env checker's first step)."""
         results: list[Step | None] = [None] * len(self.envs)
         for row, env in enumerate(self.envs):

@@ -77,17 +77,15 @@ def _objects(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray
     return array
 
 
-class _Merger(VectorEnv):  # type: ignore[type-arg]
+class _Merger(VectorEnv):
     """Only for ``_add_info``, which reads ``num_envs``."""
 
     def __init__(self, num_envs: int) -> None:
         self.num_envs = num_envs
 
 
-def _merged_by_gymnasium(
-    infos: Sequence[dict[str, Any] | None], num_envs: int
-) -> dict[str, Any]:
-    merger, merged = _Merger(num_envs), {}
+def _merged_by_gymnasium(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[str, Any]:
+    merger, merged = _Merger(num_envs), dict[str, Any]()
     for index, info in enumerate(infos):
         if info is not None:
             merged = merger._add_info(merged, info, index)

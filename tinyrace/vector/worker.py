@@ -79,7 +79,9 @@ class _Slice:
         if self.batch is not None:
             results = self.batch.step(actions, autoreset, self._write)
         else:
-            results = [None if autoreset[j] else env.step(actions[j]) for j, env in enumerate(self.envs)]
+            results = [
+                None if autoreset[j] else env.step(actions[j]) for j, env in enumerate(self.envs)
+            ]
         for j, result in enumerate(results):
             if result is None:  # the episode ended at the last step: reset, reward 0, not done
                 observation, infos[j] = self.envs[j].reset()
