@@ -7,7 +7,8 @@ same seeds and actions, bit for bit: observations, rewards, terminations,
 truncations and infos, for 400 steps across autoresets (TimeLimit), full-throttle
 stretches that leave the road for the grass, locked brakes that draw skid marks, a
 ``reset`` with a mask, on CarRacing-v0 (Box and Discrete actions) and on the metric
-F1TENTH corridor with the dynamic car (walls stop it).
+F1TENTH corridor with the dynamic car (walls stop it); and with fewer envs than
+``numpy_from``, each car's own tyre model in the same split step.
 """
 
 from __future__ import annotations
@@ -146,12 +147,15 @@ def driving_actions(space: gym.Space, num_envs: int, steps: int, seed: int) -> l
     return actions
 
 
-def compare(make: functools.partial, num_envs: int, steps: int, seed: int = 7) -> dict:
+def compare(
+    make: functools.partial, num_envs: int, steps: int, seed: int = 7, numpy_from: int = 1
+) -> dict:
     """Steps a SyncVectorEnv and an in-process batched BatchVectorEnv in lock step; every
     result equal. Returns counts of what happened."""
     sync = gym.vector.SyncVectorEnv([make] * num_envs)
-    batch = BatchVectorEnv([make] * num_envs, workers=0)
+    batch = BatchVectorEnv([make] * num_envs, workers=0, numpy_from=numpy_from)
     assert batch._local is not None and batch._local.batch is not None  # batched physics
+    assert batch._local.batch.vectorized == (num_envs >= numpy_from)
     seen = {"ends": 0, "grass": 0, "skids": 0, "walls": 0}
     try:
         assert_same(sync.reset(seed=seed), batch.reset(seed=seed), "reset")
@@ -192,6 +196,12 @@ def test_carracing_discrete_batched_equals_sync_vector_env() -> None:
         gym.make, "tinyrace/CarRacing-v0", continuous=False, max_episode_steps=70
     )
     seen = compare(make, num_envs=3, steps=200)
+    assert seen["ends"] >= 6
+
+
+def test_few_cars_stepped_together_with_their_own_tyre_model_equal_sync() -> None:
+    make = functools.partial(gym.make, "tinyrace/CarRacing-v0", max_episode_steps=70)
+    seen = compare(make, num_envs=3, steps=200, numpy_from=4)
     assert seen["ends"] >= 6
 
 

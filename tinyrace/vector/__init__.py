@@ -56,6 +56,7 @@ from gymnasium.vector.utils import (
     read_from_shared_memory,
 )
 
+from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.worker import CLOSED, _Slice, work
 
@@ -78,6 +79,9 @@ class BatchVectorEnv(VectorEnv):
         batch_physics: step the dynamic cars of a process's envs together (their tyre
             forces as one numpy computation, ``tinyrace.vector.batched``); False steps
             each env by its own ``step``. Results are the same.
+        numpy_from: with batched physics, the envs per process from which their cars' tyre
+            forces are one numpy computation; fewer cars each run their own tyre model
+            (numpy's fixed cost per call outweighs it), still stepped together.
     """
 
     def __init__(
@@ -87,6 +91,7 @@ class BatchVectorEnv(VectorEnv):
         context: str | None = None,
         copy: bool = True,
         batch_physics: bool = True,
+        numpy_from: int = NUMPY_FROM,
     ):
         env_fns = list(env_fns)
         if not env_fns:
@@ -119,7 +124,7 @@ class BatchVectorEnv(VectorEnv):
         self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds.astype(int))]
         memory = (self._buffer, self.single_observation_space, self.num_envs)
         if workers == 0:
-            self._local = _Slice(env_fns, 0, memory, batch_physics)
+            self._local = _Slice(env_fns, 0, memory, batch_physics, numpy_from)
             self._check_spaces([self._local.spaces()])
             return
         for number, envs in enumerate(self._slices):
@@ -127,7 +132,7 @@ class BatchVectorEnv(VectorEnv):
             fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
             process = ctx.Process(  # type: ignore[attr-defined]
                 target=work,
-                args=(child, parent, fns, envs.start, memory, batch_physics),
+                args=(child, parent, fns, envs.start, memory, batch_physics, numpy_from),
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
             )
@@ -302,13 +307,18 @@ def make_batch(
     *,
     context: str | None = None,
     batch_physics: bool = True,
+    numpy_from: int = NUMPY_FROM,
     **kwargs: Any,
 ) -> BatchVectorEnv:
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``; ``workers=0``
     steps them all in this process."""
     maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv(
-        [maker] * num_envs, workers=workers, context=context, batch_physics=batch_physics
+        [maker] * num_envs,
+        workers=workers,
+        context=context,
+        batch_physics=batch_physics,
+        numpy_from=numpy_from,
     )
 
 

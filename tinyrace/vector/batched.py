@@ -34,6 +34,9 @@ from tinyrace.env import TinyRaceEnv
 
 KNOWN_WRAPPERS = (TimeLimit, OrderEnforcing, PassiveEnvChecker)  # gym.make's own
 BATCHED_ACTIONS = ("dynamic", "discrete")  # action kinds of the dynamic car
+# cars from which the tyre forces are one numpy computation: below, numpy's fixed cost per
+# call (about 60 calls per step) outweighs the scalar model's cost per car
+NUMPY_FROM = 16
 Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 Write = Callable[[int, Any], None]  # (env index in the slice, observation)
 
@@ -41,8 +44,9 @@ Write = Callable[[int, Any], None]  # (env index in the slice, observation)
 class BatchStepper:
     """The envs of one slice, stepped together (see the module's docstring)."""
 
-    def __init__(self, envs: Sequence[gym.Env[Any, Any]]) -> None:
+    def __init__(self, envs: Sequence[gym.Env[Any, Any]], numpy_from: int = NUMPY_FROM) -> None:
         self.envs = list(envs)
+        self.vectorized = len(self.envs) >= numpy_from  # else each car's own tyre model
         self.cores = [_core(env) for env in self.envs]
         self.limits = [_wrapper(env, TimeLimit) for env in self.envs]
         self.checkers = [_wrapper(env, PassiveEnvChecker) for env in self.envs]
@@ -87,8 +91,21 @@ class BatchStepper:
         if not rows:
             return [None] * len(self.envs)
         steer, gas, brake = self._controls(actions, rows)
+        if self.vectorized:
+            self._forces_together(rows, steer, gas, brake)
+        else:
+            self._forces_one_by_one(rows, steer, gas, brake)
+        results: list[Step | None] = [None] * len(self.envs)
+        for row in rows:
+            results[row] = self._finish(row, write)
+        return results
+
+    def _forces_together(
+        self, rows: list[int], steer: np.ndarray, gas: np.ndarray, brake: np.ndarray
+    ) -> None:
+        """Every car's controls and tyre forces as one numpy computation (DynamicBatch)."""
         self._load(rows)
-        physics = self.physics
+        physics, cores = self.physics, self.cores
         physics.control(steer, gas, brake)
         on_road = np.ones((len(self.envs), 4), dtype=np.bool_)
         for row in rows:
@@ -96,18 +113,26 @@ class BatchStepper:
         physics.apply_forces(self.dt, rows, on_road)
         physics.store(rows)
         physics.track_skids(rows, on_road)
-        results: list[Step | None] = [None] * len(self.envs)
+
+    def _forces_one_by_one(
+        self, rows: list[int], steer: np.ndarray, gas: np.ndarray, brake: np.ndarray
+    ) -> None:
+        """Each car's own ``control`` and ``apply_forces`` (fewer cars than numpy pays for)."""
+        controls = np.column_stack((steer, gas, brake)).tolist()  # floats, as read() gives
         for row in rows:
-            results[row] = self._finish(row, write)
-        return results
+            core = self.cores[row]
+            world = core._episode().world
+            car = world.car
+            car.control(*controls[row])
+            car.apply_forces(core.dt, world.wheel_grip())
 
     def _finish(self, row: int, write: Write) -> Step:
         """The rest of env ``row``'s step: its world and rules, rewards, observation."""
         core = self.cores[row]
         episode = core._episode()
         facts = episode.step(core.dt, forces_applied=True)
-        if episode.world.contacts.crashed:  # the car stopped its wheels: so do the arrays
-            self.physics.stop(row)
+        if episode.world.contacts.crashed and self.vectorized:  # the car stopped its wheels
+            self.physics.stop(row)  # so do the arrays
         observation, reward, terminated, truncated, info = core.conclude(facts)
         limit = self.limits[row]
         if limit is not None:  # TimeLimit.step, without the call

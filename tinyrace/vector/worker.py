@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium.spaces import Box, Dict
 from gymnasium.vector.utils import read_from_shared_memory, write_to_shared_memory
 
-from tinyrace.vector.batched import BatchStepper
+from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
 
 Memory = tuple[Any, gym.Space[Any], int]  # shared buffer, one env's observation space, envs
 
@@ -36,12 +36,13 @@ class _Slice:
         first: int,
         memory: Memory,
         batch_physics: bool = True,
+        numpy_from: int = NUMPY_FROM,
     ):
         self.envs = [fn() for fn in env_fns]
         self.first = first
         # dynamic cars: their tyre forces computed together (else each env's own step)
         fits = batch_physics and BatchStepper.fits(self.envs)
-        self.batch = BatchStepper(self.envs) if fits else None
+        self.batch = BatchStepper(self.envs, numpy_from) if fits else None
         self.buffer, self.space, num_envs = memory
         self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
         # Boxes (and Dicts of them) are written through views made once: several times
@@ -134,12 +135,13 @@ def work(
     first: int,
     memory: Memory,
     batch_physics: bool = True,
+    numpy_from: int = NUMPY_FROM,
 ) -> None:
     """A worker's loop: build the envs, then answer ``(command, args)`` until "close"."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
     try:
-        envs = _Slice(env_fns, first, memory, batch_physics)
+        envs = _Slice(env_fns, first, memory, batch_physics, numpy_from)
     except Exception as error:
         pipe.send((False, _describe(error)))
         return
