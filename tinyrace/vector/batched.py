@@ -162,21 +162,18 @@ class BatchStepper:
         checks, for the envs in ``rows`` (an invalid one raises before anything changes)."""
         spec = self.actions
         n = len(self.envs)
+        array = isinstance(actions, np.ndarray)
         if spec.kind == "discrete":
-            if isinstance(actions, np.ndarray) and actions.dtype.kind in "iu":
-                picked = actions[rows]
-                if picked.min() >= 0 and picked.max() < len(self._discrete):
-                    controls = self._discrete[np.clip(actions, 0, len(self._discrete) - 1)]
-                    return controls[:, 0], controls[:, 1], controls[:, 2]
+            whole = array and actions.dtype.kind in "iu" and actions.shape == (n,)
+            picked = actions if not whole or len(rows) == n else actions[rows]
+            if whole and picked.min() >= 0 and picked.max() < len(self._discrete):
+                controls = self._discrete[np.clip(actions, 0, len(self._discrete) - 1)]
+                return controls[:, 0], controls[:, 1], controls[:, 2]
             return self._read_each(actions, rows)
-        if (
-            isinstance(actions, np.ndarray)
-            and actions.dtype == np.float32
-            and actions.shape == (n, *spec._shape)
-        ):
-            picked = actions[rows]
+        if array and actions.dtype == np.float32 and actions.shape == (n, *spec._shape):
             assert isinstance(spec.space, gym.spaces.Box)
-            if np.all(picked >= spec.space.low) and np.all(picked <= spec.space.high):
+            picked = actions if len(rows) == n else actions[rows]
+            if (picked >= spec.space.low).all() and (picked <= spec.space.high).all():
                 controls = actions.astype(np.float64)
                 return controls[:, 0], controls[:, 1], controls[:, 2]
         return self._read_each(actions, rows)
