@@ -34,9 +34,11 @@ from tinyrace.env import TinyRaceEnv
 
 KNOWN_WRAPPERS = (TimeLimit, OrderEnforcing, PassiveEnvChecker)  # gym.make's own
 BATCHED_ACTIONS = ("dynamic", "discrete")  # action kinds of the dynamic car
-# cars from which the tyre forces are one numpy computation: below, numpy's fixed cost per
-# call (about 60 calls per step) outweighs the scalar model's cost per car
-NUMPY_FROM = 16
+# cars from which the tyre forces are one numpy computation. Measured (callgrind, random
+# actions): the numpy step costs about 900k instructions + 63k per car (mostly the Python
+# per car around it: body reads, velocities, wheel copies, skid marks), the scalar model
+# 112k per car; they break even at about 19 cars
+NUMPY_FROM = 20
 Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 Write = Callable[[int, Any], None]  # (env index in the slice, observation)
 
