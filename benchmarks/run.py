@@ -91,6 +91,7 @@ RSS_STEPS = 200
 GENERATED_SIZES = {SMALL: (1000, 1000), BIG: (6000, 3000)}  # (width, height) [px]
 BATCH_ENVS = 8  # envs of the BatchVectorEnv case, in 2 workers
 SCALING_ENVS = (1, 2, 4, 8, 16, 32)  # envs stepped in one process (batched, and SyncVectorEnv)
+ENV_WARMUP_STEPS = {False: 2000, True: 200}  # steps of every env before the scaling table
 TINYCARLO_SCRIPT = Path(__file__).resolve().parent / "tinycarlo_steps.py"
 
 FRONT = {"id": "front", "resolution": [120, 160], "roi": [360, 480]}
@@ -266,8 +267,11 @@ def measure_vector(budget: Budget) -> dict[str, Any]:
 def measure_vector_scaling(budget: Budget) -> dict[str, Any]:
     """Env-steps/s of N envs stepped in this one process, N in SCALING_ENVS, by the vector
     entry point in this process (``make_batch(workers=0)``: batched physics), beside one
-    ``gym.make`` env and SyncVectorEnv(8), interleaved. Each vector env warms up N times
-    longer than one env, so that every env's caches (car pictures) are as warm."""
+    ``gym.make`` env and SyncVectorEnv(8), interleaved. Every env first takes the same
+    number of steps, ENV_WARMUP_STEPS: an env's cached car pictures make its first
+    thousand steps dearer (CarRacing's view: a cold env renders a car patch every fourth
+    step, a warm one every twentieth), and N envs sharing a core would otherwise each be
+    N times younger than the one env they are compared with."""
     from tinyrace.vector import make_batch  # here: the RSS baseline must not import tinyrace
 
     steppers = {"single": Stepper(make_tinyrace())}
@@ -279,7 +283,7 @@ def measure_vector_scaling(budget: Budget) -> dict[str, Any]:
         gym.vector.SyncVectorEnv([make_tinyrace] * 8), batch=8, auto_reset=True
     )
     for stepper in steppers.values():
-        stepper.run(budget.warmup * (stepper.batch - 1))  # interleave() adds one warm-up
+        stepper.take(ENV_WARMUP_STEPS[budget is QUICK])
     return timed(steppers, budget)
 
 
