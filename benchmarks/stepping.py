@@ -24,6 +24,7 @@ class Timing:
     resets: int = 0  # episodes ended and reset inside the timed loop
     reset_seconds: float = 0.0  # [s] of ``seconds`` spent in those resets
     rounds: list[float] = field(default_factory=list)  # [steps/s] of each round
+    cpu_seconds: float = 0.0  # [s] this process's CPU time (the machine's load left out)
 
     @property
     def rate(self) -> float:
@@ -36,15 +37,22 @@ class Timing:
         stepping = self.seconds - self.reset_seconds
         return self.steps / stepping if stepping > 0 else 0.0
 
+    @property
+    def cpu_rate(self) -> float:
+        """[steps per CPU second] of this process, resets included."""
+        return self.steps / self.cpu_seconds if self.cpu_seconds else 0.0
+
     def add(self, other: Timing) -> None:
         self.steps += other.steps
         self.seconds += other.seconds
+        self.cpu_seconds += other.cpu_seconds
         self.resets += other.resets
         self.reset_seconds += other.reset_seconds
         self.rounds.append(other.rate)
 
     def as_dict(self) -> dict[str, Any]:
-        return {**asdict(self), "steps_per_s": self.rate, "step_only_per_s": self.step_rate}
+        rates = {"steps_per_s": self.rate, "step_only_per_s": self.step_rate}
+        return {**asdict(self), **rates, "steps_per_cpu_s": self.cpu_rate}
 
 
 class Stepper:
@@ -72,6 +80,7 @@ class Stepper:
         env, actions, n = self.env, self.actions, len(self.actions)
         steps = resets = 0
         reset_seconds = 0.0
+        cpu = time.process_time()
         start = time.perf_counter()
         end = start + seconds
         while True:
@@ -86,7 +95,8 @@ class Stepper:
             now = time.perf_counter()
             if now >= end:
                 break
-        return Timing(steps * self.batch, now - start, resets, reset_seconds)
+        cpu = time.process_time() - cpu
+        return Timing(steps * self.batch, now - start, resets, reset_seconds, cpu_seconds=cpu)
 
     def take(self, steps: int) -> None:
         """``steps`` calls, untimed."""

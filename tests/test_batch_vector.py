@@ -43,8 +43,13 @@ FACTORIES = {
         sim={"step_limit": EPISODE},
     ),
 }
-# (num_envs, workers, steps): 150 steps cross three autoresets, 50 steps one
-LAYOUTS = {"3_envs_2_workers": (3, 2, 150), "2_envs_1_worker": (2, 1, 50)}
+# (num_envs, workers, steps): 150 steps cross three autoresets, 50 steps one; 0 workers:
+# every env in this process
+LAYOUTS = {
+    "3_envs_2_workers": (3, 2, 150),
+    "2_envs_1_worker": (2, 1, 50),
+    "3_envs_in_process": (3, 0, 150),
+}
 
 
 def assert_same(a, b, where: str = "") -> None:

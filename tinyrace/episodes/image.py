@@ -37,9 +37,9 @@ class ImageEpisode:
         self._judge()
         return StepFacts()
 
-    def step(self, dt: float) -> StepFacts:
+    def step(self, dt: float, forces_applied: bool = False) -> StepFacts:
         """The world's step with the controls the car holds (full grip: no grass here)."""
-        self.world.step(dt)
+        self.world.step(dt, forces_applied=forces_applied)
         return self._judge()
 
     def _judge(self) -> StepFacts:

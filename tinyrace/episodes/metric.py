@@ -59,9 +59,9 @@ class MetricEpisode:
         self.world.look(dt)
         return self._progress(StepFacts(tiles_total=len(self.visited)))
 
-    def step(self, dt: float) -> StepFacts:
+    def step(self, dt: float, forces_applied: bool = False) -> StepFacts:
         """The world's step (a wall stops the car there); cones, bounds, tiles and laps."""
-        contacts = self.world.step(dt)
+        contacts = self.world.step(dt, forces_applied=forces_applied)
         facts = StepFacts(tiles_total=len(self.visited))
         if contacts.crashed:
             facts.wall_hit = True

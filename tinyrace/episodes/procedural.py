@@ -38,9 +38,9 @@ class ProceduralEpisode:
         """CarRacing's reset takes one physics step with no action."""
         return self.step(dt)
 
-    def step(self, dt: float) -> StepFacts:
+    def step(self, dt: float, forces_applied: bool = False) -> StepFacts:
         """The world's step with the controls the car holds; the rules' facts."""
-        contacts = self.world.step(dt)
+        contacts = self.world.step(dt, forces_applied=forces_applied)
         facts = self._visit(contacts.new_tile_touches)
         facts.wheels_on_grass = sum(not tiles for tiles in contacts.wheel_tiles)
         x, y, _ = self.world.states()[0].pose

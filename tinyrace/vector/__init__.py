@@ -56,7 +56,9 @@ from gymnasium.vector.utils import (
     read_from_shared_memory,
 )
 
-from tinyrace.vector.worker import CLOSED, work
+from tinyrace.vector.batched import NUMPY_FROM
+from tinyrace.vector.infos import merge_infos
+from tinyrace.vector.worker import CLOSED, _Slice, work
 
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
 ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
@@ -69,10 +71,17 @@ class BatchVectorEnv(VectorEnv):
         env_fns: functions that make the envs; with ``context="spawn"`` they are sent
             with cloudpickle, so the env ids they make must be importable there
             (``"tinyrace:tinyrace/CarRacing-v0"`` or ``make_batch`` do that).
-        workers: processes to run the envs in (at most one per env).
+        workers: processes to run the envs in (at most one per env); 0 runs them all
+            in this process, with no pipe and no pickling.
         context: ``multiprocessing`` start method; ``None`` for the platform default.
         copy: return a copy of the observations (else views of the shared memory,
             overwritten by the next step), as ``SyncVectorEnv``'s ``copy``.
+        batch_physics: step the dynamic cars of a process's envs together (their tyre
+            forces as one numpy computation, ``tinyrace.vector.batched``); False steps
+            each env by its own ``step``. Results are the same.
+        numpy_from: with batched physics, the envs per process from which their cars' tyre
+            forces are one numpy computation; fewer cars each run their own tyre model
+            (numpy's fixed cost per call outweighs it), still stepped together.
     """
 
     def __init__(
@@ -81,17 +90,20 @@ class BatchVectorEnv(VectorEnv):
         workers: int = 2,
         context: str | None = None,
         copy: bool = True,
+        batch_physics: bool = True,
+        numpy_from: int = NUMPY_FROM,
     ):
         env_fns = list(env_fns)
         if not env_fns:
             raise ValueError("BatchVectorEnv needs at least one env function")
-        if workers < 1:
-            raise ValueError(f"workers must be >= 1, got {workers}")
+        if workers < 0:
+            raise ValueError(f"workers must be >= 0 (0: in this process), got {workers}")
         self.env_fns, self.copy = env_fns, copy
         self.num_envs = len(env_fns)
         self.autoreset_mode = AutoresetMode.NEXT_STEP
         self._pipes: list[Connection] = []
         self._processes: list[multiprocessing.process.BaseProcess] = []
+        self._local: _Slice | None = None  # workers=0: the envs, stepped in this process
         # The shared memory must exist before the workers start, so the spaces come from
         # an env made here (as AsyncVectorEnv does).
         probe = env_fns[0]()
@@ -108,15 +120,19 @@ class BatchVectorEnv(VectorEnv):
         self._observations = read_from_shared_memory(
             self.single_observation_space, self._buffer, self.num_envs
         )
-        bounds = np.linspace(0, self.num_envs, min(workers, self.num_envs) + 1).astype(int)
-        self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds)]
+        bounds = np.linspace(0, self.num_envs, min(max(workers, 1), self.num_envs) + 1)
+        self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds.astype(int))]
         memory = (self._buffer, self.single_observation_space, self.num_envs)
+        if workers == 0:
+            self._local = _Slice(env_fns, 0, memory, batch_physics, numpy_from)
+            self._check_spaces([self._local.spaces()])
+            return
         for number, envs in enumerate(self._slices):
             parent, child = ctx.Pipe()
             fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
             process = ctx.Process(  # type: ignore[attr-defined]
                 target=work,
-                args=(child, parent, fns, envs.start, memory),
+                args=(child, parent, fns, envs.start, memory, batch_physics, numpy_from),
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
             )
@@ -162,20 +178,15 @@ class BatchVectorEnv(VectorEnv):
             options = dict(options)  # unlike SyncVectorEnv, leave the caller's dict alone
             mask = _check_reset_mask(options.pop("reset_mask"), self.num_envs)
         replies = self._exchange("reset", [(seed[s], options, mask[s]) for s in self._slices])
-        infos: dict[str, Any] = {}
-        for index, info in enumerate(_flat(replies)):
-            if info is not None:  # None: not in the reset mask
-                infos = self._add_info(infos, info, index)
-        return self._observations_out(), infos
+        # None: not in the reset mask
+        return self._observations_out(), merge_infos(_flat(replies), self.num_envs)
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Step every env; an env whose episode ended at the last step is reset instead."""
         replies = self._exchange("step", [(batch,) for batch in self._split_actions(actions)])
         # the workers' slices are contiguous and in order: flattened, item i is env i's
         rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
-        infos: dict[str, Any] = {}
-        for index, info in enumerate(env_infos):
-            infos = self._add_info(infos, info, index)
+        infos = merge_infos(env_infos, self.num_envs)
         return (
             self._observations_out(),
             np.array(rewards, dtype=np.float64),
@@ -220,6 +231,9 @@ class BatchVectorEnv(VectorEnv):
 
     def close_extras(self, **kwargs: Any) -> None:
         """Close the envs, stop the workers (terminating any that hang), free the memory."""
+        if self._local is not None:
+            self._local.close()
+            self._local = None
         for pipe in self._pipes:
             with contextlib.suppress(OSError):  # a worker that is gone already
                 pipe.send(("close", ()))
@@ -234,7 +248,7 @@ class BatchVectorEnv(VectorEnv):
         self._observations = self._buffer = None  # type: ignore[assignment]  # memory freed
 
     def __del__(self) -> None:
-        if not self.closed and hasattr(self, "_pipes"):
+        if not self.closed and hasattr(self, "_local"):
             self.close()
 
     # -- messages ---------------------------------------------------------------------------
@@ -242,6 +256,8 @@ class BatchVectorEnv(VectorEnv):
         """Send each worker its command and arguments; every worker's answer, in order."""
         if self.closed:
             raise gym.error.ClosedEnvironmentError("BatchVectorEnv was closed")
+        if self._local is not None:  # in this process: the slice's own exceptions
+            return [getattr(self._local, command)(*args[0])]
         # all pickled first: an argument that cannot be pickled leaves the pipes in step
         messages = [ForkingPickler.dumps((command, worker_args)) for worker_args in args]
         for pipe, message in zip(self._pipes, messages, strict=True):
@@ -285,11 +301,25 @@ class BatchVectorEnv(VectorEnv):
 
 
 def make_batch(
-    id: str, num_envs: int, workers: int = 2, *, context: str | None = None, **kwargs: Any
+    id: str,
+    num_envs: int,
+    workers: int = 2,
+    *,
+    context: str | None = None,
+    batch_physics: bool = True,
+    numpy_from: int = NUMPY_FROM,
+    **kwargs: Any,
 ) -> BatchVectorEnv:
-    """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``."""
+    """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``; ``workers=0``
+    steps them all in this process."""
     maker = functools.partial(_make, id, kwargs)
-    return BatchVectorEnv([maker] * num_envs, workers=workers, context=context)
+    return BatchVectorEnv(
+        [maker] * num_envs,
+        workers=workers,
+        context=context,
+        batch_physics=batch_physics,
+        numpy_from=numpy_from,
+    )
 
 
 def make_carracing_vec(

@@ -16,6 +16,8 @@ import numpy as np
 from gymnasium.spaces import Box, Dict
 from gymnasium.vector.utils import read_from_shared_memory, write_to_shared_memory
 
+from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
+
 Memory = tuple[Any, gym.Space[Any], int]  # shared buffer, one env's observation space, envs
 
 # [s] a worker polls for its next command this long before it sleeps: waking a sleeping
@@ -28,9 +30,19 @@ _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # no sched_yiel
 class _Slice:
     """One worker's envs: envs ``first``, ``first + 1``, ... of the vector env."""
 
-    def __init__(self, env_fns: list[Callable[[], gym.Env[Any, Any]]], first: int, memory: Memory):
+    def __init__(
+        self,
+        env_fns: list[Callable[[], gym.Env[Any, Any]]],
+        first: int,
+        memory: Memory,
+        batch_physics: bool = True,
+        numpy_from: int = NUMPY_FROM,
+    ):
         self.envs = [fn() for fn in env_fns]
         self.first = first
+        # dynamic cars: their tyre forces computed together (else each env's own step)
+        fits = batch_physics and BatchStepper.fits(self.envs)
+        self.batch = BatchStepper(self.envs, numpy_from) if fits else None
         self.buffer, self.space, num_envs = memory
         self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
         # Boxes (and Dicts of them) are written through views made once: several times
@@ -54,6 +66,7 @@ class _Slice:
             self._write(j, observation)
             self.autoreset[j] = False
             infos.append(info)
+        self._invalidate()
         return infos
 
     def step(
@@ -62,14 +75,22 @@ class _Slice:
         n = len(self.envs)
         rewards = np.zeros(n, dtype=np.float64)
         terminated, truncated = np.zeros(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_)
-        infos = []
-        for j, env in enumerate(self.envs):
-            if self.autoreset[j]:  # the episode ended at the last step: reward 0, not done
-                observation, info = env.reset()
-            else:
-                observation, rewards[j], terminated[j], truncated[j], info = env.step(actions[j])
-            self._write(j, observation)
-            infos.append(info)
+        infos: list[dict[str, Any]] = [{}] * n
+        autoreset = self.autoreset
+        if self.batch is not None:
+            results = self.batch.step(actions, autoreset, self._write)
+        else:
+            results = [
+                None if autoreset[j] else env.step(actions[j]) for j, env in enumerate(self.envs)
+            ]
+        for j, result in enumerate(results):
+            if result is None:  # the episode ended at the last step: reset, reward 0, not done
+                observation, infos[j] = self.envs[j].reset()
+                self._write(j, observation)
+                continue
+            observation, rewards[j], terminated[j], truncated[j], infos[j] = result
+            if self.batch is None:
+                self._write(j, observation)
         self.autoreset = terminated | truncated
         # cast by numpy as SyncVectorEnv's arrays do; sent as lists, which pickle faster
         return rewards.tolist(), terminated.tolist(), truncated.tolist(), infos
@@ -79,11 +100,18 @@ class _Slice:
         for env in self.envs:
             attribute = env.get_wrapper_attr(name)
             results.append(attribute(*args, **kwargs) if callable(attribute) else attribute)
+        self._invalidate()
         return results
 
     def set_attr(self, name: str, values: Sequence[Any]) -> None:
         for env, value in zip(self.envs, values, strict=True):
             env.set_wrapper_attr(name, value)
+        self._invalidate()
+
+    def _invalidate(self) -> None:
+        """The envs may have changed (reset, called, set): the batch reloads its cars."""
+        if self.batch is not None:
+            self.batch.invalidate()
 
     def close(self) -> None:
         for env in self.envs:
@@ -106,12 +134,14 @@ def work(
     env_fns: list[Callable[[], gym.Env[Any, Any]]],
     first: int,
     memory: Memory,
+    batch_physics: bool = True,
+    numpy_from: int = NUMPY_FROM,
 ) -> None:
     """A worker's loop: build the envs, then answer ``(command, args)`` until "close"."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
     try:
-        envs = _Slice(env_fns, first, memory)
+        envs = _Slice(env_fns, first, memory, batch_physics, numpy_from)
     except Exception as error:
         pipe.send((False, _describe(error)))
         return

@@ -166,26 +166,33 @@ class World:
             body.velocity, body.angular_velocity = velocity, spin
 
     # -- stepping ----------------------------------------------------------------------------
-    def step(self, dt: float, actions: Sequence[Sequence[Any]] = ()) -> Contacts:
+    def step(
+        self, dt: float, actions: Sequence[Sequence[Any]] = (), forces_applied: bool = False
+    ) -> Contacts:
         """One step of ``dt`` seconds: ``actions`` (controls per car, if given) handed over,
         the car's forces with each wheel's grip from its contacts, the space stepped, a car
         that ran into a wall put back and stopped. Returns this step's contact facts (the
-        world's own object, valid until the next step)."""
+        world's own object, valid until the next step). ``forces_applied``: the car's
+        forces for this step were set already (a batch computed them, see ``wheel_grip``)."""
         if actions:
             for car, controls in zip(self.cars, actions, strict=False):
                 car.control(*controls)
         car = self.cars[0]
         contacts = self.contacts
         before = _place(car.body) if self._walls else None
-        if self.grass_off_tiles:
-            car.apply_forces(dt, [bool(tiles) for tiles in contacts.wheel_tiles])
-        else:
-            car.apply_forces(dt, _ALL_ROAD)
+        if not forces_applied:
+            car.apply_forces(dt, self.wheel_grip())
         self.look(dt)
         if before is not None and contacts.walls:
             _crash(car, before)
             contacts.crashed = True
         return contacts
+
+    def wheel_grip(self) -> Sequence[bool]:
+        """Per wheel of the car: grips as on road (else as on grass), from its contacts."""
+        if self.grass_off_tiles:
+            return [bool(tiles) for tiles in self.contacts.wheel_tiles]
+        return _ALL_ROAD
 
     def look(self, dt: float) -> Contacts:
         """Step the space by ``dt`` seconds without driving (a reset's look at the spawn)."""

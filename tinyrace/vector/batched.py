@@ -1,0 +1,223 @@
+"""Many envs' steps done together: the cars' tyre forces as one numpy computation.
+
+``BatchStepper`` steps the envs of a slice whose cars are CarRacing's dynamic car. It
+takes each env's step apart (``TinyRaceEnv.step`` is ``control``, the episode's step,
+``conclude``) and does the car parts for all envs at once in a ``DynamicBatch``:
+
+1. the actions are checked in one go and handed to every car (``DynamicBatch.control``);
+2. every car's tyre forces, spin and steering in one numpy computation, the new
+   velocities set on the bodies, skid marks drawn;
+3. env by env, the episode's step with those forces (``forces_applied=True``: the world
+   steps its pymunk space, the rules find the facts) and ``conclude`` (rewards,
+   observation, info), with ``gym.make``'s ``TimeLimit`` counted here instead of called.
+
+Results are the envs' own ``step`` results, bit for bit. Only envs made by ``gym.make``
+(wrappers ``TimeLimit``, ``OrderEnforcing``, ``PassiveEnvChecker``, or none) around a
+``TinyRaceEnv`` with the dynamic car qualify (``BatchStepper.fits``); the first step
+goes through the wrappers, so that the env checker makes its one-time checks.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.error import InvalidAction, ResetNeeded
+from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker, TimeLimit
+
+from tinyrace.actions import DISCRETE_CONTROLS, ActionSpec
+from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.dynamic_batch import DynamicBatch
+from tinyrace.env import TinyRaceEnv
+
+KNOWN_WRAPPERS = (TimeLimit, OrderEnforcing, PassiveEnvChecker)  # gym.make's own
+BATCHED_ACTIONS = ("dynamic", "discrete")  # action kinds of the dynamic car
+# cars from which the tyre forces are one numpy computation. Measured (callgrind, random
+# actions): the numpy step costs about 900k instructions + 63k per car (mostly the Python
+# per car around it: body reads, velocities, wheel copies, skid marks), the scalar model
+# 112k per car; they break even at about 19 cars
+NUMPY_FROM = 20
+Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
+Write = Callable[[int, Any], None]  # (env index in the slice, observation)
+
+
+class BatchStepper:
+    """The envs of one slice, stepped together (see the module's docstring)."""
+
+    def __init__(self, envs: Sequence[gym.Env[Any, Any]], numpy_from: int = NUMPY_FROM) -> None:
+        self.envs = list(envs)
+        self.vectorized = len(self.envs) >= numpy_from  # else each car's own tyre model
+        self.cores = [_core(env) for env in self.envs]
+        self.limits = [_wrapper(env, TimeLimit) for env in self.envs]
+        self.checkers = [_wrapper(env, PassiveEnvChecker) for env in self.envs]
+        self.physics = DynamicBatch(len(self.envs))
+        self.dt = np.array([core.dt for core in self.cores])  # [s] per env
+        actions = self.cores[0]._actions
+        self.actions: ActionSpec = actions
+        self._stale = np.ones(len(self.envs), dtype=np.bool_)  # rows to load from their cars
+        self._discrete = np.array(DISCRETE_CONTROLS)
+
+    @staticmethod
+    def fits(envs: Sequence[gym.Env[Any, Any]]) -> bool:
+        """Whether every env is a ``TinyRaceEnv`` with the dynamic car, made by ``gym.make``
+        (or bare), all with the same action space."""
+        cores = []
+        for env in envs:
+            layer: Any = env
+            while isinstance(layer, gym.Wrapper):
+                if type(layer) not in KNOWN_WRAPPERS:
+                    return False
+                layer = layer.env
+            if not isinstance(layer, TinyRaceEnv) or layer._actions.kind not in BATCHED_ACTIONS:
+                return False
+            cores.append(layer)
+        return all(core._actions == cores[0]._actions for core in cores)
+
+    def invalidate(self) -> None:
+        """The cars may have changed outside this stepper (a reset, a call): reload them."""
+        self._stale[:] = True
+
+    def step(self, actions: Any, autoreset: np.ndarray, write: Write) -> list[Step | None]:
+        """Step the envs not in ``autoreset`` with ``actions``; each one's step results
+        (``None`` for the others, which the caller resets). Observations go to ``write``."""
+        if any(checker is not None and not checker.checked_step for checker in self.checkers):
+            return self._step_one_by_one(actions, autoreset, write)
+        rows = np.flatnonzero(~autoreset).tolist()
+        cores = self.cores
+        for row in rows:
+            if cores[row].episode is None:
+                raise ResetNeeded("Cannot call env.step() before calling env.reset()")
+        self._stale |= autoreset  # those rows are reset, not stepped
+        if not rows:
+            return [None] * len(self.envs)
+        steer, gas, brake = self._controls(actions, rows)
+        if self.vectorized:
+            self._forces_together(rows, steer, gas, brake)
+        else:
+            self._forces_one_by_one(rows, steer, gas, brake)
+        results: list[Step | None] = [None] * len(self.envs)
+        for row in rows:
+            results[row] = self._finish(row, write)
+        return results
+
+    def _forces_together(
+        self, rows: list[int], steer: np.ndarray, gas: np.ndarray, brake: np.ndarray
+    ) -> None:
+        """Every car's controls and tyre forces as one numpy computation (DynamicBatch)."""
+        self._load(rows)
+        physics, cores = self.physics, self.cores
+        physics.control(steer, gas, brake)
+        on_road = np.ones((len(self.envs), 4), dtype=np.bool_)
+        for row in rows:
+            on_road[row] = cores[row]._episode().world.wheel_grip()
+        physics.apply_forces(self.dt, rows, on_road)
+        physics.store(rows)
+        physics.track_skids(rows, on_road)
+
+    def _forces_one_by_one(
+        self, rows: list[int], steer: np.ndarray, gas: np.ndarray, brake: np.ndarray
+    ) -> None:
+        """Each car's own ``control`` and ``apply_forces`` (fewer cars than numpy pays for)."""
+        controls = np.column_stack((steer, gas, brake)).tolist()  # floats, as read() gives
+        for row in rows:
+            core = self.cores[row]
+            world = core._episode().world
+            car = world.car
+            car.control(*controls[row])
+            car.apply_forces(core.dt, world.wheel_grip())
+
+    def _finish(self, row: int, write: Write) -> Step:
+        """The rest of env ``row``'s step: its world and rules, rewards, observation."""
+        core = self.cores[row]
+        episode = core._episode()
+        facts = episode.step(core.dt, forces_applied=True)
+        if episode.world.contacts.crashed and self.vectorized:  # the car stopped its wheels
+            self.physics.stop(row)  # so do the arrays
+        observation, reward, terminated, truncated, info = core.conclude(facts)
+        limit = self.limits[row]
+        if limit is not None:  # TimeLimit.step, without the call
+            limit._elapsed_steps += 1
+            if limit._elapsed_steps >= limit._max_episode_steps:
+                truncated = True
+        write(row, observation)
+        return observation, reward, terminated, truncated, info
+
+    def _load(self, rows: list[int]) -> None:
+        """Stepped rows whose car may have changed, loaded from it (the others stay stale)."""
+        stale = self._stale
+        if not stale.any():
+            return
+        for row in rows:
+            if not stale[row]:
+                continue
+            episode = self.cores[row].episode
+            if episode is not None:
+                car = episode.world.car
+                assert isinstance(car, DynamicCar)  # the dynamic car's actions: its car
+                self.physics.load(row, car)
+            stale[row] = False
+
+    def _controls(self, actions: Any, rows: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(steer, gas, brake) per env as float64 columns; checked as ``ActionSpec.read``
+        checks, for the envs in ``rows`` (an invalid one raises before anything changes)."""
+        spec = self.actions
+        n = len(self.envs)
+        array = isinstance(actions, np.ndarray)
+        if spec.kind == "discrete":
+            whole = array and actions.dtype.kind in "iu" and actions.shape == (n,)
+            picked = actions if not whole or len(rows) == n else actions[rows]
+            if whole and picked.min() >= 0 and picked.max() < len(self._discrete):
+                controls = self._discrete[np.clip(actions, 0, len(self._discrete) - 1)]
+                return controls[:, 0], controls[:, 1], controls[:, 2]
+            return self._read_each(actions, rows)
+        if array and actions.dtype == np.float32 and actions.shape == (n, *spec._shape):
+            assert isinstance(spec.space, gym.spaces.Box)
+            picked = actions if len(rows) == n else actions[rows]
+            if (picked >= spec.space.low).all() and (picked <= spec.space.high).all():
+                controls = actions.astype(np.float64)
+                return controls[:, 0], controls[:, 1], controls[:, 2]
+        return self._read_each(actions, rows)
+
+    def _read_each(
+        self, actions: Any, rows: list[int]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each action read by ``ActionSpec.read`` (which raises ``InvalidAction``)."""
+        controls = np.zeros((len(self.envs), 3))
+        for row in rows:
+            values = self.actions.read(actions[row])
+            if len(values) != 3:
+                raise InvalidAction(f"action {actions[row]!r} is not [steer, gas, brake]")
+            controls[row] = values
+        return controls[:, 0], controls[:, 1], controls[:, 2]
+
+    def _step_one_by_one(
+        self, actions: Any, autoreset: np.ndarray, write: Write
+    ) -> list[Step | None]:
+        """Each env's own ``step`` through its wrappers (the env checker's first step)."""
+        results: list[Step | None] = [None] * len(self.envs)
+        for row, env in enumerate(self.envs):
+            if not autoreset[row]:
+                results[row] = step = env.step(actions[row])
+                write(row, step[0])
+        self.invalidate()
+        return results
+
+
+def _core(env: gym.Env[Any, Any]) -> TinyRaceEnv:
+    layer: Any = env
+    while isinstance(layer, gym.Wrapper):
+        layer = layer.env
+    assert isinstance(layer, TinyRaceEnv)
+    return layer
+
+
+def _wrapper(env: gym.Env[Any, Any], kind: type[Any]) -> Any:
+    """The first wrapper of type ``kind`` around ``env``'s core, or None."""
+    layer: Any = env
+    while isinstance(layer, gym.Wrapper):
+        if type(layer) is kind:
+            return layer
+        layer = layer.env
+    return None

@@ -1,0 +1,92 @@
+"""The envs' infos merged as ``VectorEnv._add_info`` merges them, each array made once."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium.vector import VectorEnv
+
+_SCALARS = (int, float, bool)
+
+
+def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[str, Any]:
+    """What ``_add_info`` makes of env ``i``'s info for every ``i`` (``None``: no info).
+
+    ``_add_info`` visits env by env and key by key, growing one array per key; here the
+    values are gathered per key first and each array is made and filled once. Keys come
+    in the same order, arrays get the same dtypes (the first env's value decides) and
+    the same ``_key`` masks. Infos that mix dicts and other values under one key take
+    ``_add_info`` itself.
+    """
+    gathered: dict[str, tuple[list[int], list[Any]]] = {}
+    for index, info in enumerate(infos):
+        if not info:
+            continue
+        for key, value in info.items():
+            entry = gathered.get(key)
+            if entry is None:
+                gathered[key] = entry = ([], [])
+            entry[0].append(index)
+            entry[1].append(value)
+    merged: dict[str, Any] = {}
+    for key, (indices, values) in gathered.items():
+        nested = [isinstance(value, dict) for value in values]
+        if key != "final_obs" and any(nested) and not all(nested):
+            return _merged_by_gymnasium(infos, num_envs)
+        if key == "final_obs":
+            array: Any = _objects(indices, values, num_envs)
+        elif nested[0]:
+            per_env: list[dict[str, Any] | None] = [None] * num_envs
+            for index, value in zip(indices, values, strict=True):
+                per_env[index] = value
+            array = merge_infos(per_env, num_envs)
+        else:
+            array = _array(indices, values, num_envs)
+        if len(indices) == num_envs:
+            mask = np.ones(num_envs, dtype=np.bool_)
+        else:
+            mask = np.zeros(num_envs, dtype=np.bool_)
+            mask[indices] = True
+        merged[key], merged[f"_{key}"] = array, mask
+    return merged
+
+
+def _array(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
+    """One key's values in the array ``_add_info`` would make for the first of them."""
+    first = values[0]
+    kind = type(first)
+    if kind in _SCALARS or issubclass(kind, np.number):
+        if len(values) == num_envs and all(type(value) is kind for value in values):
+            return np.array(values, dtype=kind)  # every env, one type: cast as one by one
+        array = np.zeros(num_envs, dtype=kind)
+    elif isinstance(first, np.ndarray):
+        array = np.zeros((num_envs, *first.shape), dtype=first.dtype)
+    else:
+        return _objects(indices, values, num_envs)
+    for index, value in zip(indices, values, strict=True):  # one by one, as _add_info casts
+        array[index] = value
+    return array
+
+
+def _objects(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
+    array = np.full(num_envs, fill_value=None, dtype=object)
+    for index, value in zip(indices, values, strict=True):
+        array[index] = value
+    return array
+
+
+class _Merger(VectorEnv):
+    """Only for ``_add_info``, which reads ``num_envs``."""
+
+    def __init__(self, num_envs: int) -> None:
+        self.num_envs = num_envs
+
+
+def _merged_by_gymnasium(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[str, Any]:
+    merger, merged = _Merger(num_envs), dict[str, Any]()
+    for index, info in enumerate(infos):
+        if info is not None:
+            merged = merger._add_info(merged, info, index)
+    return merged
