@@ -359,6 +359,26 @@ def test_nearest_point_on_far_apart_pixel_clusters(pixels, queries):
     assert_nearest(points, queries, 32.0)
 
 
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.integers(0, 200), st.integers(0, 200)), min_size=1, max_size=80),
+    st.lists(st.tuples(st.integers(0, 400), st.integers(0, 400)), min_size=1, max_size=8),
+)
+def test_nearest_point_inside_the_grid_keeps_ties(pixels, halves):
+    """Queries inside the grid, on half pixels and cell edges (many ties): the cut-down
+    candidates of a cell give the very point that a search of all its rings gives."""
+    points = np.array(pixels, float)
+    index = NearestPoint(points, 8.0)
+    for hx, hy in halves:
+        x, y = hx / 2, hy / 2
+        col = min(max(math.floor((x - index.origin[0]) / 8.0), 0), index.cols - 1)
+        row = min(max(math.floor((y - index.origin[1]) / 8.0), 0), index.rows - 1)
+        xs, ys = index._candidates(row, col, index.rows + index.cols)  # every point
+        d2 = (xs - x) ** 2 + (ys - y) ** 2
+        best = int(np.argmin(d2))
+        assert index.query(x, y) == (math.sqrt(d2[best]), xs[best], ys[best])
+
+
 def test_nearest_point_far_outside():
     points = np.array([[0.0, 0.0], [10.0, 0.0], [5000.0, 5000.0]])
     index = NearestPoint(points)
