@@ -272,7 +272,7 @@ def _any_inside(corners: np.ndarray, pixels: list[tuple[np.ndarray, np.ndarray]]
     top = int(ys.min())
     left, right = _row_spans(corners, np.arange(top, int(ys.max()) + 1, dtype=np.float64))
     rows = ys - top
-    return bool(np.any((xs >= np.ceil(left)[rows]) & (xs <= np.floor(right)[rows])))
+    return bool(((xs >= np.ceil(left)[rows]) & (xs <= np.floor(right)[rows])).any())
 
 
 def _row_spans(corners: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -63,7 +63,7 @@ class NearestPoint:
         xs, ys = found
         dx, dy = xs - x, ys - y
         d2 = dx * dx + dy * dy
-        best = int(np.argmin(d2))
+        best = int(d2.argmin())  # the method: no numpy dispatch wrapper
         return math.sqrt(d2[best]), float(xs[best]), float(ys[best])
 
     def _candidates(self, row: int, col: int, rings: int) -> tuple[np.ndarray, np.ndarray]:
