@@ -365,8 +365,8 @@ def test_nearest_point_on_far_apart_pixel_clusters(pixels, queries):
     st.lists(st.tuples(st.integers(0, 400), st.integers(0, 400)), min_size=1, max_size=8),
 )
 def test_nearest_point_inside_the_grid_keeps_ties(pixels, halves):
-    """Queries inside the grid, on half pixels and cell edges (many ties): the cut-down
-    candidates of a cell give the very point that a search of all its rings gives."""
+    """Queries inside the grid, on half pixels and cell edges (many ties): the cached
+    candidates of a cell give the very point that a search of every point gives."""
     points = np.array(pixels, float)
     index = NearestPoint(points, 8.0)
     for hx, hy in halves:

@@ -6,8 +6,7 @@ any cell, how many rings around it can hold the nearest point; a query reads
 only those rows: O(points near the query), never a scan of all points. The
 candidates depend on the query's cell (clamped to the grid) and the rings searched alone,
 so they are gathered once per such pair (a bounded cache), also for queries beyond the
-grid; inside the grid they are cut down to those that can be nearest to some point of the
-cell. A query is then a few numpy calls on a few dozen points.
+grid. A query is then a few numpy calls.
 """
 
 from __future__ import annotations
@@ -53,13 +52,12 @@ class NearestPoint:
         # every point closer than the nearest occupied cell's far corner lies within this many
         # rings of cells (the query's cell clamped to the grid, ``outside`` cells beyond it)
         rings = math.ceil(self.reach[row, col] + outside) + 2
-        key = (row, col, rings if outside else 0)  # 0: inside the grid, in that very cell
+        key = (row, col, rings)
         found = self._cells.get(key)
         if found is None:
             if len(self._cells) >= CACHED_CELLS:
                 self._cells.clear()
-            found = self._candidates(row, col, rings)
-            self._cells[key] = found if outside else self._near_cell(row, col, *found)
+            found = self._cells[key] = self._candidates(row, col, rings)
         xs, ys = found
         dx, dy = xs - x, ys - y
         d2 = dx * dx + dy * dy
@@ -75,22 +73,6 @@ class NearestPoint:
         ends = self.offsets[np.arange(r0, r1 + 1) * self.cols + c1 + 1]
         candidates = np.concatenate([self.points[a:b] for a, b in zip(starts, ends, strict=True)])
         return np.ascontiguousarray(candidates[:, 0]), np.ascontiguousarray(candidates[:, 1])
-
-    def _near_cell(
-        self, row: int, col: int, xs: np.ndarray, ys: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """The candidates that can be nearest to some point of cell (row, col), in their
-        order: those no farther from the cell than the least far-corner distance of any."""
-        x0, y0 = self.origin[0] + col * self.cell, self.origin[1] + row * self.cell
-        slack = 1e-6 * self.cell  # [px] the cell grown a little: floor() at its edges
-        x0, y0, x1, y1 = x0 - slack, y0 - slack, x0 + self.cell + slack, y0 + self.cell + slack
-        gap_x = np.maximum(np.maximum(x0 - xs, xs - x1), 0.0)
-        gap_y = np.maximum(np.maximum(y0 - ys, ys - y1), 0.0)
-        far_x = np.maximum(np.abs(xs - x0), np.abs(xs - x1))
-        far_y = np.maximum(np.abs(ys - y0), np.abs(ys - y1))
-        bound = float(np.min(far_x * far_x + far_y * far_y))  # [px^2]
-        keep = gap_x * gap_x + gap_y * gap_y <= bound * (1 + 1e-9) + 1e-9
-        return np.ascontiguousarray(xs[keep]), np.ascontiguousarray(ys[keep])
 
     def __getstate__(self) -> dict[str, Any]:
         return {**self.__dict__, "_cells": {}}  # a cache: refilled when queried
