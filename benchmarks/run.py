@@ -31,7 +31,9 @@ machine's conditions. Measured:
 - tinycarlo 1.1's steps/s on the example tracks, each with one 120x160 camera (its
   wheel ships no examples; these folders are in its format), run by
   ``tinycarlo_steps.py`` in an interpreter that imports tinycarlo ($TINYCARLO_PYTHON,
-  /tmp/tc/bin/python or this one; "not installed" otherwise), beside tinyrace's;
+  /tmp/tc/bin/python or this one; "not installed" otherwise), beside tinyrace's; its
+  episodes end when the car leaves the image, as tinyrace's do (tinycarlo's own loop,
+  whose car drives on over black ground, is given too);
 - ``SyncVectorEnv`` and ``AsyncVectorEnv`` (2 envs, 2 workers) env-steps/s of
   ``tinyrace/CarRacing-v0`` against one env's steps/s, and tinyrace's
   ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step);
@@ -455,6 +457,15 @@ def report_tinycarlo(tinycarlo: dict[str, Any]) -> None:
         )
         for name in names
     ]
+    for name in names:  # tinycarlo's own loop: its car drives on off the image (see the script)
+        free = (tinycarlo.get(f"tinycarlo_{name}") or {}).get("free")
+        row = ratio_row(
+            f"{name}, tinycarlo never ending off the image",
+            tinycarlo.get(f"tinyrace_{name}"),
+            free,
+            0,
+        )
+        rows.append([*row[:2], "", ""])
     print_table("Image tracks vs tinycarlo 1.1", ["measure", "value", "target", "result"], rows)
 
 

@@ -5,8 +5,15 @@ Usage (tinyrace need not be importable here)::
     /tmp/tc/bin/python benchmarks/tinycarlo_steps.py --seconds 2 NAME=FOLDER ...
 
 Steps ``TinyCarloEnv(environment=FOLDER)`` with seeded random steering for the given
-time, resetting when an episode ends (as a training loop would), and prints one JSON
-line: ``{NAME: {"steps_per_s": ..., "steps": ..., "seconds": ..., "folder": FOLDER}}``.
+time, resetting when an episode ends (as a training loop would), resets timed too, and
+prints one JSON line: ``{NAME: {"steps_per_s": ..., "steps": ..., "seconds": ...,
+"resets": ..., "free": {...}, "folder": FOLDER}}``.
+
+An episode also ends when the car's rear axle leaves the image, as tinyrace's does
+(``out_of_bounds``): tinycarlo 1.1 has no such end, and a car driven at random leaves the
+image within a few hundred steps and drives on over black ground, where its steps cost a
+fraction of those on the track (no obstacle pixels in view); tinyrace's figures never
+include such steps. ``free`` holds the figures of tinycarlo's own loop, without that end.
 """
 
 from __future__ import annotations
@@ -20,7 +27,8 @@ import time
 import numpy as np
 
 
-def steps_per_second(folder: str, seconds: float) -> dict:
+def steps_per_second(folder: str, seconds: float, end_outside: bool) -> dict:
+    """steps/s of one env on ``folder``; ``end_outside``: reset when the car leaves the image."""
     from tinycarlo.env import TinyCarloEnv
 
     with contextlib.redirect_stdout(io.StringIO()):  # it prints the config file it loaded
@@ -31,14 +39,24 @@ def steps_per_second(folder: str, seconds: float) -> dict:
     actions = rng.uniform(-1.0, 1.0, (1024, 1))
     env.reset()
     env.step(actions[0])  # warm-up
-    steps, start = 0, time.perf_counter()
+    env.reset()
+    steps = resets = 0
+    start = time.perf_counter()
     while time.perf_counter() - start < seconds:
         *_, done, _ = env.step(actions[steps % len(actions)])
         steps += 1
-        if done:
+        if done or (end_outside and not _inside(env)):
             env.reset()
+            resets += 1
     elapsed = time.perf_counter() - start
-    return {"steps_per_s": steps / elapsed, "steps": steps, "seconds": elapsed, "folder": folder}
+    return {"steps_per_s": steps / elapsed, "steps": steps, "seconds": elapsed, "resets": resets}
+
+
+def _inside(env) -> bool:
+    """Whether the car's rear axle (its position) is on the image, by tinyrace's rule."""
+    rows, cols = env.track.dimensions[env.track.current_track]
+    x, y = env.car.position
+    return -0.5 <= x < cols - 0.5 and -0.5 <= y < rows - 0.5
 
 
 def main() -> None:
@@ -49,7 +67,11 @@ def main() -> None:
     results = {}
     for item in args.tracks:
         name, folder = item.split("=", 1)
-        results[name] = steps_per_second(folder, args.seconds)
+        results[name] = {
+            **steps_per_second(folder, args.seconds, end_outside=True),
+            "free": steps_per_second(folder, args.seconds, end_outside=False),
+            "folder": folder,
+        }
     print(json.dumps(results))
 
 

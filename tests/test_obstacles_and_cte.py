@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 from synthetic import BGR, blank, color_mask, make_env, straight, write_track
 
 from tinyrace.config import Color
-from tinyrace.tracks.image import ImageTrack, touched_obstacles
+from tinyrace.tracks.image import ImageTrack, ObstaclePixels, _obstacle_cells
 from tinyrace.tracks.nearest import NearestPoint
 
 WHEELBASE, TRACK_WIDTH = 100, 60  # [px]
@@ -164,8 +164,6 @@ def test_touched_obstacles_counts_pixel_centres_inside(tmp_path):
     image = np.zeros((size, size, 4), np.uint8)
     image[..., 3] = 255
     red = Color.rgb(255, 0, 0)
-    none = np.zeros((0, 4))
-    track = ImageTrack(image, ((0, 0, 0),), (red,), none, np.zeros(0, int), None, None, "-")
     ys, xs = np.mgrid[0:size, 0:size]
     centres = np.stack([xs.ravel(), ys.ravel()], axis=1).astype(float)
     for trial in range(400):
@@ -179,13 +177,26 @@ def test_touched_obstacles_counts_pixel_centres_inside(tmp_path):
         py, px = near[rng.integers(len(near))]
         image[..., :3] = 0
         image[py, px, 0] = 255
+        image[rng.integers(size, size=3), rng.integers(size, size=3), 0] = 255  # other specks
+        if trial % 4 == 1:  # a blob: its cell boxes may lie wholly inside the footprint
+            h, w = rng.integers(1, 40, 2)
+            image[py : py + h, px : px + w, 0] = 255
+        cells, owners = _obstacle_cells(image, (red,))
+        track = ImageTrack(image, ((0, 0, 0),), (red,), cells, owners, None, None, "-")
+        exact = heading in (0.0, math.pi / 2, math.pi) and trial % 3 == 0  # integer corners
         f = np.array([math.cos(heading), math.sin(heading)])
+        f = np.round(f) if exact else f  # cos(pi / 2) is 6e-17, not 0
         r = np.array([-f[1], f[0]])
         rear = np.array(pose[:2])
         left, right = rear - r * width / 2, rear + r * width / 2
         corners = np.array([left, right, right + length * f, left + length * f])
-        expected = margins[py, px] >= -1e-9
-        assert bool(touched_obstacles(track, corners, {0})) == expected, (trial, margins[py, px])
+        red_centres = np.argwhere(image[..., 0] == 255)[:, ::-1].astype(float)
+        red_margins = footprint_margin(red_centres, pose, length, width)
+        expected = np.any(red_margins >= -1e-9)
+        if not exact and not np.any(red_margins > 1e-9) and expected:
+            continue  # on a slanted edge to rounding: either answer would be defensible
+        found = ObstaclePixels(track).touched(corners, range(len(cells)))
+        assert bool(found) == expected, (trial, margins[py, px])
 
 
 # -- cross-track error ----------------------------------------------------------------------
@@ -346,6 +357,26 @@ def test_nearest_point_on_far_apart_pixel_clusters(pixels, queries):
     """Integer pixels in a few tight clusters far apart: mostly empty cells between them."""
     points = np.array([(x + c, y - c // 3) for x, y, c in pixels], float)
     assert_nearest(points, queries, 32.0)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.integers(0, 200), st.integers(0, 200)), min_size=1, max_size=80),
+    st.lists(st.tuples(st.integers(0, 400), st.integers(0, 400)), min_size=1, max_size=8),
+)
+def test_nearest_point_inside_the_grid_keeps_ties(pixels, halves):
+    """Queries inside the grid, on half pixels and cell edges (many ties): the cached
+    candidates of a cell give the very point that a search of every point gives."""
+    points = np.array(pixels, float)
+    index = NearestPoint(points, 8.0)
+    for hx, hy in halves:
+        x, y = hx / 2, hy / 2
+        col = min(max(math.floor((x - index.origin[0]) / 8.0), 0), index.cols - 1)
+        row = min(max(math.floor((y - index.origin[1]) / 8.0), 0), index.rows - 1)
+        xs, ys = index._candidates(row, col, index.rows + index.cols)  # every point
+        d2 = (xs - x) ** 2 + (ys - y) ** 2
+        best = int(np.argmin(d2))
+        assert index.query(x, y) == (math.sqrt(d2[best]), xs[best], ys[best])
 
 
 def test_nearest_point_far_outside():

@@ -8,7 +8,7 @@ from tinyrace.cars.registry import CarModel
 from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
 from tinyrace.tracks.base import TrackDraw
-from tinyrace.tracks.image import ImageSource, ImageTrack, touched_obstacles
+from tinyrace.tracks.image import ImageSource, ImageTrack, ObstaclePixels
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
@@ -17,12 +17,20 @@ from tinyrace.world.world import World
 class ImageEpisode:
     """One reset on an image track: the chosen track and spawn, a car in its world."""
 
-    def __init__(self, config: EnvConfig, world: World, draw: TrackDraw, car_model: CarModel):
+    def __init__(
+        self,
+        config: EnvConfig,
+        world: World,
+        draw: TrackDraw,
+        car_model: CarModel,
+        pixels: ObstaclePixels,
+    ):
         self.config = config
         self.layout = draw.track  # the generic view (tinyrace.tracks.base.Track)
         self.track: ImageTrack = draw.track.detail
         self.track_index, self.spawn_index = draw.track_index, draw.spawn_index
         self.world = world
+        self.pixels = pixels  # the track's obstacle pixels, for the footprint test
         self.world.remove_cars()  # the last episode's car; the obstacle sensors stay
         self.world.add_car(car_model.build(self.world.space, draw.spawn, config.car, draw.track))
         self.visit_order: list[int] = []  # an image track has no tiles
@@ -47,8 +55,8 @@ class ImageEpisode:
         contacts, car = self.world.contacts, self.world.states()[0]
         facts = StepFacts()
         if contacts.obstacle_cells:
-            candidates = {int(self.track.cell_obstacles[i]) for i in contacts.obstacle_cells}
-            facts.obstacles_hit = touched_obstacles(self.track, footprint_corners(car), candidates)
+            corners = footprint_corners(car)
+            facts.obstacles_hit = self.pixels.touched(corners, contacts.obstacle_cells)
         x, y = car.rear_axle
         if self.track.trajectory is not None:
             facts.cte = self.track.trajectory.query(x, y)[0]
@@ -73,13 +81,15 @@ class ImageEpisode:
 
 
 class ImageCourse:
-    """What lasts across resets: one world per track, its obstacle sensors built once."""
+    """What lasts across resets: one world per track, its obstacle sensors built once, and
+    each track's obstacle pixels."""
 
     def __init__(self, config: EnvConfig, source: ImageSource, car_model: CarModel):
         self.config = config
         self.source = source
         self.car_model = car_model
         self.worlds: list[World] = []
+        self.pixels = [ObstaclePixels(layout.detail) for layout in source.tracks]
         for layout in source.tracks:
             world = World()
             world.add_obstacle_cells(layout.detail.cells)
@@ -90,4 +100,7 @@ class ImageCourse:
         return [layout.detail for layout in self.source.tracks]
 
     def new_episode(self, draw: TrackDraw) -> ImageEpisode:
-        return ImageEpisode(self.config, self.worlds[draw.track_index], draw, self.car_model)
+        index = draw.track_index
+        return ImageEpisode(
+            self.config, self.worlds[index], draw, self.car_model, self.pixels[index]
+        )

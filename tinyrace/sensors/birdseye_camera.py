@@ -33,6 +33,8 @@ from tinyrace.sensors.texture import GroundTexture, compose
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
+Axes = tuple[float, float, float, float]  # forward x, y and right x, y unit vectors
+
 
 class RoiCamera:
     """One configured camera on a ground texture; ``y_down`` for image tracks (pixels)."""
@@ -45,24 +47,26 @@ class RoiCamera:
         ry, rx = config.roi
         self.scale = (self.size[0] / rx, self.size[1] / ry)  # output px per track unit
         self.pixels_per_unit = math.sqrt(self.scale[0] * self.scale[1])
+        self.turn = math.radians(config.yaw)  # [rad] the camera's direction right of the car's
 
-    def _axes(self, heading: float, turn_deg: float) -> tuple[float, float, float, float]:
-        """Forward and right unit vectors of a direction ``turn_deg`` right of ``heading``."""
-        turn = math.radians(turn_deg)
+    def _axes(self, heading: float, turn: float) -> Axes:
+        """Forward and right unit vectors of a direction ``turn`` [rad] right of ``heading``."""
         angle = heading + turn if self.y_down else heading - turn
         fx, fy = math.cos(angle), math.sin(angle)
         return (fx, fy, -fy, fx) if self.y_down else (fx, fy, fy, -fx)
 
-    def mount(self, front: tuple[float, float], heading: float) -> tuple[float, float]:
-        """The window's bottom-centre point in track units."""
-        fx, fy, rx, ry = self._axes(heading, 0.0)
+    def mount(
+        self, front: tuple[float, float], heading: float, car_axes: Axes | None = None
+    ) -> tuple[float, float]:
+        """The window's bottom-centre point in track units (``car_axes``: the car's, if known)."""
+        fx, fy, rx, ry = car_axes or self._axes(heading, 0.0)
         ahead, right = self.config.position
         return front[0] + ahead * fx + right * rx, front[1] + ahead * fy + right * ry
 
     def matrix(self, front: tuple[float, float], heading: float) -> np.ndarray:
         """World -> output pixel affine for the car's front-axle middle and heading."""
-        mx, my = self.mount(front, heading)
-        fx, fy, rx, ry = self._axes(heading, self.config.yaw)
+        fx, fy, rx, ry = axes = self._axes(heading, self.turn)
+        mx, my = self.mount(front, heading, axes if self.turn == 0 else None)
         sx, sy = self.scale
         roi_y, roi_x = self.config.roi
         # u = roi_x/2 + (p - m).right ; v = roi_y - (p - m).forward ; pixel index = u * sx - 0.5
@@ -81,7 +85,7 @@ class RoiCamera:
     def corners(self, front: tuple[float, float], heading: float) -> np.ndarray:
         """(4, 2) window corners [track units]: bottom-left, bottom-right, top-right, top-left."""
         mx, my = self.mount(front, heading)
-        fx, fy, rx, ry = self._axes(heading, self.config.yaw)
+        fx, fy, rx, ry = self._axes(heading, self.turn)
         roi_y, roi_x = self.config.roi
         offsets = [(-roi_x / 2, 0), (roi_x / 2, 0), (roi_x / 2, roi_y), (-roi_x / 2, roi_y)]
         return np.array([(mx + a * rx + b * fx, my + a * ry + b * fy) for a, b in offsets])

@@ -17,6 +17,7 @@ import numpy as np
 
 # Draws the ground into ``image`` given the world->pixel affine of that image.
 Painter = Callable[[np.ndarray, np.ndarray], None]
+_IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -92,6 +93,8 @@ class GroundTexture:
         # [texture px per world unit] of each level, for picking one by the output's scale
         self.scales = [float(np.sqrt(abs(np.linalg.det(m[:, :2])))) for m in self.to_pixels]
         self.from_pixels = [invert(m) for m in self.to_pixels]
+        # levels whose pixels are the world's units (image tracks' level 0): no compose needed
+        self._unit = [bool(np.array_equal(m, _IDENTITY)) for m in self.from_pixels]
         self._scratch: dict[tuple[int, int], np.ndarray] = {}  # 4-channel warp targets by size
 
     def level_for(self, out_pixels_per_unit: float) -> int:
@@ -118,7 +121,9 @@ class GroundTexture:
         if pixels_per_unit is None:
             pixels_per_unit = float(np.sqrt(abs(np.linalg.det(world_to_out[:, :2]))))
         level = self.level_for(pixels_per_unit)
-        texture_to_out = compose(world_to_out, self.from_pixels[level])
+        texture_to_out = (
+            world_to_out if self._unit[level] else compose(world_to_out, self.from_pixels[level])
+        )
         scratch = self._scratch.get(size)
         if scratch is None:
             scratch = self._scratch[size] = np.empty((size[1], size[0], 4), np.uint8)

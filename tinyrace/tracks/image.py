@@ -9,7 +9,7 @@ world units: x right, y down.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +28,7 @@ from tinyrace.tracks.nearest import NearestPoint
 THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
 CELL = 32  # [px] side of the obstacle broad-phase cells
 _ROWS_PER_CHUNK = 512  # bounds the temporary masks when scanning huge images
+CACHED_CELLS = 1024  # obstacle cells whose pixels are kept (cleared when full)
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,25 +185,94 @@ def _cell_boxes(hits: np.ndarray) -> np.ndarray:
     return np.stack([gx * CELL + x0, gy * CELL + y0, gx * CELL + x1, gy * CELL + y1], axis=1)
 
 
-def touched_obstacles(track: ImageTrack, corners: np.ndarray, candidates: set[int]) -> list[int]:
-    """Which ``candidates`` (obstacle indices) have a pixel inside the convex polygon ``corners``.
+class ObstaclePixels:
+    """The obstacle pixels of an image track, per cell box, each cell's found on first use.
 
-    A pixel counts when its centre (integer coordinates) lies inside the polygon or on its
-    edge. Pixel-exact, over the polygon's bounding window only: O(footprint area).
+    The narrow phase of the obstacle test: pymunk reports which cell boxes the footprint
+    overlaps, and only their pixels are tested against it. A pixel inside the footprint
+    lies in a box that the footprint overlaps, so this is as exact as a test of every pixel.
+    A box wholly inside the footprint needs no pixel test: it holds at least one pixel.
     """
-    width, height = track.size
-    x0, y0 = np.ceil(corners.min(axis=0)).astype(int)
-    x1, y1 = np.floor(corners.max(axis=0)).astype(int) + 1
-    x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, width), min(y1, height)
-    if x0 >= x1 or y0 >= y1:
+
+    def __init__(self, track: ImageTrack):
+        self.track = track
+        self._boxes: list[list[float]] = track.cells.tolist()  # x0, y0, x1, y1 per cell
+        self._owners: list[int] = track.cell_obstacles.tolist()  # obstacle index per cell
+        self._pixels: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # by cell: x, y
+
+    def of_cell(self, cell: int) -> tuple[np.ndarray, np.ndarray]:
+        """Centres x [px] (float) and rows y (int) of the obstacle pixels in cell box ``cell``."""
+        found = self._pixels.get(cell)
+        if found is None:
+            track = self.track
+            x0, y0, x1, y1 = (int(v + 0.5) for v in self._boxes[cell])  # exclusive ends
+            word = pack(track.obstacle_colors[self._owners[cell]])
+            ys, xs = np.nonzero(track.packed()[y0:y1, x0:x1] == word)
+            if len(self._pixels) >= CACHED_CELLS:
+                self._pixels.clear()
+            found = (xs + x0).astype(np.float64), ys + y0
+            self._pixels[cell] = found
+        return found
+
+    def touched(self, corners: np.ndarray, cells: Iterable[int]) -> list[int]:
+        """The obstacles (indices, ascending) with a pixel of ``cells`` whose centre lies
+        inside the convex polygon ``corners`` or on its edge."""
+        edges = _inner_edges(corners.tolist())
+        hit: set[int] = set()
+        unsure: dict[int, list[int]] = {}  # by obstacle: cells whose pixels need a test
+        for cell in cells:
+            owner = self._owners[cell]
+            if owner in hit:
+                continue
+            if edges and _box_inside(self._boxes[cell], edges):
+                hit.add(owner)
+                unsure.pop(owner, None)
+            else:
+                unsure.setdefault(owner, []).append(cell)
+        for owner, owned in unsure.items():
+            if _any_inside(corners, [self.of_cell(cell) for cell in owned]):
+                hit.add(owner)
+        return sorted(hit)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "_pixels": {}}  # a cache: refilled when needed
+
+
+Edge = tuple[float, float, float, float]  # start x, y and direction dx, dy [px]
+
+
+def _inner_edges(corners: list[list[float]]) -> list[Edge]:
+    """The edges of a convex polygon, in the order that puts its inside on the positive side
+    of each edge's cross product (see _box_inside); none for a polygon without area."""
+    pairs = list(zip(corners, corners[1:] + corners[:1], strict=True))
+    area = sum(ax * by - bx * ay for (ax, ay), (bx, by) in pairs)  # twice the signed area
+    if area == 0:
         return []
-    left, right = _row_spans(corners, np.arange(y0, y1, dtype=np.float64))
-    columns = np.arange(x0, x1)
-    inside = (columns >= np.ceil(left)[:, None]) & (columns <= np.floor(right)[:, None])
-    window = track.packed()[y0:y1, x0:x1]
-    return [
-        i for i in sorted(candidates) if np.any((window == pack(track.obstacle_colors[i])) & inside)
-    ]
+    if area < 0:
+        pairs = [(b, a) for a, b in reversed(pairs)]
+    return [(ax, ay, bx - ax, by - ay) for (ax, ay), (bx, by) in pairs]
+
+
+def _box_inside(box: list[float], edges: list[Edge]) -> bool:
+    """Whether the corners of ``box`` (x0, y0, x1, y1) all lie inside the polygon of ``edges``
+    or on its edge. Its pixel centres then lie at least half a pixel inside."""
+    x0, y0, x1, y1 = box
+    for ax, ay, dx, dy in edges:
+        for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1)):
+            if dx * (y - ay) - dy * (x - ax) < 0:
+                return False
+    return True
+
+
+def _any_inside(corners: np.ndarray, pixels: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+    """Whether a pixel of ``pixels`` (per cell: centres x (float) and rows y (int)) has its
+    centre inside the convex polygon ``corners`` or on its edge."""
+    xs = np.concatenate([x for x, _ in pixels]) if len(pixels) > 1 else pixels[0][0]
+    ys = np.concatenate([y for _, y in pixels]) if len(pixels) > 1 else pixels[0][1]
+    top = int(ys.min())
+    left, right = _row_spans(corners, np.arange(top, int(ys.max()) + 1, dtype=np.float64))
+    rows = ys - top
+    return bool(((xs >= np.ceil(left)[rows]) & (xs <= np.floor(right)[rows])).any())
 
 
 def _row_spans(corners: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -212,7 +282,7 @@ def _row_spans(corners: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.nd
     case of its own: its ends are the ends of the edges next to it.
     """
     sx, sy = corners[:, 0], corners[:, 1]
-    ends = np.roll(corners, -1, axis=0)
+    ends = np.concatenate([corners[1:], corners[:1]])  # each corner's successor
     rise = ends[:, 1] - sy
     slope = np.divide(ends[:, 0] - sx, rise, out=np.zeros(len(rise)), where=rise != 0)
     xs = sx + (rows[:, None] - sy) * slope  # (rows, edges)

@@ -3,9 +3,10 @@
 Points are bucketed in a grid and sorted by cell, so that a row of cells is one
 contiguous slice. A coarse distance transform of the occupied cells tells, for
 any cell, how many rings around it can hold the nearest point; a query reads
-only those rows: O(points near the query), never a scan of all points. Inside the
-grid, a cell's candidates depend on the cell alone, so they are gathered once per cell
-(a bounded cache) and a query is then three numpy calls.
+only those rows: O(points near the query), never a scan of all points. The
+candidates depend on the query's cell (clamped to the grid) and the rings searched alone,
+so they are gathered once per such pair (a bounded cache), also for queries beyond the
+grid. A query is then a few numpy calls.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-CACHED_CELLS = 4096  # cells whose candidates are kept (cleared when full)
+CACHED_CELLS = 4096  # (cell, rings) pairs whose candidates are kept (cleared when full)
 
 
 class NearestPoint:
@@ -40,7 +41,7 @@ class NearestPoint:
         empty = (counts.reshape(self.rows, self.cols) == 0).astype(np.uint8)
         # distance (in cells, centre to centre) from each cell to the nearest occupied cell
         self.reach = cv2.distanceTransform(empty, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-        self._cells: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        self._cells: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def query(self, x: float, y: float) -> tuple[float, float, float]:
         """(distance, nearest x, nearest y) for the point (x, y)."""
@@ -48,25 +49,24 @@ class NearestPoint:
         col = min(max(math.floor(fx), 0), self.cols - 1)
         row = min(max(math.floor(fy), 0), self.rows - 1)
         outside = math.hypot(fx - min(max(fx, 0), self.cols), fy - min(max(fy, 0), self.rows))
-        if outside:
-            xs, ys = self._candidates(row, col, outside)
-        else:
-            found = self._cells.get((row, col))
-            if found is None:
-                if len(self._cells) >= CACHED_CELLS:
-                    self._cells.clear()
-                found = self._cells[row, col] = self._candidates(row, col, 0.0)
-            xs, ys = found
+        # every point closer than the nearest occupied cell's far corner lies within this many
+        # rings of cells (the query's cell clamped to the grid, ``outside`` cells beyond it)
+        rings = math.ceil(self.reach[row, col] + outside) + 2
+        key = (row, col, rings)
+        found = self._cells.get(key)
+        if found is None:
+            if len(self._cells) >= CACHED_CELLS:
+                self._cells.clear()
+            found = self._cells[key] = self._candidates(row, col, rings)
+        xs, ys = found
         dx, dy = xs - x, ys - y
         d2 = dx * dx + dy * dy
-        best = int(np.argmin(d2))
+        best = int(d2.argmin())  # the method: no numpy dispatch wrapper
         return math.sqrt(d2[best]), float(xs[best]), float(ys[best])
 
-    def _candidates(self, row: int, col: int, outside: float) -> tuple[np.ndarray, np.ndarray]:
-        """(x, y) of every point that can be the nearest from cell (row, col), ``outside``
-        [cells] the query's distance beyond the grid; in a fixed order."""
-        # every point closer than the nearest occupied cell's far corner lies within this many rings
-        rings = math.ceil(self.reach[row, col] + outside) + 2
+    def _candidates(self, row: int, col: int, rings: int) -> tuple[np.ndarray, np.ndarray]:
+        """(x, y) of every point in the cells within ``rings`` of cell (row, col), in a fixed
+        order."""
         r0, r1 = max(row - rings, 0), min(row + rings, self.rows - 1)
         c0, c1 = max(col - rings, 0), min(col + rings, self.cols - 1)
         starts = self.offsets[np.arange(r0, r1 + 1) * self.cols + c0]
