@@ -92,36 +92,42 @@ class CarSprite:
     def _polygons(self, car: CarState, steer: float) -> list[np.ndarray]:
         """Four wheels (front ones steered) then the hull, in the body's frame."""
         cos_s, sin_s = math.cos(steer), math.sin(steer)
-        turn = np.array([[cos_s, sin_s], [-sin_s, cos_s]])
-        wheels = [
-            (self.wheel_box @ turn if i < 2 else self.wheel_box) + w.position
-            for i, w in enumerate(car.wheels)
-        ]
-        return wheels + self.hull
+        front = self.wheel_box @ np.array([[cos_s, sin_s], [-sin_s, cos_s]])
+        boxes = (front, front, self.wheel_box, self.wheel_box)
+        return [box + w.position for box, w in zip(boxes, car.wheels, strict=True)] + self.hull
 
     def _render_patch(
         self, car: CarState, local_to_out: np.ndarray, steer: float
     ) -> tuple[int, int, np.ndarray, np.ndarray]:
-        """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha)."""
-        polygons = [transform_points(local_to_out, p) for p in self._polygons(car, steer)]
-        points = np.concatenate(polygons)
-        x0, y0 = np.floor(points.min(axis=0)).astype(int) - 1
-        x1, y1 = np.ceil(points.max(axis=0)).astype(int) + 1
-        size = ((x1 - x0) * SUPERSAMPLE, (y1 - y0) * SUPERSAMPLE)
-        color = np.zeros((size[1], size[0], 3), np.uint8)
-        alpha = np.zeros((size[1], size[0]), np.uint8)
+        """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha).
+
+        All polygons go through each transform together (cv2 maps every point alike, so
+        this is the per-polygon result); the two fills share their vertices."""
+        polygons = self._polygons(car, steer)
+        points = transform_points(local_to_out, np.concatenate(polygons))
+        (left, top), (right, bottom) = points.min(axis=0).tolist(), points.max(axis=0).tolist()
+        x0, y0 = math.floor(left) - 1, math.floor(top) - 1
+        x1, y1 = math.ceil(right) + 1, math.ceil(bottom) + 1
         to_patch = np.array(
             [[SUPERSAMPLE, 0, -x0 * SUPERSAMPLE], [0, SUPERSAMPLE, -y0 * SUPERSAMPLE]], float
         )
-        for polys, rgb in ((polygons[:4], WHEEL_COLOR), (polygons[4:], HULL_COLOR)):
-            _fill(color, to_patch, polys, rgb, antialias=False)
-            _fill(alpha, to_patch, polys, 255, antialias=False)
+        vertices = np.round(transform_points(to_patch, points) * (1 << _BITS)).astype(np.int32)
+        pixels, start = [], 0
+        for polygon in polygons:
+            pixels.append(vertices[start : start + len(polygon)])
+            start += len(polygon)
+        size = ((x1 - x0) * SUPERSAMPLE, (y1 - y0) * SUPERSAMPLE)
+        color = np.zeros((size[1], size[0], 3), np.uint8)
+        alpha = np.zeros((size[1], size[0]), np.uint8)
+        for polys, rgb in ((pixels[:4], WHEEL_COLOR), (pixels[4:], HULL_COLOR)):
+            cv2.fillPoly(color, polys, rgb, cv2.LINE_8, _BITS)
+            cv2.fillPoly(alpha, polys, 255, cv2.LINE_8, _BITS)
         small = (x1 - x0, y1 - y0)
         color = cv2.resize(color, small, interpolation=cv2.INTER_AREA).astype(np.float32) + 0.5
         alpha = cv2.resize(alpha, small, interpolation=cv2.INTER_AREA).astype(np.float32) / 255
         # premultiplied: frame = frame * (1 - a) + color * a, color already holds color * a
         weight = np.repeat(1.0 - alpha[:, :, None], 3, axis=2)
-        return int(x0), int(y0), color, weight
+        return x0, y0, color, weight
 
 
 def _local_to_out(car: CarState, world_to_out: np.ndarray) -> np.ndarray:
