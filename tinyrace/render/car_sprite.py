@@ -29,7 +29,8 @@ _WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
     WHEEL_HALF_WIDTH,
     WHEEL_RADIUS,
 )
-Patch = tuple[slice, slice, np.ndarray, np.ndarray]  # rows, columns, weight, colour
+# rows, columns, weight, premultiplied colour (float32, rows x columns x 3), float32 scratch
+Patch = tuple[slice, slice, np.ndarray, np.ndarray, np.ndarray]
 Patches = dict[tuple[float, int], Patch | None]  # by (zoom, steering step)
 _STEER_STEP = 0.005  # [rad] steering resolution of cached patches
 _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
@@ -80,9 +81,14 @@ class CarSprite:
                         self._patches.clear()
                     self._patches[key] = patch
             if patch is not None:
-                rows, cols, weight, color = patch
+                rows, cols, weight, color, scratch = patch
                 region = image[rows, cols]
-                region[:] = region * weight + color
+                # region * weight + color in float32, truncated to uint8; same-type ufuncs
+                # into a scratch buffer skip numpy's mixed-type casting loops
+                scratch[...] = region
+                np.multiply(scratch, weight, out=scratch)
+                np.add(scratch, color, out=scratch)
+                region[...] = scratch
             return
         polygons = self._polygons(car, car.wheels[0].steer)
         local_to_out = _local_to_out(car, world_to_out)
@@ -140,13 +146,15 @@ def _local_to_out(car: CarState, world_to_out: np.ndarray) -> np.ndarray:
 def _clip(
     shape: tuple[int, ...], x0: int, y0: int, color: np.ndarray, weight: np.ndarray
 ) -> Patch | None:
-    """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour)."""
+    """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour,
+    scratch)."""
     h, w = color.shape[:2]
     ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
     if ax >= bx or ay >= by:
         return None
     inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
-    return slice(ay, by), slice(ax, bx), weight[inside].copy(), color[inside].copy()
+    weight, color = weight[inside].copy(), color[inside].copy()
+    return slice(ay, by), slice(ax, bx), weight, color, np.empty_like(weight)
 
 
 def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidView, width: int) -> None:
