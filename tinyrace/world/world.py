@@ -178,7 +178,7 @@ class World:
         contacts = self.contacts
         before = _place(car.body) if self._walls else None
         if self.grass_off_tiles:
-            car.apply_forces(dt, [bool(tiles) for tiles in contacts.wheel_tiles])
+            car.apply_forces(dt, list(map(bool, contacts.wheel_tiles)))
         else:
             car.apply_forces(dt, _ALL_ROAD)
         self.look(dt)
