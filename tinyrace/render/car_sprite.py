@@ -114,10 +114,10 @@ class CarSprite:
         (left, top), (right, bottom) = points.min(axis=0).tolist(), points.max(axis=0).tolist()
         x0, y0 = math.floor(left) - 1, math.floor(top) - 1
         x1, y1 = math.ceil(right) + 1, math.ceil(bottom) + 1
-        to_patch = np.array(
-            [[SUPERSAMPLE, 0, -x0 * SUPERSAMPLE], [0, SUPERSAMPLE, -y0 * SUPERSAMPLE]], float
-        )
-        vertices = np.round(transform_points(to_patch, points) * (1 << _BITS)).astype(np.int32)
+        # into the 4x patch with _BITS subpixel bits: powers of two scale exactly, so this is
+        # the affine (4, 0, -4 x0; 0, 4, -4 y0) then the subpixel scaling, rounded alike
+        scale = SUPERSAMPLE << _BITS
+        vertices = np.round(points * scale - (x0 * scale, y0 * scale)).astype(np.int32)
         pixels, start = [], 0
         for polygon in polygons:
             pixels.append(vertices[start : start + len(polygon)])
@@ -152,8 +152,9 @@ def _clip(
     ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
     if ax >= bx or ay >= by:
         return None
-    inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
-    weight, color = weight[inside].copy(), color[inside].copy()
+    if (bx - ax, by - ay) != (w, h):  # cut: keep contiguous copies of the part inside
+        inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
+        weight, color = weight[inside].copy(), color[inside].copy()
     return slice(ay, by), slice(ax, bx), weight, color, np.empty_like(weight)
 
 
