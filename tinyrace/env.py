@@ -22,7 +22,7 @@ from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
-from tinyrace.rewards import ends_episode, reward_terms, shaping_from_config
+from tinyrace.rewards import active_terms, ends_episode, reward_terms, shaping_from_config
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import build_sensors, sensor_type
@@ -117,6 +117,7 @@ class TinyRaceEnv(gym.Env):
             if cte_shaping is not None
             else shaping_from_config(self.config.reward_design)
         )
+        self._terms = active_terms(self.config.reward_design, self._shaping)  # asked per step
         self.episode: Episode | None = None
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
@@ -182,7 +183,7 @@ class TinyRaceEnv(gym.Env):
         """Rewards, episode end, observation and info of a step whose physics is done."""
         self.t += self.dt
         self.steps += 1
-        terms = reward_terms(facts, self.config.reward_design, self._shaping)
+        terms = reward_terms(facts, self.config.reward_design, self._shaping, True, self._terms)
         carried, self._carry = self._carry, {}
         if carried:
             terms = _add_terms(terms, carried)

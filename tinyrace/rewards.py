@@ -9,7 +9,7 @@ adding one is a function here plus an entry in ``REWARD_TERMS``.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -118,21 +118,50 @@ REWARD_TERMS: dict[str, RewardTerm] = {
 }
 UNCHARGED_AT_RESET = ("time",)  # terms the step that reset takes with no action does not pay
 
+# When a term can pay at all, by name: a term whose weight is zero (or that has nothing to
+# pay for) returns None on every step, so ``active_terms`` leaves it out. A term without
+# an entry here is always asked.
+CAN_PAY: dict[str, Callable[[RewardConfig, CteShaping | None], bool]] = {
+    "time": lambda config, shaping: bool(config.time_penalty),
+    "tiles": lambda config, shaping: bool(config.tile_progress),
+    "off_road": lambda config, shaping: bool(config.off_road_penalty),
+    "obstacles": lambda config, shaping: any(
+        o.reward != "done" and o.reward for o in config.color_obstacles
+    ),
+    "cones": lambda config, shaping: bool(config.cone_penalty),
+    "walls": lambda config, shaping: bool(config.wall_penalty),
+    "cte": lambda config, shaping: shaping is not None,
+}
+
+
+def active_terms(config: RewardConfig, shaping: CteShaping | None) -> dict[str, RewardTerm]:
+    """The terms of ``REWARD_TERMS`` (in its order) that can pay under ``config``."""
+    return {
+        name: term
+        for name, term in REWARD_TERMS.items()
+        if name not in CAN_PAY or CAN_PAY[name](config, shaping)
+    }
+
 
 def reward_terms(
-    facts: StepFacts, config: RewardConfig, shaping: CteShaping | None, charge_time: bool = True
+    facts: StepFacts,
+    config: RewardConfig,
+    shaping: CteShaping | None,
+    charge_time: bool = True,
+    terms_to_ask: Mapping[str, RewardTerm] = REWARD_TERMS,
 ) -> dict[str, float]:
     """Named reward terms of one step.
 
     Leaving the bounds replaces every other term with the penalty, as CarRacing does.
     ``charge_time`` is False for the step that ``reset`` takes with no action.
+    ``terms_to_ask``: ``active_terms(config, shaping)`` saves asking terms that cannot pay.
     """
     if facts.out_of_bounds:
         return (
             {"out_of_bounds": -config.out_of_bounds_penalty} if config.out_of_bounds_penalty else {}
         )
     terms: dict[str, float] = {}
-    for name, term in REWARD_TERMS.items():
+    for name, term in terms_to_ask.items():
         if not charge_time and name in UNCHARGED_AT_RESET:
             continue
         value = term(facts, config, shaping)
@@ -145,7 +174,9 @@ def ends_episode(facts: StepFacts, config: RewardConfig) -> str | None:
     """Why the episode terminates after this step, or None."""
     if facts.out_of_bounds:
         return "out_of_bounds"
-    if any(config.color_obstacles[i].reward == "done" for i in facts.obstacles_hit):
+    if facts.obstacles_hit and any(
+        config.color_obstacles[i].reward == "done" for i in facts.obstacles_hit
+    ):
         return "obstacle"
     if facts.collision_ends:
         return "collision"

@@ -170,6 +170,8 @@ class DynamicCar:
         self._spin_moment = spec.wheel_moment * scale**2  # [mass track units^2]
         self._mass, self._moment = body.mass, body.moment  # the shapes are fixed once built
         self._cap_dt = (0.0, 0.0)  # (dt, Box2D's speed cap at that dt [track units/s])
+        self._dims = _footprint(scale)  # (rear axle, wheelbase, width) [track units]
+        self._spots = [(w.x, w.y) for w in self.wheels]  # wheels in the body's frame
 
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
         """Spin the wheels, compute tyre forces and set them on the body for the next space step.
@@ -292,23 +294,29 @@ class DynamicCar:
         x, y = body.position
         vx, vy = body.velocity
         angle = body.angle
-        radius = self.wheel_radius
-        rear, base, width = _footprint(self.scale)
+        radius = self._radius
+        rear, base, width = self._dims
         # the axles lie on the body's y axis: body.local_to_world((0, r)) computes
         # (x - sin * r, y + cos * r) with the same libm sin and cos, so the bits are the same
         cos_a, sin_a = math.cos(angle), math.sin(angle)
         front = rear + base
+        wheels = self.wheels
         return CarState(
             model="dynamic",
             pose=(x, y, angle + math.pi / 2),
             velocity=(vx, vy),
             speed=math.sqrt(vx**2 + vy**2),  # as pymunk's Vec2d.length
             yaw_rate=body.angular_velocity,
-            steer=self.wheels[0].steer,
+            steer=wheels[0].steer,
             front_axle=(x - sin_a * front, y + cos_a * front),
             rear_axle=(x - sin_a * rear, y + cos_a * rear),
             footprint=(base, width),
-            wheels=tuple([WheelState(w.omega, w.steer, radius, (w.x, w.y)) for w in self.wheels]),
+            wheels=tuple(
+                [
+                    WheelState(w.omega, w.steer, radius, spot)
+                    for w, spot in zip(wheels, self._spots, strict=True)
+                ]
+            ),
             hull_angle=angle,
             scale=self.scale,
             steer_sign=self.steer_sign,

@@ -42,7 +42,7 @@ class ProceduralEpisode:
         """The world's step with the controls the car holds; the rules' facts."""
         contacts = self.world.step(dt, forces_applied=forces_applied)
         facts = self._visit(contacts.new_tile_touches)
-        facts.wheels_on_grass = sum(not tiles for tiles in contacts.wheel_tiles)
+        facts.wheels_on_grass = _on_grass(contacts.wheel_tiles)
         x, y, _ = self.world.states()[0].pose
         facts.out_of_bounds = max(abs(x), abs(y)) > self.track_config.playfield
         return facts
@@ -70,8 +70,13 @@ class ProceduralEpisode:
             "speed": car.speed,
             "tiles_visited": self.visited_count,
             "tiles_total": len(self.visited),
-            "wheels_on_grass": sum(not tiles for tiles in self.world.contacts.wheel_tiles),
+            "wheels_on_grass": _on_grass(self.world.contacts.wheel_tiles),
         }
+
+
+def _on_grass(wheel_tiles: Sequence[set[int]]) -> int:
+    """How many wheels touch no road tile."""
+    return len(wheel_tiles) - sum(map(bool, wheel_tiles))
 
 
 class ProceduralCourse:

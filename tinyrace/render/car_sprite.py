@@ -29,7 +29,8 @@ _WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
     WHEEL_HALF_WIDTH,
     WHEEL_RADIUS,
 )
-Patch = tuple[slice, slice, np.ndarray, np.ndarray]  # rows, columns, weight, colour
+# rows, columns, weight, premultiplied colour (float32, rows x columns x 3), float32 scratch
+Patch = tuple[slice, slice, np.ndarray, np.ndarray, np.ndarray]
 Patches = dict[tuple[float, int], Patch | None]  # by (zoom, steering step)
 _STEER_STEP = 0.005  # [rad] steering resolution of cached patches
 _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
@@ -80,9 +81,14 @@ class CarSprite:
                         self._patches.clear()
                     self._patches[key] = patch
             if patch is not None:
-                rows, cols, weight, color = patch
+                rows, cols, weight, color, scratch = patch
                 region = image[rows, cols]
-                region[:] = region * weight + color
+                # region * weight + color in float32, truncated to uint8; same-type ufuncs
+                # into a scratch buffer skip numpy's mixed-type casting loops
+                scratch[...] = region
+                np.multiply(scratch, weight, out=scratch)
+                np.add(scratch, color, out=scratch)
+                region[...] = scratch
             return
         polygons = self._polygons(car, car.wheels[0].steer)
         local_to_out = _local_to_out(car, world_to_out)
@@ -92,36 +98,42 @@ class CarSprite:
     def _polygons(self, car: CarState, steer: float) -> list[np.ndarray]:
         """Four wheels (front ones steered) then the hull, in the body's frame."""
         cos_s, sin_s = math.cos(steer), math.sin(steer)
-        turn = np.array([[cos_s, sin_s], [-sin_s, cos_s]])
-        wheels = [
-            (self.wheel_box @ turn if i < 2 else self.wheel_box) + w.position
-            for i, w in enumerate(car.wheels)
-        ]
-        return wheels + self.hull
+        front = self.wheel_box @ np.array([[cos_s, sin_s], [-sin_s, cos_s]])
+        boxes = (front, front, self.wheel_box, self.wheel_box)
+        return [box + w.position for box, w in zip(boxes, car.wheels, strict=True)] + self.hull
 
     def _render_patch(
         self, car: CarState, local_to_out: np.ndarray, steer: float
     ) -> tuple[int, int, np.ndarray, np.ndarray]:
-        """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha)."""
-        polygons = [transform_points(local_to_out, p) for p in self._polygons(car, steer)]
-        points = np.concatenate(polygons)
-        x0, y0 = np.floor(points.min(axis=0)).astype(int) - 1
-        x1, y1 = np.ceil(points.max(axis=0)).astype(int) + 1
+        """The car drawn at 4x around its bounding box, averaged down: (x0, y0, rgb, alpha).
+
+        All polygons go through each transform together (cv2 maps every point alike, so
+        this is the per-polygon result); the two fills share their vertices."""
+        polygons = self._polygons(car, steer)
+        points = transform_points(local_to_out, np.concatenate(polygons))
+        (left, top), (right, bottom) = points.min(axis=0).tolist(), points.max(axis=0).tolist()
+        x0, y0 = math.floor(left) - 1, math.floor(top) - 1
+        x1, y1 = math.ceil(right) + 1, math.ceil(bottom) + 1
+        # into the 4x patch with _BITS subpixel bits: powers of two scale exactly, so this is
+        # the affine (4, 0, -4 x0; 0, 4, -4 y0) then the subpixel scaling, rounded alike
+        scale = SUPERSAMPLE << _BITS
+        vertices = np.round(points * scale - (x0 * scale, y0 * scale)).astype(np.int32)
+        pixels, start = [], 0
+        for polygon in polygons:
+            pixels.append(vertices[start : start + len(polygon)])
+            start += len(polygon)
         size = ((x1 - x0) * SUPERSAMPLE, (y1 - y0) * SUPERSAMPLE)
         color = np.zeros((size[1], size[0], 3), np.uint8)
         alpha = np.zeros((size[1], size[0]), np.uint8)
-        to_patch = np.array(
-            [[SUPERSAMPLE, 0, -x0 * SUPERSAMPLE], [0, SUPERSAMPLE, -y0 * SUPERSAMPLE]], float
-        )
-        for polys, rgb in ((polygons[:4], WHEEL_COLOR), (polygons[4:], HULL_COLOR)):
-            _fill(color, to_patch, polys, rgb, antialias=False)
-            _fill(alpha, to_patch, polys, 255, antialias=False)
+        for polys, rgb in ((pixels[:4], WHEEL_COLOR), (pixels[4:], HULL_COLOR)):
+            cv2.fillPoly(color, polys, rgb, cv2.LINE_8, _BITS)
+            cv2.fillPoly(alpha, polys, 255, cv2.LINE_8, _BITS)
         small = (x1 - x0, y1 - y0)
         color = cv2.resize(color, small, interpolation=cv2.INTER_AREA).astype(np.float32) + 0.5
         alpha = cv2.resize(alpha, small, interpolation=cv2.INTER_AREA).astype(np.float32) / 255
         # premultiplied: frame = frame * (1 - a) + color * a, color already holds color * a
         weight = np.repeat(1.0 - alpha[:, :, None], 3, axis=2)
-        return int(x0), int(y0), color, weight
+        return x0, y0, color, weight
 
 
 def _local_to_out(car: CarState, world_to_out: np.ndarray) -> np.ndarray:
@@ -134,13 +146,16 @@ def _local_to_out(car: CarState, world_to_out: np.ndarray) -> np.ndarray:
 def _clip(
     shape: tuple[int, ...], x0: int, y0: int, color: np.ndarray, weight: np.ndarray
 ) -> Patch | None:
-    """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour)."""
+    """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour,
+    scratch)."""
     h, w = color.shape[:2]
     ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
     if ax >= bx or ay >= by:
         return None
-    inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
-    return slice(ay, by), slice(ax, bx), weight[inside].copy(), color[inside].copy()
+    if (bx - ax, by - ay) != (w, h):  # cut: keep contiguous copies of the part inside
+        inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
+        weight, color = weight[inside].copy(), color[inside].copy()
+    return slice(ay, by), slice(ax, bx), weight, color, np.empty_like(weight)
 
 
 def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidView, width: int) -> None:

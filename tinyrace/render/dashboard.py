@@ -42,12 +42,19 @@ _BARS: tuple[tuple[str, int, RGB], ...] = (
 _LAYER_CACHE_BYTES = 8_000_000  # [bytes] of cached instrument layers per dashboard
 
 
+# A bar's drawn extent in supersampled pixels: (first, last) output columns of its patch,
+# then its box (column start, stop within the patch; row start, stop); () draws nothing
+BarBox = tuple[int, ...]
+_EMPTY: BarBox = ()
+
+
 class Dashboard:
     """The instruments of one frame size, drawn into the bottom 5/40 of the frame.
 
-    With ``supersample`` > 1 each bar is drawn at that factor and area-averaged;
-    bar patches are cached by their length (in 1/supersample px), so a step only
-    pastes a few small arrays.
+    With ``supersample`` > 1 each bar is drawn at that factor and area-averaged. Bar
+    lengths are kept to 1/8 layout unit, then rounded to supersampled pixels to draw; a
+    bar's picture depends on that box only, so lengths that round alike share one
+    picture and a step whose boxes all stay put redraws nothing.
     """
 
     def __init__(self, width: int, height: int, supersample: int = 1):
@@ -55,13 +62,14 @@ class Dashboard:
         self.top = round(height - BAR_HEIGHT * height / LAYOUT_UNITS)  # first row of the bar
         self.factor = supersample
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
-        self._patches: dict[tuple[str, int, int], tuple[int, np.ndarray]] = {}
-        self._shown: tuple[int, ...] | None = None  # what the strip holds now
+        self._boxes: list[dict[int, BarBox]] = [{} for _ in _BARS]  # per bar: box by length
+        self._shown: tuple[int, ...] | None = None  # the values drawn now
         # one layer per instrument (the bars, then the score); the strip is their maximum,
-        # so a step redraws only the layers whose value changed, from layers cached per value
+        # so a step redraws only the layers whose picture changed, from layers cached per box
         self._layers = np.zeros((len(_BARS) + 1, *self.strip.shape), np.uint8)
-        self._layer_values: list[int | None] = [None] * len(self._layers)
-        self._cached_layers: dict[tuple[int, int], np.ndarray] = {}
+        self._layer_values: list[int | None] = [None] * len(self._layers)  # bar steps, score
+        self._layer_pictures: list[object] = [None] * len(self._layers)  # bar boxes, score
+        self._cached_layers: dict[tuple[int, object], np.ndarray] = {}
         self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
 
     def draw(self, image: np.ndarray, car: CarState, score: float) -> None:
@@ -78,38 +86,62 @@ class Dashboard:
             round(GYRO_GAIN * car.yaw_rate * sign * q),
             int(score),
         )
-        if shown != self._shown:  # redraw the strip only when an instrument moved
+        if shown != self._shown:  # a value moved: its picture may have too
             self._shown = shown
             self._redraw(shown)
         image[self.top :] = self.strip
 
-    def _redraw(self, shown: tuple[int, ...]) -> None:
-        drawn = self._layer_values
-        for index, value in enumerate(shown):
-            if drawn[index] != value:
-                drawn[index] = value
-                self._layers[index] = self._layer(index, value)
-        np.maximum.reduce(self._layers, axis=0, out=self.strip)
+    def _box(self, index: int, steps: int) -> BarBox:
+        """Bar ``index``'s box at a length of ``steps`` (cached per bar)."""
+        boxes = self._boxes[index]
+        box = boxes.get(steps)
+        if box is None:
+            if len(boxes) >= self._max_cached:
+                boxes.clear()
+            kind, place, _ = _BARS[index]
+            box = boxes[steps] = self._bar_box(kind, place, steps)
+        return box
 
-    def _layer(self, index: int, value: int) -> np.ndarray:
-        """Instrument ``index`` showing ``value``, alone in a strip-sized picture (cached)."""
+    def _redraw(self, shown: tuple[int, ...]) -> None:
+        """Redraw the layers whose picture changed (a bar's box, the score), then the strip."""
+        values, pictures, boxes = self._layer_values, self._layer_pictures, self._boxes
+        changed = False
+        for index, value in enumerate(shown):
+            if values[index] != value:
+                values[index] = value
+                picture: object = value  # the score
+                if index < len(boxes):
+                    picture = boxes[index].get(value)
+                    if picture is None:
+                        picture = self._box(index, value)
+                if pictures[index] != picture:
+                    pictures[index] = picture
+                    self._layers[index] = self._layer(index, picture)
+                    changed = True
+        if changed:
+            np.maximum.reduce(self._layers, axis=0, out=self.strip)
+
+    def _layer(self, index: int, value: object) -> np.ndarray:
+        """Instrument ``index`` showing ``value`` (a bar's box, the score), alone in a
+        strip-sized picture (cached)."""
         layer = self._cached_layers.get((index, value))
         if layer is None:
             if len(self._cached_layers) >= self._max_cached:
                 self._cached_layers.clear()
             layer = np.zeros_like(self.strip)
             if index < len(_BARS):
-                kind, place, color = _BARS[index]
-                self._draw_bar(layer, kind, place, value, color)
+                assert isinstance(value, tuple)
+                self._draw_bar(layer, value, _BARS[index][2])
             else:
+                assert isinstance(value, int)
                 self._draw_score(layer, value)
             layer.setflags(write=False)
             self._cached_layers[index, value] = layer
         return layer
 
-    def _draw_bar(self, layer: np.ndarray, kind: str, place: int, steps: int, color: RGB) -> None:
-        if steps:
-            first, patch = self._bar(kind, place, steps, color)
+    def _draw_bar(self, layer: np.ndarray, box: BarBox, color: RGB) -> None:
+        if box:
+            first, patch = box[0], self._render_bar(box, color)
             region = layer[:, first : first + patch.shape[1]]
             region[:] = patch[:, : region.shape[1]]
 
@@ -119,19 +151,12 @@ class Dashboard:
         region = layer[top : top + mask.shape[0], x0 : x0 + mask.shape[1]]  # clipped to the bar
         region[:] = mask[: region.shape[0], : region.shape[1], None]
 
-    def _bar(self, kind: str, place: int, steps: int, color: RGB) -> tuple[int, np.ndarray]:
-        key = (kind, place, steps)
-        cached = self._patches.get(key)
-        if cached is None:
-            value = steps / (BAR_STEPS * self.factor)
-            cached = self._patches[key] = self._render_bar(kind, place, value, color)
-        return cached
-
-    def _render_bar(
-        self, kind: str, place: int, value: float, color: RGB
-    ) -> tuple[int, np.ndarray]:
-        """Draw one bar at ``factor`` x into a strip-high patch; return (first column, patch)."""
-        f = self.factor
+    def _bar_box(self, kind: str, place: int, steps: int) -> BarBox:
+        """Where a bar ``steps`` long is drawn at ``factor`` x: (first column, last column,
+        column start, column stop, row start, row stop); () when nothing is drawn."""
+        if not steps:
+            return _EMPTY
+        f, value = self.factor, steps / (BAR_STEPS * self.factor)
         s, h = self.width / float(LAYOUT_UNITS) * f, self.height / float(LAYOUT_UNITS) * f
         bottom = (self.height - self.top) * f  # the frame's bottom, in patch rows
         if kind == "v":
@@ -141,14 +166,22 @@ class Dashboard:
         xa, xb = sorted((x0, x1))
         first = max(int(xa // f), 0)
         last = min(int(np.ceil(xb / f)), self.width)
-        big = np.zeros((bottom, max(last - first, 1) * f, 3), np.uint8)
-        cols = slice(max(round(xa) - first * f, 0), max(round(xb) - first * f, 0))
-        big[max(round(min(y0, y1)), 0) : max(round(max(y0, y1)), 0), cols] = color
-        small = cv2.resize(
-            big, (big.shape[1] // f, big.shape[0] // f), interpolation=cv2.INTER_AREA
+        return (
+            first,
+            last,
+            max(round(xa) - first * f, 0),
+            max(round(xb) - first * f, 0),
+            max(round(min(y0, y1)), 0),
+            max(round(max(y0, y1)), 0),
         )
-        small.setflags(write=False)
-        return first, small
+
+    def _render_bar(self, box: BarBox, color: RGB) -> np.ndarray:
+        """Draw one bar's box at ``factor`` x into a strip-high patch, area-averaged down."""
+        f = self.factor
+        first, last, col0, col1, row0, row1 = box
+        big = np.zeros(((self.height - self.top) * f, max(last - first, 1) * f, 3), np.uint8)
+        big[row0:row1, col0:col1] = color
+        return cv2.resize(big, (big.shape[1] // f, big.shape[0] // f), interpolation=cv2.INTER_AREA)
 
 
 @lru_cache(maxsize=512)

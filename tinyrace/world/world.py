@@ -191,7 +191,7 @@ class World:
     def wheel_grip(self) -> Sequence[bool]:
         """Per wheel of the car: grips as on road (else as on grass), from its contacts."""
         if self.grass_off_tiles:
-            return [bool(tiles) for tiles in self.contacts.wheel_tiles]
+            return list(map(bool, self.contacts.wheel_tiles))
         return _ALL_ROAD
 
     def look(self, dt: float) -> Contacts:
