@@ -324,7 +324,9 @@ def measure_tinycarlo(budget: Budget, generated_dir: Path) -> dict[str, Any]:
     folders = one_camera_copies(generated_dir)
     tracks = [f"{name}={folder}" for name, folder in folders.items()]
     seconds = str(max(budget.seconds / 2, 1.0))
-    command = [python, str(TINYCARLO_SCRIPT), "--seconds", seconds, *tracks]
+    min_steps = "200" if budget is FULL else "20"  # tinycarlo: ~10 steps/s
+    command = [python, str(TINYCARLO_SCRIPT), "--seconds", seconds, "--min-steps", min_steps]
+    command += tracks
     done = subprocess.run(command, capture_output=True, text=True, timeout=1800)
     if done.returncode != 0:
         lines = done.stderr.strip().splitlines() or [f"exit code {done.returncode}"]

@@ -5,7 +5,8 @@ Usage (tinyrace need not be importable here)::
     /tmp/tc/bin/python benchmarks/tinycarlo_steps.py --seconds 2 NAME=FOLDER ...
 
 Steps ``TinyCarloEnv(environment=FOLDER)`` with seeded random steering for the given
-time, resetting when an episode ends (as a training loop would), resets timed too, and
+time and at least ``--min-steps`` steps (200: about 20 s at its speed; fewer steps made its
+figure noise), resetting when an episode ends (as a training loop would), resets timed too, and
 prints one JSON line: ``{NAME: {"steps_per_s": ..., "steps": ..., "seconds": ...,
 "resets": ..., "free": {...}, "folder": FOLDER}}``.
 
@@ -27,8 +28,9 @@ import time
 import numpy as np
 
 
-def steps_per_second(folder: str, seconds: float, end_outside: bool) -> dict:
-    """steps/s of one env on ``folder``; ``end_outside``: reset when the car leaves the image."""
+def steps_per_second(folder: str, seconds: float, end_outside: bool, min_steps: int) -> dict:
+    """steps/s of one env on ``folder`` over ``seconds`` and at least ``min_steps`` steps;
+    ``end_outside``: reset when the car leaves the image."""
     from tinycarlo.env import TinyCarloEnv
 
     with contextlib.redirect_stdout(io.StringIO()):  # it prints the config file it loaded
@@ -42,7 +44,7 @@ def steps_per_second(folder: str, seconds: float, end_outside: bool) -> dict:
     env.reset()
     steps = resets = 0
     start = time.perf_counter()
-    while time.perf_counter() - start < seconds:
+    while time.perf_counter() - start < seconds or steps < min_steps:
         *_, done, _ = env.step(actions[steps % len(actions)])
         steps += 1
         if done or (end_outside and not _inside(env)):
@@ -62,14 +64,17 @@ def _inside(env) -> bool:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=2.0)
+    parser.add_argument(
+        "--min-steps", type=int, default=200, help="time at least this many steps per track"
+    )
     parser.add_argument("tracks", nargs="+", help="NAME=FOLDER")
     args = parser.parse_args()
     results = {}
     for item in args.tracks:
         name, folder = item.split("=", 1)
         results[name] = {
-            **steps_per_second(folder, args.seconds, end_outside=True),
-            "free": steps_per_second(folder, args.seconds, end_outside=False),
+            **steps_per_second(folder, args.seconds, True, args.min_steps),
+            "free": steps_per_second(folder, args.seconds, False, args.min_steps),
             "folder": folder,
         }
     print(json.dumps(results))
