@@ -96,6 +96,35 @@ class ReferenceLine:
         grid = self._plane.points[WINDOW : WINDOW + m]
         return int(np.abs(grid - complex(x, y)).argmin())
 
+    def follow(
+        self, pose: tuple[float, float, float], y_down: bool, near: int | None, count: int
+    ) -> tuple[int, np.ndarray]:
+        """``nearest`` the pose's point and ``lookahead`` from there, sharing one subtraction
+        (a y-down pose uses the mirrored points, which have the same distances) when the
+        nearest point is inside the window around ``near``; else the two calls."""
+        x, y, heading = pose
+        m = len(self.table)
+        if near is not None:
+            if len(self._curvature) < m + 2 * WINDOW + FINE * count:
+                self._pad(WINDOW + FINE * count)
+            plane = self._plane
+            source, origin = (
+                (plane.mirrored, complex(x, -y)) if y_down else (plane.points, complex(x, y))
+            )
+            offsets = source[near : near + 2 * WINDOW + FINE * count] - origin
+            best = int(np.abs(offsets[: 2 * WINDOW + 1]).argmin())
+            index = near + best - WINDOW
+            if 0 < best < 2 * WINDOW and 0 <= index < m:  # neither wrapped nor clipped
+                c, s = math.cos(heading), math.sin(heading)
+                turn = complex(c, s) if y_down else complex(c, -s)
+                local = offsets[best + FINE : best + FINE * (count + 1) : FINE] * turn
+                start = index + WINDOW + FINE
+                out = self.rows32(slice(start, start + FINE * count, FINE))
+                out[:, :2] = local.view(PAIRS)
+                return index, out
+        index = self.nearest(x, y, near)
+        return index, lookahead(self, index, pose, y_down, count)
+
     def ahead(self, index: int, count: int) -> tuple[PlanePoints, slice]:
         """The padded points and the part of them 1, 2, ... ``count`` spacings after grid
         point ``index``; their curvatures are ``curvature(part)``."""
@@ -228,10 +257,9 @@ class LookaheadSensor:
         x, y = car.front_axle
         line = self._line
         assert line is not None, "reset() before observe()"
-        self._index = index = line.nearest(x, y, self._index)
         pose = (x, y, car.pose[2])
-        count = self.config.points
-        rows = lookahead(line, index, pose, track.y_down, count)
+        index, rows = line.follow(pose, track.y_down, self._index, self.config.points)
+        self._index = index
         if self._within_bounds(line, index, x, y):
             return rows  # clamping would change nothing
         np.minimum(rows, self.space.high, out=rows)  # np.clip's wrapper costs more than both
