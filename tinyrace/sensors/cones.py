@@ -32,6 +32,7 @@ from tinyrace.world.snapshot import Snapshot
 
 CONE_CLASSES = CLASSES  # class id = index + 1; 0 is padding
 MADE_UP_CLASSES = 3  # false positives are blue, yellow or orange
+PAIRS = np.dtype((np.float64, (2,)))  # a complex array viewed as (N, 2) real rows
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,7 @@ class ConeTable:
         rows = np.asarray(cones, np.float64).reshape(-1, 3)  # x, y [track units], class id
         self.plane = PlanePoints.of(rows[:, :2])
         self.classes = rows[:, 2].copy()
+        self.classes32 = self.classes.astype(np.float32)  # as detections hold them
 
     def __len__(self) -> int:
         return len(self.classes)
@@ -87,13 +89,13 @@ def detect(
     half = math.cos(min(fov, 2 * math.pi) / 2)
     seen = ((distance <= max_range) & (local.real >= half * distance)).nonzero()[0]
     if noise.miss_probability > 0 or noise.position_std > 0 or noise.false_positives > 0:
-        found = local[seen].view(np.float64).reshape(-1, 2)
+        found = local[seen].view(PAIRS)
         return _noisy(found, table.classes[seen], capacity, noise, rng, max_range, fov)
     order = seen[distance[seen].argsort(kind="stable")[:capacity]]
     count = len(order)
     rows = np.zeros((capacity, 3), np.float32)
-    rows[:count, :2] = local[order].view(np.float64).reshape(count, 2)
-    rows[:count, 2] = table.classes[order]
+    rows[:count, :2] = local[order].view(PAIRS)
+    rows[:count, 2] = table.classes32[order]
     return rows, count
 
 

@@ -32,6 +32,7 @@ from tinyrace.world.snapshot import Snapshot
 FINE = 8  # grid points per spacing
 WINDOW = 16  # grid points searched either side of the previous match (2 spacings)
 REACH = 4  # the observation's x and y saturate at this many times K spacings
+PAIRS = np.dtype((np.float64, (2,)))  # a complex array viewed as (N, 2) real rows
 
 
 class ReferenceLine:
@@ -74,6 +75,13 @@ class ReferenceLine:
         padded = self.table[rows % m if self.closed else np.clip(rows, 0, m - 1)]
         self._plane = PlanePoints.of(padded[:, :2])
         self._curvature: np.ndarray = padded[:, 2].copy()
+        # float32 rows whose curvature column observations copy (x and y are overwritten)
+        self._rows32 = padded.astype(np.float32)
+        self._point_list: list[complex] = self._plane.points.tolist()  # fast to index one
+
+    def distance(self, index: int, x: float, y: float) -> float:
+        """[track units] from (x, y) to grid point ``index``."""
+        return abs(self._point_list[index + WINDOW] - complex(x, y))
 
     def nearest(self, x: float, y: float, near: int | None) -> int:
         """Index of the grid point nearest (x, y), searched around ``near`` when given (and
@@ -88,6 +96,35 @@ class ReferenceLine:
         grid = self._plane.points[WINDOW : WINDOW + m]
         return int(np.abs(grid - complex(x, y)).argmin())
 
+    def follow(
+        self, pose: tuple[float, float, float], y_down: bool, near: int | None, count: int
+    ) -> tuple[int, np.ndarray]:
+        """``nearest`` the pose's point and ``lookahead`` from there, sharing one subtraction
+        (a y-down pose uses the mirrored points, which have the same distances) when the
+        nearest point is inside the window around ``near``; else the two calls."""
+        x, y, heading = pose
+        m = len(self.table)
+        if near is not None:
+            if len(self._curvature) < m + 2 * WINDOW + FINE * count:
+                self._pad(WINDOW + FINE * count)
+            plane = self._plane
+            source, origin = (
+                (plane.mirrored, complex(x, -y)) if y_down else (plane.points, complex(x, y))
+            )
+            offsets = source[near : near + 2 * WINDOW + FINE * count] - origin
+            best = int(np.abs(offsets[: 2 * WINDOW + 1]).argmin())
+            index = near + best - WINDOW
+            if 0 < best < 2 * WINDOW and 0 <= index < m:  # neither wrapped nor clipped
+                c, s = math.cos(heading), math.sin(heading)
+                turn = complex(c, s) if y_down else complex(c, -s)
+                local = offsets[best + FINE : best + FINE * (count + 1) : FINE] * turn
+                start = index + WINDOW + FINE
+                out = self.rows32(slice(start, start + FINE * count, FINE))
+                out[:, :2] = local.view(PAIRS)
+                return index, out
+        index = self.nearest(x, y, near)
+        return index, lookahead(self, index, pose, y_down, count)
+
     def ahead(self, index: int, count: int) -> tuple[PlanePoints, slice]:
         """The padded points and the part of them 1, 2, ... ``count`` spacings after grid
         point ``index``; their curvatures are ``curvature(part)``."""
@@ -95,6 +132,12 @@ class ReferenceLine:
             self._pad(max(WINDOW, FINE * count))
         start = index + WINDOW + FINE
         return self._plane, slice(start, start + FINE * count, FINE)
+
+    def rows32(self, part: slice) -> np.ndarray:
+        """A new float32 (count, 3) array holding the curvatures of a ``part`` of the
+        padded points in its last column (see ``ahead``)."""
+        rows: np.ndarray = self._rows32[part].copy()
+        return rows
 
     def curvature(self, part: slice) -> np.ndarray:
         """[1/track unit] of a ``part`` of the padded points (see ``ahead``)."""
@@ -129,9 +172,8 @@ def lookahead(
     ``index`` (an open line stops at its end)."""
     plane, part = line.ahead(index, count)
     local = plane.seen_from(pose, y_down, part)  # ahead + i left
-    out = np.empty((count, 3), np.float32)
-    out[:, :2] = local.view(np.float64).reshape(count, 2)
-    out[:, 2] = line.curvature(part)
+    out = line.rows32(part)  # curvature already in place
+    out[:, :2] = local.view(PAIRS)
     return out
 
 
@@ -184,17 +226,23 @@ class LookaheadSensor:
         reach = REACH * config.points * spacing  # [track units]
         high = np.tile(np.array([reach, reach, 2 * FINE / spacing], np.float32), (config.points, 1))
         self.space = spaces.Box(-high, high, dtype=np.float32)
+        self._reach = float(high[0, 0])  # [track units] the bound of x and y, as float32
         self._lines: PerTrack[ReferenceLine] = PerTrack()
         self._line: ReferenceLine | None = None
         self._index: int | None = None
+        self._curvature_fits = False  # every curvature of the line is within the bounds
+        self._extent = math.inf  # [track units] of arc from the nearest to the last point
 
     @property
     def id(self) -> str:
         return self.config.id
 
     def reset(self, track: Track) -> None:
-        self._line = self._lines.get(track, self._build_line)
+        self._line = line = self._lines.get(track, self._build_line)
         self._index = None
+        curvature = np.abs(line.table[:, 2].astype(np.float32)).max(initial=0.0)
+        self._curvature_fits = bool(curvature <= self.space.high[0, 2])
+        self._extent = self.config.points * line.spacing
 
     def _build_line(self, track: Track) -> ReferenceLine:
         if track.centerline is not None:
@@ -209,12 +257,23 @@ class LookaheadSensor:
         x, y = car.front_axle
         line = self._line
         assert line is not None, "reset() before observe()"
-        self._index = index = line.nearest(x, y, self._index)
         pose = (x, y, car.pose[2])
-        rows = lookahead(line, index, pose, track.y_down, self.config.points)
+        index, rows = line.follow(pose, track.y_down, self._index, self.config.points)
+        self._index = index
+        if self._within_bounds(line, index, x, y):
+            return rows  # clamping would change nothing
         np.minimum(rows, self.space.high, out=rows)  # np.clip's wrapper costs more than both
         clamped: np.ndarray = np.maximum(rows, self.space.low, out=rows)
         return clamped
+
+    def _within_bounds(self, line: ReferenceLine, index: int, x: float, y: float) -> bool:
+        """Whether every row of an observation from (x, y) at grid point ``index`` is surely
+        within the bounds: the points ahead lie at most K spacings of arc (so of chord) from
+        that grid point, with a margin for rounding."""
+        if not self._curvature_fits:
+            return False
+        extent = line.distance(index, x, y) + self._extent  # [track units]
+        return extent * 1.001 + 1e-9 < self._reach
 
 
 def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:
