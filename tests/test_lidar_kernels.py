@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 import tinyrace  # registers the env ids; tinyrace.sensors in a test below
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
-from tinyrace.sensors import raycast, raycast_numba
+from tinyrace.sensors import raycast, raycast_numba, raycast_numpy
 from tinyrace.sensors.lidar import KERNEL_VARIABLE, LidarSensor, beam_angles, kernel
 from tinyrace.sensors.raycast import FINE_STEP, SKIP_BLOCKED, SKIP_MARGIN, TABLE_RANGE
 
@@ -66,7 +66,7 @@ def scans(field_numpy, field_numba, angles, max_range, y_down, origins, headings
     for origin in origins:
         for heading in headings:
             first, reverse = raycast.fan_angle(field_numpy, angles, heading, y_down)
-            a = raycast.cast(field_numpy, fans[0], origin, first, reverse)
+            a = raycast_numpy.cast(field_numpy, fans[0], origin, first, reverse)
             b = raycast_numba.cast(field_numba, fans[1], origin, first, reverse)
             yield a, b
 
@@ -191,7 +191,7 @@ def test_each_path_builds_only_what_it_needs(monkeypatch):
 
 def test_the_variable_chooses_the_path(monkeypatch):
     monkeypatch.setenv(KERNEL_VARIABLE, "numpy")
-    assert kernel() == ("numpy", raycast.cast)
+    assert kernel() == ("numpy", raycast_numpy.cast)
     monkeypatch.setenv(KERNEL_VARIABLE, "NumBa")
     assert kernel() == ("numba", raycast_numba.cast)
     monkeypatch.delenv(KERNEL_VARIABLE)
@@ -207,7 +207,7 @@ def test_without_numba_auto_falls_back_to_numpy_and_numba_is_an_error(monkeypatc
     monkeypatch.delitem(sys.modules, "tinyrace.sensors.raycast_numba")
     monkeypatch.delattr(tinyrace.sensors, "raycast_numba")
     monkeypatch.delenv(KERNEL_VARIABLE, raising=False)
-    assert kernel() == ("numpy", raycast.cast)
+    assert kernel() == ("numpy", raycast_numpy.cast)
     with pytest.raises(ImportError, match=r"pip install tinyrace\[fast\]"):
         kernel("numba")
 

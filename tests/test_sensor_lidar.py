@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from tinyrace.sensors import raycast, raycast_numba
+from tinyrace.sensors import raycast, raycast_numba, raycast_numpy
 from tinyrace.sensors.lidar import add_noise, beam_angles, directions
 from tinyrace.sensors.raycast import beam_fan, fan_angle
 
@@ -32,7 +32,7 @@ def _scan(field, origin, angles, max_range: float, heading: float = 0.0) -> np.n
     angles = np.asarray(angles, np.float64)
     numpy = field.near is not None
     fan = beam_fan(field, angles, max_range, tables=numpy)
-    cast = raycast.cast if numpy else raycast_numba.cast
+    cast = raycast_numpy.cast if numpy else raycast_numba.cast
     return cast(field, fan, origin, *fan_angle(field, angles, heading, y_down=False))
 
 

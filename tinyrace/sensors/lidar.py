@@ -1,7 +1,7 @@
 """``type: lidar``: ranges of a fan of beams against the track's blocking layers.
 
 ``blocking_map`` draws what ``blocks`` names (off-road, walls, obstacle colours, cones) into
-a grid of cells once per track; ``tinyrace.sensors.raycast`` casts the beams on it (sample
+a grid of cells once per track; ``tinyrace.sensors.raycast_numpy`` casts the beams on it (sample
 tables and two vectorised passes, no loop over beams), or, when numba imports
 (``pip install tinyrace[fast]``), ``tinyrace.sensors.raycast_numba``'s compiled kernel: the
 same float32 ranges bit for bit, several times faster and without the sample tables (about
@@ -41,11 +41,11 @@ from tinyrace.sensors.raycast import (
     DistanceField,
     Fan,
     beam_fan,
-    cast,
     distance_field,
     fan_angle,
     table_bytes,
 )
+from tinyrace.sensors.raycast_numpy import cast
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES, RADII
 from tinyrace.world.snapshot import Snapshot

@@ -1,4 +1,4 @@
-"""Compiled ray casting (numba): ``raycast.cast``'s ranges, bit for bit, one beam at a time.
+"""Compiled ray casting (numba): ``raycast_numpy.cast``'s ranges, bit for bit, one beam at a time.
 
 Imported only when a lidar is built and numba imports (``pip install tinyrace[fast]``); see
 ``lidar.kernel``. The numpy passes find each beam's first blocked sample (its sample
@@ -8,7 +8,7 @@ computes each sample's nearest cell with the same float64 arithmetic (the row's 
 the origin's position inside its cell, the sample's radius), and from each free sample
 skips as many samples as the field's skip map (a distance transform) shows cannot be
 blocked. Beyond TABLE_RANGE it marches on by the same float32 sphere tracing and bisection
-as ``raycast._beyond`` (a tip's nearest cell rounds half to even and saturates to int16, as
+as ``raycast_numpy._beyond`` (a tip's nearest cell rounds half to even and saturates to int16, as
 ``cv2.remap`` does). Its field is made with ``distance_field(..., near=False)``, its fan
 with ``beam_fan(..., tables=False)``.
 
@@ -126,7 +126,7 @@ def _first_hits(
 def _march(steps: Any, ox: Any, oy: Any, dx: Any, dy: Any, t: Any, limit: Any) -> Any:
     """float32 distance [cells] a beam from (ox, oy) in direction (dx, dy) travels from
     ``t`` by sphere tracing, checked every CHECK_EVERY rounds, then bisected back toward the
-    edge of the blocking cell it entered (``raycast._march`` and ``_refine``, per beam)."""
+    edge of the blocking cell it entered (``raycast_numpy._march`` and ``_refine``, per beam)."""
     px, py = ox + t * dx, oy + t * dy
     for round_ in range(MAX_ROUNDS):
         step = _nearest(steps, px, py)
@@ -182,7 +182,7 @@ def cast(
     first: float,
     reverse: bool = False,
 ) -> np.ndarray:
-    """``raycast.cast``, compiled: the same float32 ranges [track units], bit for bit. The
+    """``raycast_numpy.cast``, compiled: the same float32 ranges [track units], bit for bit. The
     field needs its skip map (``distance_field(..., near=False)``), the fan no tables."""
     assert field.skips is not None, "distance_field(..., near=False)"
     at = start(field, fan, origin, first)
