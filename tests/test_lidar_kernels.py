@@ -18,7 +18,14 @@ from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.sensors import raycast, raycast_numba, raycast_numpy
 from tinyrace.sensors.lidar import KERNEL_VARIABLE, LidarSensor, beam_angles, kernel
-from tinyrace.sensors.raycast import FINE_STEP, SKIP_BLOCKED, SKIP_MARGIN, TABLE_RANGE
+from tinyrace.sensors.raycast import (
+    FINE_STEP,
+    SECTOR_SLOPES,
+    SECTORS,
+    SKIP_BLOCKED,
+    SKIP_MARGIN,
+    TABLE_RANGE,
+)
 
 FANS = [(1, 1.0), (2, 1.0), (7, 1.0), (7, 90.0), (360, 360.0), (1080, 270.0), (1080, 360.0)]
 
@@ -85,6 +92,9 @@ def test_both_paths_give_the_same_ranges_bit_for_bit(data, blocking):
     fields = [
         raycast.distance_field(blocking, to_cells, reach=reach, near=near) for near in (True, False)
     ]
+    if data.draw(st.booleans()):  # the compiled kernel with its skip maps by direction
+        fields[1] = raycast_numba.with_sectors(fields[1])
+        assert fields[1].sectors is not None
     height, width = blocking.shape
     corners = np.array([[0, 0], [width, height]], np.float64)  # [cells], and a little beyond
     inverse = np.linalg.inv(np.vstack([to_cells, [0, 0, 1]]))[:2]
@@ -110,10 +120,11 @@ def test_the_paths_agree_on_a_crowded_map_in_the_numpy_paths_every_branch():
     origins = [(151.3, 152.6), (40.0, 151.0), (150.0, 150.0), (10.2, 290.9), (-5.0, 3.0)]
     headings = [0.0, 0.001, math.pi / 4, 2.0]
     compared = 0
-    for a, b in scans(*fields, angles, 250.0, False, origins, headings):
-        np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
-        compared += 1
-    assert compared == len(origins) * len(headings)
+    for numba_field in (fields[1], raycast_numba.with_sectors(fields[1])):
+        for a, b in scans(fields[0], numba_field, angles, 250.0, False, origins, headings):
+            np.testing.assert_array_equal(a.view(np.uint32), b.view(np.uint32))
+            compared += 1
+    assert compared == 2 * len(origins) * len(headings)
 
 
 @pytest.mark.parametrize(
@@ -166,6 +177,84 @@ def test_the_skip_map_never_skips_a_blocked_sample():
     assert (n * FINE_STEP + math.sqrt(2) < nearest)[skipping].all()
     assert (n * FINE_STEP + SKIP_MARGIN + FINE_STEP > nearest).all()  # and skips what it can
     assert (skips[field.blocking() > 0] == SKIP_BLOCKED).all()
+
+
+def _sector_maps(field: raycast.DistanceField) -> np.ndarray:
+    """(SECTORS, H, w) view of a field's sector skip maps."""
+    height, width = field.shape
+    lead = raycast.LEAD * width
+    assert field.sectors is not None
+    return field.sectors[lead : lead + SECTORS * height * width].reshape(SECTORS, height, width)
+
+
+def test_the_sector_maps_never_skip_a_blocked_sample():
+    """From any point of a free cell, along any direction (those on the sectors' edges too),
+    the samples that the cell's skip in the direction's sector map passes over are all in
+    free cells (brute force: every sample computed as the kernel does)."""
+    rng = np.random.default_rng(5)
+    blocking = rng.random((60, 70)) < 0.02
+    blocking[10:13, 5:60] = True  # walls that beams run along
+    blocking[20:50, 40] = True
+    field = raycast_numba.with_sectors(
+        raycast.distance_field(blocking, np.array([[1.0, 0, 0], [0, 1.0, 0]]), near=False)
+    )
+    blocked = field.blocking() > 0
+    maps = _sector_maps(field)
+    edges = np.arctan2(np.arange(SECTOR_SLOPES + 1), SECTOR_SLOPES)  # [rad] first eighth
+    edges = np.concatenate([edges + k * np.pi / 2 for k in range(4)])
+    edges = np.concatenate([edges, np.pi / 2 - edges])  # every sector's edges, all eighths
+    angles = np.concatenate([rng.uniform(-np.pi, np.pi, 40000), np.tile(edges, 400)])
+    c, s = np.cos(angles), np.sin(angles)
+    free = np.argwhere(~blocked)
+    row, col = free[rng.integers(0, len(free), len(angles))].T
+    corner = rng.random(len(angles)) < 0.3  # points on the cell's edges and corners
+    dx = np.where(corner, rng.choice([-0.5, 0.4999999], len(angles)), rng.uniform(-0.5, 0.5))
+    dy = np.where(corner, rng.choice([-0.5, 0.4999999], len(angles)), rng.uniform(-0.5, 0.5))
+    skips = maps[raycast.sector(c, s), row, col].astype(np.int64)
+    for origin_x, origin_y, start in ((col + dx, row + dy, 0), (col * 1.0, row * 1.0, 37)):
+        # a sample i at radius (i + 1) FINE_STEP from an origin, as the kernel computes it
+        first = (start + 1) * FINE_STEP
+        x0, y0 = origin_x - c * first, origin_y - s * first  # an origin whose sample is there
+        k = np.arange(1, SKIP_BLOCKED)
+        radius = (start + 1 + k[None, :]) * FINE_STEP
+        x, y = x0[:, None] + c[:, None] * radius, y0[:, None] + s[:, None] * radius
+        cells_x, cells_y = np.floor(x + 0.5).astype(np.int64), np.floor(y + 0.5).astype(np.int64)
+        height, width = blocked.shape
+        inside = (cells_x >= 0) & (cells_x < width) & (cells_y >= 0) & (cells_y < height)
+        hit = ~inside
+        hit[inside] = blocked[cells_y[inside], cells_x[inside]]
+        skipped = k[None, :] <= skips[:, None]
+        assert not (hit & skipped).any()
+    assert (skips > 8).mean() > 0.3
+
+
+def test_the_sector_maps_skip_more_along_a_corridor():
+    """In a corridor 9 cells wide, beams along it skip several times farther than the
+    direction-blind skip map lets them; the sector maps never skip less."""
+    blocking = np.ones((40, 200), bool)
+    blocking[15:24, :] = False
+    field = raycast_numba.with_sectors(
+        raycast.distance_field(blocking, np.array([[1.0, 0, 0], [0, 1.0, 0]]), near=False)
+    )
+    height, width = field.shape
+    lead = raycast.LEAD * width
+    skips = field.skips[lead : lead + height * width].reshape(height, width)
+    maps = _sector_maps(field)
+    free = field.blocking() == 0
+    assert (maps[:, free] >= skips[free]).all()
+    along = maps[raycast.sector(np.array([1.0]), np.array([0.05]))[0]]
+    middle = np.s_[raycast.PAD + 19, raycast.PAD + 20 : raycast.PAD + 100]
+    assert along[middle].mean() > 3 * skips[middle].mean()
+
+
+def test_sector_maps_are_made_only_where_they_fit():
+    """Sector maps of a large field would take SECTORS times its skip map: above
+    SECTOR_BYTES the field keeps its one skip map, and the ranges stay the same."""
+    small = raycast.distance_field(np.zeros((50, 50), bool), np.eye(2, 3), near=False)
+    assert raycast_numba.with_sectors(small).sectors is not None
+    side = math.isqrt(raycast_numba.SECTOR_BYTES // SECTORS) + 1
+    large = raycast.distance_field(np.zeros((side, side), bool), np.eye(2, 3), near=False)
+    assert raycast_numba.with_sectors(large) is large
 
 
 def test_each_path_builds_only_what_it_needs(monkeypatch):

@@ -21,7 +21,9 @@ def distance_field(request):
     """``raycast.distance_field`` made for one ray-casting path; its fields remember it."""
 
     def make(*args, **kwargs):
-        return raycast.distance_field(*args, near=request.param == "numpy", **kwargs)
+        if request.param == "numpy":
+            return raycast.distance_field(*args, near=True, **kwargs)
+        return raycast_numba.with_sectors(raycast.distance_field(*args, near=False, **kwargs))
 
     return make
 

@@ -253,6 +253,10 @@ class LidarSensor:
         field = blocking_map(
             track, c.blocks, self.cell, self.cone_colors, c.hit_classes, self.max_range, numpy
         )
+        if not numpy:  # the compiled kernel's skip maps by direction, where they fit
+            from tinyrace.sensors import raycast_numba  # imported: kernel() chose it
+
+            field = raycast_numba.with_sectors(field)
         # a fan depends on the map's width and cell frame only: tracks made anew at every
         # reset (procedural) share it
         key = (field.shape[1], *field.to_cells[:, :2].ravel().tolist(), track.y_down)

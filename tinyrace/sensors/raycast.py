@@ -58,6 +58,8 @@ CHECK_EVERY = 4  # marching rounds between checks whether every beam has stopped
 MAX_ROUNDS = 256  # marching rounds at most
 SKIP_BLOCKED = 255  # the skip map's value of blocking cells
 SKIP_MARGIN = 1.42  # [cells] > sqrt(2): two samples' distances to their nearest cells' centres
+SECTOR_SLOPES = 4  # sector skip maps per eighth of a turn (slopes 0 .. 1 in steps of 1 / 4)
+SECTORS = 8 * SECTOR_SLOPES  # sector skip maps of a field (raycast_numba.with_sectors)
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,6 +83,9 @@ class DistanceField:
     steps: np.ndarray | None = None  # (H, w) uint8 [half cells]
     classes: np.ndarray | None = None  # (H, w) uint8 hit class of blocking cells and their rim
     skips: np.ndarray | None = None  # same layout as ``blocked`` [FINE_STEP samples]
+    # SECTORS skip maps, one per sector of beam directions, (H, w) each, one after the other
+    # between LEAD rows (raycast_numba.with_sectors) [FINE_STEP samples]
+    sectors: np.ndarray | None = None
 
     def blocking(self) -> np.ndarray:
         """(H, w) uint8 view of the padded map, 1 where blocking."""
@@ -223,6 +228,7 @@ class Fan:
     bits: np.ndarray  # (rows, WORDS) uint8 the NEAR bit of each row's direction
     cos: np.ndarray  # (rows,) float64 direction of each row [cells]
     sin: np.ndarray
+    sectors: np.ndarray  # (rows,) int64 the sector of each row's direction (``sector``)
     shifts: np.ndarray  # (ORIGIN_STEPS,) float64 [cells] origin positions inside a cell
     beam_windows: np.ndarray  # (beams,) int: i * (segments + 2), beam i's first window
     beam_samples: np.ndarray  # (beams,) int: i * FINE_SAMPLES
@@ -282,10 +288,23 @@ def beam_fan(
     bits = np.repeat((1 << orientation).astype(np.uint8)[:, None], WORDS, 1)
     return Fan(
         np.stack(coarse) if tables else None, np.stack(fine) if tables else None,
-        ranges, found.ravel(), bits, c, s, shifts,
+        ranges, found.ravel(), bits, c, s, sector(c, s), shifts,
         np.arange(beams) * (segments + 2), np.arange(beams) * FINE_SAMPLES,
         anchor, step, spacing, phase_rows, beams, segments, table_range, limit, max_range,
     )  # fmt: skip
+
+
+def sector(c: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """int64 sector of the directions (c, s) [cells]: its eighth of a turn (bit 0: c < 0,
+    bit 1: s < 0, bit 2: |s| > |c|) times SECTOR_SLOPES plus the step of its slope (the
+    minor over the major component, 0 .. 1 in SECTOR_SLOPES steps). Its directions' slopes
+    lie in [step, step + 1] / SECTOR_SLOPES (up to rounding)."""
+    swap = np.abs(s) > np.abs(c)
+    slope = np.minimum(np.abs(c), np.abs(s)) / np.maximum(np.abs(c), np.abs(s))
+    step = np.minimum((slope * SECTOR_SLOPES).astype(np.int64), SECTOR_SLOPES - 1)
+    eighth = (c < 0).astype(np.int64) + 2 * (s < 0) + 4 * swap
+    sectors: np.ndarray = eighth * SECTOR_SLOPES + step
+    return sectors
 
 
 def _rows(angles: np.ndarray) -> tuple[int, float, int]:

@@ -7,10 +7,12 @@ maps show hold none). This kernel finds the same sample without tables or NEAR m
 computes each sample's nearest cell with the same float64 arithmetic (the row's direction,
 the origin's position inside its cell, the sample's radius), and from each free sample
 skips as many samples as the field's skip map (a distance transform) shows cannot be
-blocked. Beyond TABLE_RANGE it marches on by the same float32 sphere tracing and bisection
-as ``raycast_numpy._beyond`` (a tip's nearest cell rounds half to even and saturates to int16, as
-``cv2.remap`` does). Its field is made with ``distance_field(..., near=False)``, its fan
-with ``beam_fan(..., tables=False)``.
+blocked, or, on fields that ``with_sectors`` gave skip maps by direction, the map of
+the beam's sector (beams along a wall skip several times farther there). Beyond
+TABLE_RANGE it marches on by the same float32 sphere tracing and bisection as
+``raycast_numpy._beyond`` (a tip's nearest cell rounds half to even and saturates to
+int16, as ``cv2.remap`` does). Its field is made with ``distance_field(..., near=False)``
+and then ``with_sectors``, its fan with ``beam_fan(..., tables=False)``.
 
 numba compiles on the first scan of a process and caches the machine code beside this
 module, or in numba's user cache directory when that is read-only; with neither writable
@@ -20,6 +22,7 @@ behind the typed ``cast``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from typing import Any, TypeVar
@@ -38,6 +41,8 @@ from tinyrace.sensors.raycast import (
     LEAD,
     MAX_ROUNDS,
     OVERSHOOT,
+    SECTOR_SLOPES,
+    SECTORS,
     SKIP_BLOCKED,
     TABLE_RANGE,
     DistanceField,
@@ -51,11 +56,16 @@ INT16 = (-32768, 32767)  # cv2.remap saturates map coordinates to int16
 # so the cache) changes as well
 COMPILED_IN = {
     "BISECTIONS": 3, "CHECK_EVERY": 4, "FINE_STEP": 0.5, "LEAD": 146, "MAX_ROUNDS": 256,
-    "OVERSHOOT": 2.0, "SKIP_BLOCKED": 255,
+    "OVERSHOOT": 2.0, "SECTOR_SLOPES": 4, "SKIP_BLOCKED": 255,
 }  # fmt: skip
 if any(getattr(raycast, name) != value for name, value in COMPILED_IN.items()):
     raise RuntimeError(f"raycast's constants changed: update COMPILED_IN ({COMPILED_IN})")
 LANES = 16  # beams that step together (independent lookups the CPU overlaps)
+SECTOR_BYTES = 16 * 2**20  # [bytes] a field's sector maps at most (else its skip map serves)
+RUN_CAP = 128  # [cells] longest free run that sector maps count (their skips fill a uint8)
+# a skip of CLEAR leaves no blocking cell within 9 FINE_STEP + SKIP_MARGIN = 5.92 cells: none
+# in the first SECTOR_SLOPES bands of any sector (columns 0 .. 3, rows -2 .. 5: <= 5.84 cells)
+CLEAR = 9
 F = TypeVar("F")
 
 
@@ -87,22 +97,124 @@ def _flat(x: float, y: float, width: int) -> Any:
     return np.uint64((math.floor(y + 0.5) + LEAD) * width + math.floor(x + 0.5))
 
 
+def with_sectors(field: DistanceField) -> DistanceField:
+    """``field`` with its sector skip maps, when they take at most SECTOR_BYTES (else the
+    kernel uses its one skip map). A beam reads the map of its sector of directions (an eighth
+    of a turn, split by the slope of the minor over the major axis in SECTOR_SLOPES steps),
+    where a cell holds how many next samples of a beam in that sector, from any point of the
+    cell, cannot be blocked: at least the skip map's, often several times more along walls
+    (the skip map must allow for a wall on every side)."""
+    assert field.skips is not None, "distance_field(..., near=False)"
+    height, width = field.shape
+    if SECTORS * height * width > SECTOR_BYTES:
+        return field
+    lead = LEAD * width
+    blocked = field.blocking()
+    skips = field.skips[lead : lead + height * width].reshape(height, width)
+    sectors = np.full(2 * lead + SECTORS * height * width, SKIP_BLOCKED, np.uint8)
+    maps = sectors[lead : lead + SECTORS * height * width].reshape(SECTORS, height, width)
+    for eighth in range(8):  # the kernels run along columns: (column, row) arrays
+        turned, turned_skips = (
+            np.ascontiguousarray(_canonical(a, eighth).T) for a in (blocked, skips)
+        )
+        prefix = np.zeros((turned.shape[0], turned.shape[1] + 1), np.int32)
+        np.cumsum(turned, axis=1, out=prefix[:, 1:])
+        out = np.empty_like(turned)
+        for slope in range(SECTOR_SLOPES):
+            _fill_sector(turned, prefix, turned_skips, out, slope)
+            _canonical(maps[eighth * SECTOR_SLOPES + slope], eighth)[...] = out.T
+    return dataclasses.replace(field, sectors=sectors)
+
+
+def _canonical(cells: np.ndarray, eighth: int) -> np.ndarray:
+    """A view of (H, w) ``cells`` turned so that the directions of ``eighth`` (bit 0: x < 0,
+    bit 1: y < 0, bit 2: |y| > |x|) point along + columns (major) and + rows (minor)."""
+    x_step, y_step = (-1 if eighth & 1 else 1), (-1 if eighth & 2 else 1)
+    view: np.ndarray = cells.T[::x_step, ::y_step] if eighth & 4 else cells[::y_step, ::x_step]
+    return view
+
+
+@_compile
+def _band_free(prefix: Any, row: int, col: int, a: int, slope: int) -> bool:
+    """Whether column ``col`` is free from row + lo to row + hi, the band that samples of a
+    beam of slope step ``slope`` can reach there, ``a`` columns from their cell (see
+    ``_fill_sector``); ``prefix[col, r]``: blocking cells above row r."""
+    m = SECTOR_SLOPES
+    lo, hi = row + (a - 1) * slope // m - 1, row + (a + 1) * (slope + 1) // m + 1
+    height = prefix.shape[1] - 1
+    if col >= prefix.shape[0] or lo < 0 or hi >= height:
+        return False
+    return bool(prefix[col, hi + 1] == prefix[col, lo])
+
+
+@_compile
+def _fill_sector(blocked: Any, prefix: Any, skips: Any, out: Any, slope: int) -> None:
+    """``out``: the sector skips of (W, H) ``blocked`` cells (by column, then row) for beams
+    pointing along + columns (cos c >= 0) and + rows (sin s, 0 <= s <= c) with slope s / c in
+    [j / m, (j + 1) / m] (j = ``slope``, m = SECTOR_SLOPES); at least ``skips``, SKIP_BLOCKED
+    where blocked. ``prefix[q, r]``: the blocking cells of column q above row r.
+
+    Why it is safe. Let a sample lie in cell (r, q) (within half a cell of its centre on
+    each axis) and a later one D = n FINE_STEP further, in cell (r + b, q + a). Then D c is
+    in [a - 1, a + 1] and D s in [D c j / m, D c (j + 1) / m], so b is in the band
+    [floor((a - 1) j / m) - 1, floor((a + 1) (j + 1) / m) + 1] (a cell of slack at each
+    end for float rounding, which moves a sample by far less than 1e-6 cells and 1 / m).
+    ``runs[q, r]`` counts the columns a = 0, 1, ... whose bands are free from (r, q). The
+    band of (r, q) at column a >= m is the union of the bands of (r + j, q + m) and
+    (r + j + 1, q + m) at column a - m: when the first m bands of (r, q) are free, its run
+    is m + the smaller of their runs. A sample after n FINE_STEP lies in a column a <=
+    1 + D c, below the run when D c < run - 1; and c <= m / hypot(m, j): any n with
+    n FINE_STEP m / hypot(m, j) < run - 1 is safe. Where the run leaves the map, the map
+    blocks; uint8 skips stop at SKIP_BLOCKED - 1 (runs at RUN_CAP).
+    """
+    width, height = blocked.shape
+    m = SECTOR_SLOPES
+    cos_max = m / math.hypot(m, slope)
+    skip_of = np.empty(RUN_CAP + 1, np.uint8)  # [samples] by run [columns]
+    for run in range(RUN_CAP + 1):
+        free = math.floor((run - 1 - 1e-6) / (FINE_STEP * cos_max))  # 1e-6: float slack
+        skip_of[run] = min(max(free, 0), SKIP_BLOCKED - 1)
+    runs = np.zeros((width, height), np.int32)  # [columns]
+    for col in range(width - 1, -1, -1):
+        for row in range(height):
+            if blocked[col, row]:
+                out[col, row] = SKIP_BLOCKED  # and run 0
+                continue
+            run = m if skips[col, row] >= CLEAR else 0  # the first m bands are free
+            while run < m and _band_free(prefix, row, col + run, run, slope):
+                run += 1
+            if run == m and col + m < width and row + slope + 1 < height:
+                ahead = min(runs[col + m, row + slope], runs[col + m, row + slope + 1])
+                run = min(m + ahead, RUN_CAP)
+            runs[col, row] = run
+            out[col, row] = max(skips[col, row], skip_of[run])
+
+
 @_compile
 def _first_hits(
-    skips: Any, width: int, sx: float, sy: float, cos: Any, sin: Any, top: int, samples: int,
-    hits: Any,
+    skips: Any, rows: int, width: int, sx: float, sy: float, cos: Any, sin: Any, sectors: Any,
+    top: int, samples: int, hits: Any,
 ) -> None:  # fmt: skip
     """``hits[b]``: index of the first blocked sample among the first ``samples`` of the
     beam of row top + b (origin shifted sx, sy [cells] from its cell, ``skips`` flat from
     that cell); -1 for none. Each free sample's cell tells how many next samples cannot be
-    blocked. LANES beams step together: their lookups overlap instead of waiting in turn."""
-    # every beam's first samples are as free as the origin's cell says: its skip (samples
-    # (j + 1) FINE_STEP from the origin, which is within half a diagonal of its cell's centre)
-    first = skips[LEAD * width]
+    blocked, in the skip map of the beam's sector (``rows`` apart; 0: one map for all).
+    Up to LANES beams of one sector step together: their lookups overlap instead of
+    waiting in turn."""
     index = np.empty(LANES, np.int64)  # the next sample of each lane's beam
     c, s = np.empty(LANES), np.empty(LANES)
-    for group in range(0, len(hits), LANES):
-        lanes = min(LANES, len(hits) - group)
+    group = 0
+    while group < len(hits):
+        sector = sectors[top + group]
+        lanes = 1
+        while lanes < min(LANES, len(hits) - group) and (
+            rows == 0 or sectors[top + group + lanes] == sector
+        ):
+            lanes += 1
+        cells = skips[sector * rows * width :]  # the sector's map
+        # the first samples are as free as the origin's cell says: its skip (samples
+        # (j + 1) FINE_STEP from the origin, which lies in that cell)
+        first = cells[LEAD * width]
         for k in range(lanes):
             index[k], c[k], s[k] = first, cos[top + group + k], sin[top + group + k]
             hits[group + k] = -1
@@ -114,12 +226,13 @@ def _first_hits(
                 if i >= samples:
                     continue
                 radius = (i + 1) * FINE_STEP
-                skip = skips[_flat(sx + c[k] * radius, sy + s[k] * radius, width)]
+                skip = cells[_flat(sx + c[k] * radius, sy + s[k] * radius, width)]
                 if skip == SKIP_BLOCKED:
                     hits[group + k], index[k] = i, samples
                 else:
                     index[k] = i + 1 + skip
                     going += 1
+        group += lanes
 
 
 @_compile
@@ -149,8 +262,9 @@ def _march(steps: Any, ox: Any, oy: Any, dx: Any, dy: Any, t: Any, limit: Any) -
 
 @_compile
 def _scan(
-    skips: Any, steps: Any, width: int, base: int, sx: float, sy: float, cos: Any, sin: Any,
-    top: int, beams: int, samples: int, ranges: Any, past: Any, x: float, y: float,
+    skips: Any, rows: int, steps: Any, width: int, base: int, sx: float, sy: float, cos: Any,
+    sin: Any, sectors: Any, top: int, beams: int, samples: int, ranges: Any, past: Any,
+    x: float, y: float,
     reach: tuple[float, float, float, float],
 ) -> Any:  # fmt: skip
     """float32 ranges [track units] of the beams of rows top .. top + beams - 1: ``ranges[i]``
@@ -158,7 +272,7 @@ def _scan(
     the tables from the origin (x, y) [cells]. ``reach``: table range, limit [cells], cells
     per track unit, max range [track units] (float32 in the march, as in ``_beyond``)."""
     hits = np.empty(beams, np.int64)
-    _first_hits(skips[base:], width, sx, sy, cos, sin, top, samples, hits)
+    _first_hits(skips[base:], rows, width, sx, sy, cos, sin, sectors, top, samples, hits)
     out = np.empty(beams, np.float32)
     ox, oy = np.float32(x), np.float32(y)
     table_range, limit = np.float32(reach[0]), np.float32(reach[1])
@@ -195,9 +309,11 @@ def cast(
     reach = (fan.table_range, fan.limit, field.cells_per_unit, fan.max_range)
     samples = fan.segments * FINE_SAMPLES
     assert fan.segments * COARSE_STEP <= TABLE_RANGE < LEAD, "no sample leaves the map"
+    height, width = field.shape
+    skips, rows = (field.skips, 0) if field.sectors is None else (field.sectors, height)
     out: np.ndarray = _scan(
-        field.skips, steps, field.shape[1], at.base, fan.shifts[at.vx], fan.shifts[at.vy],
-        fan.cos, fan.sin, at.top, fan.beams, samples, fan.ranges, fan.ranges[-1], at.x, at.y,
-        reach,
+        skips, rows, steps, width, at.base, fan.shifts[at.vx], fan.shifts[at.vy],
+        fan.cos, fan.sin, fan.sectors, at.top, fan.beams, samples, fan.ranges, fan.ranges[-1],
+        at.x, at.y, reach,
     )  # fmt: skip
     return out[::-1] if reverse else out
