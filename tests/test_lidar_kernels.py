@@ -180,17 +180,19 @@ def test_the_skip_map_never_skips_a_blocked_sample():
 
 
 def _sector_maps(field: raycast.DistanceField) -> np.ndarray:
-    """(SECTORS, H, w) view of a field's sector skip maps."""
-    height, width = field.shape
-    lead = raycast.LEAD * width
+    """(SECTORS, s H, s w) view of a field's sector skip maps, s = its sector_scale."""
+    height, width = np.array(field.shape) * field.sector_scale
+    lead = raycast.LEAD * field.sector_scale * width
     assert field.sectors is not None
     return field.sectors[lead : lead + SECTORS * height * width].reshape(SECTORS, height, width)
 
 
-def test_the_sector_maps_never_skip_a_blocked_sample():
+@pytest.mark.parametrize("scale", raycast_numba.SECTOR_SCALES)
+def test_the_sector_maps_never_skip_a_blocked_sample(scale, monkeypatch):
     """From any point of a free cell, along any direction (those on the sectors' edges too),
-    the samples that the cell's skip in the direction's sector map passes over are all in
-    free cells (brute force: every sample computed as the kernel does)."""
+    the samples that the skip of the point's sector map cell passes over are all in free
+    cells (brute force: every sample's cells computed as the kernel computes them)."""
+    monkeypatch.setattr(raycast_numba, "SECTOR_SCALES", (scale,))
     rng = np.random.default_rng(5)
     blocking = rng.random((60, 70)) < 0.02
     blocking[10:13, 5:60] = True  # walls that beams run along
@@ -198,6 +200,7 @@ def test_the_sector_maps_never_skip_a_blocked_sample():
     field = raycast_numba.with_sectors(
         raycast.distance_field(blocking, np.array([[1.0, 0, 0], [0, 1.0, 0]]), near=False)
     )
+    assert field.sector_scale == scale
     blocked = field.blocking() > 0
     maps = _sector_maps(field)
     edges = np.arctan2(np.arange(SECTOR_SLOPES + 1), SECTOR_SLOPES)  # [rad] first eighth
@@ -207,25 +210,29 @@ def test_the_sector_maps_never_skip_a_blocked_sample():
     c, s = np.cos(angles), np.sin(angles)
     free = np.argwhere(~blocked)
     row, col = free[rng.integers(0, len(free), len(angles))].T
-    corner = rng.random(len(angles)) < 0.3  # points on the cell's edges and corners
-    dx = np.where(corner, rng.choice([-0.5, 0.4999999], len(angles)), rng.uniform(-0.5, 0.5))
-    dy = np.where(corner, rng.choice([-0.5, 0.4999999], len(angles)), rng.uniform(-0.5, 0.5))
-    skips = maps[raycast.sector(c, s), row, col].astype(np.int64)
-    for origin_x, origin_y, start in ((col + dx, row + dy, 0), (col * 1.0, row * 1.0, 37)):
-        # a sample i at radius (i + 1) FINE_STEP from an origin, as the kernel computes it
-        first = (start + 1) * FINE_STEP
-        x0, y0 = origin_x - c * first, origin_y - s * first  # an origin whose sample is there
-        k = np.arange(1, SKIP_BLOCKED)
-        radius = (start + 1 + k[None, :]) * FINE_STEP
+    on_edge = rng.random(len(angles)) < 0.3  # points on the edges and corners of cells
+    edge = [-0.5, -0.25, 0.0, 0.2499999, 0.4999999]  # of the cell and its sector map cells
+    dx = np.where(on_edge, rng.choice(edge, len(angles)), rng.uniform(-0.5, 0.5, len(angles)))
+    dy = np.where(on_edge, rng.choice(edge, len(angles)), rng.uniform(-0.5, 0.5, len(angles)))
+    height, width = blocked.shape
+    for start in (0, 37):  # the point is sample ``start`` of a beam from an origin behind it
+        radius = (start + 1 + np.arange(SKIP_BLOCKED)) * FINE_STEP  # [cells] that sample on
+        x0, y0 = col + dx - c * radius[0], row + dy - s * radius[0]
         x, y = x0[:, None] + c[:, None] * radius, y0[:, None] + s[:, None] * radius
-        cells_x, cells_y = np.floor(x + 0.5).astype(np.int64), np.floor(y + 0.5).astype(np.int64)
-        height, width = blocked.shape
-        inside = (cells_x >= 0) & (cells_x < width) & (cells_y >= 0) & (cells_y < height)
+        tx, ty = x + 0.5, y + 0.5  # as the kernel rounds them
+        cx, cy = np.floor(tx).astype(np.int64), np.floor(ty).astype(np.int64)
+        fine_x, fine_y = (np.floor(t[:, 0] * scale).astype(np.int64) for t in (tx, ty))
+        assert (fine_x // scale == cx[:, 0]).all() and (fine_y // scale == cy[:, 0]).all()
+        skips = maps[raycast.sector(c, s), fine_y, fine_x].astype(np.int64)
+        free = skips < SKIP_BLOCKED  # (rounding may move a point on an edge to a wall)
+        assert free.mean() > 0.97
+        inside = (cx >= 0) & (cx < width) & (cy >= 0) & (cy < height)
         hit = ~inside
-        hit[inside] = blocked[cells_y[inside], cells_x[inside]]
-        skipped = k[None, :] <= skips[:, None]
-        assert not (hit & skipped).any()
-    assert (skips > 8).mean() > 0.3
+        hit[inside] = blocked[cy[inside], cx[inside]]
+        skipped = np.arange(SKIP_BLOCKED)[None, :] <= skips[:, None]
+        skipped[:, 0] = False  # the point itself
+        assert not (hit & skipped & free[:, None]).any()
+        assert (skips[free] > 8).mean() > 0.3
 
 
 def test_the_sector_maps_skip_more_along_a_corridor():
@@ -239,7 +246,8 @@ def test_the_sector_maps_skip_more_along_a_corridor():
     height, width = field.shape
     lead = raycast.LEAD * width
     skips = field.skips[lead : lead + height * width].reshape(height, width)
-    maps = _sector_maps(field)
+    scale = field.sector_scale
+    maps = _sector_maps(field)[:, ::scale, ::scale]  # a sector map cell in each cell
     free = field.blocking() == 0
     assert (maps[:, free] >= skips[free]).all()
     along = maps[raycast.sector(np.array([1.0]), np.array([0.05]))[0]]
@@ -247,12 +255,15 @@ def test_the_sector_maps_skip_more_along_a_corridor():
     assert along[middle].mean() > 3 * skips[middle].mean()
 
 
-def test_sector_maps_are_made_only_where_they_fit():
-    """Sector maps of a large field would take SECTORS times its skip map: above
-    SECTOR_BYTES the field keeps its one skip map, and the ranges stay the same."""
-    small = raycast.distance_field(np.zeros((50, 50), bool), np.eye(2, 3), near=False)
-    assert raycast_numba.with_sectors(small).sectors is not None
-    side = math.isqrt(raycast_numba.SECTOR_BYTES // SECTORS) + 1
+def test_sector_maps_are_as_fine_as_fit():
+    """Sector maps take SECTORS times scale**2 the skip map's bytes: a small field gets the
+    finest, a large one coarser ones, a very large one none (its one skip map serves)."""
+    budget = raycast_numba.SECTOR_BYTES
+    fine, coarse = raycast_numba.SECTOR_SCALES[0], raycast_numba.SECTOR_SCALES[-1]
+    for side, scale in ((50, fine), (math.isqrt(budget // SECTORS // fine**2) + 1, coarse)):
+        field = raycast.distance_field(np.zeros((side, side), bool), np.eye(2, 3), near=False)
+        assert raycast_numba.with_sectors(field).sector_scale == scale
+    side = math.isqrt(budget // SECTORS // coarse**2) + 1
     large = raycast.distance_field(np.zeros((side, side), bool), np.eye(2, 3), near=False)
     assert raycast_numba.with_sectors(large) is large
 

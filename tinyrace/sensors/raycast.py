@@ -83,9 +83,11 @@ class DistanceField:
     steps: np.ndarray | None = None  # (H, w) uint8 [half cells]
     classes: np.ndarray | None = None  # (H, w) uint8 hit class of blocking cells and their rim
     skips: np.ndarray | None = None  # same layout as ``blocked`` [FINE_STEP samples]
-    # SECTORS skip maps, one per sector of beam directions, (H, w) each, one after the other
-    # between LEAD rows (raycast_numba.with_sectors) [FINE_STEP samples]
+    # SECTORS skip maps, one per sector of beam directions, (s H, s w) each (s =
+    # ``sector_scale`` cells of theirs per cell and axis), one after the other between
+    # s LEAD rows (raycast_numba.with_sectors) [FINE_STEP samples]
     sectors: np.ndarray | None = None
+    sector_scale: int = 1
 
     def blocking(self) -> np.ndarray:
         """(H, w) uint8 view of the padded map, 1 where blocking."""

@@ -44,6 +44,7 @@ from tinyrace.sensors.raycast import (
     SECTOR_SLOPES,
     SECTORS,
     SKIP_BLOCKED,
+    SKIP_MARGIN,
     TABLE_RANGE,
     DistanceField,
     Fan,
@@ -62,10 +63,10 @@ if any(getattr(raycast, name) != value for name, value in COMPILED_IN.items()):
     raise RuntimeError(f"raycast's constants changed: update COMPILED_IN ({COMPILED_IN})")
 LANES = 16  # beams that step together (independent lookups the CPU overlaps)
 SECTOR_BYTES = 16 * 2**20  # [bytes] a field's sector maps at most (else its skip map serves)
-RUN_CAP = 128  # [cells] longest free run that sector maps count (their skips fill a uint8)
-# a skip of CLEAR leaves no blocking cell within 9 FINE_STEP + SKIP_MARGIN = 5.92 cells: none
-# in the first SECTOR_SLOPES bands of any sector (columns 0 .. 3, rows -2 .. 5: <= 5.84 cells)
-CLEAR = 9
+# sector map cells per cell and axis, finest first, as they fit in SECTOR_BYTES: powers of
+# two, so that a scaled coordinate rounds as the coordinate does
+SECTOR_SCALES = (2, 1)
+RUN_CAP = 128  # [sector map cells] longest free run counted (its skips fill a uint8)
 F = TypeVar("F")
 
 
@@ -90,29 +91,38 @@ def _nearest(steps: Any, x: Any, y: Any) -> Any:
 
 
 @_compile
-def _flat(x: float, y: float, width: int) -> Any:
-    """Flat offset (plus LEAD rows) of the cell nearest to (x, y) [cells], unsigned: within
-    TABLE_RANGE of the origin it is in the map (LEAD rows), and numba then skips the check
-    for negative indices."""
-    return np.uint64((math.floor(y + 0.5) + LEAD) * width + math.floor(x + 0.5))
+def _flat(x: float, y: float, width: int, half: float) -> Any:
+    """Flat offset of the cell nearest to (x, y) [cells, centres ``half`` a cell past
+    integers], unsigned, modulo 2**64: added to LEAD rows it wraps into the map within
+    TABLE_RANGE of the origin, and numba skips the check for negative indices."""
+    return np.uint64(math.floor(y + half) * width + math.floor(x + half))
 
 
 def with_sectors(field: DistanceField) -> DistanceField:
-    """``field`` with its sector skip maps, when they take at most SECTOR_BYTES (else the
-    kernel uses its one skip map). A beam reads the map of its sector of directions (an eighth
-    of a turn, split by the slope of the minor over the major axis in SECTOR_SLOPES steps),
-    where a cell holds how many next samples of a beam in that sector, from any point of the
-    cell, cannot be blocked: at least the skip map's, often several times more along walls
-    (the skip map must allow for a wall on every side)."""
+    """``field`` with its sector skip maps, as fine as fit in SECTOR_BYTES (none: the kernel
+    uses the one skip map). A beam reads the map of its sector of directions (an eighth of a
+    turn, split by the slope of the minor over the major axis in SECTOR_SLOPES steps), where
+    a cell holds how many next samples of a beam in that sector, from any point of the cell,
+    cannot be blocked: at least the skip map's, often several times more along walls (the
+    skip map must allow for a wall on every side); cells smaller than the map's (``scale``
+    of them per cell and axis) let a beam that grazes a wall come closer before it must
+    look at every sample."""
     assert field.skips is not None, "distance_field(..., near=False)"
     height, width = field.shape
-    if SECTORS * height * width > SECTOR_BYTES:
+    fits = [s for s in SECTOR_SCALES if SECTORS * s * s * height * width <= SECTOR_BYTES]
+    if not fits:
         return field
+    scale = fits[0]
     lead = LEAD * width
-    blocked = field.blocking()
-    skips = field.skips[lead : lead + height * width].reshape(height, width)
-    sectors = np.full(2 * lead + SECTORS * height * width, SKIP_BLOCKED, np.uint8)
-    maps = sectors[lead : lead + SECTORS * height * width].reshape(SECTORS, height, width)
+    blocked, skips = (
+        np.repeat(np.repeat(cells.reshape(height, width), scale, 0), scale, 1)
+        for cells in (field.blocked[lead:-lead], field.skips[lead:-lead])
+    )
+    rows, cols = height * scale, width * scale
+    lead = LEAD * scale * cols
+    sectors = np.full(2 * lead + SECTORS * rows * cols, SKIP_BLOCKED, np.uint8)
+    maps = sectors[lead : lead + SECTORS * rows * cols].reshape(SECTORS, rows, cols)
+    clear = _clear(scale)
     for eighth in range(8):  # the kernels run along columns: (column, row) arrays
         turned, turned_skips = (
             np.ascontiguousarray(_canonical(a, eighth).T) for a in (blocked, skips)
@@ -121,9 +131,19 @@ def with_sectors(field: DistanceField) -> DistanceField:
         np.cumsum(turned, axis=1, out=prefix[:, 1:])
         out = np.empty_like(turned)
         for slope in range(SECTOR_SLOPES):
-            _fill_sector(turned, prefix, turned_skips, out, slope)
+            _fill_sector(turned, prefix, turned_skips, out, slope, scale * FINE_STEP, clear)
             _canonical(maps[eighth * SECTOR_SLOPES + slope], eighth)[...] = out.T
-    return dataclasses.replace(field, sectors=sectors)
+    return dataclasses.replace(field, sectors=sectors, sector_scale=scale)
+
+
+def _clear(scale: int) -> int:
+    """The skip from which a cell's first SECTOR_SLOPES bands (``_fill_sector``) are surely
+    free: its cells of 1 / ``scale`` lie within hypot(m - 1, m + 1) / scale cells of its own,
+    and each such cell's centre within (1 - 1 / scale) / sqrt(2) of its map cell's; a skip n
+    leaves no blocking cell's centre within n FINE_STEP + SKIP_MARGIN cells."""
+    m = SECTOR_SLOPES
+    reach = math.hypot(m - 1, m + 1) / scale + (1 - 1 / scale) * math.sqrt(2)  # [cells]
+    return math.floor((reach - SKIP_MARGIN) / FINE_STEP) + 1
 
 
 def _canonical(cells: np.ndarray, eighth: int) -> np.ndarray:
@@ -148,14 +168,17 @@ def _band_free(prefix: Any, row: int, col: int, a: int, slope: int) -> bool:
 
 
 @_compile
-def _fill_sector(blocked: Any, prefix: Any, skips: Any, out: Any, slope: int) -> None:
+def _fill_sector(
+    blocked: Any, prefix: Any, skips: Any, out: Any, slope: int, step: float, clear: int
+) -> None:
     """``out``: the sector skips of (W, H) ``blocked`` cells (by column, then row) for beams
     pointing along + columns (cos c >= 0) and + rows (sin s, 0 <= s <= c) with slope s / c in
     [j / m, (j + 1) / m] (j = ``slope``, m = SECTOR_SLOPES); at least ``skips``, SKIP_BLOCKED
-    where blocked. ``prefix[q, r]``: the blocking cells of column q above row r.
+    where blocked. ``prefix[q, r]``: the blocking cells of column q above row r; ``step``:
+    FINE_STEP in these cells; ``clear``: a skip from which the first m bands are free.
 
     Why it is safe. Let a sample lie in cell (r, q) (within half a cell of its centre on
-    each axis) and a later one D = n FINE_STEP further, in cell (r + b, q + a). Then D c is
+    each axis) and a later one D = n step further, in cell (r + b, q + a). Then D c is
     in [a - 1, a + 1] and D s in [D c j / m, D c (j + 1) / m], so b is in the band
     [floor((a - 1) j / m) - 1, floor((a + 1) (j + 1) / m) + 1] (a cell of slack at each
     end for float rounding, which moves a sample by far less than 1e-6 cells and 1 / m).
@@ -164,7 +187,7 @@ def _fill_sector(blocked: Any, prefix: Any, skips: Any, out: Any, slope: int) ->
     (r + j + 1, q + m) at column a - m: when the first m bands of (r, q) are free, its run
     is m + the smaller of their runs. A sample after n FINE_STEP lies in a column a <=
     1 + D c, below the run when D c < run - 1; and c <= m / hypot(m, j): any n with
-    n FINE_STEP m / hypot(m, j) < run - 1 is safe. Where the run leaves the map, the map
+    n step m / hypot(m, j) < run - 1 is safe. Where the run leaves the map, the map
     blocks; uint8 skips stop at SKIP_BLOCKED - 1 (runs at RUN_CAP).
     """
     width, height = blocked.shape
@@ -172,7 +195,7 @@ def _fill_sector(blocked: Any, prefix: Any, skips: Any, out: Any, slope: int) ->
     cos_max = m / math.hypot(m, slope)
     skip_of = np.empty(RUN_CAP + 1, np.uint8)  # [samples] by run [columns]
     for run in range(RUN_CAP + 1):
-        free = math.floor((run - 1 - 1e-6) / (FINE_STEP * cos_max))  # 1e-6: float slack
+        free = math.floor((run - 1 - 1e-6) / (step * cos_max))  # 1e-6: float slack
         skip_of[run] = min(max(free, 0), SKIP_BLOCKED - 1)
     runs = np.zeros((width, height), np.int32)  # [columns]
     for col in range(width - 1, -1, -1):
@@ -180,7 +203,7 @@ def _fill_sector(blocked: Any, prefix: Any, skips: Any, out: Any, slope: int) ->
             if blocked[col, row]:
                 out[col, row] = SKIP_BLOCKED  # and run 0
                 continue
-            run = m if skips[col, row] >= CLEAR else 0  # the first m bands are free
+            run = m if skips[col, row] >= clear else 0  # the first m bands are free
             while run < m and _band_free(prefix, row, col + run, run, slope):
                 run += 1
             if run == m and col + m < width and row + slope + 1 < height:
@@ -192,17 +215,20 @@ def _fill_sector(blocked: Any, prefix: Any, skips: Any, out: Any, slope: int) ->
 
 @_compile
 def _first_hits(
-    skips: Any, rows: int, width: int, sx: float, sy: float, cos: Any, sin: Any, sectors: Any,
-    top: int, samples: int, hits: Any,
+    skips: Any, rows: int, width: int, scale: int, sx: float, sy: float, cos: Any, sin: Any,
+    sectors: Any, top: int, samples: int, hits: Any,
 ) -> None:  # fmt: skip
     """``hits[b]``: index of the first blocked sample among the first ``samples`` of the
     beam of row top + b (origin shifted sx, sy [cells] from its cell, ``skips`` flat from
     that cell); -1 for none. Each free sample's cell tells how many next samples cannot be
-    blocked, in the skip map of the beam's sector (``rows`` apart; 0: one map for all).
-    Up to LANES beams of one sector step together: their lookups overlap instead of
-    waiting in turn."""
+    blocked, in the skip map of the beam's sector (maps ``rows`` apart, 0: one map for all;
+    ``scale`` map cells per cell and axis, a power of two: coordinates times ``scale``
+    round exactly as the coordinates do, so a sample's map cell lies in its cell). Up to
+    LANES beams of one sector step together: their lookups overlap instead of waiting."""
     index = np.empty(LANES, np.int64)  # the next sample of each lane's beam
     c, s = np.empty(LANES), np.empty(LANES)
+    half, sx, sy = 0.5 * scale, sx * scale, sy * scale  # [map cells]
+    lead = np.uint64(LEAD * scale * width)
     group = 0
     while group < len(hits):
         sector = sectors[top + group]
@@ -214,10 +240,10 @@ def _first_hits(
         cells = skips[sector * rows * width :]  # the sector's map
         # the first samples are as free as the origin's cell says: its skip (samples
         # (j + 1) FINE_STEP from the origin, which lies in that cell)
-        first = cells[LEAD * width]
+        first = cells[lead + _flat(sx, sy, width, half)]
         for k in range(lanes):
-            index[k], c[k], s[k] = first, cos[top + group + k], sin[top + group + k]
-            hits[group + k] = -1
+            index[k], hits[group + k] = first, -1
+            c[k], s[k] = cos[top + group + k] * scale, sin[top + group + k] * scale
         going = lanes
         while going:
             going = 0
@@ -226,7 +252,7 @@ def _first_hits(
                 if i >= samples:
                     continue
                 radius = (i + 1) * FINE_STEP
-                skip = cells[_flat(sx + c[k] * radius, sy + s[k] * radius, width)]
+                skip = cells[lead + _flat(sx + c[k] * radius, sy + s[k] * radius, width, half)]
                 if skip == SKIP_BLOCKED:
                     hits[group + k], index[k] = i, samples
                 else:
@@ -262,9 +288,9 @@ def _march(steps: Any, ox: Any, oy: Any, dx: Any, dy: Any, t: Any, limit: Any) -
 
 @_compile
 def _scan(
-    skips: Any, rows: int, steps: Any, width: int, base: int, sx: float, sy: float, cos: Any,
-    sin: Any, sectors: Any, top: int, beams: int, samples: int, ranges: Any, past: Any,
-    x: float, y: float,
+    skips: Any, rows: int, steps: Any, width: int, scale: int, base: int, sx: float, sy: float,
+    cos: Any, sin: Any, sectors: Any, top: int, beams: int, samples: int, ranges: Any,
+    past: Any, x: float, y: float,
     reach: tuple[float, float, float, float],
 ) -> Any:  # fmt: skip
     """float32 ranges [track units] of the beams of rows top .. top + beams - 1: ``ranges[i]``
@@ -272,7 +298,7 @@ def _scan(
     the tables from the origin (x, y) [cells]. ``reach``: table range, limit [cells], cells
     per track unit, max range [track units] (float32 in the march, as in ``_beyond``)."""
     hits = np.empty(beams, np.int64)
-    _first_hits(skips[base:], rows, width, sx, sy, cos, sin, sectors, top, samples, hits)
+    _first_hits(skips[base:], rows, width, scale, sx, sy, cos, sin, sectors, top, samples, hits)
     out = np.empty(beams, np.float32)
     ox, oy = np.float32(x), np.float32(y)
     table_range, limit = np.float32(reach[0]), np.float32(reach[1])
@@ -310,9 +336,14 @@ def cast(
     samples = fan.segments * FINE_SAMPLES
     assert fan.segments * COARSE_STEP <= TABLE_RANGE < LEAD, "no sample leaves the map"
     height, width = field.shape
-    skips, rows = (field.skips, 0) if field.sectors is None else (field.sectors, height)
+    skips, rows, cols, scale, base = field.skips, 0, width, 1, at.base
+    if field.sectors is not None:  # the sector maps: scale cells of theirs per cell
+        scale = field.sector_scale
+        row, col = divmod(at.base, width)
+        skips, rows, cols = field.sectors, height * scale, width * scale
+        base = (row * cols + col) * scale
     out: np.ndarray = _scan(
-        skips, rows, steps, width, at.base, fan.shifts[at.vx], fan.shifts[at.vy],
+        skips, rows, steps, cols, scale, base, fan.shifts[at.vx], fan.shifts[at.vy],
         fan.cos, fan.sin, fan.sectors, at.top, fan.beams, samples, fan.ranges, fan.ranges[-1],
         at.x, at.y, reach,
     )  # fmt: skip
