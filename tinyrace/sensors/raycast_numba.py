@@ -155,19 +155,6 @@ def _canonical(cells: np.ndarray, eighth: int) -> np.ndarray:
 
 
 @_compile
-def _band_free(prefix: Any, row: int, col: int, a: int, slope: int) -> bool:
-    """Whether column ``col`` is free from row + lo to row + hi, the band that samples of a
-    beam of slope step ``slope`` can reach there, ``a`` columns from their cell (see
-    ``_fill_sector``); ``prefix[col, r]``: blocking cells above row r."""
-    m = SECTOR_SLOPES
-    lo, hi = row + (a - 1) * slope // m - 1, row + (a + 1) * (slope + 1) // m + 1
-    height = prefix.shape[1] - 1
-    if col >= prefix.shape[0] or lo < 0 or hi >= height:
-        return False
-    return bool(prefix[col, hi + 1] == prefix[col, lo])
-
-
-@_compile
 def _fill_sector(
     blocked: Any, prefix: Any, skips: Any, out: Any, slope: int, step: float, clear: int
 ) -> None:
@@ -197,6 +184,9 @@ def _fill_sector(
     for run in range(RUN_CAP + 1):
         free = math.floor((run - 1 - 1e-6) / (step * cos_max))  # 1e-6: float slack
         skip_of[run] = min(max(free, 0), SKIP_BLOCKED - 1)
+    # the band a columns on: rows row + lo[a] .. row + hi[a]
+    lo = np.array([(a - 1) * slope // m - 1 for a in range(m)])
+    hi = np.array([(a + 1) * (slope + 1) // m + 1 for a in range(m)])
     runs = np.zeros((width, height), np.int32)  # [columns]
     for col in range(width - 1, -1, -1):
         for row in range(height):
@@ -204,7 +194,10 @@ def _fill_sector(
                 out[col, row] = SKIP_BLOCKED  # and run 0
                 continue
             run = m if skips[col, row] >= clear else 0  # the first m bands are free
-            while run < m and _band_free(prefix, row, col + run, run, slope):
+            while run < m and col + run < width and 0 <= row + lo[run] <= row + hi[run] < height:
+                q, low, high = col + run, row + lo[run], row + hi[run] + 1
+                if prefix[q, high] != prefix[q, low]:  # a blocking cell in the band
+                    break
                 run += 1
             if run == m and col + m < width and row + slope + 1 < height:
                 ahead = min(runs[col + m, row + slope], runs[col + m, row + slope + 1])
