@@ -137,10 +137,11 @@ def with_sectors(field: DistanceField) -> DistanceField:
 
 
 def _clear(scale: int) -> int:
-    """The skip from which a cell's first SECTOR_SLOPES bands (``_fill_sector``) are surely
-    free: its cells of 1 / ``scale`` lie within hypot(m - 1, m + 1) / scale cells of its own,
-    and each such cell's centre within (1 - 1 / scale) / sqrt(2) of its map cell's; a skip n
-    leaves no blocking cell's centre within n FINE_STEP + SKIP_MARGIN cells."""
+    """The skip-map skip from which the first SECTOR_SLOPES bands (``_fill_sector``) of a
+    sector map cell (1 / ``scale`` of a cell a side) are surely free: their map cells lie
+    within hypot(m - 1, m + 1) / scale cells of it, and a map cell's centre within
+    (1 - 1 / scale) / sqrt(2) of its cell's (for both ends); a skip n leaves no blocking
+    cell's centre within n FINE_STEP + SKIP_MARGIN cells of the cell's."""
     m = SECTOR_SLOPES
     reach = math.hypot(m - 1, m + 1) / scale + (1 - 1 / scale) * math.sqrt(2)  # [cells]
     return math.floor((reach - SKIP_MARGIN) / FINE_STEP) + 1
