@@ -38,6 +38,7 @@ class ImageEpisode:
         self.cte: float | None = None
         width, height = self.track.size
         self._inside = (-0.5, width - 0.5, -0.5, height - 0.5)  # [px] x, y bounds of the image
+        self._color_names = [repr(color) for color in self.track.obstacle_colors]  # "#rrggbb"
 
     def start(self, dt: float) -> StepFacts:
         """The reset's look at the spawn: tinycarlo's reset neither moves the car nor rewards
@@ -69,13 +70,13 @@ class ImageEpisode:
 
     def info(self, snapshot: Snapshot) -> dict[str, Any]:
         car = snapshot.car
-        colors = self.track.obstacle_colors
+        names = self._color_names
         info = {
             "pose": car.pose,
             "speed": car.speed,
             "track": self.track_index,
             "spawn": self.spawn_index,
-            "obstacles_hit": [repr(colors[i]) for i in self.obstacles_hit],  # "#rrggbb" each
+            "obstacles_hit": [names[i] for i in self.obstacles_hit],  # "#rrggbb" each
         }
         if self.cte is not None:
             info["cte"] = self.cte  # [px]
