@@ -216,16 +216,15 @@ class ObstaclePixels:
                 self._probes.clear()
             found = (xs + x0).astype(np.float64), ys + y0
             self._pixels[cell] = found
-            ends = {int(xs.argmin()), int(xs.argmax()), int(ys.argmin()), int(ys.argmax())}
-            self._probes[cell] = [(float(found[0][i]), float(found[1][i])) for i in sorted(ends)]
         return found
 
     def probes(self, cell: int) -> list[tuple[float, float]]:
         """Centres (x, y) [px] of the leftmost, rightmost, top and bottom pixels of a cell."""
         probes = self._probes.get(cell)
         if probes is None:
-            self.of_cell(cell)
-            probes = self._probes[cell]
+            xs, ys = self.of_cell(cell)  # clears the probes too when its cache is full
+            ends = sorted({int(xs.argmin()), int(xs.argmax()), int(ys.argmin()), int(ys.argmax())})
+            probes = self._probes[cell] = [(float(xs[i]), float(ys[i])) for i in ends]
         return probes
 
     def touched(self, corners: np.ndarray, cells: Iterable[int]) -> list[int]:
