@@ -15,6 +15,16 @@ An episode also ends when the car's rear axle leaves the image, as tinyrace's do
 image within a few hundred steps and drives on over black ground, where its steps cost a
 fraction of those on the track (no obstacle pixels in view); tinyrace's figures never
 include such steps. ``free`` holds the figures of tinycarlo's own loop, without that end.
+
+Fairness: tinycarlo is timed in its own loop (no wrappers; tinyrace is timed through
+``gym.make``), with the same folders, camera (120x160), seeded random steering and end rule.
+The folders run.py passes are tinyrace's examples, whose images (2282-2441 x 1706-1743 px)
+are smaller than those of tinycarlo 1.1's own examples in its repository
+(formula_student 6000x3000, segmented 4561x3010; not in its wheel). tinycarlo warps the
+whole image every step, so its steps/s falls with the image's area (about 5x and 2.5x
+slower on its own two than on tinyrace's, measured side by side here), while tinyrace's
+stays about the same: the ratio measured on tinyrace's examples is the conservative one.
+Pass tinycarlo's own folders as NAME=FOLDER to time those.
 """
 
 from __future__ import annotations

@@ -18,7 +18,16 @@ from hypothesis import strategies as st
 from synthetic import BGR, blank, color_mask, make_env, straight, write_track
 
 from tinyrace.config import Color
-from tinyrace.tracks.image import ImageTrack, ObstaclePixels, _obstacle_cells
+from tinyrace.tracks.image import (
+    ImageTrack,
+    ObstaclePixels,
+    _box_inside,
+    _inner_edges,
+    _inside_span,
+    _obstacle_cells,
+    _row_spans,
+    _span_edges,
+)
 from tinyrace.tracks.nearest import NearestPoint
 
 WHEELBASE, TRACK_WIDTH = 100, 60  # [px]
@@ -197,6 +206,46 @@ def test_touched_obstacles_counts_pixel_centres_inside(tmp_path):
             continue  # on a slanted edge to rounding: either answer would be defensible
         found = ObstaclePixels(track).touched(corners, range(len(cells)))
         assert bool(found) == expected, (trial, margins[py, px])
+
+
+def random_polygon(rng: np.random.Generator, trial: int) -> np.ndarray:
+    """A footprint-like rectangle: integer or half-pixel corners, axis-aligned or turned,
+    either winding, sometimes without area."""
+    heading = rng.choice([0.0, math.pi / 2, math.pi, math.pi / 4, rng.uniform(-4, 4)])
+    f = np.array([math.cos(heading), math.sin(heading)])
+    f = np.round(f) if trial % 3 == 0 and heading != math.pi / 4 else f
+    r = np.array([-f[1], f[0]])
+    rear = rng.uniform(0, 40, 2)
+    rear = np.round(rear * 2) / 2 if trial % 2 else rear
+    length, width = rng.integers(0, 30, 2) if trial % 4 else rng.uniform(0, 30, 2)
+    left, right = rear - r * width / 2, rear + r * width / 2
+    corners = np.array([left, right, right + length * f, left + length * f])
+    return corners[::-1].copy() if trial % 5 == 0 else corners
+
+
+def test_scalar_span_and_box_tests_agree_with_the_array_ones():
+    """The per-pixel span test and the one-corner-per-edge box test give the answers of
+    _row_spans and of testing all four box corners, bit for bit, edges and ties included."""
+    rng = np.random.default_rng(1)
+    xs = np.mgrid[-5:50, -25:70][1]
+    for trial in range(300):
+        corners = random_polygon(rng, trial)
+        rows = np.arange(-5, 50, dtype=np.float64)
+        left, right = _row_spans(corners, rows)
+        expected = (xs >= np.ceil(left)[:, None]) & (xs <= np.floor(right)[:, None])
+        spans = _span_edges(corners.tolist())
+        found = [[_inside_span(spans, float(x), float(y)) for x in range(-25, 70)] for y in rows]
+        assert np.array_equal(np.array(found), expected), trial
+        edges = _inner_edges(corners.tolist())
+        for _ in range(20):
+            x0, y0 = np.round(rng.uniform(-10, 50, 2)) - 0.5
+            x1, y1 = x0 + rng.integers(1, 12), y0 + rng.integers(1, 12)
+            every_corner = all(
+                dx * (y - ay) - dy * (x - ax) >= 0
+                for ax, ay, dx, dy, *_ in edges
+                for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))
+            )
+            assert _box_inside([x0, y0, x1, y1], edges) == every_corner
 
 
 # -- cross-track error ----------------------------------------------------------------------

@@ -36,6 +36,9 @@ class ImageEpisode:
         self.visit_order: list[int] = []  # an image track has no tiles
         self.obstacles_hit: list[int] = []
         self.cte: float | None = None
+        width, height = self.track.size
+        self._inside = (-0.5, width - 0.5, -0.5, height - 0.5)  # [px] x, y bounds of the image
+        self._color_names = [repr(color) for color in self.track.obstacle_colors]  # "#rrggbb"
 
     def start(self, dt: float) -> StepFacts:
         """The reset's look at the spawn: tinycarlo's reset neither moves the car nor rewards
@@ -60,20 +63,20 @@ class ImageEpisode:
         x, y = car.rear_axle
         if self.track.trajectory is not None:
             facts.cte = self.track.trajectory.query(x, y)[0]
-        width, height = self.track.size
-        facts.out_of_bounds = not (-0.5 <= x < width - 0.5 and -0.5 <= y < height - 0.5)
+        left, right, top, bottom = self._inside
+        facts.out_of_bounds = not (left <= x < right and top <= y < bottom)
         self.obstacles_hit, self.cte = facts.obstacles_hit, facts.cte
         return facts
 
     def info(self, snapshot: Snapshot) -> dict[str, Any]:
         car = snapshot.car
-        colors = self.track.obstacle_colors
+        names = self._color_names
         info = {
             "pose": car.pose,
             "speed": car.speed,
             "track": self.track_index,
             "spawn": self.spawn_index,
-            "obstacles_hit": [repr(colors[i]) for i in self.obstacles_hit],  # "#rrggbb" each
+            "obstacles_hit": [names[i] for i in self.obstacles_hit],  # "#rrggbb" each
         }
         if self.cte is not None:
             info["cte"] = self.cte  # [px]

@@ -9,6 +9,7 @@ world units: x right, y down.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -192,6 +193,7 @@ class ObstaclePixels:
     overlaps, and only their pixels are tested against it. A pixel inside the footprint
     lies in a box that the footprint overlaps, so this is as exact as a test of every pixel.
     A box wholly inside the footprint needs no pixel test: it holds at least one pixel.
+    Nor does a box one of whose outermost pixels (its probes) lies inside.
     """
 
     def __init__(self, track: ImageTrack):
@@ -199,6 +201,7 @@ class ObstaclePixels:
         self._boxes: list[list[float]] = track.cells.tolist()  # x0, y0, x1, y1 per cell
         self._owners: list[int] = track.cell_obstacles.tolist()  # obstacle index per cell
         self._pixels: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # by cell: x, y
+        self._probes: dict[int, list[tuple[float, float]]] = {}  # by cell: a few pixels' x, y
 
     def of_cell(self, cell: int) -> tuple[np.ndarray, np.ndarray]:
         """Centres x [px] (float) and rows y (int) of the obstacle pixels in cell box ``cell``."""
@@ -210,14 +213,25 @@ class ObstaclePixels:
             ys, xs = np.nonzero(track.packed()[y0:y1, x0:x1] == word)
             if len(self._pixels) >= CACHED_CELLS:
                 self._pixels.clear()
+                self._probes.clear()
             found = (xs + x0).astype(np.float64), ys + y0
             self._pixels[cell] = found
         return found
 
+    def probes(self, cell: int) -> list[tuple[float, float]]:
+        """Centres (x, y) [px] of the leftmost, rightmost, top and bottom pixels of a cell."""
+        probes = self._probes.get(cell)
+        if probes is None:
+            xs, ys = self.of_cell(cell)  # clears the probes too when its cache is full
+            ends = sorted({int(xs.argmin()), int(xs.argmax()), int(ys.argmin()), int(ys.argmax())})
+            probes = self._probes[cell] = [(float(xs[i]), float(ys[i])) for i in ends]
+        return probes
+
     def touched(self, corners: np.ndarray, cells: Iterable[int]) -> list[int]:
         """The obstacles (indices, ascending) with a pixel of ``cells`` whose centre lies
         inside the convex polygon ``corners`` or on its edge."""
-        edges = _inner_edges(corners.tolist())
+        listed = corners.tolist()
+        edges = _inner_edges(listed)
         hit: set[int] = set()
         unsure: dict[int, list[int]] = {}  # by obstacle: cells whose pixels need a test
         for cell in cells:
@@ -229,16 +243,21 @@ class ObstaclePixels:
                 unsure.pop(owner, None)
             else:
                 unsure.setdefault(owner, []).append(cell)
+        spans = _span_edges(listed) if unsure else []
         for owner, owned in unsure.items():
-            if _any_inside(corners, [self.of_cell(cell) for cell in owned]):
+            probes = [xy for cell in owned for xy in self.probes(cell)]
+            if any(_inside_span(spans, x, y) for x, y in probes) or _any_inside(
+                corners, [self.of_cell(cell) for cell in owned]
+            ):
                 hit.add(owner)
         return sorted(hit)
 
     def __getstate__(self) -> dict[str, Any]:
-        return {**self.__dict__, "_pixels": {}}  # a cache: refilled when needed
+        return {**self.__dict__, "_pixels": {}, "_probes": {}}  # caches: refilled when needed
 
 
-Edge = tuple[float, float, float, float]  # start x, y and direction dx, dy [px]
+# An edge: start x, y and direction dx, dy [px], then the box corner that is least inside it
+Edge = tuple[float, float, float, float, bool, bool]  # ..., take x1, take y1
 
 
 def _inner_edges(corners: list[list[float]]) -> list[Edge]:
@@ -250,17 +269,23 @@ def _inner_edges(corners: list[list[float]]) -> list[Edge]:
         return []
     if area < 0:
         pairs = [(b, a) for a, b in reversed(pairs)]
-    return [(ax, ay, bx - ax, by - ay) for (ax, ay), (bx, by) in pairs]
+    # dx * (y - ay) - dy * (x - ax) is smallest at y0 when dx >= 0 and at x1 when dy >= 0
+    return [(ax, ay, bx - ax, by - ay, by - ay >= 0, bx - ax < 0) for (ax, ay), (bx, by) in pairs]
 
 
 def _box_inside(box: list[float], edges: list[Edge]) -> bool:
     """Whether the corners of ``box`` (x0, y0, x1, y1) all lie inside the polygon of ``edges``
-    or on its edge. Its pixel centres then lie at least half a pixel inside."""
+    or on its edge. Its pixel centres then lie at least half a pixel inside.
+
+    Per edge only the corner least inside is tested: the rounded cross product grows
+    monotonically with each coordinate, so it is the smallest of the four as computed.
+    """
     x0, y0, x1, y1 = box
-    for ax, ay, dx, dy in edges:
-        for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1)):
-            if dx * (y - ay) - dy * (x - ax) < 0:
-                return False
+    for ax, ay, dx, dy, take_x1, take_y1 in edges:
+        x = x1 if take_x1 else x0
+        y = y1 if take_y1 else y0
+        if dx * (y - ay) - dy * (x - ax) < 0:
+            return False
     return True
 
 
@@ -292,6 +317,29 @@ def _row_spans(corners: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.nd
     left = np.where(crosses, xs, np.inf).min(axis=1)
     right = np.where(crosses, xs, -np.inf).max(axis=1)
     return left, right
+
+
+SpanEdge = tuple[float, float, float, float, float]  # lowest y, highest y, start x, y, slope
+
+
+def _span_edges(corners: list[list[float]]) -> list[SpanEdge]:
+    """The edges of the polygon ``corners`` as _row_spans reads them, for _inside_span."""
+    edges = []
+    for (sx, sy), (ex, ey) in zip(corners, corners[1:] + corners[:1], strict=True):
+        rise = ey - sy
+        edges.append((min(sy, ey), max(sy, ey), sx, sy, (ex - sx) / rise if rise != 0 else 0.0))
+    return edges
+
+
+def _inside_span(edges: list[SpanEdge], x: float, y: float) -> bool:
+    """Whether the pixel centre (x, y) (whole numbers) lies in its row's span of the polygon,
+    computed exactly as _row_spans does (the same operations in the same order)."""
+    left, right = math.inf, -math.inf
+    for low, high, sx, sy, slope in edges:
+        if low <= y <= high:
+            at = sx + (y - sy) * slope
+            left, right = min(left, at), max(right, at)
+    return left <= x <= right  # for a whole x: ceil(left) <= x <= floor(right)
 
 
 class ImageSource:

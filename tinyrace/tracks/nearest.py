@@ -41,17 +41,23 @@ class NearestPoint:
         empty = (counts.reshape(self.rows, self.cols) == 0).astype(np.uint8)
         # distance (in cells, centre to centre) from each cell to the nearest occupied cell
         self.reach = cv2.distanceTransform(empty, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        # the same as plain floats: a query does scalar arithmetic, numpy scalars are slow at it
+        self._origin = (float(low[0]), float(low[1]))
+        self._reach: list[list[float]] = self.reach.tolist()
         self._cells: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def query(self, x: float, y: float) -> tuple[float, float, float]:
         """(distance, nearest x, nearest y) for the point (x, y)."""
-        fx, fy = (x - self.origin[0]) / self.cell, (y - self.origin[1]) / self.cell
+        x, y = float(x), float(y)  # as numpy would promote a float32 against float64 points
+        fx, fy = (x - self._origin[0]) / self.cell, (y - self._origin[1]) / self.cell
         col = min(max(math.floor(fx), 0), self.cols - 1)
         row = min(max(math.floor(fy), 0), self.rows - 1)
         outside = math.hypot(fx - min(max(fx, 0), self.cols), fy - min(max(fy, 0), self.rows))
         # every point closer than the nearest occupied cell's far corner lies within this many
         # rings of cells (the query's cell clamped to the grid, ``outside`` cells beyond it)
-        rings = math.ceil(self.reach[row, col] + outside) + 2
+        # (``reach`` is float32: beyond the grid the sum is float32 too, as numpy adds them)
+        reach = self._reach[row][col] if outside == 0 else self.reach[row, col] + outside
+        rings = math.ceil(reach) + 2
         key = (row, col, rings)
         found = self._cells.get(key)
         if found is None:
