@@ -28,12 +28,15 @@ machine's conditions. Measured:
 - env-steps/s of 1, 2, 4, 8, 16 and 32 envs stepped in this one process by the vector
   entry point (``make_batch(workers=0)``: the cars' tyre forces as one numpy computation),
   and of ``SyncVectorEnv`` with 8, against one env's, in wall and in CPU time;
-- tinycarlo 1.1's steps/s on the example tracks, each with one 120x160 camera (its
-  wheel ships no examples; these folders are in its format), run by
+- tinycarlo 1.1's steps/s on the example tracks, each with one 120x160 camera, run by
   ``tinycarlo_steps.py`` in an interpreter that imports tinycarlo ($TINYCARLO_PYTHON,
   /tmp/tc/bin/python or this one; "not installed" otherwise), beside tinyrace's; its
   episodes end when the car leaves the image, as tinyrace's do (tinycarlo's own loop,
-  whose car drives on over black ground, is given too);
+  whose car drives on over black ground, is given too). tinycarlo's own examples (the folders
+  under ``example_tracks/`` of its repository at 1.1, github.com/danielriege/tinycarlo; its
+  wheel and sdist ship none) are timed the same way when ``--tinycarlo-examples DIR`` (or
+  $TINYCARLO_EXAMPLES) names that folder; their images are 2.5-5x larger than tinyrace's, and
+  tinycarlo warps the whole image every step;
 - ``SyncVectorEnv`` and ``AsyncVectorEnv`` (2 envs, 2 workers) env-steps/s of
   ``tinyrace/CarRacing-v0`` against one env's steps/s, and tinyrace's
   ``BatchVectorEnv`` (8 envs in 2 workers, one message per worker and step);
@@ -299,13 +302,26 @@ def tinycarlo_python() -> str | None:
     return None
 
 
-def one_camera_copies(generated_dir: Path) -> dict[str, Path]:
-    """The example tracks, each copied with one 120x160 camera (and a step limit, which
-    tinycarlo 1.1 needs), for tinyrace and tinycarlo alike."""
+def tinycarlo_examples(folder: Path | None) -> dict[str, Path]:
+    """tinycarlo's own example track folders under ``folder`` (each holding a track.yaml),
+    named ``tinycarlo:<name>``; none when no folder is given."""
+    if folder is None:
+        return {}
+    if not folder.is_dir():
+        raise SystemExit(f"--tinycarlo-examples: {folder} is not a folder")
+    found = {f"tinycarlo:{t.parent.name}": t.parent for t in sorted(folder.glob("*/track.yaml"))}
+    if not found:
+        raise SystemExit(f"--tinycarlo-examples: no <name>/track.yaml under {folder}")
+    return found
+
+
+def one_camera_copies(generated_dir: Path, sources: dict[str, Path]) -> dict[str, Path]:
+    """The track folders ``sources``, each copied with one 120x160 camera (and a step limit,
+    which tinycarlo 1.1 needs), for tinyrace and tinycarlo alike. The originals are only read."""
     folders = {}
-    for name in EXAMPLE_TRACKS:
-        folder = generated_dir / f"one_camera_{name}"
-        shutil.copytree(TRACKS_DIR / name, folder, dirs_exist_ok=True)
+    for name, source in sources.items():
+        folder = generated_dir / f"one_camera_{name.replace(':', '_')}"
+        shutil.copytree(source, folder, dirs_exist_ok=True)
         config = yaml.safe_load((folder / "track.yaml").read_text())
         config.pop("camera", None)
         config["cameras"] = ONE_CAMERA
@@ -315,13 +331,17 @@ def one_camera_copies(generated_dir: Path) -> dict[str, Path]:
     return folders
 
 
-def measure_tinycarlo(budget: Budget, generated_dir: Path) -> dict[str, Any]:
-    """tinycarlo 1.1's steps/s on the example tracks with one 120x160 camera (run in its
-    own interpreter, a subprocess) and tinyrace's on the same folders."""
+def measure_tinycarlo(
+    budget: Budget, generated_dir: Path, own_examples: Path | None = None
+) -> dict[str, Any]:
+    """tinycarlo 1.1's steps/s with one 120x160 camera (run in its own interpreter, a
+    subprocess) and tinyrace's on the same folders: tinyrace's example tracks, and
+    tinycarlo's own examples when ``own_examples`` names their folder."""
     python = tinycarlo_python()
     if python is None:
         return {"error": "not installed (pip install 'tinycarlo==1.1.*', e.g. in a venv /tmp/tc)"}
-    folders = one_camera_copies(generated_dir)
+    sources = {name: TRACKS_DIR / name for name in EXAMPLE_TRACKS}
+    folders = one_camera_copies(generated_dir, {**tinycarlo_examples(own_examples), **sources})
     tracks = [f"{name}={folder}" for name, folder in folders.items()]
     seconds = str(max(budget.seconds / 2, 1.0))
     min_steps = "200" if budget is FULL else "20"  # tinycarlo: ~10 steps/s
@@ -450,6 +470,10 @@ def report_tinycarlo(tinycarlo: dict[str, Any]) -> None:
         return
     names = [k.removeprefix("tinycarlo_") for k in tinycarlo if k.startswith("tinycarlo_")]
     print(f"\ntinycarlo 1.1 ran in {tinycarlo.get('interpreter')}; both with one 120x160 camera")
+    if any(name.startswith("tinycarlo:") for name in names):
+        print("tinycarlo:<name> = tinycarlo's own example folders; the others are tinyrace's")
+    else:
+        print("tinyrace's example tracks only (tinycarlo's own: --tinycarlo-examples DIR)")
     rows = [
         ratio_row(
             f"{name}, 1 camera 120x160: tinyrace vs tinycarlo 1.1",
@@ -577,7 +601,7 @@ def guarded(name: str, measure: Callable[..., dict[str, Any]], *args: Any) -> di
     return result
 
 
-def run(budget: Budget) -> dict[str, Any]:
+def run(budget: Budget, own_examples: Path | None = None) -> dict[str, Any]:
     """Every measurement, in one process (RSS in fresh ones), as a JSON-ready dict."""
     results: dict[str, Any] = {"machine": machine(), "budget": asdict(budget), "targets": TARGETS}
     with tempfile.TemporaryDirectory(prefix="tinyrace-bench-") as tmp, quiet_gym_warnings():
@@ -593,7 +617,7 @@ def run(budget: Budget) -> dict[str, Any]:
             "envs in one process (1..32)", measure_vector_scaling, budget
         )
         results["tinycarlo"] = guarded(
-            "tinycarlo 1.1 (subprocess)", measure_tinycarlo, budget, generated
+            "tinycarlo 1.1 (subprocess)", measure_tinycarlo, budget, generated, own_examples
         )
         results["vector_ceiling"] = guarded(
             "vector env ceiling (stand-in envs)",
@@ -622,8 +646,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--scaling", action="store_true", help="only the 1..32 envs in one process table"
     )
+    parser.add_argument(
+        "--tinycarlo", action="store_true", help="only tinyrace vs tinycarlo 1.1 on image tracks"
+    )
+    parser.add_argument(
+        "--tinycarlo-examples",
+        type=Path,
+        default=os.environ.get("TINYCARLO_EXAMPLES") or None,
+        help="tinycarlo's own example_tracks folder (from its repository), timed too",
+    )
     parser.add_argument("--rss-child", help=argparse.SUPPRESS)  # internal: one RSS process
     args = parser.parse_args(argv)
+    own_examples = Path(args.tinycarlo_examples) if args.tinycarlo_examples else None
     if args.rss_child:
         rss_child(json.loads(args.rss_child))
         return
@@ -651,7 +685,12 @@ def main(argv: list[str] | None = None) -> None:
             tracks = measure_track_sources(QUICK if args.quick else FULL)
         print_track_sources(tracks)
         return
-    results = run(QUICK if args.quick else FULL)
+    if args.tinycarlo:
+        with quiet_gym_warnings(), tempfile.TemporaryDirectory(prefix="tinyrace-bench-") as tmp:
+            compared = measure_tinycarlo(QUICK if args.quick else FULL, Path(tmp), own_examples)
+        report_tinycarlo(compared)
+        return
+    results = run(QUICK if args.quick else FULL, own_examples)
     report(results, RSS_STEPS)
     report_informational(results)
     if "error" not in results["sensors"]:
