@@ -50,7 +50,7 @@ def chase_affine(
 
 
 class ChaseView:
-    """One output size of CarRacing's view; ``render`` fills a reused frame buffer."""
+    """One output size of CarRacing's view; ``render`` returns a new frame each call."""
 
     def __init__(
         self,
@@ -65,7 +65,6 @@ class ChaseView:
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
         self.sprite = CarSprite(supersample=small, patches=patches)
         self.dashboard = dashboard
-        self.frame = np.zeros((size[1], size[0], 3), np.uint8)
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
@@ -80,7 +79,7 @@ class ChaseView:
         pixels_per_unit = zoom * math.sqrt(size[0] * size[1] / (WINDOW[0] * WINDOW[1]))
         # a new frame each call (it is returned); the dashboard paints over its bottom rows,
         # so the ground is sampled above them only
-        frame = np.empty_like(self.frame)
+        frame = np.empty((size[1], size[0], 3), np.uint8)
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
         # the car sits still in this frame: its patch depends on zoom and steering only (the

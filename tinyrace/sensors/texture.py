@@ -157,6 +157,7 @@ class GroundTexture:
             _six(m) if m[0, 1] == 0 and m[1, 0] == 0 else None for m in self.from_pixels
         ]
         self._scratch: dict[tuple[int, int], np.ndarray] = {}  # 4-channel warp targets by size
+        self._border_value = (*self.border, 0)  # the warp's RGBx outside the texture
 
     def level_for(self, out_pixels_per_unit: float) -> int:
         """The smallest level that still has at least one texture pixel per output pixel
@@ -209,14 +210,15 @@ class GroundTexture:
         scratch = self._scratch.get(size)
         if scratch is None:
             scratch = self._scratch[size] = np.empty((size[1], size[0], 4), np.uint8)
+        pixels = self.levels[level]
         cv2.warpAffine(
-            self.image(level),
+            self.image(level) if pixels is None else pixels,
             texture_to_out,
             size,
             dst=scratch,
             flags=self.interpolation,
             borderMode=cv2.BORDER_CONSTANT,
-            borderValue=(*self.border, 0),
+            borderValue=self._border_value,
         )
         return cv2.cvtColor(scratch, cv2.COLOR_RGBA2RGB, dst=out)
 
