@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from fractions import Fraction
 
 import cv2
 import numpy as np
@@ -22,6 +23,7 @@ Painter = Callable[[np.ndarray, np.ndarray], None]
 Affine = tuple[float, float, float, float, float, float]
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _SPLITTER = 134217729.0  # 2**27 + 1: splits a float64 into two 26-bit halves (Veltkamp)
+_TINY, _HUGE = 2.0**-900, 2.0**900  # where Dekker's exact product holds, with margin
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -35,11 +37,16 @@ def fused_multiply_add(x: float, y: float, z: float) -> float:
     """``x * y + z`` rounded once, as an FMA instruction does (math.fma arrived in Python 3.13).
 
     The product is split exactly into ``high + low`` (Dekker), and math.fsum rounds the
-    exact sum of the three once. Non-finite values take the plain formula (the same
-    infinities and NaNs)."""
+    exact sum of the three once. Where that split would be inexact (a product near the
+    subnormals, a value near overflow) the exact sum is taken in fractions instead;
+    non-finite values take the plain formula (the same infinities and NaNs)."""
     high = x * y
-    if not math.isfinite(high) or not math.isfinite(z):
+    if not (math.isfinite(high) and math.isfinite(z)):
         return high + z
+    if x == 0.0 or y == 0.0:
+        return high + z  # an exact product: one rounding
+    if not (_TINY < abs(high) < _HUGE and abs(x) < _HUGE and abs(y) < _HUGE and abs(z) < _HUGE):
+        return float(Fraction(x) * Fraction(y) + Fraction(z))
     c = _SPLITTER * x
     x_high = c - (c - x)
     x_low = x - x_high
