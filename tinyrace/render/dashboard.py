@@ -40,11 +40,6 @@ _BARS: tuple[tuple[str, int, RGB], ...] = (
     ("h", GYRO_COLUMN, _RED),
 )
 _LAYER_CACHE_BYTES = 8_000_000  # [bytes] of cached instrument layers per dashboard
-# Instruments drawn together as one cached layer (indices into _BARS, then the score): the
-# vertical bars (speed, wheel spins) move together and their pictures repeat, so the strip is
-# the maximum of four layers, not eight
-_GROUPS = ((0, 1, 2, 3, 4), (5,), (6,), (7,))
-_GROUP_OF = tuple(g for index in range(len(_BARS) + 1) for g, m in enumerate(_GROUPS) if index in m)
 
 
 # A bar's drawn extent in supersampled pixels: (first, last) output columns of its patch,
@@ -72,15 +67,11 @@ class Dashboard:
             {} for _ in range(len(_BARS) + 1)
         ]
         self._shown: tuple[int, ...] | None = None  # the values drawn now
-        self._values: list[int | None] = [None] * (len(_BARS) + 1)  # per instrument now
-        blank = np.zeros_like(self.strip)
-        blank.setflags(write=False)
-        # per instrument: (picture, layer) drawn now; blank (no bar, no score) at first
-        self._entries: list[tuple[object, np.ndarray]] = [(None, blank)] * len(self._values)
-        # one layer per group of instruments; the strip is their maximum, so a step redraws
-        # only the groups whose pictures changed, from layers cached per pictures
-        self._layers = np.zeros((len(_GROUPS), *self.strip.shape), np.uint8)
-        self._group_layers: list[dict[tuple[object, ...], np.ndarray]] = [{} for _ in _GROUPS]
+        # one layer per instrument (the bars, then the score); the strip is their maximum,
+        # so a step redraws only the layers whose picture changed, from layers cached per box
+        self._layers = np.zeros((len(_BARS) + 1, *self.strip.shape), np.uint8)
+        self._layer_values: list[int | None] = [None] * len(self._layers)  # bar steps, score
+        self._layer_pictures: list[object] = [None] * len(self._layers)  # bar boxes, score
         self._cached_layers: dict[tuple[int, object], np.ndarray] = {}
         self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
 
@@ -104,36 +95,27 @@ class Dashboard:
         image[self.top :] = self.strip
 
     def _redraw(self, shown: tuple[int, ...]) -> None:
-        """Redraw the groups whose pictures changed (a bar's box, the score), then the strip."""
-        values, entries, by_value = self._values, self._entries, self._by_value
-        dirty = set()
+        """Redraw the layers whose picture changed (a bar's box, the score), then the strip."""
+        values, pictures, layers, by_value = (
+            self._layer_values,
+            self._layer_pictures,
+            self._layers,
+            self._by_value,
+        )
+        changed = False
         for index, value in enumerate(shown):
             if values[index] != value:
                 values[index] = value
                 entry = by_value[index].get(value)
                 if entry is None:
                     entry = self._entry(index, value)
-                if entries[index][0] != entry[0]:
-                    entries[index] = entry
-                    dirty.add(_GROUP_OF[index])
-        if dirty:
-            for group in dirty:
-                self._layers[group] = self._group_layer(group)
-            np.maximum.reduce(self._layers, axis=0, out=self.strip)
-
-    def _group_layer(self, group: int) -> np.ndarray:
-        """The maximum of the layers of the instruments of ``group`` (cached by pictures)."""
-        members = _GROUPS[group]
-        key = tuple([self._entries[index][0] for index in members])
-        cache = self._group_layers[group]
-        layer = cache.get(key)
-        if layer is None:
-            if len(cache) >= self._max_cached:
-                cache.clear()
-            layers = [self._entries[index][1] for index in members]
-            layer = layers[0] if len(layers) == 1 else np.maximum.reduce(np.stack(layers))
-            cache[key] = layer
-        return layer
+                picture, layer = entry
+                if pictures[index] != picture:
+                    pictures[index] = picture
+                    layers[index] = layer
+                    changed = True
+        if changed:
+            np.maximum.reduce(layers, axis=0, out=self.strip)
 
     def _entry(self, index: int, value: int) -> tuple[object, np.ndarray]:
         """Instrument ``index`` at ``value``: its picture (a bar's box, the score) and layer."""
