@@ -17,7 +17,7 @@ import numpy as np
 
 from tinyrace.cars.dynamic_shape import HULL_POLYGONS, SIZE, WHEEL_HALF_WIDTH, WHEEL_RADIUS
 from tinyrace.cars.state import CarState, SkidView
-from tinyrace.sensors.texture import compose, transform_points
+from tinyrace.sensors.texture import Affine, as_matrix, compose, transform_points
 
 HULL_COLOR = (204, 0, 0)  # RGB
 WHEEL_COLOR = (0, 0, 0)
@@ -51,14 +51,15 @@ class CarSprite:
         self,
         image: np.ndarray,
         car: CarState,
-        world_to_out: np.ndarray,
+        world_to_out: np.ndarray | Affine,
         skid_width: int,
         cache_key: float | None = None,
     ) -> None:
         """Skid marks (unless ``skid_width`` is 0), wheels, then hull into ``image``.
 
-        ``cache_key`` (e.g. the zoom) promises that the car's placement in the frame
-        depends only on it and the steering angle, which allows reusing patches.
+        ``world_to_out`` is a 2x3 array or six floats (row by row). ``cache_key`` (e.g.
+        the zoom) promises that the car's placement in the frame depends only on it and the
+        steering angle, which allows reusing patches.
         """
         if car.scale != self._scale:
             unit = SIZE * car.scale
@@ -66,7 +67,7 @@ class CarSprite:
             self.wheel_box = _WHEEL_BOX * unit
             self._scale = car.scale
         if skid_width and car.skids is not None and car.skids.lengths.any():
-            _draw_skids(image, world_to_out, car.skids, skid_width)
+            _draw_skids(image, as_matrix(world_to_out), car.skids, skid_width)
         if self.supersample:
             steer = round(car.wheels[0].steer / _STEER_STEP)
             key = None if cache_key is None else (cache_key, steer)
@@ -136,11 +137,11 @@ class CarSprite:
         return x0, y0, color, weight
 
 
-def _local_to_out(car: CarState, world_to_out: np.ndarray) -> np.ndarray:
+def _local_to_out(car: CarState, world_to_out: np.ndarray | Affine) -> np.ndarray:
     """The car's body frame -> output pixels."""
     x, y, _ = car.pose
     cos_a, sin_a = math.cos(car.hull_angle), math.sin(car.hull_angle)
-    return compose(world_to_out, np.array([[cos_a, -sin_a, x], [sin_a, cos_a, y]]))
+    return compose(as_matrix(world_to_out), np.array([[cos_a, -sin_a, x], [sin_a, cos_a, y]]))
 
 
 def _clip(

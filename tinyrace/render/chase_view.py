@@ -13,7 +13,7 @@ import numpy as np
 
 from tinyrace.render.car_sprite import CarSprite, Patches
 from tinyrace.render.dashboard import Dashboard
-from tinyrace.sensors.texture import GroundTexture
+from tinyrace.sensors.texture import Affine, GroundTexture
 from tinyrace.world.snapshot import Snapshot
 
 WINDOW = (1000, 800)  # [px] the reference's layout size (w, h)
@@ -30,6 +30,14 @@ def chase_matrix(
     position: tuple[float, float], hull_angle: float, zoom: float, size: tuple[int, int]
 ) -> np.ndarray:
     """World -> output pixels: the car at half width, a quarter height from the bottom, nose up."""
+    a, b, ox, c, d, oy = chase_affine(position, hull_angle, zoom, size)
+    return np.array([[a, b, ox], [c, d, oy]])
+
+
+def chase_affine(
+    position: tuple[float, float], hull_angle: float, zoom: float, size: tuple[int, int]
+) -> Affine:
+    """``chase_matrix`` as six plain floats, row by row."""
     sx, sy = size[0] / WINDOW[0], size[1] / WINDOW[1]
     cos_a, sin_a = math.cos(hull_angle), math.sin(hull_angle)
     a, b = sx * zoom * cos_a, sx * zoom * sin_a  # rotate by -hull_angle, then scale
@@ -38,11 +46,11 @@ def chase_matrix(
     # output pixel centres sit half a pixel in; so do the reference's window pixels
     ox = WINDOW[0] / 2 * sx - (a * px + b * py) - 0.5 + 0.5 * sx
     oy = WINDOW[1] * 3 / 4 * sy - (c * px + d * py) - 0.5 + 0.5 * sy
-    return np.array([[a, b, ox], [c, d, oy]])
+    return (a, b, ox, c, d, oy)
 
 
 class ChaseView:
-    """One output size of CarRacing's view; ``render`` fills a reused frame buffer."""
+    """One output size of CarRacing's view; ``render`` returns a new frame each call."""
 
     def __init__(
         self,
@@ -57,7 +65,6 @@ class ChaseView:
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
         self.sprite = CarSprite(supersample=small, patches=patches)
         self.dashboard = dashboard
-        self.frame = np.zeros((size[1], size[0], 3), np.uint8)
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
@@ -65,21 +72,18 @@ class ChaseView:
         """The view of the controlled car at ``snapshot.t`` seconds after reset, with
         ``score`` on the dashboard. Returns a new array."""
         car = snapshot.car
-        zoom = zoom_at(snapshot.t)
+        zoom = zoom_at(snapshot.t) / car.scale  # [output px/u] at the reference's window size
         x, y, _ = car.pose
-        matrix = chase_matrix((x, y), car.hull_angle, zoom / car.scale, self.size)
-        pixels_per_unit = (
-            zoom / car.scale * math.sqrt(self.size[0] * self.size[1] / (WINDOW[0] * WINDOW[1]))
-        )
+        size = self.size
+        world_to_out = chase_affine((x, y), car.hull_angle, zoom, size)
+        pixels_per_unit = zoom * math.sqrt(size[0] * size[1] / (WINDOW[0] * WINDOW[1]))
         # a new frame each call (it is returned); the dashboard paints over its bottom rows,
         # so the ground is sampled above them only
-        frame = np.empty_like(self.frame)
+        frame = np.empty((size[1], size[0], 3), np.uint8)
         top = self.dashboard.top
-        self.texture.warp(
-            matrix, (self.size[0], top), out=frame[:top], pixels_per_unit=pixels_per_unit
-        )
+        self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
-        self.sprite.draw(frame, car, matrix, self.skid_width, cache_key=zoom)
+        self.sprite.draw(frame, car, world_to_out, self.skid_width, cache_key=zoom)
         self.dashboard.draw(frame, car, score)
         return frame

@@ -62,7 +62,10 @@ class Dashboard:
         self.top = round(height - BAR_HEIGHT * height / LAYOUT_UNITS)  # first row of the bar
         self.factor = supersample
         self.strip = np.zeros((height - self.top, width, 3), np.uint8)
-        self._boxes: list[dict[int, BarBox]] = [{} for _ in _BARS]  # per bar: box by length
+        # per instrument: value (bar steps, score) -> (picture, layer), the step's one lookup
+        self._by_value: list[dict[int, tuple[object, np.ndarray]]] = [
+            {} for _ in range(len(_BARS) + 1)
+        ]
         self._shown: tuple[int, ...] | None = None  # the values drawn now
         # one layer per instrument (the bars, then the score); the strip is their maximum,
         # so a step redraws only the layers whose picture changed, from layers cached per box
@@ -91,35 +94,40 @@ class Dashboard:
             self._redraw(shown)
         image[self.top :] = self.strip
 
-    def _box(self, index: int, steps: int) -> BarBox:
-        """Bar ``index``'s box at a length of ``steps`` (cached per bar)."""
-        boxes = self._boxes[index]
-        box = boxes.get(steps)
-        if box is None:
-            if len(boxes) >= self._max_cached:
-                boxes.clear()
-            kind, place, _ = _BARS[index]
-            box = boxes[steps] = self._bar_box(kind, place, steps)
-        return box
-
     def _redraw(self, shown: tuple[int, ...]) -> None:
         """Redraw the layers whose picture changed (a bar's box, the score), then the strip."""
-        values, pictures, boxes = self._layer_values, self._layer_pictures, self._boxes
+        values, pictures, layers, by_value = (
+            self._layer_values,
+            self._layer_pictures,
+            self._layers,
+            self._by_value,
+        )
         changed = False
         for index, value in enumerate(shown):
             if values[index] != value:
                 values[index] = value
-                picture: object = value  # the score
-                if index < len(boxes):
-                    picture = boxes[index].get(value)
-                    if picture is None:
-                        picture = self._box(index, value)
+                entry = by_value[index].get(value)
+                if entry is None:
+                    entry = self._entry(index, value)
+                picture, layer = entry
                 if pictures[index] != picture:
                     pictures[index] = picture
-                    self._layers[index] = self._layer(index, picture)
+                    layers[index] = layer
                     changed = True
         if changed:
-            np.maximum.reduce(self._layers, axis=0, out=self.strip)
+            np.maximum.reduce(layers, axis=0, out=self.strip)
+
+    def _entry(self, index: int, value: int) -> tuple[object, np.ndarray]:
+        """Instrument ``index`` at ``value``: its picture (a bar's box, the score) and layer."""
+        entries = self._by_value[index]
+        if len(entries) >= self._max_cached:
+            entries.clear()
+        picture: object = value  # the score
+        if index < len(_BARS):
+            kind, place, _ = _BARS[index]
+            picture = self._bar_box(kind, place, value)
+        entry = entries[value] = (picture, self._layer(index, picture))
+        return entry
 
     def _layer(self, index: int, value: object) -> np.ndarray:
         """Instrument ``index`` showing ``value`` (a bar's box, the score), alone in a

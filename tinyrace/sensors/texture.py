@@ -9,15 +9,21 @@ images about 2.5x faster than 3-channel ones.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from fractions import Fraction
 
 import cv2
 import numpy as np
 
 # Draws the ground into ``image`` given the world->pixel affine of that image.
 Painter = Callable[[np.ndarray, np.ndarray], None]
+# A 2x3 affine as six plain floats, row by row: (m00, m01, m02, m10, m11, m12)
+Affine = tuple[float, float, float, float, float, float]
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+_SPLITTER = 134217729.0  # 2**27 + 1: splits a float64 into two 26-bit halves (Veltkamp)
+_TINY, _HUGE = 2.0**-900, 2.0**900  # where Dekker's exact product holds, with margin
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -25,6 +31,64 @@ def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
     result: np.ndarray = outer[:, :2] @ inner
     result[:, 2] += outer[:, 2]
     return result
+
+
+def fused_multiply_add(x: float, y: float, z: float) -> float:
+    """``x * y + z`` rounded once, as an FMA instruction does (math.fma arrived in Python 3.13).
+
+    The product is split exactly into ``high + low`` (Dekker), and math.fsum rounds the
+    exact sum of the three once. Where that split would be inexact (a product near the
+    subnormals, a value near overflow) the exact sum is taken in fractions instead;
+    non-finite values take the plain formula (the same infinities and NaNs)."""
+    high = x * y
+    if not (math.isfinite(high) and math.isfinite(z)):
+        return high + z
+    if x == 0.0 or y == 0.0:
+        return high + z  # an exact product: one rounding
+    if not (_TINY < abs(high) < _HUGE and abs(x) < _HUGE and abs(y) < _HUGE and abs(z) < _HUGE):
+        return float(Fraction(x) * Fraction(y) + Fraction(z))
+    c = _SPLITTER * x
+    x_high = c - (c - x)
+    x_low = x - x_high
+    c = _SPLITTER * y
+    y_high = c - (c - y)
+    y_low = y - y_high
+    low = ((x_high * y_high - high) + x_high * y_low + x_low * y_high) + x_low * y_low
+    return math.fsum((z, high, low))
+
+
+def compose_shift_scale(outer: Affine, inner: Affine) -> Affine:
+    """``compose(outer, inner)`` in plain floats, bit for bit, for an ``inner`` whose
+    off-diagonal terms are zero (a scale and a shift, e.g. texture pixels -> world).
+
+    numpy's 2x2 @ 2x3 goes through OpenBLAS, whose kernel sums each entry as
+    ``fma(o[i][1], inner[1][j], o[i][0] * inner[0][j])``; with zero off-diagonal terms that
+    is plain arithmetic except in the shift column, where the FMA is reproduced exactly.
+    """
+    o00, o01, o02, o10, o11, o12 = outer
+    sx, zero_01, tx, zero_10, sy, ty = inner
+    return (
+        o00 * sx + o01 * zero_10,  # the second product is a zero: exact, as in the FMA
+        o00 * zero_01 + o01 * sy,
+        fused_multiply_add(o01, ty, o00 * tx) + o02,
+        o10 * sx + o11 * zero_10,
+        o10 * zero_01 + o11 * sy,
+        fused_multiply_add(o11, ty, o10 * tx) + o12,
+    )
+
+
+def _six(matrix: np.ndarray) -> Affine:
+    """A 2x3 array as six floats."""
+    a, b, c, d, e, f = matrix.ravel().tolist()
+    return (a, b, c, d, e, f)
+
+
+def as_matrix(affine: Affine | np.ndarray) -> np.ndarray:
+    """Six floats as a 2x3 array (an array is returned as it is)."""
+    if isinstance(affine, np.ndarray):
+        return affine
+    a, b, c, d, e, f = affine
+    return np.array([[a, b, c], [d, e, f]])
 
 
 def invert(matrix: np.ndarray) -> np.ndarray:
@@ -95,7 +159,12 @@ class GroundTexture:
         self.from_pixels = [invert(m) for m in self.to_pixels]
         # levels whose pixels are the world's units (image tracks' level 0): no compose needed
         self._unit = [bool(np.array_equal(m, _IDENTITY)) for m in self.from_pixels]
+        # levels whose pixels -> world is a scale and a shift: composed in plain floats
+        self._shift_scale: list[Affine | None] = [
+            _six(m) if m[0, 1] == 0 and m[1, 0] == 0 else None for m in self.from_pixels
+        ]
         self._scratch: dict[tuple[int, int], np.ndarray] = {}  # 4-channel warp targets by size
+        self._border_value = (*self.border, 0)  # the warp's RGBx outside the texture
 
     def level_for(self, out_pixels_per_unit: float) -> int:
         """The smallest level that still has at least one texture pixel per output pixel
@@ -124,17 +193,39 @@ class GroundTexture:
         texture_to_out = (
             world_to_out if self._unit[level] else compose(world_to_out, self.from_pixels[level])
         )
+        return self._warp_level(level, texture_to_out, size, out)
+
+    def warp_affine(
+        self, world_to_out: Affine, size: tuple[int, int], out: np.ndarray, pixels_per_unit: float
+    ) -> np.ndarray:
+        """``warp`` for a world -> output affine given as six floats (the same pixels; the
+        composition with the level's affine costs no numpy call on scale-and-shift levels)."""
+        level = self.level_for(pixels_per_unit)
+        inner = self._shift_scale[level]
+        if self._unit[level]:
+            texture_to_out = as_matrix(world_to_out)
+        elif inner is not None:
+            texture_to_out = as_matrix(compose_shift_scale(world_to_out, inner))
+        else:
+            texture_to_out = compose(as_matrix(world_to_out), self.from_pixels[level])
+        return self._warp_level(level, texture_to_out, size, out)
+
+    def _warp_level(
+        self, level: int, texture_to_out: np.ndarray, size: tuple[int, int], out: np.ndarray | None
+    ) -> np.ndarray:
+        """Sample ``level`` through ``texture_to_out`` into an RGB image of ``size`` (w, h)."""
         scratch = self._scratch.get(size)
         if scratch is None:
             scratch = self._scratch[size] = np.empty((size[1], size[0], 4), np.uint8)
+        pixels = self.levels[level]
         cv2.warpAffine(
-            self.image(level),
+            self.image(level) if pixels is None else pixels,
             texture_to_out,
             size,
             dst=scratch,
             flags=self.interpolation,
             borderMode=cv2.BORDER_CONSTANT,
-            borderValue=(*self.border, 0),
+            borderValue=self._border_value,
         )
         return cv2.cvtColor(scratch, cv2.COLOR_RGBA2RGB, dst=out)
 
