@@ -183,9 +183,13 @@ class BatchVectorEnv(VectorEnv):
 
     def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """Step every env; an env whose episode ended at the last step is reset instead."""
-        replies = self._exchange("step", [(batch,) for batch in self._split_actions(actions)])
-        # the workers' slices are contiguous and in order: flattened, item i is env i's
-        rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
+        if self._local is not None:  # in this process: no messages, no slicing
+            rewards, terminated, truncated, env_infos = self._local.step(self._batch(actions))
+        else:
+            batch = self._batch(actions)
+            replies = self._exchange("step", [(batch[s],) for s in self._slices])
+            # the workers' slices are contiguous and in order: flattened, item i is env i's
+            rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
         infos = merge_infos(env_infos, self.num_envs)
         return (
             self._observations_out(),
@@ -286,18 +290,22 @@ class BatchVectorEnv(VectorEnv):
                 raise _rebuild_error(result, number, self._slices[number])
         return [result for _, result in replies]
 
-    def _split_actions(self, actions: Any) -> list[Any]:
-        """One batch per worker: an array slice for array spaces, else a list of actions."""
+    def _batch(self, actions: Any) -> Any:
+        """The actions as one batch to slice: an array for array spaces, else a list."""
         if isinstance(self.single_action_space, ARRAY_ACTIONS):
             batch: Any = np.asarray(actions)
         else:
             batch = list(iterate(self.action_space, actions))
         if len(batch) != self.num_envs:
             raise ValueError(f"expected actions for {self.num_envs} envs, got {len(batch)}")
-        return [batch[s] for s in self._slices]
+        return batch
 
     def _observations_out(self) -> Any:
-        return deepcopy(self._observations) if self.copy else self._observations
+        if not self.copy:
+            return self._observations
+        if isinstance(self._observations, np.ndarray):
+            return self._observations.copy()  # as deepcopy, without its memo
+        return deepcopy(self._observations)
 
 
 def make_batch(

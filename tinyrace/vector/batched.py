@@ -58,6 +58,8 @@ class BatchStepper:
         self.actions: ActionSpec = actions
         self._stale = np.ones(len(self.envs), dtype=np.bool_)  # rows to load from their cars
         self._discrete = np.array(DISCRETE_CONTROLS)
+        self._every = list(range(len(self.envs)))  # the rows of a step without autoresets
+        self._checked = not any(self.checkers)  # every env checker has made its first step
 
     @staticmethod
     def fits(envs: Sequence[gym.Env[Any, Any]]) -> bool:
@@ -82,21 +84,25 @@ class BatchStepper:
     def step(self, actions: Any, autoreset: np.ndarray, write: Write) -> list[Step | None]:
         """Step the envs not in ``autoreset`` with ``actions``; each one's step results
         (``None`` for the others, which the caller resets). Observations go to ``write``."""
-        if any(checker is not None and not checker.checked_step for checker in self.checkers):
-            return self._step_one_by_one(actions, autoreset, write)
-        rows = np.flatnonzero(~autoreset).tolist()
+        if not self._checked:
+            if any(c is not None and not c.checked_step for c in self.checkers):
+                return self._step_one_by_one(actions, autoreset, write)
+            self._checked = True
+        if autoreset.any():
+            rows = np.flatnonzero(~autoreset).tolist()
+            self._stale |= autoreset  # those rows are reset, not stepped
+        else:
+            rows = self._every
         cores = self.cores
         for row in rows:
             if cores[row].episode is None:
                 raise ResetNeeded("Cannot call env.step() before calling env.reset()")
-        self._stale |= autoreset  # those rows are reset, not stepped
         if not rows:
             return [None] * len(self.envs)
-        steer, gas, brake = self._controls(actions, rows)
         if self.vectorized:
-            self._forces_together(rows, steer, gas, brake)
+            self._forces_together(rows, *self._controls(actions, rows))
         else:
-            self._forces_one_by_one(rows, steer, gas, brake)
+            self._forces_one_by_one(rows, self._control_rows(actions, rows))
         results: list[Step | None] = [None] * len(self.envs)
         for row in rows:
             results[row] = self._finish(row, write)
@@ -116,16 +122,15 @@ class BatchStepper:
         physics.store(rows)
         physics.track_skids(rows, on_road)
 
-    def _forces_one_by_one(
-        self, rows: list[int], steer: np.ndarray, gas: np.ndarray, brake: np.ndarray
-    ) -> None:
-        """Each car's own ``control`` and ``apply_forces`` (fewer cars than numpy pays for)."""
-        controls = np.column_stack((steer, gas, brake)).tolist()  # floats, as read() gives
-        for row in rows:
-            core = self.cores[row]
+    def _forces_one_by_one(self, rows: list[int], controls: list[Sequence[float]]) -> None:
+        """Each car's own ``control`` and ``apply_forces`` (fewer cars than numpy pays for);
+        ``controls[i]`` is row ``rows[i]``'s (steer, gas, brake)."""
+        cores = self.cores
+        for row, (steer, gas, brake) in zip(rows, controls, strict=True):
+            core = cores[row]
             world = core._episode().world
             car = world.car
-            car.control(*controls[row])
+            car.control(steer, gas, brake)
             car.apply_forces(core.dt, world.wheel_grip())
 
     def _finish(self, row: int, write: Write) -> Step:
@@ -179,6 +184,32 @@ class BatchStepper:
                 controls = actions.astype(np.float64)
                 return controls[:, 0], controls[:, 1], controls[:, 2]
         return self._read_each(actions, rows)
+
+    def _control_rows(self, actions: Any, rows: list[int]) -> list[Sequence[float]]:
+        """(steer, gas, brake) of each env in ``rows``, as Python floats, checked as
+        ``ActionSpec.read`` checks them (an invalid one raises before anything changes)."""
+        spec = self.actions
+        if spec.kind == "discrete" or not isinstance(actions, np.ndarray):
+            return [self._read(actions[row]) for row in rows]
+        if actions.dtype != np.float32 or actions.shape != (len(self.envs), *spec._shape):
+            return [self._read(actions[row]) for row in rows]
+        values = actions.tolist()  # float32 rows as Python floats: read() gives the same
+        bounds = spec._bounds
+        controls: list[Sequence[float]] = []
+        for row in rows:
+            action = values[row]
+            for value, (low, high) in zip(action, bounds, strict=True):
+                if not low <= value <= high:  # NaN too: read() says what is wrong
+                    return [self._read(actions[row]) for row in rows]
+            controls.append(action)
+        return controls
+
+    def _read(self, action: Any) -> tuple[float, ...]:
+        """One action read by ``ActionSpec.read`` (which raises ``InvalidAction``)."""
+        values = self.actions.read(action)
+        if len(values) != 3:
+            raise InvalidAction(f"action {action!r} is not [steer, gas, brake]")
+        return values
 
     def _read_each(
         self, actions: Any, rows: list[int]

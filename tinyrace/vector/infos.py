@@ -20,6 +20,8 @@ def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[s
     the same ``_key`` masks. Infos that mix dicts and other values under one key take
     ``_add_info`` itself.
     """
+    if len(infos) == num_envs and _alike(infos):
+        return _merge_alike(infos, num_envs)  # type: ignore[arg-type]  # no None: _alike
     gathered: dict[str, tuple[list[int], list[Any]]] = {}
     for index, info in enumerate(infos):
         if not info:
@@ -50,6 +52,38 @@ def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[s
             mask = np.zeros(num_envs, dtype=np.bool_)
             mask[indices] = True
         merged[key], merged[f"_{key}"] = array, mask
+    return merged
+
+
+def _alike(infos: Sequence[dict[str, Any] | None]) -> bool:
+    """Whether every env has an info, each with the first one's keys (the common step)."""
+    first = infos[0]
+    if not first:
+        return False
+    keys = first.keys()
+    return all(info is not None and info.keys() == keys for info in infos)
+
+
+def _merge_alike(infos: Sequence[dict[str, Any]], num_envs: int) -> dict[str, Any]:
+    """``merge_infos`` of infos that all have the same keys: every mask all True, every
+    array filled from a list of all the envs' values (in the first info's key order,
+    which is ``_add_info``'s when every env has every key)."""
+    every = list(range(num_envs))
+    full = np.ones(num_envs, dtype=np.bool_)  # copied per key: each mask its own array
+    merged: dict[str, Any] = {}
+    for key in infos[0]:
+        values = [info[key] for info in infos]
+        first = values[0]
+        if key == "final_obs":
+            array: Any = _objects(every, values, num_envs)
+        elif type(first) in _SCALARS and all(type(value) is type(first) for value in values):
+            array = np.array(values, dtype=type(first))  # the common case, checked first
+        else:
+            nested = [isinstance(value, dict) for value in values]
+            if any(nested) and not all(nested):
+                return _merged_by_gymnasium(infos, num_envs)
+            array = merge_infos(values, num_envs) if nested[0] else _array(every, values, num_envs)
+        merged[key], merged[f"_{key}"] = array, full.copy()
     return merged
 
 
