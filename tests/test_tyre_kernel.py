@@ -143,13 +143,16 @@ def test_many_cars_in_one_call_equal_each_car_alone(data, cars):
     brake=st.lists(st.floats(0, 1), min_size=3, max_size=3),
 )
 def test_control_is_the_same_on_both_paths(state, gas, brake):
-    consts = np.column_stack([a_car(1.0, False)._consts] * 3)
-    ours, theirs = state.copy(), state.copy()
-    for row in range(3):
-        clipped = min(max(gas[row], 0.0), 1.0)
-        dynamic_python.control(ours, consts, row, clipped, brake[row])
+    """The batch's compiled control against each car's own (Python) ``control``."""
+    cars = [a_car(1.0, False) for _ in range(3)]
+    consts = np.column_stack([car._consts for car in cars])
+    theirs = state.copy()
+    for row, car in enumerate(cars):
+        car.wheel_state[:] = state[:, row::3]
+        car.control(0.0, gas[row], brake[row])
     dynamic_numba.batch_control(theirs, consts, np.array(gas), np.array(brake))
-    assert same_arrays(ours, theirs)
+    for row, car in enumerate(cars):
+        assert same_arrays(car.wheel_state, theirs[:, row::3])
 
 
 @settings(max_examples=2000, deadline=None)

@@ -16,9 +16,11 @@ import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pymunk
+from pymunk._chipmunk_cffi import lib as _chipmunk
 
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.collision import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
@@ -166,13 +168,18 @@ class SkidMarks:
 # setters called directly skip it (about 0.5 us each, twice per step)
 _set_velocity = vars(pymunk.Body)["velocity"].fset
 _set_angular_velocity = vars(pymunk.Body)["angular_velocity"].fset
+# the hot path reads and sets the body by the chipmunk calls that pymunk's Body properties
+# make (on its pointer ``body._body``), without their Python frames and Vec2d tuples: the
+# same doubles (pymunk is pinned to 7.x)
+_get_position, _get_velocity = _chipmunk.cpBodyGetPosition, _chipmunk.cpBodyGetVelocity
+_get_angle, _get_spin = _chipmunk.cpBodyGetAngle, _chipmunk.cpBodyGetAngularVelocity
+_put_velocity, _put_spin = _chipmunk.cpBodySetVelocity, _chipmunk.cpBodySetAngularVelocity
 
 PHYSICS_VARIABLE = "TINYRACE_PHYSICS"  # environment variable: auto | numba | python
 Forces = Callable[
     [np.ndarray, np.ndarray, float, float, float, float, float, float, int],
     tuple[float, float, float, int],
 ]
-Control = Callable[[np.ndarray, np.ndarray, int, float, float], None]
 
 
 @dataclass
@@ -229,8 +236,11 @@ class DynamicCar:
     def control(self, steer: float, gas: float, brake: float) -> None:
         """steer -1 (left) .. 1 (right), gas 0..1, brake 0..1, as CarRacing's action."""
         self.steer_target = -steer * self.steer_sign
-        control = self._control or self._choose_kernel()[1]
-        control(self.wheel_state, self._consts, 0, min(max(gas, 0.0), 1.0), brake)
+        gas, rise = min(max(gas, 0.0), 1.0), self.spec.gas_rise
+        state = self.wheel_state  # (Python here: cheaper than a compiled call's arguments)
+        left, right = state[GAS, 2:].tolist()  # the rear wheels
+        state[GAS, 2:] = (left + min(gas - left, rise), right + min(gas - right, rise))
+        state[BRAKE] = brake
 
     # -- physics -----------------------------------------------------------------------------
     def __post_init__(self) -> None:
@@ -238,7 +248,8 @@ class DynamicCar:
 
     def __getstate__(self) -> dict[str, object]:
         # the kernel is chosen again after unpickling (numba may be missing there)
-        return {**self.__dict__, "_forces": None, "_control": None, "kernel": None}
+        # and the body's chipmunk pointer is found again
+        return {**self.__dict__, "_forces": None, "kernel": None, "_cp": None}
 
     def _prepare(self) -> None:
         """Per-car constants of the hot path, each computed as the formula it replaces would."""
@@ -256,14 +267,19 @@ class DynamicCar:
         self._spots = [(w.x, w.y) for w in self.wheels]  # wheels in the body's frame
         self._radii = [self._radius] * len(self.wheels)
         self._consts = np.array(car_constants(self)).reshape(CONSTANTS, 1)
-        self.kernel: str | None = None  # the tyre model's path, chosen at the first control
+        self.kernel: str | None = None  # the tyre model's path, chosen at the first step
         self._forces: Forces | None = None
-        self._control: Control | None = None
+        self._cp: Any = None  # the body's chipmunk pointer (see ``_pointer``)
 
-    def _choose_kernel(self) -> tuple[Forces, Control]:
+    def _pointer(self) -> Any:
+        """The body's chipmunk pointer, for the direct reads and sets of the hot path."""
+        self._cp = self.body._body
+        return self._cp
+
+    def _choose_kernel(self) -> Forces:
         """The tyre model's path (``physics_kernel``), chosen once per car."""
-        self.kernel, self._forces, self._control = physics_kernel()
-        return self._forces, self._control
+        self.kernel, self._forces = physics_kernel()
+        return self._forces
 
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
         """Spin the wheels, compute tyre forces and set the body's new velocities.
@@ -273,16 +289,16 @@ class DynamicCar:
         ``body.force`` would leave the car one step behind the reference). Skid marks
         follow, for the wheels that skid or have a mark open.
         """
-        forces = self._forces or self._choose_kernel()[0]
-        body = self.body
-        vx, vy = body.velocity
+        forces = self._forces or self._choose_kernel()
+        cp = self._cp or self._pointer()
+        velocity = _get_velocity(cp)
         road = on_road[0] | on_road[1] << 1 | on_road[2] << 2 | on_road[3] << 3
         vx, vy, spin, skids = forces(
-            self.wheel_state, self._consts, dt, body.angle, body.angular_velocity, vx, vy,
-            self.steer_target, road,
+            self.wheel_state, self._consts, dt, _get_angle(cp), _get_spin(cp), velocity.x,
+            velocity.y, self.steer_target, road,
         )  # fmt: skip
-        _set_velocity(body, (vx, vy))
-        _set_angular_velocity(body, spin)
+        _put_velocity(cp, (vx, vy))  # as pymunk's setters: the body wakes
+        _put_spin(cp, spin)
         if skids or any(self._skid_start) or any(self._skid_open):
             for index, wheel in enumerate(self.wheels):
                 self._track_skid(index, wheel, bool(on_road[index]))
@@ -317,10 +333,10 @@ class DynamicCar:
     # -- state -------------------------------------------------------------------------------
     def state(self) -> CarState:
         """A copy of the car's state for sensors and pictures (the body read once: per step)."""
-        body = self.body
-        x, y = body.position
-        vx, vy = body.velocity
-        angle = body.angle
+        cp = self._cp or self._pointer()
+        position, velocity = _get_position(cp), _get_velocity(cp)
+        x, y, vx, vy = position.x, position.y, velocity.x, velocity.y
+        angle = _get_angle(cp)
         rear, base, width = self._dims
         # the axles lie on the body's y axis: body.local_to_world((0, r)) computes
         # (x - sin * r, y + cos * r) with the same libm sin and cos, so the bits are the same
@@ -332,7 +348,7 @@ class DynamicCar:
             pose=(x, y, angle + math.pi / 2),
             velocity=(vx, vy),
             speed=math.sqrt(vx**2 + vy**2),  # as pymunk's Vec2d.length
-            yaw_rate=body.angular_velocity,
+            yaw_rate=_get_spin(cp),
             steer=steers[0],
             front_axle=(x - sin_a * front, y + cos_a * front),
             rear_axle=(x - sin_a * rear, y + cos_a * rear),
@@ -376,16 +392,16 @@ class DynamicCar:
         return point.x, point.y
 
 
-def physics_kernel(wanted: str | None = None) -> tuple[str, Forces, Control]:
+def physics_kernel(wanted: str | None = None) -> tuple[str, Forces]:
     """The tyre model's path ``wanted`` (auto | numba | python; None: ``TINYRACE_PHYSICS``'s,
-    else auto), by name, with its ``car_forces`` and ``control``: auto is ``numba`` when
-    numba imports (``pip install tinyrace[fast]``), else ``python``. Same results."""
+    else auto), by name, with its ``car_forces``: auto is ``numba`` when numba imports
+    (``pip install tinyrace[fast]``), else ``python``. Same results."""
     if wanted is None:
         wanted = os.environ.get(PHYSICS_VARIABLE, "auto").strip().lower() or "auto"
     if wanted not in ("auto", "numba", "python"):
         raise ValueError(f"{PHYSICS_VARIABLE}={wanted!r}: expected auto, numba or python")
     if wanted == "python":
-        return "python", dynamic_python.car_forces, dynamic_python.control
+        return "python", dynamic_python.car_forces
     try:
         from tinyrace.cars import dynamic_numba  # numba is optional
     except ImportError as error:
@@ -393,8 +409,8 @@ def physics_kernel(wanted: str | None = None) -> tuple[str, Forces, Control]:
             raise ImportError(
                 f"{PHYSICS_VARIABLE}=numba needs numba: pip install tinyrace[fast]"
             ) from error
-        return "python", dynamic_python.car_forces, dynamic_python.control
-    return "numba", dynamic_numba.car_forces, dynamic_numba.control
+        return "python", dynamic_python.car_forces
+    return "numba", dynamic_numba.car_forces
 
 
 def _footprint(scale: float) -> tuple[float, float, float]:

@@ -2,8 +2,7 @@
 
 The reference path (``TINYRACE_PHYSICS=python``, or no numba): the same functions, on the
 same arrays (see ``dynamic_layout``), as ``dynamic_numba``'s compiled ones, with the same
-results bit for bit. ``car_forces`` steps one car (a state array of one row),
-``control`` hands a row its gas and brake.
+results bit for bit. ``car_forces`` steps one car (a state array of one car).
 """
 
 from __future__ import annotations
@@ -12,7 +11,7 @@ import math
 
 import numpy as np
 
-from tinyrace.cars.dynamic_layout import BRAKE, GAS, GAS_RISE, WHEELS
+from tinyrace.cars.dynamic_layout import WHEELS
 
 
 def car_forces(
@@ -85,15 +84,3 @@ def car_forces(
         steers[index] = min(max(steers[index] + rate * dt, -steer_limit), steer_limit)
     state[:] = (omegas, steers, gases, brakes, phases, flags)
     return vx, vy, turning, skids
-
-
-def control(state: np.ndarray, consts: np.ndarray, row: int, gas: float, brake: float) -> None:
-    """Row ``row``'s rear wheels' gas rises toward ``gas`` (clipped to 0..1 already) by at
-    most the spec's rise per step; every wheel brakes ``brake``."""
-    n = consts.shape[1]
-    rise = float(consts[GAS_RISE, row])
-    for index in range(2, WHEELS):
-        k = index * n + row
-        now = float(state[GAS, k])
-        state[GAS, k] = now + min(gas - now, rise)
-    state[BRAKE, row::n] = brake
