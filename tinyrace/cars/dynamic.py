@@ -13,13 +13,28 @@ The model is written in CarRacing's frame (y up, angles counter-clockwise). A
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pymunk
+from pymunk._chipmunk_cffi import lib as _chipmunk
 
+from tinyrace.cars import dynamic_python
 from tinyrace.cars.collision import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
+from tinyrace.cars.dynamic_layout import (
+    BRAKE,
+    CONSTANTS,
+    GAS,
+    OMEGA,
+    PHASE,
+    SKID,
+    STEER,
+    car_constants,
+    new_state,
+)
 from tinyrace.cars.dynamic_shape import (
     HULL_POLYGONS,
     SIZE,
@@ -31,18 +46,73 @@ from tinyrace.cars.dynamic_shape import (
 from tinyrace.cars.state import CarState, Point, SkidView, WheelState, read_only
 
 
-@dataclass
 class Wheel:
-    """One wheel's own state; position is in the body's frame (track units)."""
+    """One wheel: its position in the body's frame (track units) and its state, a column
+    of the car's state array (see ``dynamic_layout``), read and set as attributes."""
 
-    x: float
-    y: float
-    omega: float = 0.0  # [rad/s] spin
-    steer: float = 0.0  # [rad] steering angle (front wheels)
-    gas: float = 0.0  # 0..1 (rear wheels)
-    brake: float = 0.0  # 0..1
-    phase: float = 0.0  # [rad] accumulated spin, for drawing
-    skidding: bool = False
+    __slots__ = ("_column", "_state", "x", "y")
+
+    def __init__(self, x: float, y: float, state: np.ndarray, column: int) -> None:
+        self.x, self.y = x, y
+        self._state, self._column = state, column
+
+    @property
+    def omega(self) -> float:
+        """[rad/s] spin"""
+        return float(self._state[OMEGA, self._column])
+
+    @omega.setter
+    def omega(self, value: float) -> None:
+        self._state[OMEGA, self._column] = value
+
+    @property
+    def steer(self) -> float:
+        """[rad] steering angle (front wheels)"""
+        return float(self._state[STEER, self._column])
+
+    @steer.setter
+    def steer(self, value: float) -> None:
+        self._state[STEER, self._column] = value
+
+    @property
+    def gas(self) -> float:
+        """0..1 (rear wheels)"""
+        return float(self._state[GAS, self._column])
+
+    @gas.setter
+    def gas(self, value: float) -> None:
+        self._state[GAS, self._column] = value
+
+    @property
+    def brake(self) -> float:
+        """0..1"""
+        return float(self._state[BRAKE, self._column])
+
+    @brake.setter
+    def brake(self, value: float) -> None:
+        self._state[BRAKE, self._column] = value
+
+    @property
+    def phase(self) -> float:
+        """[rad] accumulated spin, for drawing"""
+        return float(self._state[PHASE, self._column])
+
+    @phase.setter
+    def phase(self, value: float) -> None:
+        self._state[PHASE, self._column] = value
+
+    @property
+    def skidding(self) -> bool:
+        """The tyre force passed the skid threshold in the last step."""
+        return bool(self._state[SKID, self._column])
+
+    @skidding.setter
+    def skidding(self, value: bool) -> None:
+        self._state[SKID, self._column] = float(value)
+
+    def __repr__(self) -> str:
+        fields = ("x", "y", "omega", "steer", "gas", "brake", "phase", "skidding")
+        return f"Wheel({', '.join(f'{name}={getattr(self, name)!r}' for name in fields)})"
 
 
 class SkidMarks:
@@ -98,11 +168,28 @@ class SkidMarks:
 # setters called directly skip it (about 0.5 us each, twice per step)
 _set_velocity = vars(pymunk.Body)["velocity"].fset
 _set_angular_velocity = vars(pymunk.Body)["angular_velocity"].fset
+# the hot path reads and sets the body by the chipmunk calls that pymunk's Body properties
+# make (on its pointer ``body._body``), without their Python frames and Vec2d tuples: the
+# same doubles (pymunk is pinned to 7.x)
+_get_position, _get_velocity = _chipmunk.cpBodyGetPosition, _chipmunk.cpBodyGetVelocity
+_get_angle, _get_spin = _chipmunk.cpBodyGetAngle, _chipmunk.cpBodyGetAngularVelocity
+_put_velocity, _put_spin = _chipmunk.cpBodySetVelocity, _chipmunk.cpBodySetAngularVelocity
+
+PHYSICS_VARIABLE = "TINYRACE_PHYSICS"  # environment variable: auto | numba | python
+Forces = Callable[
+    [np.ndarray, np.ndarray, float, float, float, float, float, float, int],
+    tuple[float, float, float, int],
+]
 
 
 @dataclass
 class DynamicCar:
-    """The car: a pymunk body plus wheel states. Controls are set, then ``apply_forces(dt)``."""
+    """The car: a pymunk body plus wheel states. Controls are set, then ``apply_forces(dt)``.
+
+    The wheels' state is one array, ``wheel_state`` (see ``dynamic_layout``); each
+    ``Wheel`` reads and sets its column. The tyre model runs compiled (numba) or in
+    Python, with the same results (see ``physics_kernel``).
+    """
 
     body: pymunk.Body
     wheels: list[Wheel]
@@ -111,6 +198,7 @@ class DynamicCar:
     steer_sign: float  # +1 in CarRacing's y-up frame, -1 on a y-down image
     steer_target: float = 0.0  # [rad] internal sign (positive: counter-clockwise)
     skids: SkidMarks = field(default_factory=SkidMarks)
+    wheel_state: np.ndarray = field(default_factory=lambda: new_state(1))
     # per wheel: the mark being drawn (its handle), and a first point waiting for a second
     _skid_open: list[tuple[int, int] | None] = field(default_factory=lambda: [None] * 4)
     _skid_start: list[Point | None] = field(default_factory=lambda: [None] * 4)
@@ -133,29 +221,35 @@ class DynamicCar:
         shapes = [
             _hull_shape(body, poly, unit, spec.hull_density / scale**2) for poly in HULL_POLYGONS
         ]
+        state = new_state(1)
         wheels = []
         for index, (wx, wy) in enumerate(WHEEL_POSITIONS):
-            wheels.append(Wheel(wx * unit, wy * unit))
+            wheels.append(Wheel(wx * unit, wy * unit, state, index))
             shapes.append(_wheel_sensor(body, index, wx, wy, unit, spec.wheel_density / scale**2))
         rear, base, width = _footprint(scale)
         shapes.append(footprint_sensor(body, (-width / 2, rear), (width / 2, rear + base)))
         space.add(body, *shapes)
-        return cls(body, wheels, spec, scale, steer_sign=-1.0 if y_down else 1.0)
+        sign = -1.0 if y_down else 1.0
+        return cls(body, wheels, spec, scale, steer_sign=sign, wheel_state=state)
 
     # -- controls ----------------------------------------------------------------------------
     def control(self, steer: float, gas: float, brake: float) -> None:
         """steer -1 (left) .. 1 (right), gas 0..1, brake 0..1, as CarRacing's action."""
         self.steer_target = -steer * self.steer_sign
         gas, rise = min(max(gas, 0.0), 1.0), self.spec.gas_rise
-        wheels = self.wheels
-        for wheel in wheels[2:]:
-            wheel.gas += min(gas - wheel.gas, rise)
-        for wheel in wheels:
-            wheel.brake = brake
+        state = self.wheel_state  # (Python here: cheaper than a compiled call's arguments)
+        left, right = state[GAS, 2:].tolist()  # the rear wheels
+        state[GAS, 2:] = (left + min(gas - left, rise), right + min(gas - right, rise))
+        state[BRAKE] = brake
 
     # -- physics -----------------------------------------------------------------------------
     def __post_init__(self) -> None:
         self._prepare()
+
+    def __getstate__(self) -> dict[str, object]:
+        # the kernel is chosen again after unpickling (numba may be missing there)
+        # and the body's chipmunk pointer is found again
+        return {**self.__dict__, "_forces": None, "kernel": None, "_cp": None}
 
     def _prepare(self) -> None:
         """Per-car constants of the hot path, each computed as the formula it replaces would."""
@@ -169,106 +263,55 @@ class DynamicCar:
         self._radius = self.wheel_radius  # [track units]
         self._spin_moment = spec.wheel_moment * scale**2  # [mass track units^2]
         self._mass, self._moment = body.mass, body.moment  # the shapes are fixed once built
-        self._cap_dt = (0.0, 0.0)  # (dt, Box2D's speed cap at that dt [track units/s])
         self._dims = _footprint(scale)  # (rear axle, wheelbase, width) [track units]
         self._spots = [(w.x, w.y) for w in self.wheels]  # wheels in the body's frame
+        self._radii = [self._radius] * len(self.wheels)
+        self._consts = np.array(car_constants(self)).reshape(CONSTANTS, 1)
+        self.kernel: str | None = None  # the tyre model's path, chosen at the first step
+        self._forces: Forces | None = None
+        self._cp: Any = None  # the body's chipmunk pointer (see ``_pointer``)
+
+    def _pointer(self) -> Any:
+        """The body's chipmunk pointer, for the direct reads and sets of the hot path."""
+        self._cp = self.body._body
+        return self._cp
+
+    def _choose_kernel(self) -> Forces:
+        """The tyre model's path (``physics_kernel``), chosen once per car."""
+        self.kernel, self._forces = physics_kernel()
+        return self._forces
 
     def apply_forces(self, dt: float, on_road: Sequence[bool]) -> None:
-        """Spin the wheels, compute tyre forces and set them on the body for the next space step.
-
-        Written for speed: the body is read once, the four wheels' math is straight scalar
-        code and the summed force changes the velocities once. Each formula keeps the
-        operation order of CarRacing's model, so results are bit-identical to it.
-        """
-        spec, body = self.spec, self.body
-        angle, spin = body.angle, body.angular_velocity
-        vx, vy = body.velocity
-        cos_a, sin_a = math.cos(angle), math.sin(angle)
-        radius, gain, moment = self._radius, spec.slip_gain, self._spin_moment
-        drive = dt * spec.engine_power  # [mass u^2/s^2] per unit of gas
-        inertia, floor = spec.wheel_moment, spec.spin_floor
-        lock, brake_rate = spec.brake_lock, spec.brake_rate
-        road_limits, grass_limits = self._limits
-        offsets, starts, opens = self._offsets, self._skid_start, self._skid_open
-        fx_total = fy_total = torque = 0.0
-        for index, wheel in enumerate(self.wheels):
-            # engine and brake act on the wheel's spin
-            omega = wheel.omega
-            omega += drive * wheel.gas / inertia / (abs(omega) + floor)
-            brake = wheel.brake
-            if brake >= lock:
-                omega = 0.0
-            elif brake > 0:
-                omega -= math.copysign(min(brake_rate * brake, abs(omega)), omega)
-            wheel.phase += omega * dt
-            lx, ly = offsets[index]
-            rx, ry = cos_a * lx - sin_a * ly, sin_a * lx + cos_a * ly  # world frame
-            wvx, wvy = vx - spin * ry, vy + spin * rx
-            steer = wheel.steer
-            if steer:
-                heading = angle + steer
-                side_x, side_y = math.cos(heading), math.sin(heading)
-            else:  # angle + 0.0 is angle: the hull's own axes
-                side_x, side_y = cos_a, sin_a
-            road = on_road[index]
-            limit, skid_limit = road_limits if road else grass_limits
-            # tyre force from slip, capped at the friction limit (forward f, sideways p)
-            f = (omega * radius - (-side_y * wvx + side_x * wvy)) * gain
-            p = -(side_x * wvx + side_y * wvy) * gain
-            total = math.hypot(f, p)
-            if total > limit:
-                f, p = f * limit / total, p * limit / total
-            wheel.omega = omega - dt * f * radius / moment
-            fx, fy = p * side_x + f * -side_y, p * side_y + f * side_x
-            fx_total, fy_total = fx_total + fx, fy_total + fy
-            torque += rx * fy - ry * fx
-            skidding = wheel.skidding = total > skid_limit
-            if skidding or starts[index] or opens[index]:
-                self._track_skid(index, wheel, road)
-        self._accelerate(dt, vx, vy, spin, fx_total, fy_total, torque)
-        self._steer(dt)
-
-    def _accelerate(
-        self, dt: float, vx: float, vy: float, spin: float, fx: float, fy: float, torque: float
-    ) -> None:
-        """Change the velocities now, so that the coming space step moves with the new ones.
+        """Spin the wheels, compute tyre forces and set the body's new velocities.
 
         Box2D updates velocities before positions (semi-implicit Euler); pymunk moves
-        positions with the old velocities first. Setting ``body.force`` would leave the
-        car one step behind the reference (dt * speed, about 2 u at top speed).
-        Box2D also caps a body's travel per step; the same cap keeps the same top speed.
-        ``vx, vy, spin`` are the body's velocities now.
+        positions with the old velocities first, so the velocities change now (setting
+        ``body.force`` would leave the car one step behind the reference). Skid marks
+        follow, for the wheels that skid or have a mark open.
         """
-        mass = self._mass
-        vx, vy = vx + fx / mass * dt, vy + fy / mass * dt
-        if self._cap_dt[0] != dt:
-            self._cap_dt = (dt, self.spec.max_translation * self.scale / dt)  # [track units/s]
-        cap = self._cap_dt[1]
-        speed = math.hypot(vx, vy)
-        if speed > cap:
-            vx, vy = vx * cap / speed, vy * cap / speed
-        _set_velocity(self.body, (vx, vy))
-        _set_angular_velocity(self.body, spin + torque / self._moment * dt)
+        forces = self._forces or self._choose_kernel()
+        cp = self._cp or self._pointer()
+        velocity = _get_velocity(cp)
+        road = on_road[0] | on_road[1] << 1 | on_road[2] << 2 | on_road[3] << 3
+        vx, vy, spin, skids = forces(
+            self.wheel_state, self._consts, dt, _get_angle(cp), _get_spin(cp), velocity.x,
+            velocity.y, self.steer_target, road,
+        )  # fmt: skip
+        _put_velocity(cp, (vx, vy))  # as pymunk's setters: the body wakes
+        _put_spin(cp, spin)
+        if skids or any(self._skid_start) or any(self._skid_open):
+            for index, wheel in enumerate(self.wheels):
+                self._track_skid(index, wheel, bool(on_road[index]))
 
     def stop(self) -> None:
         """A crash: body and wheels stand still."""
         self.body.velocity, self.body.angular_velocity = (0.0, 0.0), 0.0
-        for wheel in self.wheels:
-            wheel.omega = 0.0
+        self.wheel_state[OMEGA] = 0.0
 
     @property
     def wheel_radius(self) -> float:
         """[track units]"""
         return WHEEL_RADIUS * SIZE * self.scale
-
-    def _steer(self, dt: float) -> None:
-        """Front wheels turn toward the target like the reference's joint motor."""
-        spec, target = self.spec, self.steer_target
-        gain, speed, limit = spec.steer_gain, spec.steer_speed, spec.steer_limit
-        for wheel in self.wheels[:2]:
-            error = target - wheel.steer
-            rate = math.copysign(min(gain * abs(error), speed), error)
-            wheel.steer = min(max(wheel.steer + rate * dt, -limit), limit)
 
     def _track_skid(self, index: int, wheel: Wheel, on_road: bool) -> None:
         """Skid marks: polylines where the tyre force exceeds twice the friction limit."""
@@ -290,33 +333,27 @@ class DynamicCar:
     # -- state -------------------------------------------------------------------------------
     def state(self) -> CarState:
         """A copy of the car's state for sensors and pictures (the body read once: per step)."""
-        body = self.body
-        x, y = body.position
-        vx, vy = body.velocity
-        angle = body.angle
-        radius = self._radius
+        cp = self._cp or self._pointer()
+        position, velocity = _get_position(cp), _get_velocity(cp)
+        x, y, vx, vy = position.x, position.y, velocity.x, velocity.y
+        angle = _get_angle(cp)
         rear, base, width = self._dims
         # the axles lie on the body's y axis: body.local_to_world((0, r)) computes
         # (x - sin * r, y + cos * r) with the same libm sin and cos, so the bits are the same
         cos_a, sin_a = math.cos(angle), math.sin(angle)
         front = rear + base
-        wheels = self.wheels
+        omegas, steers = self.wheel_state[:2].tolist()  # rows OMEGA, STEER
         return CarState(
             model="dynamic",
             pose=(x, y, angle + math.pi / 2),
             velocity=(vx, vy),
             speed=math.sqrt(vx**2 + vy**2),  # as pymunk's Vec2d.length
-            yaw_rate=body.angular_velocity,
-            steer=wheels[0].steer,
+            yaw_rate=_get_spin(cp),
+            steer=steers[0],
             front_axle=(x - sin_a * front, y + cos_a * front),
             rear_axle=(x - sin_a * rear, y + cos_a * rear),
             footprint=(base, width),
-            wheels=tuple(
-                [
-                    WheelState(w.omega, w.steer, radius, spot)
-                    for w, spot in zip(wheels, self._spots, strict=True)
-                ]
-            ),
+            wheels=tuple(map(WheelState, omegas, steers, self._radii, self._spots)),
             hull_angle=angle,
             scale=self.scale,
             steer_sign=self.steer_sign,
@@ -353,6 +390,27 @@ class DynamicCar:
         rear, base, _ = _footprint(self.scale)
         point = self.body.local_to_world((0.0, rear + base))
         return point.x, point.y
+
+
+def physics_kernel(wanted: str | None = None) -> tuple[str, Forces]:
+    """The tyre model's path ``wanted`` (auto | numba | python; None: ``TINYRACE_PHYSICS``'s,
+    else auto), by name, with its ``car_forces``: auto is ``numba`` when numba imports
+    (``pip install tinyrace[fast]``), else ``python``. Same results."""
+    if wanted is None:
+        wanted = os.environ.get(PHYSICS_VARIABLE, "auto").strip().lower() or "auto"
+    if wanted not in ("auto", "numba", "python"):
+        raise ValueError(f"{PHYSICS_VARIABLE}={wanted!r}: expected auto, numba or python")
+    if wanted == "python":
+        return "python", dynamic_python.car_forces
+    try:
+        from tinyrace.cars import dynamic_numba  # numba is optional
+    except ImportError as error:
+        if wanted == "numba":
+            raise ImportError(
+                f"{PHYSICS_VARIABLE}=numba needs numba: pip install tinyrace[fast]"
+            ) from error
+        return "python", dynamic_python.car_forces
+    return "numba", dynamic_numba.car_forces
 
 
 def _footprint(scale: float) -> tuple[float, float, float]:

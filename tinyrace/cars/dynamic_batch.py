@@ -10,28 +10,47 @@ operations do; ``cos``, ``sin`` and ``hypot`` are Python's own (``math``), mappe
 over the elements, since numpy's may differ from them in the last bit.
 
 The arrays are the wheels' state while a batch steps; ``store`` copies a row back to
-its car's ``Wheel`` objects (which ``DynamicCar.state`` and skid marks read), ``load``
+its car's ``wheel_state`` (which ``DynamicCar.state`` and skid marks read), ``load``
 copies a car into a row (after a reset, or when the car was changed by other code).
+
+With numba (``physics_kernel``: ``TINYRACE_PHYSICS`` auto or numba), ``control`` and
+``apply_forces`` run ``dynamic_numba``'s compiled kernel over the rows (the one a single
+``DynamicCar`` runs); else the numpy computation below, with the same results.
 
 Layout, for speed: numpy's cost per call on arrays this small is its fixed overhead
 (thousands of instructions), least when every operand is a contiguous 1-D array of the
 same length. So every per-wheel quantity is one flat array of ``4 * size``, wheel by
 wheel (index ``wheel * size + row``: the front wheels are the first half, the rear
-the second), per-car constants are repeated per wheel, and per-car results (force,
-torque, velocity) are arrays of ``size``.
+the second): a row of ``state`` (see ``dynamic_layout``); per-car constants are
+repeated per wheel, and per-car results (force, torque, velocity) are arrays of ``size``.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 import pymunk
 
-from tinyrace.cars.dynamic import DynamicCar, _set_angular_velocity, _set_velocity
-
-WHEELS = 4  # FL, FR, RL, RR; the first two steer, the last two drive
+from tinyrace.cars.dynamic import (
+    DynamicCar,
+    _set_angular_velocity,
+    _set_velocity,
+    physics_kernel,
+)
+from tinyrace.cars.dynamic_layout import (
+    BRAKE,
+    CONSTANTS,
+    GAS,
+    OMEGA,
+    PHASE,
+    SKID,
+    STEER,
+    WHEELS,
+    new_state,
+)
 
 
 def _each(function: Callable[..., float], *arrays: np.ndarray) -> np.ndarray:
@@ -48,6 +67,14 @@ def _motion(body: pymunk.Body | None) -> tuple[float, float, float, float, float
     angle = body.angle
     vx, vy = body.velocity
     return angle, math.cos(angle), math.sin(angle), body.angular_velocity, vx, vy
+
+
+def _angle_spin_velocity(body: pymunk.Body | None) -> tuple[float, float, float, float]:
+    """A body's (angle, angular velocity, vx, vy); zeros for no body."""
+    if body is None:
+        return 0.0, 0.0, 0.0, 0.0
+    vx, vy = body.velocity
+    return body.angle, body.angular_velocity, vx, vy
 
 
 class DynamicBatch:
@@ -82,13 +109,14 @@ class DynamicBatch:
         self.cars: list[DynamicCar | None] = [None] * size
         m = WHEELS * n
         self.front, self.rear = slice(0, 2 * n), slice(2 * n, m)
-        # wheel state
-        self.omega = np.zeros(m)  # [rad/s] spin
-        self.steer = np.zeros(m)  # [rad] steering angle (front wheels)
-        self.gas = np.zeros(m)  # 0..1 (rear wheels)
-        self.brake = np.zeros(m)  # 0..1
-        self.phase = np.zeros(m)  # [rad] accumulated spin
-        self.skidding = np.zeros(m, bool)
+        # wheel state: the rows of one array, changed in place
+        self.state = state = new_state(n)
+        self.omega = state[OMEGA]  # [rad/s] spin
+        self.steer = state[STEER]  # [rad] steering angle (front wheels)
+        self.gas = state[GAS]  # 0..1 (rear wheels)
+        self.brake = state[BRAKE]  # 0..1
+        self.phase = state[PHASE]  # [rad] accumulated spin
+        self.skidding = state[SKID]  # 1.0: skidding
         self.tracking = np.zeros(m, bool)  # a skid mark is open or waits for a point
         self.steer_target = np.zeros(n)  # [rad] per car
         # per wheel: offset from the CoG in the body's frame [track units]; the car's
@@ -100,6 +128,16 @@ class DynamicBatch:
             setattr(self, name, np.ones(n))
         self._zeros, self._ones = np.zeros(m), np.ones(m)  # for np.where
         self._car_zeros = np.zeros(n)
+        # the compiled kernel's inputs: each car's constants (dynamic_layout), the bodies'
+        # motion (angle, angular velocity, vx, vy), its outputs (vx, vy, angular velocity)
+        self.consts = np.ones((CONSTANTS, n))
+        self._motion, self._out = np.zeros((4, n)), np.zeros((3, n))
+        self.kernel = physics_kernel()[0]  # numba | python (this numpy computation)
+        self._compiled: Any = None
+        if self.kernel == "numba":
+            from tinyrace.cars import dynamic_numba
+
+            self._compiled = dynamic_numba
 
     def wheels(self, values: np.ndarray, row: int) -> np.ndarray:
         """The four wheels' entries of ``row`` in a per-wheel array (a view)."""
@@ -109,7 +147,7 @@ class DynamicBatch:
     def load(self, row: int, car: DynamicCar) -> None:
         """Copy ``car``'s constants and wheel state into ``row``."""
         self.cars[row] = car
-        spec, wheels, n = car.spec, car.wheels, self.size
+        spec, n = car.spec, self.size
         (road, road_skid), (grass, grass_skid) = car._limits
         per_wheel = {
             "road_limit": road,
@@ -142,12 +180,8 @@ class DynamicBatch:
             getattr(self, name)[row] = value
         self.offset_x[row::n] = [x for x, _ in car._offsets]
         self.offset_y[row::n] = [y for _, y in car._offsets]
-        self.omega[row::n] = [w.omega for w in wheels]
-        self.steer[row::n] = [w.steer for w in wheels]
-        self.gas[row::n] = [w.gas for w in wheels]
-        self.brake[row::n] = [w.brake for w in wheels]
-        self.phase[row::n] = [w.phase for w in wheels]
-        self.skidding[row::n] = [w.skidding for w in wheels]
+        self.consts[:, row] = car._consts[:, 0]
+        self.state[:, row::n] = car.wheel_state
         self.tracking[row::n] = [
             start is not None or mark is not None
             for start, mark in zip(car._skid_start, car._skid_open, strict=True)
@@ -155,27 +189,26 @@ class DynamicBatch:
         self.steer_target[row] = car.steer_target
 
     def store(self, rows: Sequence[int]) -> None:
-        """Copy the wheel state of ``rows`` back to their cars' ``Wheel`` objects."""
-        omega, steer, gas = self.omega.tolist(), self.steer.tolist(), self.gas.tolist()
-        brake, phase, skidding = self.brake.tolist(), self.phase.tolist(), self.skidding.tolist()
+        """Copy the wheel state of ``rows`` back to their cars' ``wheel_state``."""
         targets = self.steer_target.tolist()
-        n = self.size
+        state, n = self.state, self.size
         for row in rows:
             car = self.cars[row]
             assert car is not None
             car.steer_target = targets[row]
-            for k, wheel in zip(range(row, WHEELS * n, n), car.wheels, strict=True):
-                wheel.omega, wheel.steer, wheel.gas = omega[k], steer[k], gas[k]
-                wheel.brake, wheel.phase, wheel.skidding = brake[k], phase[k], skidding[k]
+            car.wheel_state[:] = state[:, row::n]
 
     # -- controls ----------------------------------------------------------------------------
     def control(self, steer: np.ndarray, gas: np.ndarray, brake: np.ndarray) -> None:
         """Every row's action (``DynamicCar.control``): steer -1..1, gas 0..1, brake 0..1."""
         self.steer_target = -steer * self.steer_sign
+        if self._compiled is not None:
+            self._compiled.batch_control(self.state, self.consts, gas, brake)
+            return
         gas = np.tile(np.minimum(np.maximum(gas, 0.0), 1.0), 2)  # per rear wheel
         rear = self.gas[self.rear]
         self.gas[self.rear] = rear + np.minimum(gas - rear, self.gas_rise[self.rear])
-        self.brake = np.tile(brake, WHEELS)
+        self.brake[:] = np.tile(brake, WHEELS)
 
     # -- physics -----------------------------------------------------------------------------
     def apply_forces(self, dt: np.ndarray, rows: Sequence[int], on_road: np.ndarray) -> None:
@@ -186,6 +219,9 @@ class DynamicBatch:
         Skid marks are the caller's (``track_skids``), before the space steps."""
         n = self.size
         bodies = [car.body if car is not None else None for car in self.cars]
+        if self._compiled is not None:
+            self._compiled_forces(bodies, dt, rows, on_road)
+            return
         motion = np.array([_motion(body) for body in bodies]).T.copy()  # 6 x rows
         angle, cos_a, sin_a, spin, vx, vy = np.tile(motion, WHEELS)  # per wheel
         dt_wheel = np.tile(dt, WHEELS)
@@ -207,9 +243,9 @@ class DynamicBatch:
         divisor = np.where(capped, total, self._ones)  # the uncapped keep f, p (no 0 / 0)
         f = np.where(capped, f * limit / divisor, f)
         p = np.where(capped, p * limit / divisor, p)
-        self.omega = omega - dt_wheel * f * radius / self.spin_moment
+        self.omega[:] = omega - dt_wheel * f * radius / self.spin_moment
         fx, fy = p * side_x + f * -side_y, p * side_y + f * side_x
-        self.skidding = total > skid_limit
+        self.skidding[:] = total > skid_limit
         # force, torque summed over the wheels in order from 0.0, as the scalar loop adds them
         terms = np.concatenate(
             (fx.reshape(WHEELS, n), fy.reshape(WHEELS, n), (rx * fy - ry * fx).reshape(WHEELS, n)),
@@ -221,6 +257,25 @@ class DynamicBatch:
         self._accelerate(bodies, rows, dt, velocity, fx_total, fy_total, torque)
         self._steer(dt_wheel)
 
+    def _compiled_forces(
+        self,
+        bodies: list[pymunk.Body | None],
+        dt: np.ndarray,
+        rows: Sequence[int],
+        on_road: np.ndarray,
+    ) -> None:
+        """``apply_forces`` by the compiled kernel (``dynamic_numba.batch_forces``)."""
+        motion, out = self._motion, self._out
+        motion[:] = np.array([_angle_spin_velocity(body) for body in bodies]).T
+        self._compiled.batch_forces(
+            self.state, self.consts, dt, motion, self.steer_target, on_road, out
+        )
+        vxs, vys, turns = out.tolist()
+        for row in rows:
+            body = bodies[row]
+            _set_velocity(body, (vxs[row], vys[row]))
+            _set_angular_velocity(body, turns[row])
+
     def _spin_wheels(self, dt: np.ndarray) -> np.ndarray:
         """Engine and brake act on the wheels' spin; the spin after them."""
         omega = self.omega
@@ -229,7 +284,7 @@ class DynamicBatch:
         brake = self.brake
         braked = omega - np.copysign(np.minimum(self.brake_rate * brake, np.abs(omega)), omega)
         omega = np.where(brake >= self.brake_lock, self._zeros, np.where(brake > 0, braked, omega))
-        self.phase = self.phase + omega * dt
+        self.phase[:] = self.phase + omega * dt
         return omega
 
     def _wheel_axes(
@@ -289,7 +344,7 @@ class DynamicBatch:
     def track_skids(self, rows: Sequence[int], on_road: np.ndarray) -> None:
         """Skid marks of ``rows`` (stored first): the scalar path for the wheels that skid
         or end a mark, before the space steps (the marks use the body's position now)."""
-        busy = np.flatnonzero(self.skidding | self.tracking).tolist()
+        busy = np.flatnonzero((self.skidding != 0) | self.tracking).tolist()
         if not busy:
             return
         wanted, n = set(rows), self.size
