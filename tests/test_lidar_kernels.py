@@ -14,6 +14,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tinyrace  # registers the env ids; tinyrace.sensors in a test below
+from tinyrace import compiled as compiled_module
+from tinyrace.compiled import compiler
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.sensors import raycast, raycast_numba, raycast_numpy
@@ -322,9 +324,9 @@ def test_an_uncachable_kernel_still_compiles(monkeypatch):
             raise RuntimeError("cannot cache function 'f': no locator available")
         return lambda function: function
 
-    monkeypatch.setattr(raycast_numba, "njit", njit)
-    with pytest.warns(UserWarning, match="cannot cache"):
-        compiled = raycast_numba._compile(math.hypot)
+    monkeypatch.setattr(compiled_module, "njit", njit)
+    with pytest.warns(UserWarning, match="cannot cache the lidar kernel"):
+        compiled = compiler("lidar")(math.hypot)
     assert compiled is math.hypot and calls == [{"cache": True, "nogil": True}, {"nogil": True}]
 
 

@@ -23,12 +23,9 @@ from __future__ import annotations
 
 import math
 import sys
-import warnings
-from typing import Any, TypeVar
-from typing import cast as typed
+from typing import Any
 
 import numpy as np
-from numba import njit
 
 from tinyrace.cars.dynamic_layout import (
     BRAKE,
@@ -60,19 +57,11 @@ from tinyrace.cars.dynamic_layout import (
     WHEEL_MOMENT,
     WHEELS,
 )
+from tinyrace.compiled import compiler
 
-F = TypeVar("F")
+_compile = compiler("tyre")
 SPLIT = 134217729.0  # 2**27 + 1: Veltkamp's split of a double into two halves
 HYPOT_FMA_STYLE = sys.version_info >= (3, 12)  # CPython 3.12 changed hypot's squaring
-
-
-def _compile(function: F) -> F:
-    """``function`` compiled (no fastmath), cached when numba finds a cache directory."""
-    try:
-        return typed(F, njit(cache=True, nogil=True)(function))
-    except RuntimeError as error:  # "cannot cache function ...: no locator available"
-        warnings.warn(f"numba cannot cache the tyre kernel: {error}", stacklevel=1)
-        return typed(F, njit(nogil=True)(function))
 
 
 @_compile

@@ -24,13 +24,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
-from typing import Any, TypeVar
-from typing import cast as typed
+from typing import Any
 
 import numpy as np
-from numba import njit
 
+from tinyrace.compiled import compiler
 from tinyrace.sensors import raycast
 from tinyrace.sensors.raycast import (
     BISECTIONS,
@@ -67,17 +65,7 @@ SECTOR_BYTES = 16 * 2**20  # [bytes] a field's sector maps at most (else its ski
 # two, so that a scaled coordinate rounds as the coordinate does
 SECTOR_SCALES = (2, 1)
 RUN_CAP = 128  # [sector map cells] longest free run counted (its skips fill a uint8)
-F = TypeVar("F")
-
-
-def _compile(function: F) -> F:
-    """``function`` compiled, its machine code cached beside this module or in numba's
-    user cache directory; uncached when neither is writable (numba refuses cache=True)."""
-    try:
-        return typed(F, njit(cache=True, nogil=True)(function))
-    except RuntimeError as error:  # "cannot cache function ...: no locator available"
-        warnings.warn(f"numba cannot cache the lidar kernel: {error}", stacklevel=1)
-        return typed(F, njit(nogil=True)(function))
+_compile = compiler("lidar")
 
 
 @_compile
