@@ -307,6 +307,7 @@ def test_the_variable_chooses_the_path(monkeypatch):
 def test_without_numba_auto_falls_back_to_numpy_and_numba_is_an_error(monkeypatch):
     monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
     monkeypatch.delitem(sys.modules, "tinyrace.sensors.raycast_numba")
+    monkeypatch.delitem(sys.modules, "tinyrace.compiled", raising=False)  # imports numba too
     monkeypatch.delattr(tinyrace.sensors, "raycast_numba")
     monkeypatch.delenv(KERNEL_VARIABLE, raising=False)
     assert kernel() == ("numpy", raycast_numpy.cast)

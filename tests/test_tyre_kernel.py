@@ -183,6 +183,7 @@ def test_physics_variable_chooses_the_path(monkeypatch):
 def test_without_numba_auto_falls_back_to_python_and_numba_is_an_error(monkeypatch):
     monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
     monkeypatch.delitem(sys.modules, "tinyrace.cars.dynamic_numba")
+    monkeypatch.delitem(sys.modules, "tinyrace.compiled", raising=False)  # imports numba too
     monkeypatch.delattr(tinyrace.cars, "dynamic_numba")
     assert physics_kernel("auto")[1] is dynamic_python.car_forces
     with pytest.raises(ImportError, match=r"tinyrace\[fast\]"):
