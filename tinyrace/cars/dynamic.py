@@ -46,6 +46,19 @@ from tinyrace.cars.dynamic_shape import (
 from tinyrace.cars.state import CarState, Point, SkidView, WheelState, read_only
 
 
+class _Column:
+    """A float state of a wheel, kept in its row of the car's state array."""
+
+    def __init__(self, row: int, doc: str) -> None:
+        self.row, self.__doc__ = row, doc
+
+    def __get__(self, wheel: Wheel, owner: type | None = None) -> float:
+        return float(wheel._state[self.row, wheel._column])
+
+    def __set__(self, wheel: Wheel, value: float) -> None:
+        wheel._state[self.row, wheel._column] = value
+
+
 class Wheel:
     """One wheel: its position in the body's frame (track units) and its state, a column
     of the car's state array (see ``dynamic_layout``), read and set as attributes."""
@@ -56,50 +69,11 @@ class Wheel:
         self.x, self.y = x, y
         self._state, self._column = state, column
 
-    @property
-    def omega(self) -> float:
-        """[rad/s] spin"""
-        return float(self._state[OMEGA, self._column])
-
-    @omega.setter
-    def omega(self, value: float) -> None:
-        self._state[OMEGA, self._column] = value
-
-    @property
-    def steer(self) -> float:
-        """[rad] steering angle (front wheels)"""
-        return float(self._state[STEER, self._column])
-
-    @steer.setter
-    def steer(self, value: float) -> None:
-        self._state[STEER, self._column] = value
-
-    @property
-    def gas(self) -> float:
-        """0..1 (rear wheels)"""
-        return float(self._state[GAS, self._column])
-
-    @gas.setter
-    def gas(self, value: float) -> None:
-        self._state[GAS, self._column] = value
-
-    @property
-    def brake(self) -> float:
-        """0..1"""
-        return float(self._state[BRAKE, self._column])
-
-    @brake.setter
-    def brake(self, value: float) -> None:
-        self._state[BRAKE, self._column] = value
-
-    @property
-    def phase(self) -> float:
-        """[rad] accumulated spin, for drawing"""
-        return float(self._state[PHASE, self._column])
-
-    @phase.setter
-    def phase(self, value: float) -> None:
-        self._state[PHASE, self._column] = value
+    omega = _Column(OMEGA, "[rad/s] spin")
+    steer = _Column(STEER, "[rad] steering angle (front wheels)")
+    gas = _Column(GAS, "0..1 (rear wheels)")
+    brake = _Column(BRAKE, "0..1")
+    phase = _Column(PHASE, "[rad] accumulated spin, for drawing")
 
     @property
     def skidding(self) -> bool:
