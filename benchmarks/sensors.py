@@ -23,7 +23,9 @@ else numpy) and ``lidar_1080_numpy`` a second lidar of the same config forced on
 path, on the same snapshots; every step also checks that both give the same ranges, bit for
 bit. numba compiles on the env's first observation (in ``reset``), before any timing;
 ``measure_compile`` times that first scan in fresh processes, with an empty and then a
-filled numba cache.
+filled numba cache. The cone detector likewise: ``cones`` is the env's own (compiled when
+numba imports), ``cones_numpy`` the same detector on the numpy path, checked identical every
+step, and ``cones_noisy`` the env's path with position noise, misses and false positives.
 
 Cases: the procedural track, formula_student (a picture track with cones) and the shipped
 metric tracks (circuit, autocross with its cone map, f1tenth_loop), each with bird's-eye
@@ -36,6 +38,7 @@ perspective camera no more than 1.5x a 120x160 bird's-eye camera.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib.util
 import math
@@ -50,6 +53,7 @@ import cv2
 import gymnasium as gym
 import numpy as np
 from tinyrace.examples import TRACKS_DIR
+from tinyrace.sensors.cones import ConesSensor
 from tinyrace.sensors.lidar import LidarSensor, directions
 from tinyrace.world.snapshot import Snapshot
 
@@ -148,6 +152,20 @@ def numpy_twin(lidar: LidarSensor) -> LidarSensor:
     return LidarSensor(lidar.config, lidar.max_range, lidar.cell, lidar.cone_colors, "numpy")
 
 
+def cone_twins(cones: ConesSensor | None) -> list[tuple[str, ConesSensor]]:
+    """(id, sensor) of a cone detector like ``cones`` on the numpy path (when ``cones`` is
+    on the compiled one), and of one on ``cones``' path with noise, misses and false
+    positives."""
+    if cones is None:
+        return []
+    noise = {"position_std": cones.max_range / 300, "miss_probability": 0.1, "false_positives": 1}
+    noisy = dataclasses.replace(cones.config, id="cones_noisy", **noise)
+    twins = [("cones_noisy", ConesSensor(noisy, cones.max_range, cones.kernel))]
+    if cones.kernel != "numpy":
+        twins.append(("cones_numpy", ConesSensor(cones.config, cones.max_range, "numpy")))
+    return twins
+
+
 def _fastest(call) -> float:
     """[s] the fastest of REPEATS calls."""
     best = math.inf
@@ -172,15 +190,32 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
     twin = numpy_twin(lidar)
     twin.reset(raw.layout)
     extra = [(f"{lidar.id}_numpy", twin)] if lidar.kernel != "numpy" else []
+    cones = next((s for s in raw.sensors if isinstance(s, ConesSensor)), None)
+    cone_extra = dict(cone_twins(cones))
+    for cone_twin in cone_extra.values():
+        cone_twin.reset(raw.layout)
+    extra += list(cone_extra.items())
+    cone_steps = 0  # steps whose cones both paths detect alike
     reference_seconds, differences, identical = 0.0, [], 0
     for step in range(steps):
         _, _, terminated, truncated, _ = env.step(env.action_space.sample())
         if terminated or truncated:
             env.reset()
-            twin.reset(raw.layout)
+            for sensor in (twin, *cone_extra.values()):
+                sensor.reset(raw.layout)
         snapshot = raw.snapshot()
         ranges, numpy_ranges = (s.observe(snapshot, raw.layout, rng) for s in (lidar, twin))
         identical += ranges.tobytes() == numpy_ranges.tobytes()
+        if cones is not None and "cones_numpy" in cone_extra:
+            pair = (cones, cone_extra["cones_numpy"])
+            seen = [
+                {
+                    k: np.asarray(v).tobytes()
+                    for k, v in c.observe(snapshot, raw.layout, rng).items()
+                }
+                for c in pair
+            ]
+            cone_steps += seen[0] == seen[1]
         probes = _probes(raw, extra, snapshot, rng)
         shift = step % len(probes)
         for probe_id, probe in probes[shift:] + probes[:shift]:
@@ -203,6 +238,8 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         "steps": steps,
         "lidar_kernel": lidar.kernel,
         "lidar_steps_identical_to_numpy": identical,
+        "cones_kernel": cones.kernel if cones is not None else None,
+        "cones_steps_identical_to_numpy": cone_steps,
         "us_per_step": micros,
         "us_per_step_mean": means,
         "lidar_cell": cell,
@@ -290,6 +327,10 @@ def measure_sensors(steps: int = 2000, reference_steps: int = 20) -> dict[str, A
             "perspective_120x160 <= 1.5 x birdseye_120x160": us["perspective_120x160"]
             <= PERSPECTIVE_PER_CAMERA * us["birdseye_120x160"],
         }
+        if result["cones_kernel"] not in (None, "numpy"):
+            result["checks"]["cones identical to numpy every step"] = (
+                result["cones_steps_identical_to_numpy"] == result["steps"]
+            )
     return results
 
 

@@ -13,15 +13,16 @@ The model is written in CarRacing's frame (y up, angles counter-clockwise). A
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
+from typing import cast as typed
 
 import numpy as np
 import pymunk
 from pymunk._chipmunk_cffi import lib as _chipmunk
 
+from tinyrace import kernels
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.collision import NOTHING, WHEEL, WHEEL_FILTER, footprint_sensor
 from tinyrace.cars.dynamic_layout import (
@@ -370,21 +371,8 @@ def physics_kernel(wanted: str | None = None) -> tuple[str, Forces]:
     """The tyre model's path ``wanted`` (auto | numba | python; None: ``TINYRACE_PHYSICS``'s,
     else auto), by name, with its ``car_forces``: auto is ``numba`` when numba imports
     (``pip install tinyrace[fast]``), else ``python``. Same results."""
-    if wanted is None:
-        wanted = os.environ.get(PHYSICS_VARIABLE, "auto").strip().lower() or "auto"
-    if wanted not in ("auto", "numba", "python"):
-        raise ValueError(f"{PHYSICS_VARIABLE}={wanted!r}: expected auto, numba or python")
-    if wanted == "python":
-        return "python", dynamic_python.car_forces
-    try:
-        from tinyrace.cars import dynamic_numba  # numba is optional
-    except ImportError as error:
-        if wanted == "numba":
-            raise ImportError(
-                f"{PHYSICS_VARIABLE}=numba needs numba: pip install tinyrace[fast]"
-            ) from error
-        return "python", dynamic_python.car_forces
-    return "numba", dynamic_numba.car_forces
+    name, module = kernels.choose(PHYSICS_VARIABLE, "python", "tinyrace.cars.dynamic_numba", wanted)
+    return name, dynamic_python.car_forces if module is None else typed(Forces, module.car_forces)
 
 
 def _footprint(scale: float) -> tuple[float, float, float]:

@@ -16,14 +16,15 @@ units.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable
 from typing import Any
+from typing import cast as typed
 
 import cv2
 import numpy as np
 from gymnasium import spaces
 
+from tinyrace import kernels
 from tinyrace.config.sensors import LidarConfig
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
@@ -188,21 +189,10 @@ def kernel(wanted: str | None = None) -> tuple[str, Cast]:
     """The ray-casting path ``wanted`` (auto | numba | numpy; None: ``TINYRACE_LIDAR``'s,
     else auto), by name, and its ``cast``: auto is ``numba`` when numba imports, else
     ``numpy``."""
-    if wanted is None:
-        wanted = os.environ.get(KERNEL_VARIABLE, "auto").strip().lower() or "auto"
-    if wanted not in ("auto", "numba", "numpy"):
-        raise ValueError(f"{KERNEL_VARIABLE}={wanted!r}: expected auto, numba or numpy")
-    if wanted == "numpy":
-        return "numpy", cast
-    try:
-        from tinyrace.sensors import raycast_numba  # numba is optional
-    except ImportError as error:
-        if wanted == "numba":
-            raise ImportError(
-                f"{KERNEL_VARIABLE}=numba needs numba: pip install tinyrace[fast]"
-            ) from error
-        return "numpy", cast
-    return "numba", raycast_numba.cast
+    name, module = kernels.choose(
+        KERNEL_VARIABLE, "numpy", "tinyrace.sensors.raycast_numba", wanted
+    )
+    return name, cast if module is None else typed(Cast, module.cast)
 
 
 class LidarSensor:

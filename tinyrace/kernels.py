@@ -1,0 +1,35 @@
+"""Which path a kernel runs: compiled (numba) or plain (numpy or Python), by environment variable.
+
+Each compiled kernel (the lidar's ray casting, the tyre model, the cone detector) has a plain
+twin with the same results, and an environment variable that chooses between them for what is
+built afterwards: ``auto`` (or unset) takes the compiled module when numba imports
+(``pip install tinyrace[fast]``), ``numba`` requires it, and the plain path's name forces that.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from types import ModuleType
+
+
+def choose(
+    variable: str, plain: str, compiled: str, wanted: str | None = None
+) -> tuple[str, ModuleType | None]:
+    """(path name, the ``compiled`` module or None for the ``plain`` path) that ``wanted``
+    (auto | numba | ``plain``; None: ``variable``'s value, else auto) names."""
+    if wanted is None:
+        wanted = os.environ.get(variable, "auto").strip().lower() or "auto"
+    if wanted not in ("auto", "numba", plain):
+        raise ValueError(f"{variable}={wanted!r}: expected auto, numba or {plain}")
+    if wanted == plain:
+        return plain, None
+    try:
+        module = importlib.import_module(compiled)  # numba is optional
+    except ImportError as error:
+        if wanted == "numba":
+            raise ImportError(
+                f"{variable}=numba needs numba: pip install tinyrace[fast]"
+            ) from error
+        return plain, None
+    return "numba", module
