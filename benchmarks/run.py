@@ -567,9 +567,10 @@ def rss_child(spec: dict[str, Any]) -> None:
 def machine() -> dict[str, Any]:
     """Where and on what the figures were taken."""
     versions = {}
-    for module in ("gymnasium", "numpy", "cv2", "pymunk", "envpool", "tinyrace"):
+    for module in ("gymnasium", "numpy", "cv2", "pymunk", "numba", "envpool", "tinyrace"):
         try:
-            versions[module] = __import__(module).__version__
+            imported = __import__(module)
+            versions[module] = getattr(imported, "__version__", None) or imported.version
         except Exception as error:
             versions[module] = unavailable(error)
     git = subprocess.run(
