@@ -44,6 +44,12 @@ machine's conditions. Measured:
   busy-waits, against one such stand-in, for three step times from this run: tinyrace's,
   the longest one that meets the 30x-CarRacing-v3 target, and CarRacing-v3's.
 
+Drawing runs on one core: cv2's thread pool would otherwise split a camera's warp over the
+machine's cores (on this 2-core VM a 96x96 camera then takes about 25% less wall time when
+the second core is idle, for twice the CPU time), while CarRacing-v3, EnvPool (1 thread) and
+the compiled kernels use one. ``--cv2-threads N`` sets cv2's threads of this process and of
+the processes it starts (``OPENCV_FOR_THREADS_NUM``); the default 1 measures cost per core.
+
 It prints the targets with PASS/FAIL, then the figures behind them, and writes
 every figure as JSON. Memory is in MB of 10^6 bytes. ``profile_step.py`` shows
 where a step's time goes.
@@ -564,6 +570,13 @@ def rss_child(spec: dict[str, Any]) -> None:
 
 
 # -- the run ----------------------------------------------------------------------------------
+def drawing_threads(threads: int) -> None:
+    """cv2's threads for this process and for the processes it starts (tinycarlo, RSS
+    children, vector workers), which read ``OPENCV_FOR_THREADS_NUM``."""
+    os.environ["OPENCV_FOR_THREADS_NUM"] = str(threads)
+    cv2.setNumThreads(threads)
+
+
 def machine() -> dict[str, Any]:
     """Where and on what the figures were taken."""
     versions = {}
@@ -585,6 +598,7 @@ def machine() -> dict[str, Any]:
         "load_average": os.getloadavg(),  # other work on the machine skews absolute figures
         "python": sys.version.split()[0],
         "versions": versions,
+        "cv2_threads": cv2.getNumThreads(),
         "git": git.stdout.strip() or None,
     }
 
@@ -656,8 +670,12 @@ def main(argv: list[str] | None = None) -> None:
         default=os.environ.get("TINYCARLO_EXAMPLES") or None,
         help="tinycarlo's own example_tracks folder (from its repository), timed too",
     )
+    parser.add_argument(
+        "--cv2-threads", type=int, default=1, help="cv2's threads (default 1: cost per core)"
+    )
     parser.add_argument("--rss-child", help=argparse.SUPPRESS)  # internal: one RSS process
     args = parser.parse_args(argv)
+    drawing_threads(args.cv2_threads)
     own_examples = Path(args.tinycarlo_examples) if args.tinycarlo_examples else None
     if args.rss_child:
         rss_child(json.loads(args.rss_child))

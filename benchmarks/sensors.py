@@ -31,6 +31,10 @@ Cases: the procedural track, formula_student (a picture track with cones) and th
 metric tracks (circuit, autocross with its cone map, f1tenth_loop), each with bird's-eye
 windows about as large as its own camera's.
 
+Every probe runs on one core (``run.py`` sets cv2's threads to 1 unless ``--cv2-threads``
+says otherwise): with cv2's default pool a camera's warp is split over the cores, which on a
+2-core VM takes a 96x96 camera about 25% less wall time when the other core is idle.
+
 Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
 (the path ``tinyrace[fast]`` gives) costs no more than a 96x96 bird's-eye camera; a 120x160
 perspective camera no more than 1.5x a 120x160 bird's-eye camera.
@@ -359,5 +363,6 @@ def print_sensors(results: dict[str, Any]) -> None:
 
 
 if __name__ == "__main__":
+    cv2.setNumThreads(1)  # cost per core, as benchmarks/run.py measures (--cv2-threads)
     print_sensors(measure_sensors())
     print_compile(measure_compile())
