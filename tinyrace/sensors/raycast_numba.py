@@ -38,6 +38,7 @@ from tinyrace.sensors.raycast import (
     FINE_STEP,
     LEAD,
     MAX_ROUNDS,
+    ORIGIN_STEPS,
     OVERSHOOT,
     SECTOR_SLOPES,
     SECTORS,
@@ -46,7 +47,6 @@ from tinyrace.sensors.raycast import (
     TABLE_RANGE,
     DistanceField,
     Fan,
-    start,
 )
 
 INT16 = (-32768, 32767)  # cv2.remap saturates map coordinates to int16
@@ -55,12 +55,16 @@ INT16 = (-32768, 32767)  # cv2.remap saturates map coordinates to int16
 # so the cache) changes as well
 COMPILED_IN = {
     "BISECTIONS": 3, "CHECK_EVERY": 4, "FINE_STEP": 0.5, "LEAD": 146, "MAX_ROUNDS": 256,
-    "OVERSHOOT": 2.0, "SECTOR_SLOPES": 4, "SKIP_BLOCKED": 255,
+    "ORIGIN_STEPS": 3, "OVERSHOOT": 2.0, "SECTOR_SLOPES": 4, "SKIP_BLOCKED": 255,
 }  # fmt: skip
 if any(getattr(raycast, name) != value for name, value in COMPILED_IN.items()):
     raise RuntimeError(f"raycast's constants changed: update COMPILED_IN ({COMPILED_IN})")
 LANES = 16  # beams that step together (independent lookups the CPU overlaps)
 SECTOR_BYTES = 16 * 2**20  # [bytes] a field's sector maps at most (else its skip map serves)
+# Large maps (the circuit's 1811 x 3151 cells) keep the one skip map. Measured against it on
+# recorded poses: whole sector maps at scale 1 need 32x its bytes (174 MB there) for 9 % less
+# time; sector maps kept only in the 16 x 16 tiles that hold free cells (11 MB there) took
+# 20 % more time, the lookup through the tile table costing more than the 23 % fewer lookups
 # sector map cells per cell and axis, finest first, as they fit in SECTOR_BYTES: powers of
 # two, so that a scaled coordinate rounds as the coordinate does
 SECTOR_SCALES = (2, 1)
@@ -270,27 +274,48 @@ def _march(steps: Any, ox: Any, oy: Any, dx: Any, dy: Any, t: Any, limit: Any) -
 
 @_compile
 def _scan(
-    skips: Any, rows: int, steps: Any, width: int, scale: int, base: int, sx: float, sy: float,
-    cos: Any, sin: Any, sectors: Any, top: int, beams: int, samples: int, ranges: Any,
-    past: Any, x: float, y: float,
+    skips: Any, rows: int, steps: Any, blocked: Any, shape: tuple[int, int], scale: int,
+    affine: tuple[float, float, float, float, float, float], origin: tuple[float, float],
+    first: float, turning: tuple[float, float, int, int], shifts: Any, cos: Any, sin: Any,
+    sectors: Any, beams: int, samples: int, ranges: Any, past: Any,
     reach: tuple[float, float, float, float],
 ) -> Any:  # fmt: skip
-    """float32 ranges [track units] of the beams of rows top .. top + beams - 1: ``ranges[i]``
-    of each first blocked sample i, else ``past``; when ``past`` is inf, the march beyond
-    the tables from the origin (x, y) [cells]. ``reach``: table range, limit [cells], cells
-    per track unit, max range [track units] (float32 in the march, as in ``_beyond``)."""
+    """float32 ranges [track units] of the fan's beams from ``origin`` [track units], the
+    first at angle ``first`` [rad] in the cell frame (``raycast.start`` with the same float64
+    arithmetic: ``affine``, the field's; ``turning``: the fan's anchor [rad], step [rad],
+    spacing and phase rows): ``ranges[i]`` of each first blocked sample i, else ``past``;
+    when ``past`` is inf, the march beyond the tables from the origin. All 0 when the origin
+    is off the map (``shape``, ``blocked`` flat with LEAD rows) or in a blocking cell.
+    ``skips``: the skip map, or the sector maps ``rows`` apart (``scale`` cells of theirs
+    per cell and axis). ``reach``: table range, limit [cells], cells per track unit, max
+    range [track units] (float32 in the march, as in ``_beyond``)."""
+    out = np.zeros(beams, np.float32)
+    a, b, c, d, e, f = affine
+    x, y = a * origin[0] + b * origin[1] + c, d * origin[0] + e * origin[1] + f  # [cells]
+    col, row = math.floor(x + 0.5), math.floor(y + 0.5)
+    height, width = shape
+    if not (0 <= row < height and 0 <= col < width) or blocked[(LEAD + row) * width + col]:
+        return out
+    vx = min(int((x + 0.5 - col) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
+    vy = min(int((y + 0.5 - row) * ORIGIN_STEPS), ORIGIN_STEPS - 1)
+    anchor, step, spacing, phase_rows = turning
+    j = round(((first - anchor) % (2 * math.pi)) / step)
+    top = (j % spacing) * phase_rows + j // spacing  # the first beam's row
+    base = (row * width * scale + col) * scale  # the origin's cell in its map
     hits = np.empty(beams, np.int64)
-    _first_hits(skips[base:], rows, width, scale, sx, sy, cos, sin, sectors, top, samples, hits)
-    out = np.empty(beams, np.float32)
+    _first_hits(
+        skips[base:], rows, width * scale, scale, shifts[vx], shifts[vy], cos, sin, sectors,
+        top, samples, hits,
+    )  # fmt: skip
     ox, oy = np.float32(x), np.float32(y)
     table_range, limit = np.float32(reach[0]), np.float32(reach[1])
     per_unit, max_range = np.float32(reach[2]), np.float32(reach[3])
-    for b in range(beams):
-        out[b] = ranges[hits[b]] if hits[b] >= 0 else past
-        if hits[b] < 0 and math.isinf(past):
-            dx, dy = np.float32(cos[top + b]), np.float32(sin[top + b])
+    for i in range(beams):
+        out[i] = ranges[hits[i]] if hits[i] >= 0 else past
+        if hits[i] < 0 and math.isinf(past):
+            dx, dy = np.float32(cos[top + i]), np.float32(sin[top + i])
             t = _march(steps, ox, oy, dx, dy, table_range, limit)
-            out[b] = min(t / per_unit, max_range)
+            out[i] = min(t / per_unit, max_range)
     return out
 
 
@@ -307,26 +332,19 @@ def cast(
     """``raycast_numpy.cast``, compiled: the same float32 ranges [track units], bit for bit. The
     field needs its skip map (``distance_field(..., near=False)``), the fan no tables."""
     assert field.skips is not None, "distance_field(..., near=False)"
-    at = start(field, fan, origin, first)
-    if at is None:
-        return np.zeros(fan.beams, np.float32)
     steps = field.steps
     if steps is None:
         assert fan.table_range >= fan.limit, "distance_field(..., reach=...) past TABLE_RANGE"
         steps = _NO_STEPS
-    reach = (fan.table_range, fan.limit, field.cells_per_unit, fan.max_range)
-    samples = fan.segments * FINE_SAMPLES
     assert fan.segments * COARSE_STEP <= TABLE_RANGE < LEAD, "no sample leaves the map"
-    height, width = field.shape
-    skips, rows, cols, scale, base = field.skips, 0, width, 1, at.base
+    skips, rows, scale = field.skips, 0, 1
     if field.sectors is not None:  # the sector maps: scale cells of theirs per cell
         scale = field.sector_scale
-        row, col = divmod(at.base, width)
-        skips, rows, cols = field.sectors, height * scale, width * scale
-        base = (row * cols + col) * scale
+        skips, rows = field.sectors, field.shape[0] * scale
     out: np.ndarray = _scan(
-        skips, rows, steps, cols, scale, base, fan.shifts[at.vx], fan.shifts[at.vy],
-        fan.cos, fan.sin, fan.sectors, at.top, fan.beams, samples, fan.ranges, fan.ranges[-1],
-        at.x, at.y, reach,
+        skips, rows, steps, field.blocked, field.shape, scale, field.affine, origin, first,
+        (fan.anchor, fan.step, fan.spacing, fan.phase_rows), fan.shifts, fan.cos, fan.sin,
+        fan.sectors, fan.beams, fan.segments * FINE_SAMPLES, fan.ranges, fan.ranges[-1],
+        (fan.table_range, fan.limit, field.cells_per_unit, fan.max_range),
     )  # fmt: skip
     return out[::-1] if reverse else out
