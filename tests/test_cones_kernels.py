@@ -5,7 +5,6 @@ and without noise; which path a sensor takes."""
 from __future__ import annotations
 
 import math
-import sys
 
 import gymnasium as gym
 import numpy as np
@@ -13,7 +12,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import tinyrace  # registers the env ids; tinyrace.sensors in a test below
 from tinyrace.sensors import cones_numba
 from tinyrace.sensors.cones import (
     KERNEL_VARIABLE,
@@ -101,17 +99,6 @@ def test_the_variable_chooses_the_path(monkeypatch):
     monkeypatch.setenv(KERNEL_VARIABLE, "fortran")
     with pytest.raises(ValueError, match="TINYRACE_CONES='fortran': expected auto, numba or numpy"):
         kernel()
-
-
-def test_without_numba_auto_falls_back_to_numpy_and_numba_is_an_error(monkeypatch):
-    monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
-    monkeypatch.delitem(sys.modules, "tinyrace.sensors.cones_numba")
-    monkeypatch.delitem(sys.modules, "tinyrace.compiled", raising=False)  # imports numba too
-    monkeypatch.delattr(tinyrace.sensors, "cones_numba")
-    monkeypatch.delenv(KERNEL_VARIABLE, raising=False)
-    assert kernel() == ("numpy", NUMPY_PATH)
-    with pytest.raises(ImportError, match=r"pip install tinyrace\[fast\]"):
-        kernel("numba")
 
 
 @pytest.mark.parametrize("environment", ["formula_student", "autocross"])

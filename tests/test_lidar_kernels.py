@@ -5,7 +5,6 @@ a lidar takes, and what each builds."""
 from __future__ import annotations
 
 import math
-import sys
 
 import gymnasium as gym
 import numpy as np
@@ -13,7 +12,6 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import tinyrace  # registers the env ids; tinyrace.sensors in a test below
 from tinyrace import compiled as compiled_module
 from tinyrace.compiled import compiler
 from tinyrace.errors import ConfigError
@@ -302,17 +300,6 @@ def test_the_variable_chooses_the_path(monkeypatch):
     monkeypatch.setenv(KERNEL_VARIABLE, "fortran")
     with pytest.raises(ValueError, match="auto, numba or numpy"):
         kernel()
-
-
-def test_without_numba_auto_falls_back_to_numpy_and_numba_is_an_error(monkeypatch):
-    monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
-    monkeypatch.delitem(sys.modules, "tinyrace.sensors.raycast_numba")
-    monkeypatch.delitem(sys.modules, "tinyrace.compiled", raising=False)  # imports numba too
-    monkeypatch.delattr(tinyrace.sensors, "raycast_numba")
-    monkeypatch.delenv(KERNEL_VARIABLE, raising=False)
-    assert kernel() == ("numpy", raycast_numpy.cast)
-    with pytest.raises(ImportError, match=r"pip install tinyrace\[fast\]"):
-        kernel("numba")
 
 
 def test_an_uncachable_kernel_still_compiles(monkeypatch):

@@ -20,7 +20,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import tinyrace.cars
 from tinyrace.cars import dynamic_numba, dynamic_python
 from tinyrace.cars.dynamic import DynamicCar, physics_kernel
 from tinyrace.cars.dynamic_layout import BRAKE, GAS, OMEGA, PHASE, SKID, STEER, WHEELS
@@ -178,16 +177,6 @@ def test_physics_variable_chooses_the_path(monkeypatch):
     assert physics_kernel()[0] == "numba"  # numba is a test dependency: auto takes it
     with pytest.raises(ValueError, match="auto, numba or python"):
         physics_kernel("fortran")
-
-
-def test_without_numba_auto_falls_back_to_python_and_numba_is_an_error(monkeypatch):
-    monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
-    monkeypatch.delitem(sys.modules, "tinyrace.cars.dynamic_numba")
-    monkeypatch.delitem(sys.modules, "tinyrace.compiled", raising=False)  # imports numba too
-    monkeypatch.delattr(tinyrace.cars, "dynamic_numba")
-    assert physics_kernel("auto")[1] is dynamic_python.car_forces
-    with pytest.raises(ImportError, match=r"tinyrace\[fast\]"):
-        physics_kernel("numba")
 
 
 @pytest.mark.parametrize("path", ["python", "numba"])

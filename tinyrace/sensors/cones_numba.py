@@ -8,7 +8,9 @@ no fused multiply-add, numba compiles without fastmath), its distance by the C l
 ``hypot`` (as ``np.hypot``), the same range and field-of-view tests, and numpy's stable sort
 by distance. It skips the ``hypot`` (the costliest part) of cones that the tests reject
 anyway: one whose offset ahead or aside exceeds the range (``hypot`` is at least either,
-being faithfully rounded), or behind the car with a field of view up to 180 deg.
+being faithfully rounded), or behind the car with a field of view up to 180 deg. The
+compiled functions take a ``Frame``'s fields one by one: numba dispatches seven floats in a
+sixth of the time it takes to type one named tuple (0.4 against 2.4 µs a call here).
 """
 
 from __future__ import annotations
