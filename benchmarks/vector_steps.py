@@ -26,13 +26,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("envs", type=int, help="> 0: vector entry point; <= 0: gym.make envs")
     parser.add_argument("steps", type=int, help="steps after the warm-up")
+    parser.add_argument(
+        "--numpy-from", type=int, default=None, help="make_batch's numpy_from (its default)"
+    )
     args = parser.parse_args()
     gym.logger.min_level = gym.logger.ERROR
     space = gym.spaces.Box(np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32))
     space.seed(0)
     actions = [space.sample() for _ in range(ACTIONS)]
     if args.envs > 0:
-        vector = make_batch("tinyrace/CarRacing-v0", args.envs, workers=0)
+        options = {} if args.numpy_from is None else {"numpy_from": args.numpy_from}
+        vector = make_batch("tinyrace/CarRacing-v0", args.envs, workers=0, **options)
         batches = [np.stack([action] * args.envs) for action in actions]
         vector.reset(seed=0)
         for index in range(WARMUP + args.steps):
