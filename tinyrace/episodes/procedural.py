@@ -33,6 +33,7 @@ class ProceduralEpisode:
         self.visited = np.zeros(len(self.track.tiles), bool)
         self.visited_count = 0
         self.visit_order: list[int] = []  # tiles in the order first visited (pictures repaint)
+        self.wheels_on_grass = _on_grass(self.world.contacts.wheel_tiles)  # as of the last step
 
     def start(self, dt: float) -> StepFacts:
         """CarRacing's reset takes one physics step with no action."""
@@ -42,7 +43,7 @@ class ProceduralEpisode:
         """The world's step with the controls the car holds; the rules' facts."""
         contacts = self.world.step(dt, forces_applied=forces_applied)
         facts = self._visit(contacts.new_tile_touches)
-        facts.wheels_on_grass = _on_grass(contacts.wheel_tiles)
+        facts.wheels_on_grass = self.wheels_on_grass = _on_grass(contacts.wheel_tiles)
         x, y, _ = self.world.states()[0].pose
         facts.out_of_bounds = max(abs(x), abs(y)) > self.track_config.playfield
         return facts
@@ -70,7 +71,7 @@ class ProceduralEpisode:
             "speed": car.speed,
             "tiles_visited": self.visited_count,
             "tiles_total": len(self.visited),
-            "wheels_on_grass": _on_grass(self.world.contacts.wheel_tiles),
+            "wheels_on_grass": self.wheels_on_grass,  # contacts change only in a step
         }
 
 

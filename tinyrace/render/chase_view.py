@@ -65,6 +65,7 @@ class ChaseView:
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
         self.sprite = CarSprite(supersample=small, patches=patches)
         self.dashboard = dashboard
+        self._ppu_per_zoom = math.sqrt(size[0] * size[1] / (WINDOW[0] * WINDOW[1]))  # per step
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
@@ -76,7 +77,7 @@ class ChaseView:
         x, y, _ = car.pose
         size = self.size
         world_to_out = chase_affine((x, y), car.hull_angle, zoom, size)
-        pixels_per_unit = zoom * math.sqrt(size[0] * size[1] / (WINDOW[0] * WINDOW[1]))
+        pixels_per_unit = zoom * self._ppu_per_zoom
         # a new frame each call (it is returned); the dashboard paints over its bottom rows,
         # so the ground is sampled above them only
         frame = np.empty((size[1], size[0], 3), np.uint8)
