@@ -53,10 +53,16 @@ def to_car_frame(points: np.ndarray, pose: tuple[float, float, float], y_down: b
     (heading counter-clockwise on y-up tracks, clockwise on y-down image tracks)."""
     x, y, heading = pose
     c, s = math.cos(heading), math.sin(heading)
-    dx, dy = points[:, 0] - x, points[:, 1] - y
-    ahead = dx * c + dy * s
-    left = dx * s - dy * c if y_down else dy * c - dx * s
-    return np.stack([ahead, left], axis=1)
+    return np.stack(_car_frame(points[:, 0], points[:, 1], x, y, c, s, y_down), axis=1)
+
+
+def _car_frame(
+    xs: np.ndarray, ys: np.ndarray, x: float, y: float, c: float, s: float, y_down: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """(ahead, left) [track units] of points (xs, ys) from (x, y) with heading cos ``c``,
+    sin ``s``: the formula both detection paths compute (``cones_numba`` in a loop)."""
+    dx, dy = xs - x, ys - y
+    return dx * c + dy * s, (dx * s - dy * c if y_down else dy * c - dx * s)
 
 
 class ConeTable:
@@ -125,9 +131,7 @@ class Paths(NamedTuple):
 def _numpy_seen(table: ConeTable, frame: Frame) -> tuple[np.ndarray, ...]:
     """(ahead, left, distance) of every cone [track units] and the indices of the visible."""
     x, y, c, s, y_down, max_range, half = frame
-    dx, dy = table.xs - x, table.ys - y
-    ahead = dx * c + dy * s
-    left = dx * s - dy * c if y_down else dy * c - dx * s
+    ahead, left = _car_frame(table.xs, table.ys, x, y, c, s, y_down)
     distance = np.hypot(ahead, left)
     seen = ((distance <= max_range) & (ahead >= half * distance)).nonzero()[0]
     return ahead, left, distance, seen
