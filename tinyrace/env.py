@@ -166,11 +166,8 @@ class TinyRaceEnv(gym.Env):
         return observation, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        episode = self.episode  # control() and conclude() inlined: two calls fewer per step
-        if episode is None:
-            raise ResetNeeded("call reset() before step()")
-        episode.world.control(self._actions.read(action))
-        return self.conclude(episode.step(self.dt))
+        self.control(action)
+        return self.conclude(self._episode().step(self.dt))
 
     # A step in parts, for a vector env that moves many cars between them:
     # control(action); facts = env.episode.step(env.dt) (the world's step and the rules);
@@ -196,11 +193,9 @@ class TinyRaceEnv(gym.Env):
         reason = ends_episode(facts, self.config.reward_design)
         limit = self.config.sim.step_limit
         truncated = reason is None and limit is not None and self.steps >= limit
-        episode = self._episode()
-        snapshot = episode.world.snapshot(self.t, self.steps)
+        snapshot = self.snapshot()
         observation = self._observe(snapshot)
-        info: dict[str, Any] = episode.info(snapshot)
-        info["reward_terms"] = terms
+        info = self._info(terms, snapshot)
         if reason is not None:
             info["termination"] = reason
             info["lap_finished"] = reason == "lap_finished"
