@@ -17,6 +17,8 @@ import numpy as np
 
 from tinyrace.cars.dynamic_shape import HULL_POLYGONS, SIZE, WHEEL_HALF_WIDTH, WHEEL_RADIUS
 from tinyrace.cars.state import CarState, SkidView
+from tinyrace.render.drawing import blend as numpy_blend
+from tinyrace.render.drawing import kernel as drawing_kernel
 from tinyrace.sensors.texture import Affine, as_matrix, compose, transform_points
 
 HULL_COLOR = (204, 0, 0)  # RGB
@@ -29,8 +31,9 @@ _WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
     WHEEL_HALF_WIDTH,
     WHEEL_RADIUS,
 )
-# rows, columns, weight, premultiplied colour (float32, rows x columns x 3), float32 scratch
-Patch = tuple[slice, slice, np.ndarray, np.ndarray, np.ndarray]
+# top row, left column, weight, premultiplied colour (float32, rows x columns x 3), float32
+# scratch of the same shape (the numpy path's)
+Patch = tuple[int, int, np.ndarray, np.ndarray, np.ndarray]
 Patches = dict[tuple[float, int], Patch | None]  # by (zoom, steering step)
 _STEER_STEP = 0.005  # [rad] steering resolution of cached patches
 _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
@@ -40,8 +43,13 @@ class CarSprite:
     """Draws CarRacing's car from its state; polygons are prepared per car size, transformed
     per frame."""
 
-    def __init__(self, supersample: bool, patches: Patches | None = None):
+    def __init__(
+        self, supersample: bool, patches: Patches | None = None, drawing: str | None = None
+    ):
+        """``drawing``: the blend's path (auto | numba | numpy; see ``drawing.kernel``)."""
         self.supersample = supersample
+        self.drawing, module = drawing_kernel(drawing)
+        self._blend = None if module is None else module.blend
         self._patches: Patches = {} if patches is None else patches
         self._scale: float | None = None  # the car size the polygons below are for
         self.hull: list[np.ndarray] = []
@@ -82,14 +90,11 @@ class CarSprite:
                         self._patches.clear()
                     self._patches[key] = patch
             if patch is not None:
-                rows, cols, weight, color, scratch = patch
-                region = image[rows, cols]
-                # region * weight + color in float32, truncated to uint8; same-type ufuncs
-                # into a scratch buffer skip numpy's mixed-type casting loops
-                scratch[...] = region
-                np.multiply(scratch, weight, out=scratch)
-                np.add(scratch, color, out=scratch)
-                region[...] = scratch
+                top, left, weight, color, scratch = patch
+                if self._blend is None:
+                    numpy_blend(image, top, left, weight, color, scratch)
+                else:
+                    self._blend(image, top, left, weight, color)
             return
         polygons = self._polygons(car, car.wheels[0].steer)
         local_to_out = _local_to_out(car, world_to_out)
@@ -147,7 +152,7 @@ def _local_to_out(car: CarState, world_to_out: np.ndarray | Affine) -> np.ndarra
 def _clip(
     shape: tuple[int, ...], x0: int, y0: int, color: np.ndarray, weight: np.ndarray
 ) -> Patch | None:
-    """A patch cut to the frame: (row slice, column slice, weight, premultiplied colour,
+    """A patch cut to the frame: (top row, left column, weight, premultiplied colour,
     scratch)."""
     h, w = color.shape[:2]
     ax, ay, bx, by = max(x0, 0), max(y0, 0), min(x0 + w, shape[1]), min(y0 + h, shape[0])
@@ -156,7 +161,7 @@ def _clip(
     if (bx - ax, by - ay) != (w, h):  # cut: keep contiguous copies of the part inside
         inside = (slice(ay - y0, by - y0), slice(ax - x0, bx - x0))
         weight, color = weight[inside].copy(), color[inside].copy()
-    return slice(ay, by), slice(ax, bx), weight, color, np.empty_like(weight)
+    return ay, ax, weight, color, np.empty_like(weight)
 
 
 def _draw_skids(image: np.ndarray, world_to_out: np.ndarray, skids: SkidView, width: int) -> None:

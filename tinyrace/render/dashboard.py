@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 
 from tinyrace.cars.state import CarState
+from tinyrace.render.drawing import kernel
 
 RGB = tuple[int, int, int]
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)
@@ -39,6 +40,10 @@ _BARS: tuple[tuple[str, int, RGB], ...] = (
     ("h", STEER_COLUMN, _GREEN),
     ("h", GYRO_COLUMN, _RED),
 )
+# the same, as arrays for the compiled path (drawing_numba.draw_bars)
+BAR_PLACES = np.array([place for _, place, _ in _BARS])
+BARS_VERTICAL = np.array([kind == "v" for kind, _, _ in _BARS])
+BAR_COLORS = np.array([color for _, _, color in _BARS])
 _LAYER_CACHE_BYTES = 8_000_000  # [bytes] of cached instrument layers per dashboard
 
 
@@ -54,10 +59,12 @@ class Dashboard:
     With ``supersample`` > 1 each bar is drawn at that factor and area-averaged. Bar
     lengths are kept to 1/8 layout unit, then rounded to supersampled pixels to draw; a
     bar's picture depends on that box only, so lengths that round alike share one
-    picture and a step whose boxes all stay put redraws nothing.
+    picture and a step whose boxes all stay put redraws nothing. With numba (``drawing``:
+    ``TINYRACE_DRAWING``) one compiled call draws the bars of a step instead, into the
+    frame: the same pixels.
     """
 
-    def __init__(self, width: int, height: int, supersample: int = 1):
+    def __init__(self, width: int, height: int, supersample: int = 1, drawing: str | None = None):
         self.width, self.height = width, height
         self.top = round(height - BAR_HEIGHT * height / LAYOUT_UNITS)  # first row of the bar
         self.factor = supersample
@@ -74,6 +81,9 @@ class Dashboard:
         self._layer_pictures: list[object] = [None] * len(self._layers)  # bar boxes, score
         self._cached_layers: dict[tuple[int, object], np.ndarray] = {}
         self._max_cached = max(64, _LAYER_CACHE_BYTES // self.strip.nbytes)
+        self.drawing, module = kernel(drawing)  # numba | numpy
+        self._draw_bars = None if module is None else module.draw_bars
+        self._score: tuple[int, np.ndarray] | None = None  # the compiled path's score layer
 
     def draw(self, image: np.ndarray, car: CarState, score: float) -> None:
         """The instruments of ``car`` (a car with four wheels) and ``score`` into ``image``."""
@@ -89,10 +99,20 @@ class Dashboard:
             round(GYRO_GAIN * car.yaw_rate * sign * q),
             int(score),
         )
+        if self._draw_bars is not None:
+            score_layer = self._score_layer(shown[-1])
+            self._draw_bars(image[self.top :], score_layer, shown, self.height, self.factor)
+            return
         if shown != self._shown:  # a value moved: its picture may have too
             self._shown = shown
             self._redraw(shown)
         image[self.top :] = self.strip
+
+    def _score_layer(self, score: int) -> np.ndarray:
+        """The score's layer (the last one's kept: a score changes a few times a second)."""
+        if self._score is None or self._score[0] != score:
+            self._score = (score, self._layer(len(_BARS), score))
+        return self._score[1]
 
     def _redraw(self, shown: tuple[int, ...]) -> None:
         """Redraw the layers whose picture changed (a bar's box, the score), then the strip."""
