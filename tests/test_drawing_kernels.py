@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from tinyrace.render import drawing, drawing_numba
 from tinyrace.render.dashboard import BAR_STEPS, Dashboard
+from tinyrace.sensors import texture
 
 SIZES = [(96, 96, 4), (600, 400, 1), (1000, 800, 1), (150, 120, 2)]  # (w, h, supersample)
 
@@ -125,3 +126,39 @@ def test_both_paths_give_the_same_observations(monkeypatch):
         observations[path] = [env.step(env.action_space.sample())[0] for _ in range(300)]
         env.close()
     np.testing.assert_array_equal(observations["numba"], observations["numpy"])
+
+
+# camera affines: ordinary scales and shifts, exact zeros, and magnitudes down to the
+# subnormals (where the plain path's exact product takes fractions); not near overflow,
+# where a product that overflows alone can be finite in a fused multiply-add
+ENTRIES = st.one_of(
+    st.floats(-1e4, 1e4),
+    st.just(0.0),
+    st.floats(-1e150, 1e150),
+    st.floats(-1e-300, 1e-300),
+)
+
+
+@settings(max_examples=2000, deadline=None)
+@given(
+    outer=st.tuples(*[ENTRIES] * 6),
+    scale=st.tuples(ENTRIES, ENTRIES),
+    shift=st.tuples(ENTRIES, ENTRIES),
+)
+def test_both_paths_compose_the_same_texture_affine(outer, scale, shift):
+    inner = (scale[0], 0.0, shift[0], 0.0, scale[1], shift[1])
+    compiled = texture.compose_kernel("numba")[1](outer, inner)
+    plain = texture.compose_kernel("numpy")[1](outer, inner)
+    assert compiled.dtype == plain.dtype and compiled.shape == plain.shape == (2, 3)
+    assert compiled.tobytes() == plain.tobytes()
+
+
+def test_a_texture_warps_with_the_composition_the_variable_chooses(monkeypatch):
+    for path in ("numba", "numpy"):
+        monkeypatch.setenv(drawing.DRAWING_VARIABLE, path)
+        env = gym.make("tinyrace/CarRacing-v0")
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
+        view = env.unwrapped.pictures.chase_view((96, 96))
+        assert view.texture.drawing == path
+        env.close()

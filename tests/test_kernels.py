@@ -10,13 +10,19 @@ import pytest
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.dynamic import physics_kernel
 from tinyrace.render import drawing
-from tinyrace.sensors import cones, lidar, raycast_numpy
+from tinyrace.sensors import cones, lidar, raycast_numpy, texture
 
 KERNELS = {  # name: (compiled module, chooser, plain path's name, plain path)
     "lidar": ("tinyrace.sensors.raycast_numba", lidar.kernel, "numpy", raycast_numpy.cast),
     "tyres": ("tinyrace.cars.dynamic_numba", physics_kernel, "python", dynamic_python.car_forces),
     "cones": ("tinyrace.sensors.cones_numba", cones.kernel, "numpy", cones.NUMPY_PATH),
     "drawing": ("tinyrace.render.drawing_numba", drawing.kernel, "numpy", None),
+    "texture": (
+        "tinyrace.sensors.texture_numba",
+        texture.compose_kernel,
+        "numpy",
+        texture.shift_scale_matrix,
+    ),
 }
 
 

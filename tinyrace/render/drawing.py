@@ -12,8 +12,9 @@ from types import ModuleType
 import numpy as np
 
 from tinyrace import kernels
+from tinyrace.sensors.texture import DRAWING_VARIABLE
 
-DRAWING_VARIABLE = "TINYRACE_DRAWING"
+__all__ = ["DRAWING_VARIABLE", "blend", "kernel"]
 
 
 def kernel(wanted: str | None = None) -> tuple[str, ModuleType | None]:

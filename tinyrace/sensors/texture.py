@@ -17,10 +17,15 @@ from fractions import Fraction
 import cv2
 import numpy as np
 
+from tinyrace import kernels
+
 # Draws the ground into ``image`` given the world->pixel affine of that image.
 Painter = Callable[[np.ndarray, np.ndarray], None]
 # A 2x3 affine as six plain floats, row by row: (m00, m01, m02, m10, m11, m12)
 Affine = tuple[float, float, float, float, float, float]
+# environment variable: auto | numba | numpy, the path of the compiled drawing kernels
+# (this affine composition; render.drawing's car and dashboard)
+DRAWING_VARIABLE = "TINYRACE_DRAWING"
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _SPLITTER = 134217729.0  # 2**27 + 1: splits a float64 into two 26-bit halves (Veltkamp)
 _TINY, _HUGE = 2.0**-900, 2.0**900  # where Dekker's exact product holds, with margin
@@ -75,6 +80,21 @@ def compose_shift_scale(outer: Affine, inner: Affine) -> Affine:
         o10 * zero_01 + o11 * sy,
         fused_multiply_add(o11, ty, o10 * tx) + o12,
     )
+
+
+def shift_scale_matrix(outer: Affine, inner: Affine) -> np.ndarray:
+    """``compose_shift_scale`` as a 2x3 array (the plain path of ``compose_kernel``)."""
+    return as_matrix(compose_shift_scale(outer, inner))
+
+
+def compose_kernel(wanted: str | None = None) -> tuple[str, Callable[[Affine, Affine], np.ndarray]]:
+    """(path name, ``shift_scale_matrix``'s path) that ``wanted`` names (auto | numba |
+    numpy; None: ``TINYRACE_DRAWING``'s value, else auto): numba's compiled one
+    (``texture_numba``) when numba imports, else the plain one. Same bits."""
+    name, module = kernels.choose(
+        DRAWING_VARIABLE, "numpy", "tinyrace.sensors.texture_numba", wanted
+    )
+    return name, shift_scale_matrix if module is None else module.shift_scale_matrix
 
 
 def _six(matrix: np.ndarray) -> Affine:
@@ -165,6 +185,8 @@ class GroundTexture:
         ]
         self._scratch: dict[tuple[int, int], np.ndarray] = {}  # 4-channel warp targets by size
         self._border_value = (*self.border, 0)  # the warp's RGBx outside the texture
+        self.drawing: str | None = None  # the composition's path (numba | numpy), at first use
+        self._compose: Callable[[Affine, Affine], np.ndarray] | None = None
 
     def level_for(self, out_pixels_per_unit: float) -> int:
         """The smallest level that still has at least one texture pixel per output pixel
@@ -205,10 +227,16 @@ class GroundTexture:
         if self._unit[level]:
             texture_to_out = as_matrix(world_to_out)
         elif inner is not None:
-            texture_to_out = as_matrix(compose_shift_scale(world_to_out, inner))
+            compose_to = self._compose or self._choose_compose()
+            texture_to_out = compose_to(world_to_out, inner)
         else:
             texture_to_out = compose(as_matrix(world_to_out), self.from_pixels[level])
         return self._warp_level(level, texture_to_out, size, out)
+
+    def _choose_compose(self) -> Callable[[Affine, Affine], np.ndarray]:
+        """The composition's path, chosen at the first warp (numba is imported then)."""
+        self.drawing, self._compose = compose_kernel()
+        return self._compose
 
     def _warp_level(
         self, level: int, texture_to_out: np.ndarray, size: tuple[int, int], out: np.ndarray | None
