@@ -1,9 +1,10 @@
 """Which path a kernel runs: compiled (numba) or plain (numpy or Python), by environment variable.
 
-Each compiled kernel (the lidar's ray casting, the tyre model, the cone detector) has a plain
-twin with the same results, and an environment variable that chooses between them for what is
-built afterwards: ``auto`` (or unset) takes the compiled module when numba imports
-(``pip install tinyrace[fast]``), ``numba`` requires it, and the plain path's name forces that.
+Each compiled kernel (the lidar's ray casting, the tyre model, the cone detector, CarRacing's
+drawing and its track's path) has a plain twin with the same results, and an environment
+variable that chooses between them for what is built afterwards: ``auto`` (or unset) takes
+the compiled module when numba imports (``pip install tinyrace[fast]``), ``numba`` requires
+it, and the plain path's name forces that.
 """
 
 from __future__ import annotations

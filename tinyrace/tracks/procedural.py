@@ -13,6 +13,7 @@ config is ``tinyrace.tracks.procedural_source``).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,17 +72,21 @@ class ProceduralTrack:
 
 
 def generate_track(
-    rng: np.random.Generator, params: ProceduralTrackParams = ProceduralTrackParams()
+    rng: np.random.Generator,
+    params: ProceduralTrackParams = ProceduralTrackParams(),
+    trace: Callable[[np.ndarray, ProceduralTrackParams], np.ndarray] | None = None,
 ) -> ProceduralTrack:
     """Draw a CarRacing track from rng; same draws, same track as CarRacing-v3.
 
     Each attempt draws ``2 * params.checkpoints`` uniforms. An attempt fails when
     its lap does not close; like CarRacing, the next attempt draws afresh from
     the same rng. Raises RuntimeError after ``params.max_attempts`` failures.
+    ``trace``: the path's tracer, ``trace_path`` or its compiled twin (same rows).
     """
+    trace = trace or trace_path
     for attempt in range(1, params.max_attempts + 1):
         checkpoints = _draw_checkpoints(rng, params)
-        lap = _extract_lap(_trace_path(checkpoints, params), params)
+        lap = _extract_lap(trace(checkpoints, params), params)
         if lap is not None:
             return _build_track(lap, params, attempt)
     raise NoClosedLap(
@@ -106,7 +111,7 @@ def _draw_checkpoints(rng: np.random.Generator, params: ProceduralTrackParams) -
     return np.column_stack((alpha, rad * np.cos(alpha), rad * np.sin(alpha)))
 
 
-def _trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
+def trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.ndarray:
     """Steer from the start line towards the checkpoints for a few laps.
 
     Returns rows (alpha [rad], beta [rad], x [u], y [u]): the point's polar

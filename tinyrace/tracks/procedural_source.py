@@ -7,12 +7,13 @@ randomised, then the track); the env and ``tinyrace show`` both call it.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from tinyrace import kernels
 from tinyrace.config import EnvConfig, ProceduralTrackConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Surface, Track, TrackDraw
@@ -21,6 +22,7 @@ from tinyrace.tracks.procedural import (
     ProceduralTrack,
     ProceduralTrackParams,
     generate_track,
+    trace_path,
 )
 
 GRASS_FRICTION = 0.6  # CarRacing's grip off the road, as a fraction of the road's
@@ -72,6 +74,20 @@ def config_colors(config: ProceduralTrackConfig) -> GroundColors:
     )
 
 
+TRACE_VARIABLE = "TINYRACE_TRACE"  # environment variable: auto | numba | python
+Trace = Callable[[np.ndarray, ProceduralTrackParams], np.ndarray]
+
+
+def trace_kernel(wanted: str | None = None) -> tuple[str, Trace]:
+    """(path name, tracer of CarRacing's path) that ``wanted`` names (auto | numba | python;
+    None: ``TINYRACE_TRACE``'s value, else auto): the compiled ``procedural_numba`` when
+    numba imports, else the Python loop. The same tracks bit for bit."""
+    name, module = kernels.choose(
+        TRACE_VARIABLE, "python", "tinyrace.tracks.procedural_numba", wanted
+    )
+    return name, trace_path if module is None else module.trace_path
+
+
 class ProceduralSource:
     """``track.type: procedural``: a new CarRacing track per reset.
 
@@ -87,18 +103,28 @@ class ProceduralSource:
         self.source = source
         self.params = track_params(self.config)
         self.colors = config_colors(self.config)
+        self.kernel: str | None = None  # the path's tracer (numba | python), at the first draw
+        self._trace: Trace | None = None
 
     def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
         """CarRacing's reset order: colours (when randomised) are drawn before the track."""
         if self.config.domain_randomize and options.get("randomize", True):
             self.colors = draw_colors(rng)
         try:
-            generated = generate_track(rng, self.params)
+            generated = generate_track(rng, self.params, self._trace or self._choose_trace())
         except NoClosedLap as exc:
             c = self.config
             knobs = {"radius": c.radius, "detail_step": c.detail_step, "turn_rate": c.turn_rate}
             raise ConfigError(Problem(self.source, "tracks[0]", knobs, _NO_LAP)) from exc
         return TrackDraw(self.track(generated), 0, 0)
+
+    def _choose_trace(self) -> Trace:
+        """The tracer's path, chosen at the first draw (``trace_kernel``)."""
+        self.kernel, self._trace = trace_kernel()
+        return self._trace
+
+    def __getstate__(self) -> dict[str, object]:
+        return {**self.__dict__, "_trace": None}  # chosen again after unpickling
 
     def track(self, generated: ProceduralTrack) -> Track:
         """The generic view of a generated track, in CarRacing's units, y up."""
