@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -123,13 +124,27 @@ def trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.nda
     numpy cannot help. The arithmetic is CarRacing's, operation for operation.
     """
     cp_alpha, cp_x, cp_y = (column.tolist() for column in checkpoints.T)
+    rows = [0.0] * (4 * _MAX_STEPS)
+    start = _START_RADIUS_FACTOR * params.radius  # [u]
+    points = trace_loop(cp_alpha, cp_x, cp_y, start, params.turn_rate, params.detail_step, rows)
+    return np.array(rows[: 4 * points]).reshape(-1, 4)
+
+
+def trace_loop(
+    cp_alpha: Any, cp_x: Any, cp_y: Any, x: float, turn_rate: float, step: float, rows: Any
+) -> int:
+    """``trace_path``'s loop from (``x``, 0) heading along +y: fills ``rows`` (flat: alpha,
+    beta, x, y per point) and returns the number of points.
+
+    Written for Python lists and numpy arrays alike: numba compiles this same function
+    (``procedural_numba``), where the checkpoints and ``rows`` are arrays.
+    """
     count = len(cp_alpha)
-    turn_rate, step = params.turn_rate, params.detail_step  # [rad], [u]
     full_turn, unwrap_limit = 2 * math.pi, 1.5 * math.pi  # [rad]
     atan2, cos, sin = math.atan2, math.cos, math.sin
-    x, y, beta = _START_RADIUS_FACTOR * params.radius, 0.0, 0.0  # [u], [u], [rad]
+    y, beta = 0.0, 0.0  # [u], [rad]
     target, laps, below_axis = 0, 0, False  # target: index of the checkpoint aimed at
-    rows: list[float] = []  # alpha, beta, x, y of each point, flat
+    points = 0
     for _ in range(_MAX_STEPS):
         alpha = atan2(y, x)  # [rad]
         if below_axis and alpha > 0:
@@ -160,10 +175,14 @@ def trace_path(checkpoints: np.ndarray, params: ProceduralTrackParams) -> np.nda
             beta += turn
         # the step runs along the heading's normal, using the heading before this turn
         x, y = x - sin_beta * step, y + cos_beta * step
-        rows += (alpha, prev_beta * 0.5 + beta * 0.5, x, y)
+        at = 4 * points
+        rows[at], rows[at + 1], rows[at + 2], rows[at + 3] = (
+            alpha, prev_beta * 0.5 + beta * 0.5, x, y,
+        )  # fmt: skip
+        points += 1
         if laps > _MAX_LAPS:
             break
-    return np.array(rows).reshape(-1, 4)
+    return points
 
 
 def _extract_lap(path: np.ndarray, params: ProceduralTrackParams) -> np.ndarray | None:
