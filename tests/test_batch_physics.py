@@ -24,6 +24,7 @@ import pytest
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.cars.dynamic_batch import DynamicBatch
+from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.batched import BatchStepper
@@ -231,3 +232,56 @@ def test_only_dynamic_cars_in_known_wrappers_are_batched() -> None:
     envs = make_batch("tinyrace/CarRacing-v0", 2, workers=0, batch_physics=False)
     assert envs._local is not None and envs._local.batch is None
     envs.close()
+
+
+class ShapingThatFails:
+    """A user's cte shaping that returns NaN at its ``fail_at``-th call (a ConfigError)."""
+
+    def __init__(self, fail_at: int | None) -> None:
+        self.fail_at, self.calls = fail_at, 0
+
+    def __call__(self, cte: float) -> float:
+        self.calls += 1
+        return math.nan if self.calls == self.fail_at else -abs(cte)
+
+
+def test_an_env_whose_rewards_fail_leaves_the_others_of_its_batch_consistent() -> None:
+    """Envs stepped together go stage by stage (every world, then every env's rewards, ...):
+    when one env's reward shaping raises, every other env has still been judged, and each
+    is where the same env stepped alone with the same actions is."""
+
+    def make(fail_at: int | None) -> gym.Env:
+        return gym.make(
+            "tinyrace/TinyRace-v0",
+            environment=str(TRACKS_DIR / "f1tenth_loop"),
+            car={"model": "dynamic"},
+            cte_shaping=ShapingThatFails(fail_at),
+        )
+
+    fns = [functools.partial(make, None), functools.partial(make, 6), functools.partial(make, None)]
+    batch = BatchVectorEnv(fns, workers=0)
+    alone = [fn() for fn in fns[::2]]  # twins of envs 0 and 2
+    assert batch._local is not None and batch._local.batch is not None
+    try:
+        batch.reset(seed=3)
+        for index, twin in zip((0, 2), alone, strict=True):
+            twin.reset(seed=3 + index)
+        actions = driving_actions(batch.action_space, 3, 10, seed=3)
+        with pytest.raises(ConfigError, match="cte_shaping"):
+            for action in actions:
+                batch.step(action)
+                for index, twin in zip((0, 2), alone, strict=True):
+                    twin.step(action[index])
+        for index, twin in zip((0, 2), alone, strict=True):  # the failing step's share too
+            twin.step(action[index])
+        for index, twin in zip((0, 2), alone, strict=True):
+            env = batch._local.envs[index].unwrapped
+            assert (env.steps, env.score) == (twin.unwrapped.steps, twin.unwrapped.score)
+            ours, theirs = env.snapshot().car, twin.unwrapped.snapshot().car
+            assert ours._replace(skids=None) == theirs._replace(skids=None)  # views: no ==
+        # its shaping ran at the reset and 4 steps; the 5th step raised (counted, as env.step)
+        assert batch._local.envs[1].unwrapped.steps == 5
+    finally:
+        batch.close()
+        for twin in alone:
+            twin.close()

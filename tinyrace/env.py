@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, NamedTuple, cast
 
 import gymnasium as gym
 import numpy as np
@@ -171,7 +171,7 @@ class TinyRaceEnv(gym.Env):
 
     # A step in parts, for a vector env that moves many cars between them:
     # control(action); facts = env.episode.step(env.dt) (the world's step and the rules);
-    # conclude(facts).
+    # conclude(facts), itself judge(facts), then the observation of snapshot(), then report.
     def control(self, action: Any) -> None:
         """Check ``action`` and hand it to the car (the first part of a step)."""
         episode = self.episode
@@ -181,6 +181,12 @@ class TinyRaceEnv(gym.Env):
 
     def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Rewards, episode end, observation and info of a step whose physics is done."""
+        verdict = self.judge(facts)
+        snapshot = self.snapshot()
+        return self.report(verdict, snapshot, self._observe(snapshot))
+
+    def judge(self, facts: StepFacts) -> Verdict:
+        """The step's reward terms and episode end; the clock and the score move on."""
         self.t += self.dt
         self.steps += 1
         terms = reward_terms(facts, self.config.reward_design, self._shaping, True, self._terms)
@@ -193,15 +199,20 @@ class TinyRaceEnv(gym.Env):
         reason = ends_episode(facts, self.config.reward_design)
         limit = self.config.sim.step_limit
         truncated = reason is None and limit is not None and self.steps >= limit
-        snapshot = self.snapshot()
-        observation = self._observe(snapshot)
-        info = self._info(terms, snapshot)
+        return Verdict(terms, reward, reason, truncated)
+
+    def report(
+        self, verdict: Verdict, snapshot: Snapshot, observation: Any
+    ) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """The step's results from its verdict and its observation of ``snapshot``."""
+        info = self._info(verdict.terms, snapshot)
+        reason = verdict.reason
         if reason is not None:
             info["termination"] = reason
             info["lap_finished"] = reason == "lap_finished"
         if self.render_mode == "human":
             self.render()
-        return observation, reward, reason is not None, truncated, info
+        return observation, verdict.reward, reason is not None, verdict.truncated, info
 
     def _observe(self, snapshot: Snapshot) -> Any:
         if not self.sensors:  # CarRacing's view, or a top view on tracks in metres
@@ -279,6 +290,16 @@ class TinyRaceEnv(gym.Env):
         state = self.__dict__.copy()
         state["_window"] = None  # a window belongs to this process
         return state
+
+
+class Verdict(NamedTuple):
+    """A step's judgement (``TinyRaceEnv.judge``): its reward terms and their sum, why the
+    episode ends (or None) and whether the step limit truncates it."""
+
+    terms: dict[str, float]
+    reward: float
+    reason: str | None
+    truncated: bool
 
 
 class EpisodeGround:

@@ -13,7 +13,8 @@ same ``_key`` masks. ``render()`` returns the envs' frames as a tuple, like
 ``SyncVectorEnv``. An exception in a worker is raised again in the parent, with
 the worker's traceback as a note (PEP 678), once every worker has answered; the
 vector env stays usable, with the envs that stepped before the error stepped (as
-in SyncVectorEnv, though here that includes every other worker's envs). An
+in SyncVectorEnv, though here that includes every other worker's envs, and the other
+envs of the failing one's slice when they are stepped together: ``batched``). An
 exception that does not survive pickling arrives as ``RuntimeError("<Type>: <message>")``.
 A worker that dies closes the vector env and raises a RuntimeError naming it.
 

@@ -7,9 +7,11 @@ takes each env's step apart (``TinyRaceEnv.step`` is ``control``, the episode's 
 1. the actions are checked in one go and handed to every car (``DynamicBatch.control``);
 2. every car's tyre forces, spin and steering in one numpy computation, the new
    velocities set on the bodies, skid marks drawn;
-3. env by env, the episode's step with those forces (``forces_applied=True``: the world
-   steps its pymunk space, the rules find the facts) and ``conclude`` (rewards,
-   observation, info), with ``gym.make``'s ``TimeLimit`` counted here instead of called.
+3. stage by stage over the envs: every episode's step with those forces
+   (``forces_applied=True``: the world steps its pymunk space, the rules find the facts),
+   then every env's ``judge`` (rewards, episode end), every observation, and every
+   ``report`` (info), with ``gym.make``'s ``TimeLimit`` counted here instead of called.
+   Each stage runs the same code env after env, which keeps it hot in the caches.
 
 Results are the envs' own ``step`` results, bit for bit. Only envs made by ``gym.make``
 (wrappers ``TimeLimit``, ``OrderEnforcing``, ``PassiveEnvChecker``, or none) around a
@@ -105,10 +107,7 @@ class BatchStepper:
             self._forces_together(rows, *self._controls(actions, rows))
         else:
             self._forces_one_by_one(rows, self._control_rows(actions, rows))
-        results: list[Step | None] = [None] * len(self.envs)
-        for row in rows:
-            results[row] = self._finish(row, write)
-        return results
+        return self._finish(rows, write)
 
     def _forces_together(
         self, rows: list[int], steer: np.ndarray, gas: np.ndarray, brake: np.ndarray
@@ -135,21 +134,46 @@ class BatchStepper:
             car.control(steer, gas, brake)
             car.apply_forces(core.dt, world.wheel_grip())
 
-    def _finish(self, row: int, write: Write) -> Step:
-        """The rest of env ``row``'s step: its world and rules, rewards, observation."""
-        core = self.cores[row]
-        episode = core._episode()
-        facts = episode.step(core.dt, forces_applied=True)
-        if episode.world.contacts.crashed and self.vectorized:  # the car stopped its wheels
-            self.physics.stop(row)  # so do the arrays
-        observation, reward, terminated, truncated, info = core.conclude(facts)
-        limit = self.limits[row]
-        if limit is not None:  # TimeLimit.step, without the call
-            limit._elapsed_steps += 1
-            if limit._elapsed_steps >= limit._max_episode_steps:
-                truncated = True
-        write(row, observation)
-        return observation, reward, terminated, truncated, info
+    def _finish(self, rows: list[int], write: Write) -> list[Step | None]:
+        """The rest of the step, stage by stage over the envs of ``rows``: every world and
+        its rules, then every env's rewards, then every observation, then the results
+        (measured: a stage's code and data stay hot; 8 envs took 111-113 µs per env-step
+        this way against 121-126 env by env). An exception while judging an env (a user's
+        reward shaping) is raised once every other env has been judged: those envs stay
+        consistent, the failing one has moved without its rewards, as stepping env by env
+        left it."""
+        cores, physics = self.cores, self.physics
+        facts = []
+        for row in rows:
+            episode = cores[row]._episode()
+            facts.append(episode.step(cores[row].dt, forces_applied=True))
+            if episode.world.contacts.crashed and self.vectorized:  # the car stopped its wheels
+                physics.stop(row)  # so do the arrays
+        verdicts, error = [], None
+        for row, fact in zip(rows, facts, strict=True):
+            try:
+                verdicts.append(cores[row].judge(fact))
+            except Exception as exc:
+                error = error or exc
+        if error is not None:
+            raise error
+        snapshots = [cores[row].snapshot() for row in rows]
+        observations = [cores[row]._observe(s) for row, s in zip(rows, snapshots, strict=True)]
+        results: list[Step | None] = [None] * len(self.envs)
+        for row, verdict, snapshot, observation in zip(
+            rows, verdicts, snapshots, observations, strict=True
+        ):
+            observation, reward, terminated, truncated, info = cores[row].report(
+                verdict, snapshot, observation
+            )
+            limit = self.limits[row]
+            if limit is not None:  # TimeLimit.step, without the call
+                limit._elapsed_steps += 1
+                if limit._elapsed_steps >= limit._max_episode_steps:
+                    truncated = True
+            write(row, observation)
+            results[row] = observation, reward, terminated, truncated, info
+        return results
 
     def _load(self, rows: list[int]) -> None:
         """Stepped rows whose car may have changed, loaded from it (the others stay stale)."""
