@@ -31,7 +31,10 @@ def draw_bars(
     strip: np.ndarray, score: np.ndarray, shown: tuple[int, ...], height: int, factor: int
 ) -> None:
     """The dashboard's strip (``Dashboard.strip``'s pixels) into ``strip``: the ``score``
-    layer, then each bar whose steps ``shown`` holds (in ``_BARS``'s order), by maximum."""
+    layer, then each bar whose steps ``shown`` holds (in ``_BARS``'s order), by maximum.
+
+    Every bar's box is cut to the strip before a pixel is written (compiled code checks
+    no bounds); ``score`` has the strip's shape."""
     rows, width = strip.shape[0], strip.shape[1]
     flat, source = strip.reshape(-1), score.reshape(-1)
     for i in range(flat.size):  # (an element loop: numba's strip[...] = score is 8x slower)
@@ -71,7 +74,10 @@ def draw_bars(
 @compile_
 def blend(image: np.ndarray, top: int, left: int, weight: np.ndarray, color: np.ndarray) -> None:
     """The patch whose corner is (``top``, ``left``) over ``image``: ``pixel * weight +
-    color`` in float32, truncated to uint8 (``drawing.blend``'s pixels), in place."""
+    color`` in float32, truncated to uint8 (``drawing.blend``'s pixels), in place.
+
+    The patch must lie inside ``image`` (``car_sprite._clip`` cuts it so): compiled code
+    checks no bounds."""
     rows, cols = weight.shape[0], weight.shape[1]
     for r in range(rows):
         for c in range(cols):
