@@ -13,6 +13,10 @@ import importlib
 import os
 from types import ModuleType
 
+# The drawing kernels span two layers (sensors.texture's affine composition, render.drawing's
+# car and dashboard), so their one variable lives here: auto | numba | numpy
+DRAWING_VARIABLE = "TINYRACE_DRAWING"
+
 
 def choose(
     variable: str, plain: str, compiled: str, wanted: str | None = None

@@ -12,9 +12,7 @@ from types import ModuleType
 import numpy as np
 
 from tinyrace import kernels
-from tinyrace.sensors.texture import DRAWING_VARIABLE
-
-__all__ = ["DRAWING_VARIABLE", "blend", "kernel"]
+from tinyrace.kernels import DRAWING_VARIABLE
 
 
 def kernel(wanted: str | None = None) -> tuple[str, ModuleType | None]:

@@ -23,9 +23,6 @@ from tinyrace import kernels
 Painter = Callable[[np.ndarray, np.ndarray], None]
 # A 2x3 affine as six plain floats, row by row: (m00, m01, m02, m10, m11, m12)
 Affine = tuple[float, float, float, float, float, float]
-# environment variable: auto | numba | numpy, the path of the compiled drawing kernels
-# (this affine composition; render.drawing's car and dashboard)
-DRAWING_VARIABLE = "TINYRACE_DRAWING"
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _SPLITTER = 134217729.0  # 2**27 + 1: splits a float64 into two 26-bit halves (Veltkamp)
 _TINY, _HUGE = 2.0**-900, 2.0**900  # where Dekker's exact product holds, with margin
@@ -92,7 +89,7 @@ def compose_kernel(wanted: str | None = None) -> tuple[str, Callable[[Affine, Af
     numpy; None: ``TINYRACE_DRAWING``'s value, else auto): numba's compiled one
     (``texture_numba``) when numba imports, else the plain one. Same bits."""
     name, module = kernels.choose(
-        DRAWING_VARIABLE, "numpy", "tinyrace.sensors.texture_numba", wanted
+        kernels.DRAWING_VARIABLE, "numpy", "tinyrace.sensors.texture_numba", wanted
     )
     return name, shift_scale_matrix if module is None else module.shift_scale_matrix
 

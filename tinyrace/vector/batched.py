@@ -137,8 +137,8 @@ class BatchStepper:
     def _finish(self, rows: list[int], write: Write) -> list[Step | None]:
         """The rest of the step, stage by stage over the envs of ``rows``: every world and
         its rules, then every env's rewards, then every observation, then the results
-        (measured: a stage's code and data stay hot; 8 envs took 111-113 µs per env-step
-        this way against 121-126 env by env). An exception while judging an env (a user's
+        (measured: a stage's code and data stay hot; 8 envs took 104-106 µs per env-step
+        this way against 122-125 env by env). An exception while judging an env (a user's
         reward shaping) is raised once every other env has been judged: those envs stay
         consistent, the failing one has moved without its rewards, as stepping env by env
         left it."""
