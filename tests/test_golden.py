@@ -7,6 +7,10 @@ infos, frames). After an intended change, re-record: ``python tests/golden/recor
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from golden.record import cases, path_of, run
@@ -23,3 +27,30 @@ def test_golden_hashes_unchanged(name):
 def test_every_case_has_a_recording():
     recorded = {p.stem for p in path_of("x").parent.glob("*.json")}
     assert recorded == set(CASES)
+
+
+def test_hashes_do_not_depend_on_numpys_simd_dispatch():
+    """numpy picks its SIMD kernels by CPU, and its AVX-512 arctan2, sin and cos may differ
+    from the AVX2 ones in the last bit: a track built from them would start a car a bit
+    differently on another machine. Every case, with numpy held to its baseline kernels in a
+    fresh interpreter, hashes as recorded (on a baseline-only CPU this is the plain run)."""
+    from numpy._core._multiarray_umath import __cpu_dispatch__, __cpu_features__
+
+    dispatched = " ".join(f for f in __cpu_dispatch__ if __cpu_features__.get(f))
+    script = (
+        "import json, sys\n"
+        "from golden.record import cases, path_of, run\n"
+        "changed = [n for n, make in sorted(cases().items())\n"
+        "           if run(make) != json.loads(path_of(n).read_text())]\n"
+        "print(json.dumps(changed))\n"
+    )
+    tests = Path(__file__).resolve().parent
+    environment = {**os.environ, "NPY_DISABLE_CPU_FEATURES": dispatched}
+    environment["PYTHONPATH"] = os.pathsep.join(
+        filter(None, [str(tests), environment.get("PYTHONPATH")])
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], env=environment, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert json.loads(done.stdout.splitlines()[-1]) == [], f"numpy without {dispatched}"

@@ -1,11 +1,16 @@
 """Closed polylines in the plane: arc length, resampling, headings, road edges and tiles.
 
-Pure numpy. A loop is an (N, 2) array of points in driving order; the last point
+numpy, except the angles: headings, sines and cosines come from ``math`` (the C
+library's, one per point at load time), because numpy picks its SIMD kernels by CPU and
+its AVX-512 ones may differ in the last bit, which would start a car differently on
+another machine. A loop is an (N, 2) array of points in driving order; the last point
 joins the first and is not repeated. World frame: y up, headings counter-clockwise
 from +x, so the left of the driving direction is the heading plus 90 degrees.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -44,7 +49,7 @@ def resample(
 def headings(loop: np.ndarray) -> np.ndarray:
     """(N,) direction of travel at each point [rad], from its two neighbours."""
     ahead = np.roll(loop, -1, axis=0) - np.roll(loop, 1, axis=0)
-    return np.asarray(np.arctan2(ahead[:, 1], ahead[:, 0]), float)
+    return np.array([math.atan2(y, x) for x, y in ahead.tolist()], float)
 
 
 def curvature(loop: np.ndarray) -> np.ndarray:
@@ -56,8 +61,7 @@ def curvature(loop: np.ndarray) -> np.ndarray:
 
 def left_normals(loop: np.ndarray) -> np.ndarray:
     """(N, 2) unit vectors pointing to the left of the driving direction."""
-    angle = headings(loop)
-    return np.column_stack((-np.sin(angle), np.cos(angle)))
+    return np.array([(-math.sin(a), math.cos(a)) for a in headings(loop).tolist()], float)
 
 
 def edges(loop: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
