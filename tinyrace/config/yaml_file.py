@@ -23,6 +23,9 @@ MAX_DEPTH = 32  # nested mappings and lists; the schema itself nests 4 deep
 MAX_VALUES = 200_000  # scalars and collections after alias expansion
 
 _BaseLoader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when installed
+# libyaml (bundled with PyYAML >= 6.0.4) refuses 1,000 open flow collections while it scans
+# tokens ahead, before the depth check below sees their events: the same refusal, said ours
+LIBYAML_DEPTH = "exceeded maximum nesting depth"
 _COLLECTION_START = (yaml.MappingStartEvent, yaml.SequenceStartEvent)
 _COLLECTION_END = (yaml.MappingEndEvent, yaml.SequenceEndEvent)
 _MERGE_TAG = "tag:yaml.org,2002:merge"
@@ -96,6 +99,8 @@ def parse_yaml(text: str, source: str) -> Any:
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         reason = getattr(exc, "problem", None) or str(exc)
+        if reason == LIBYAML_DEPTH:  # libyaml's own bound, met while scanning ahead
+            reason = f"nesting deeper than {MAX_DEPTH} levels"
         problem = Problem(source, _line(mark), _text_at(text, mark), f"invalid YAML: {reason}")
         raise ConfigError(problem) from None
     except (ValueError, OverflowError, TypeError, RecursionError) as exc:  # e.g. 2001-13-45
