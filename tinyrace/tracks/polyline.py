@@ -54,7 +54,8 @@ def headings(loop: np.ndarray) -> np.ndarray:
 
 def curvature(loop: np.ndarray) -> np.ndarray:
     """(N,) signed curvature at each point [1/unit], positive turning left (counter-clockwise)."""
-    turn = np.diff(np.unwrap(np.concatenate((headings(loop), headings(loop)[:1]))))
+    angle = headings(loop)  # one pass of math.atan2 per point: computed once
+    turn = np.diff(np.unwrap(np.concatenate((angle, angle[:1]))))
     step = segment_lengths(loop)
     return np.asarray(np.roll(turn, 1) / np.maximum(0.5 * (step + np.roll(step, 1)), 1e-12))
 
