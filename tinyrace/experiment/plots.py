@@ -3,6 +3,7 @@ bar charts per episode and time series. All images are RGB uint8."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -114,6 +115,7 @@ class Axes:
     height: int
     x_range: tuple[float, float]
     y_range: tuple[float, float]
+    y_ticks: tuple[float, ...] = ()  # labelled grid lines (none: the frame only)
 
     def pixel(self, x: ArrayLike, y: ArrayLike) -> np.ndarray:
         (x0, x1), (y0, y1) = self.x_range, self.y_range
@@ -135,15 +137,54 @@ def nice_range(values: np.ndarray, include_zero: bool = False) -> tuple[float, f
     return low - (pad if low < 0 or not include_zero else 0), high + pad
 
 
+_MANTISSAS = (1.0, 2.0, 2.5, 5.0)  # round tick steps, times a power of ten
+
+
+def nice_ticks(low: float, high: float, most: int = 6) -> tuple[float, ...]:
+    """At most ``most`` (>= 3) ticks a round step apart (1, 2, 2.5 or 5 times a power of
+    ten), from the step's multiple at or below ``low`` to the one at or above ``high``:
+    the smallest such step that needs no more ticks."""
+    span = max(high - low, 1e-12 * max(abs(low), abs(high), 1.0))
+    exponent = math.floor(math.log10(span / (most - 1)))
+    while True:  # ends by the decade after: a step >= span needs at most 3 ticks
+        for mantissa in _MANTISSAS:
+            step = mantissa * 10.0**exponent
+            first, last = math.floor(low / step), math.ceil(high / step)
+            if first * step > low:  # k x step rounded past the range's end: one more
+                first -= 1
+            if last * step < high:
+                last += 1
+            if last - first < most:
+                return tuple(k * step for k in range(first, last + 1))
+        exponent += 1
+
+
+def tick_labels(ticks: Sequence[float]) -> list[str]:
+    """The ticks printed with as many decimals as their step needs."""
+    if len(ticks) < 2:
+        return [f"{t:g}" for t in ticks]
+    step = abs(ticks[1] - ticks[0])
+    decimals = max(0, -math.floor(math.log10(step) + 1e-9))
+    if round(step / 10.0**-decimals, 6) % 1:  # 2.5 x a power of ten: one more decimal
+        decimals += 1
+    return [f"{t:.{decimals}f}" for t in ticks]
+
+
+def value_axis(
+    values: np.ndarray, include_zero: bool
+) -> tuple[tuple[float, float], tuple[float, ...]]:
+    """The range and round ticks of a value axis for ``values`` (the range ends on ticks)."""
+    ticks = nice_ticks(*nice_range(values, include_zero))
+    return (ticks[0], ticks[-1]), ticks
+
+
 def _frame(image: np.ndarray, axes: Axes, title: str, x_label: str) -> None:
     """Grid, tick labels, title."""
     left, top, w, h = axes.left, axes.top, axes.width, axes.height
-    for k in range(5):
-        fraction = k / 4
-        y_value = axes.y_range[0] + fraction * (axes.y_range[1] - axes.y_range[0])
-        y = round(top + h - fraction * h)
+    for value, label in zip(axes.y_ticks, tick_labels(axes.y_ticks), strict=True):
+        y = round(float(axes.pixel(axes.x_range[0], value)[1]))
         cv2.line(image, (left, y), (left + w, y), GRID, 1)
-        cv2.putText(image, f"{y_value:.3g}", (4, y + 4), _FONT, 0.4, INK, 1, cv2.LINE_AA)
+        cv2.putText(image, label, (4, y + 4), _FONT, 0.4, INK, 1, cv2.LINE_AA)
     cv2.rectangle(image, (left, top), (left + w, top + h), INK, 1)
     cv2.putText(image, title, (left, top - 8), _FONT, 0.5, INK, 1, cv2.LINE_AA)
     if x_label:
@@ -165,9 +206,8 @@ def bar_chart(
     width, height = size
     image = np.full((height, width, 3), PAPER, np.uint8)
     numbers = np.array([np.nan if v is None else v for v in values], float)
-    axes = Axes(
-        56, 28, width - 72, height - 64, (0, max(len(values), 1)), nice_range(numbers, True)
-    )
+    y_range, ticks = value_axis(numbers, include_zero=True)
+    axes = Axes(56, 28, width - 72, height - 64, (0, max(len(values), 1)), y_range, ticks)
     _frame(image, axes, title, "")
     zero = axes.pixel(0, 0)[1]
     slot = axes.width / max(len(values), 1)
@@ -194,10 +234,11 @@ def time_series(
     finite_t = t[np.isfinite(t)]
     x_range = (float(finite_t.min()), float(finite_t.max())) if len(finite_t) > 1 else (0.0, 1.0)
     for k, (name, values) in enumerate(panels):
-        axes = Axes(56, 20 + gap + k * (panel_h + gap) - 10, width - 72, panel_h, x_range,
-                    nice_range(values, include_zero=True))  # fmt: skip
-        _frame(image, axes, name, "s" if k == len(panels) - 1 else "")
         ok = np.isfinite(values) & np.isfinite(t)
+        y_range, ticks = value_axis(values, include_zero=True)
+        axes = Axes(56, 20 + gap + k * (panel_h + gap) - 10, width - 72, panel_h, x_range,
+                    y_range, ticks if ok.any() else ())  # fmt: skip
+        _frame(image, axes, name, "s" if k == len(panels) - 1 else "")
         if not ok.any():
             cv2.putText(image, "(not measured on this track)", (axes.left + 10,
                         axes.top + panel_h // 2), _FONT, 0.45, INK, 1)  # fmt: skip
