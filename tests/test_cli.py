@@ -81,7 +81,7 @@ def test_validate_reports_image_problems(tmp_path: Path, capsys):
 
 @pytest.mark.parametrize(
     "target",
-    ["procedural", "tinyrace/data/tracks/formula_student", "tinyrace/data/configs/carracing.yaml"],
+    ["procedural", "example_tracks/formula_student", "configs/carracing.yaml"],
 )
 def test_show_writes_a_picture(target: str, tmp_path: Path, monkeypatch):
     monkeypatch.chdir(ROOT)

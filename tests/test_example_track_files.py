@@ -1,6 +1,6 @@
 """The shipped example tracks: reproducible, pure-coloured and drivable.
 
-``tinyrace/data/make_example_tracks.py`` writes three tinycarlo 1.1 track
+``example_tracks/make_example_tracks.py`` writes three tinycarlo 1.1 track
 folders. These tests rebuild them into a temporary folder and compare with the
 committed files, then check the promises the simulator's own tests rely on:
 binary colours, spawns on the trajectory, markings on the right side of the
@@ -24,7 +24,7 @@ from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = TRACKS_DIR
-SCRIPT = EXAMPLES.parent / "make_example_tracks.py"
+SCRIPT = EXAMPLES / "make_example_tracks.py"
 TRACKS = ["segmented", "formula_student", "carolo_cup"]
 
 WHEELBASE_PX = 150  # rear axle to front axle

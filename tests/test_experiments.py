@@ -178,6 +178,6 @@ def test_bad_experiments_name_the_key(raw: dict, path: str, value: str, tmp_path
 
 
 def test_a_view_that_is_no_camera_is_refused(tmp_path: Path):
-    raw = {"env": {"environment": "tinyrace/data/tracks/segmented"}, "output": {"view": "roof"}}
+    raw = {"env": {"environment": "example_tracks/segmented"}, "output": {"view": "roof"}}
     with pytest.raises(ConfigError, match=r"output\.view.*front_camera"):  # when it is read
         experiment_from_dict(raw, "exp.yaml", ROOT)

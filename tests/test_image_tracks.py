@@ -48,7 +48,7 @@ EXAMPLE_NAMES = ["segmented", "formula_student", "carolo_cup"]
 
 def test_formula_student_folder_loads_its_track_yaml(monkeypatch):
     monkeypatch.chdir(ROOT)
-    env = gym.make(ENV_ID, environment="./tinyrace/data/tracks/formula_student")
+    env = gym.make(ENV_ID, environment="./example_tracks/formula_student")
     raw = yaml.safe_load((EXAMPLES / "formula_student" / "track.yaml").read_text())
     config = env.unwrapped.config
     assert config.kind == "image"

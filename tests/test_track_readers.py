@@ -17,7 +17,7 @@ import pytest
 
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError
-from tinyrace.examples import DATA_DIR, TRACKS_DIR
+from tinyrace.examples import TRACKS_DIR
 from tinyrace.tracks import polyline
 from tinyrace.tracks.centerline_csv import read_loop
 from tinyrace.tracks.circuit import Circuit
@@ -291,7 +291,7 @@ def test_the_example_raceline_runs_through_free_space_clear_of_the_walls():
 
 # -- the generator -------------------------------------------------------------------------------
 def test_the_generator_rebuilds_the_committed_metric_examples(tmp_path):
-    script = DATA_DIR / "make_metric_tracks.py"
+    script = TRACKS_DIR / "make_metric_tracks.py"
     subprocess.run([sys.executable, str(script), str(tmp_path)], check=True)
     for folder in ("circuit", "autocross", "f1tenth_loop"):
         for made in (tmp_path / folder).iterdir():

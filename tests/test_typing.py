@@ -1,4 +1,5 @@
-"""The package type-checks: ``mypy`` with ``strict = true`` (pyproject.toml) finds nothing."""
+"""The package and the scripts generating its examples type-check: ``mypy`` with
+``strict = true`` (pyproject.toml) finds nothing."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_mypy_strict_is_clean():
     done = subprocess.run(
-        [sys.executable, "-m", "mypy", "--no-incremental", "tinyrace"],
+        [sys.executable, "-m", "mypy", "--no-incremental", "tinyrace", "example_tracks"],
         cwd=ROOT,
         capture_output=True,
         text=True,

@@ -1,9 +1,14 @@
-"""The example tracks and experiment configs shipped inside the package, found by bare name.
+"""The example tracks and experiment configs shipped with the package, found by bare name.
 
 A value that names an existing file or folder is always that path; otherwise a bare
 name (``formula_student``) stands for the shipped track folder or experiment file of
 that name, from any working folder. An unknown name raises a ConfigError that lists
 the known names.
+
+Their one copy is the repository's top-level ``example_tracks/`` and ``configs/``
+folders. pyproject.toml's ``package-dir`` maps them to the packages
+``tinyrace.example_tracks`` and ``tinyrace.configs``, so a wheel holds them inside the
+installed package; a source checkout or an editable install reads them beside it.
 """
 
 from __future__ import annotations
@@ -14,9 +19,18 @@ from pathlib import Path
 
 from tinyrace.errors import ConfigError, Problem
 
-DATA_DIR = Path(__file__).resolve().parent / "data"
-TRACKS_DIR = DATA_DIR / "tracks"  # one tinycarlo track folder per example
-CONFIGS_DIR = DATA_DIR / "configs"  # one experiment file per example
+PACKAGE_DIR = Path(__file__).resolve().parent
+
+
+def shipped_folder(name: str) -> Path:
+    """The shipped folder ``name``: inside the installed package (a wheel), else the
+    repository's top-level folder beside the package (a checkout or an editable install)."""
+    installed = PACKAGE_DIR / name
+    return installed if installed.is_dir() else PACKAGE_DIR.parent / name
+
+
+TRACKS_DIR = shipped_folder("example_tracks")  # one tinycarlo track folder per example
+CONFIGS_DIR = shipped_folder("configs")  # one experiment file per example
 DEFAULT_EXPERIMENT = CONFIGS_DIR / "carracing.yaml"
 TRACK_FILE = "track.yaml"
 CONFIG_SUFFIX = ".yaml"

@@ -2,9 +2,9 @@
 
 Usage::
 
-    python tinyrace/data/make_example_tracks.py [OUT_DIR]
+    python example_tracks/make_example_tracks.py [OUT_DIR]
 
-OUT_DIR defaults to the ``tracks/`` folder beside this script. Each track folder gets a
+OUT_DIR defaults to the folder of this script (``example_tracks/``). Each track folder gets a
 ``track.yaml`` in tinycarlo 1.1's format (lists under ``tracks:`` and
 ``cameras:``) and one PNG image:
 
@@ -333,7 +333,7 @@ def track_yaml(
     """track.yaml text in tinycarlo 1.1's format, with units in comments."""
     lines = [
         f"# {title}",
-        "# Made by tinyrace/data/make_example_tracks.py: edit the script, not this file.",
+        "# Made by example_tracks/make_example_tracks.py: edit the script, not this file.",
     ]
     lines += [f"# {line}" for line in legend]
     lines += [
@@ -511,8 +511,8 @@ def carolo_cup_track(out_dir: Path) -> None:
 
 
 def main(argv: list[str]) -> None:
-    """Write all example tracks into argv[1], or into tracks/ beside this script."""
-    out_dir = Path(argv[1]) if len(argv) > 1 else Path(__file__).resolve().parent / "tracks"
+    """Write all example tracks into argv[1], or into the folder of this script."""
+    out_dir = Path(argv[1]) if len(argv) > 1 else Path(__file__).resolve().parent
     segmented_track(out_dir)
     formula_student_track(out_dir)
     carolo_cup_track(out_dir)
