@@ -261,7 +261,7 @@ COMPILE_PROBE = """
 import time
 began = time.perf_counter()
 import numpy as np
-from tinyrace.sensors import raycast_numba
+from tinyrace.sensors.kernels import raycast as raycast_numba
 from tinyrace.sensors.lidar import beam_angles
 from tinyrace.sensors.raycast import beam_fan, distance_field, fan_angle
 imported = time.perf_counter() - began

@@ -12,7 +12,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tinyrace.sensors import cones_numba
 from tinyrace.sensors.cones import (
     KERNEL_VARIABLE,
     NUMPY_PATH,
@@ -23,6 +22,7 @@ from tinyrace.sensors.cones import (
     detect,
     kernel,
 )
+from tinyrace.sensors.kernels import cones as cones_numba
 
 NUMBA_PATH = kernel("numba")[1]
 RANGES = [0.5, 3.0, 10.0, 150.0, 1500.0]  # [track units]

@@ -13,8 +13,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tinyrace.render import drawing, drawing_numba
+from tinyrace.render import drawing
 from tinyrace.render.dashboard import BAR_STEPS, Dashboard
+from tinyrace.render.kernels import drawing as drawing_numba
 from tinyrace.sensors import texture
 
 SIZES = [(96, 96, 4), (600, 400, 1), (1000, 800, 1), (150, 120, 2)]  # (w, h, supersample)

@@ -16,7 +16,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "tinyrace"
 
 # Bottom to top; a module may import from its own layer and the layers below it.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "examples", "actions", "compiled", "kernels"),
+    ("errors", "examples", "actions", "kernels"),
     ("config",),
     ("tracks",),
     ("cars",),
@@ -71,7 +71,7 @@ def _imports(tree: ast.AST, module: str, is_package: bool) -> set[str]:
 
 
 def _graph() -> dict[str, set[str]]:
-    """tinyrace module -> the tinyrace modules it imports; plus '+pymunk'/'+cv2' markers."""
+    """tinyrace module -> the tinyrace modules it imports; plus '+pymunk', '+cv2', '+numba'."""
     sources = {
         _module_name(p): (p, ast.parse(p.read_text())) for p in sorted(PACKAGE.rglob("*.py"))
     }
@@ -82,7 +82,7 @@ def _graph() -> dict[str, set[str]]:
             base, _, member = imported.partition(":")
             imported = f"{base}.{member}" if f"{base}.{member}" in sources else base
             root = imported.split(".")[0]
-            if root in ("pymunk", "cv2"):
+            if root in ("pymunk", "cv2", "numba"):
                 targets.add(f"+{root}")
             elif imported in sources and imported != name:
                 targets.add(imported)
@@ -149,6 +149,24 @@ def test_no_import_cycle_between_folders():
         mine = _folder(module)
         folders.setdefault(mine, set()).update(_folder(t) for t in targets if _folder(t) != mine)
     assert _cycle(folders) is None
+
+
+# The compiled twins: tinyrace.<layer>.kernels.<name>, beside their layer's plain twin.
+COMPILER = "tinyrace.kernels.compiled"  # numba's compiler, in the bottom layer's kernels/
+
+
+def _is_compiled_twin(module: str) -> bool:
+    parts = module.split(".")
+    return len(parts) == 4 and parts[2] == "kernels"
+
+
+def test_the_compiled_twins_are_the_kernels_folders_of_the_layers():
+    """A module compiles with numba exactly when it is in a layer's kernels/ folder."""
+    twins = sorted(m for m in GRAPH if _is_compiled_twin(m))
+    compiling = sorted(m for m, targets in GRAPH.items() if COMPILER in targets)
+    assert twins and twins == compiling
+    with_numba = sorted(m for m, targets in GRAPH.items() if "+numba" in targets)
+    assert set(with_numba) <= {COMPILER, *twins}, "numba is imported only by compiled kernels"
 
 
 def test_no_module_imports_both_pymunk_and_cv2():

@@ -4,9 +4,11 @@ asking for ``numba`` is an error that says what to install (``tinyrace.kernels.c
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import pytest
 
+import tinyrace
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.dynamic import physics_kernel
 from tinyrace.render import drawing
@@ -14,18 +16,18 @@ from tinyrace.sensors import cones, lidar, raycast_numpy, texture
 from tinyrace.tracks import procedural, procedural_source
 
 KERNELS = {  # name: (compiled module, chooser, plain path's name, plain path)
-    "lidar": ("tinyrace.sensors.raycast_numba", lidar.kernel, "numpy", raycast_numpy.cast),
-    "tyres": ("tinyrace.cars.dynamic_numba", physics_kernel, "python", dynamic_python.car_forces),
-    "cones": ("tinyrace.sensors.cones_numba", cones.kernel, "numpy", cones.NUMPY_PATH),
-    "drawing": ("tinyrace.render.drawing_numba", drawing.kernel, "numpy", None),
+    "lidar": ("tinyrace.sensors.kernels.raycast", lidar.kernel, "numpy", raycast_numpy.cast),
+    "tyres": ("tinyrace.cars.kernels.dynamic", physics_kernel, "python", dynamic_python.car_forces),
+    "cones": ("tinyrace.sensors.kernels.cones", cones.kernel, "numpy", cones.NUMPY_PATH),
+    "drawing": ("tinyrace.render.kernels.drawing", drawing.kernel, "numpy", None),
     "trace": (
-        "tinyrace.tracks.procedural_numba",
+        "tinyrace.tracks.kernels.procedural",
         procedural_source.trace_kernel,
         "python",
         procedural.trace_path,
     ),
     "texture": (
-        "tinyrace.sensors.texture_numba",
+        "tinyrace.sensors.kernels.texture",
         texture.compose_kernel,
         "numpy",
         texture.shift_scale_matrix,
@@ -33,14 +35,23 @@ KERNELS = {  # name: (compiled module, chooser, plain path's name, plain path)
 }
 
 
+def test_every_compiled_twin_in_a_kernels_folder_is_listed_here():
+    package = Path(tinyrace.__file__).parent
+    files = sorted(package.glob("*/kernels/*.py"))
+    twins = {".".join(("tinyrace", *f.relative_to(package).with_suffix("").parts)) for f in files}
+    twins = {t for t in twins if not t.endswith(".__init__")}
+    assert twins and twins == {module for module, *_ in KERNELS.values()}
+
+
 @pytest.mark.parametrize("kernel", sorted(KERNELS))
 def test_without_numba_auto_takes_the_plain_path_and_numba_is_an_error(monkeypatch, kernel):
     module, choose, plain, path = KERNELS[kernel]
     monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
     monkeypatch.delitem(sys.modules, module, raising=False)
-    monkeypatch.delitem(sys.modules, "tinyrace.compiled", raising=False)  # imports numba too
+    monkeypatch.delitem(sys.modules, "tinyrace.kernels.compiled", raising=False)  # imports numba
     package, _, name = module.rpartition(".")
-    monkeypatch.delattr(sys.modules[package], name, raising=False)
+    if package in sys.modules:  # a layer's kernels/ package comes with its first kernel
+        monkeypatch.delattr(sys.modules[package], name, raising=False)
     for variable in (
         "TINYRACE_LIDAR",
         "TINYRACE_PHYSICS",

@@ -12,11 +12,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tinyrace import compiled as compiled_module
-from tinyrace.compiled import compiler
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
-from tinyrace.sensors import raycast, raycast_numba, raycast_numpy
+from tinyrace.kernels import compiled as compiled_module
+from tinyrace.kernels.compiled import compiler
+from tinyrace.sensors import raycast, raycast_numpy
+from tinyrace.sensors.kernels import raycast as raycast_numba
 from tinyrace.sensors.lidar import KERNEL_VARIABLE, LidarSensor, beam_angles, kernel
 from tinyrace.sensors.raycast import (
     FINE_STEP,

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from tinyrace.sensors import raycast, raycast_numba, raycast_numpy
+from tinyrace.sensors import raycast, raycast_numpy
+from tinyrace.sensors.kernels import raycast as raycast_numba
 from tinyrace.sensors.lidar import add_noise, beam_angles, directions
 from tinyrace.sensors.raycast import beam_fan, fan_angle
 

@@ -20,9 +20,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tinyrace.cars import dynamic_numba, dynamic_python
+from tinyrace.cars import dynamic_python
 from tinyrace.cars.dynamic import DynamicCar, physics_kernel
 from tinyrace.cars.dynamic_layout import BRAKE, GAS, OMEGA, PHASE, SKID, STEER, WHEELS
+from tinyrace.cars.kernels import dynamic as dynamic_numba
 
 FINITE = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
 SOME_ZERO = st.one_of(st.just(0.0), st.just(-0.0), FINITE)  # steer 0: the hull's own axes

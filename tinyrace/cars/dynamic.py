@@ -371,7 +371,9 @@ def physics_kernel(wanted: str | None = None) -> tuple[str, Forces]:
     """The tyre model's path ``wanted`` (auto | numba | python; None: ``TINYRACE_PHYSICS``'s,
     else auto), by name, with its ``car_forces``: auto is ``numba`` when numba imports
     (``pip install tinyrace[fast]``), else ``python``. Same results."""
-    name, module = kernels.choose(PHYSICS_VARIABLE, "python", "tinyrace.cars.dynamic_numba", wanted)
+    name, module = kernels.choose(
+        PHYSICS_VARIABLE, "python", "tinyrace.cars.kernels.dynamic", wanted
+    )
     return name, dynamic_python.car_forces if module is None else typed(Forces, module.car_forces)
 
 

@@ -14,7 +14,7 @@ its car's ``wheel_state`` (which ``DynamicCar.state`` and skid marks read), ``lo
 copies a car into a row (after a reset, or when the car was changed by other code).
 
 With numba (``physics_kernel``: ``TINYRACE_PHYSICS`` auto or numba), ``control`` and
-``apply_forces`` run ``dynamic_numba``'s compiled kernel over the rows (the one a single
+``apply_forces`` run ``kernels/dynamic.py``'s compiled kernel over the rows (the one a single
 ``DynamicCar`` runs); else the numpy computation below, with the same results.
 
 Layout, for speed: numpy's cost per call on arrays this small is its fixed overhead
@@ -135,7 +135,7 @@ class DynamicBatch:
         self.kernel = physics_kernel()[0]  # numba | python (this numpy computation)
         self._compiled: Any = None
         if self.kernel == "numba":
-            from tinyrace.cars import dynamic_numba
+            from tinyrace.cars.kernels import dynamic as dynamic_numba
 
             self._compiled = dynamic_numba
 
@@ -264,7 +264,7 @@ class DynamicBatch:
         rows: Sequence[int],
         on_road: np.ndarray,
     ) -> None:
-        """``apply_forces`` by the compiled kernel (``dynamic_numba.batch_forces``)."""
+        """``apply_forces`` by the compiled kernel (``kernels.dynamic.batch_forces``)."""
         motion, out = self._motion, self._out
         motion[:] = np.array([_angle_spin_velocity(body) for body in bodies]).T
         self._compiled.batch_forces(

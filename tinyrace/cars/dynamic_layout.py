@@ -5,7 +5,7 @@
 own (FIELDS, 4); ``DynamicBatch`` keeps n cars' and copies rows to and from the cars.
 ``consts`` (CONSTANTS, n): each car's constants, from its spec and scale, computed as the
 formulas they replace would (see ``car_constants``). Plain numbers, no numba: the
-compiled kernel (``dynamic_numba``) and the Python paths read the same rows.
+compiled kernel (``kernels/dynamic.py``) and the Python paths read the same rows.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The dynamic car's tyre model in Python: CarRacing-v3's formulas, in its operation order.
 
 The reference path (``TINYRACE_PHYSICS=python``, or no numba): the same functions, on the
-same arrays (see ``dynamic_layout``), as ``dynamic_numba``'s compiled ones, with the same
+same arrays (see ``dynamic_layout``), as ``kernels/dynamic.py``'s compiled ones, with the same
 results bit for bit. ``car_forces`` steps one car (a state array of one car).
 """
 

@@ -40,7 +40,7 @@ _BARS: tuple[tuple[str, int, RGB], ...] = (
     ("h", STEER_COLUMN, _GREEN),
     ("h", GYRO_COLUMN, _RED),
 )
-# the same, as arrays for the compiled path (drawing_numba.draw_bars)
+# the same, as arrays for the compiled path (kernels.drawing.draw_bars)
 BAR_PLACES = np.array([place for _, place, _ in _BARS])
 BARS_VERTICAL = np.array([kind == "v" for kind, _, _ in _BARS])
 BAR_COLORS = np.array([color for _, _, color in _BARS])

@@ -1,7 +1,7 @@
 """Which path CarRacing's view draws its car and dashboard with: compiled or numpy.
 
 ``TINYRACE_DRAWING`` chooses (``tinyrace.kernels.choose``): ``auto`` (or unset) takes the
-compiled kernels of ``drawing_numba`` when numba imports (``pip install tinyrace[fast]``),
+compiled kernels of ``kernels/drawing.py`` when numba imports (``pip install tinyrace[fast]``),
 ``numba`` requires them, ``numpy`` forces the numpy path. Same pixels.
 """
 
@@ -18,7 +18,7 @@ from tinyrace.kernels import DRAWING_VARIABLE
 def kernel(wanted: str | None = None) -> tuple[str, ModuleType | None]:
     """(path name, the compiled module or None for numpy) that ``wanted`` names (auto |
     numba | numpy; None: ``TINYRACE_DRAWING``'s value, else auto)."""
-    return kernels.choose(DRAWING_VARIABLE, "numpy", "tinyrace.render.drawing_numba", wanted)
+    return kernels.choose(DRAWING_VARIABLE, "numpy", "tinyrace.render.kernels.drawing", wanted)
 
 
 def blend(

@@ -10,7 +10,7 @@ A track that lists its cones (a cone map) is read as it is, by class; on picture
 cones are the connected components of the cone colours (``cones_from_picture``), found once
 per track.
 
-Speed: when numba imports (``pip install tinyrace[fast]``), ``cones_numba``'s compiled
+Speed: when numba imports (``pip install tinyrace[fast]``), ``kernels/cones.py``'s compiled
 passes do the detection in one call, with the numpy passes' results bit for bit;
 ``TINYRACE_CONES`` (auto | numba | numpy) chooses the path of sensors built afterwards.
 """
@@ -60,7 +60,7 @@ def _car_frame(
     xs: np.ndarray, ys: np.ndarray, x: float, y: float, c: float, s: float, y_down: bool
 ) -> tuple[np.ndarray, np.ndarray]:
     """(ahead, left) [track units] of points (xs, ys) from (x, y) with heading cos ``c``,
-    sin ``s``: the formula both detection paths compute (``cones_numba`` in a loop)."""
+    sin ``s``: the formula both detection paths compute (``kernels/cones.py`` in a loop)."""
     dx, dy = xs - x, ys - y
     return dx * c + dy * s, (dx * s - dy * c if y_down else dy * c - dx * s)
 
@@ -186,9 +186,11 @@ NUMPY_PATH = Paths(_numpy_nearest, _numpy_found, _numpy_noisy)
 
 def kernel(wanted: str | None = None) -> tuple[str, Paths]:
     """The detection path ``wanted`` (auto | numba | numpy; None: ``TINYRACE_CONES``'s, else
-    auto), by name: auto is ``numba`` (``cones_numba``) when numba imports, else ``numpy``.
+    auto), by name: auto is ``numba`` (``kernels/cones.py``) when numba imports, else ``numpy``.
     Same results."""
-    name, module = kernels.choose(KERNEL_VARIABLE, "numpy", "tinyrace.sensors.cones_numba", wanted)
+    name, module = kernels.choose(
+        KERNEL_VARIABLE, "numpy", "tinyrace.sensors.kernels.cones", wanted
+    )
     if module is None:
         return name, NUMPY_PATH
     return name, Paths(module.nearest, module.found, module.noisy)

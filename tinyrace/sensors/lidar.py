@@ -3,7 +3,7 @@
 ``blocking_map`` draws what ``blocks`` names (off-road, walls, obstacle colours, cones) into
 a grid of cells once per track; ``tinyrace.sensors.raycast_numpy`` casts the beams on it (sample
 tables and two vectorised passes, no loop over beams), or, when numba imports
-(``pip install tinyrace[fast]``), ``tinyrace.sensors.raycast_numba``'s compiled kernel: the
+(``pip install tinyrace[fast]``), ``tinyrace.sensors.kernels.raycast``'s compiled kernel: the
 same float32 ranges bit for bit, several times faster and without the sample tables (about
 38 MB per 1080-beam lidar). The environment variable ``TINYRACE_LIDAR`` chooses the path of
 the lidars built afterwards: ``numpy`` forces the numpy path, ``numba`` requires the compiled
@@ -190,7 +190,7 @@ def kernel(wanted: str | None = None) -> tuple[str, Cast]:
     else auto), by name, and its ``cast``: auto is ``numba`` when numba imports, else
     ``numpy``."""
     name, module = kernels.choose(
-        KERNEL_VARIABLE, "numpy", "tinyrace.sensors.raycast_numba", wanted
+        KERNEL_VARIABLE, "numpy", "tinyrace.sensors.kernels.raycast", wanted
     )
     return name, cast if module is None else typed(Cast, module.cast)
 
@@ -244,7 +244,7 @@ class LidarSensor:
             track, c.blocks, self.cell, self.cone_colors, c.hit_classes, self.max_range, numpy
         )
         if not numpy:  # the compiled kernel's skip maps by direction, where they fit
-            from tinyrace.sensors import raycast_numba  # imported: kernel() chose it
+            from tinyrace.sensors.kernels import raycast as raycast_numba  # kernel() chose it
 
             field = raycast_numba.with_sectors(field)
         # a fan depends on the map's width and cell frame only: tracks made anew at every

@@ -21,7 +21,7 @@ march on by sphere tracing on a distance field (``cv2.distanceTransform``), buil
 lidars that reach that far.
 
 A field is made for one of two paths: the numpy passes above (``raycast_numpy``;
-``near=True``: NEAR maps, and ``beam_fan(..., tables=True)``), or ``raycast_numba``'s
+``near=True``: NEAR maps, and ``beam_fan(..., tables=True)``), or ``kernels/raycast.py``'s
 compiled kernel (``near=False``: a skip map from the distance transform, no tables), which
 finds the same first blocked sample of every beam and gives the same ranges, bit for bit.
 
@@ -59,7 +59,7 @@ MAX_ROUNDS = 256  # marching rounds at most
 SKIP_BLOCKED = 255  # the skip map's value of blocking cells
 SKIP_MARGIN = 1.42  # [cells] > sqrt(2): two samples' distances to their nearest cells' centres
 SECTOR_SLOPES = 4  # sector skip maps per eighth of a turn (slopes 0 .. 1 in steps of 1 / 4)
-SECTORS = 8 * SECTOR_SLOPES  # sector skip maps of a field (raycast_numba.with_sectors)
+SECTORS = 8 * SECTOR_SLOPES  # sector skip maps of a field (kernels.raycast.with_sectors)
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +85,7 @@ class DistanceField:
     skips: np.ndarray | None = None  # same layout as ``blocked`` [FINE_STEP samples]
     # SECTORS skip maps, one per sector of beam directions, (s H, s w) each (s =
     # ``sector_scale`` cells of theirs per cell and axis), one after the other between
-    # s LEAD rows (raycast_numba.with_sectors) [FINE_STEP samples]
+    # s LEAD rows (kernels.raycast.with_sectors) [FINE_STEP samples]
     sectors: np.ndarray | None = None
     sector_scale: int = 1
 
@@ -256,7 +256,7 @@ def beam_fan(
     ``max_range`` [track units] on ``field`` (of a y-down track: ``y_down``). The rows are
     placed so that a car at heading 0 gets its beams without turning them. ``tables``: build
     the offset tables that ``cast`` gathers with (most of a fan's memory); the compiled
-    kernel (``raycast_numba``) needs only the rows' directions."""
+    kernel (``kernels/raycast.py``) needs only the rows' directions."""
     beams = len(angles)
     spacing, step, phase_rows = _rows(angles)
     phase, u = np.divmod(np.arange(spacing * phase_rows), phase_rows)

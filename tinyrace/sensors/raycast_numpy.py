@@ -7,7 +7,7 @@ blocking map and finds the first blocked sample. Beams whose flagged segment onl
 blocking cells by (false alarms) go on to their next flagged segment while they are many,
 and sample their whole row when few. Beyond TABLE_RANGE, beams march on by sphere tracing.
 The field and the fan (``raycast``) must be made for this path: ``distance_field(...,
-near=True)`` and ``beam_fan(..., tables=True)``. ``raycast_numba`` gives the same ranges.
+near=True)`` and ``beam_fan(..., tables=True)``. ``kernels/raycast.py`` gives the same ranges.
 """
 
 from __future__ import annotations

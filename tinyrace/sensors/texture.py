@@ -87,9 +87,9 @@ def shift_scale_matrix(outer: Affine, inner: Affine) -> np.ndarray:
 def compose_kernel(wanted: str | None = None) -> tuple[str, Callable[[Affine, Affine], np.ndarray]]:
     """(path name, ``shift_scale_matrix``'s path) that ``wanted`` names (auto | numba |
     numpy; None: ``TINYRACE_DRAWING``'s value, else auto): numba's compiled one
-    (``texture_numba``) when numba imports, else the plain one. Same bits."""
+    (``kernels/texture.py``) when numba imports, else the plain one. Same bits."""
     name, module = kernels.choose(
-        kernels.DRAWING_VARIABLE, "numpy", "tinyrace.sensors.texture_numba", wanted
+        kernels.DRAWING_VARIABLE, "numpy", "tinyrace.sensors.kernels.texture", wanted
     )
     return name, shift_scale_matrix if module is None else module.shift_scale_matrix
 

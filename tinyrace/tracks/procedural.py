@@ -137,7 +137,7 @@ def trace_loop(
     beta, x, y per point) and returns the number of points.
 
     Written for Python lists and numpy arrays alike: numba compiles this same function
-    (``procedural_numba``), where the checkpoints and ``rows`` are arrays.
+    (``kernels/procedural.py``), where the checkpoints and ``rows`` are arrays.
     """
     count = len(cp_alpha)
     full_turn, unwrap_limit = 2 * math.pi, 1.5 * math.pi  # [rad]

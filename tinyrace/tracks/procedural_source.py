@@ -80,10 +80,10 @@ Trace = Callable[[np.ndarray, ProceduralTrackParams], np.ndarray]
 
 def trace_kernel(wanted: str | None = None) -> tuple[str, Trace]:
     """(path name, tracer of CarRacing's path) that ``wanted`` names (auto | numba | python;
-    None: ``TINYRACE_TRACE``'s value, else auto): the compiled ``procedural_numba`` when
+    None: ``TINYRACE_TRACE``'s value, else auto): the compiled ``kernels/procedural.py`` when
     numba imports, else the Python loop. The same tracks bit for bit."""
     name, module = kernels.choose(
-        TRACE_VARIABLE, "python", "tinyrace.tracks.procedural_numba", wanted
+        TRACE_VARIABLE, "python", "tinyrace.tracks.kernels.procedural", wanted
     )
     return name, trace_path if module is None else module.trace_path
 

@@ -5,6 +5,11 @@ drawing and its track's path) has a plain twin with the same results, and an env
 variable that chooses between them for what is built afterwards: ``auto`` (or unset) takes
 the compiled module when numba imports (``pip install tinyrace[fast]``), ``numba`` requires
 it, and the plain path's name forces that.
+
+The compiled twins live in a ``kernels/`` folder of the layer whose plain twin they match
+(``tracks/kernels/``, ``cars/kernels/``, ``sensors/kernels/``, ``render/kernels/``), each
+module named as its plain twin; this bottom-layer package holds what they share: this
+choice and numba's compiler (``compiled.py``).
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tinyrace.compiled import compiler
+from tinyrace.kernels.compiled import compiler
 from tinyrace.render.dashboard import BAR_COLORS, BAR_PLACES, BAR_STEPS, BARS_VERTICAL, LAYOUT_UNITS
 
 compile_ = compiler("drawing")

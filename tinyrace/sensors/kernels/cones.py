@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.compiled import compiler
+from tinyrace.kernels.compiled import compiler
 from tinyrace.sensors.cones import MADE_UP_CLASSES, ConeTable, Draws, Frame, Sight
 
 compiled = compiler("cones")

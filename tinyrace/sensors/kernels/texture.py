@@ -16,7 +16,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from tinyrace.compiled import compiler
+from tinyrace.kernels.compiled import compiler
 
 _compile = compiler("texture")
 

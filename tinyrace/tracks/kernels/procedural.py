@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tinyrace.compiled import compiler
+from tinyrace.kernels.compiled import compiler
 from tinyrace.tracks.procedural import (
     _MAX_STEPS,
     _START_RADIUS_FACTOR,

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.compiled import compiler
+from tinyrace.kernels.compiled import compiler
 from tinyrace.sensors import raycast
 from tinyrace.sensors.raycast import (
     BISECTIONS,

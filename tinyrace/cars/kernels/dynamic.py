@@ -57,7 +57,7 @@ from tinyrace.cars.dynamic_layout import (
     WHEEL_MOMENT,
     WHEELS,
 )
-from tinyrace.compiled import compiler
+from tinyrace.kernels.compiled import compiler
 
 _compile = compiler("tyre")
 SPLIT = 134217729.0  # 2**27 + 1: Veltkamp's split of a double into two halves
