@@ -54,9 +54,9 @@ class LeanStep:
         core: Any = env.unwrapped
         episode = core.episode
         world = episode.world
-        self.car, self.episode, self.pictures = world.car, episode, core.pictures
+        self.car, self.episode, self.pictures = world.cars[0], episode, core.pictures
         self.world, self.space = world, world.space._space
-        contacts = world.contacts
+        contacts = world.contacts[0]
         self.touches, self.wheel_tiles = contacts.new_tile_touches, contacts.wheel_tiles
         self.dt, self.t, self.steps, self.score = core.dt, core.t, core.steps, core.score
         self.carried = sum(core._carry.values())  # the reset's tiles, paid by the first step

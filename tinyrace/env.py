@@ -33,6 +33,7 @@ from tinyrace.tracks.metric import MetricTrack
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
+from tinyrace.world.world import World
 
 Episode = ProceduralEpisode | ImageEpisode | MetricEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
@@ -101,8 +102,8 @@ class TinyRaceEnv(gym.Env):
         assert fps is not None  # resolved by the config loader
         self.dt = 1.0 / fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(fps)}
-        self._actions = parts.car_model.actions(self.config.car)
-        self.action_space = self._actions.space
+        self.action_spec = parts.car_model.actions(self.config.car)  # reads and checks actions
+        self.action_space = self.action_spec.space
         self._ground = EpisodeGround(self.pictures)
         context = SensorContext(self.config, self._ground)
         self.sensors: list[Sensor] = [
@@ -156,7 +157,7 @@ class TinyRaceEnv(gym.Env):
         self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
         self.score += sum(self._carry.values())
         snapshot = self.snapshot()
-        observation = self._observe(snapshot)
+        observation = self.observe(snapshot)
         if self.render_mode == "human":
             self.render()
         info = self._info({}, snapshot)
@@ -169,21 +170,32 @@ class TinyRaceEnv(gym.Env):
         self.control(action)
         return self.conclude(self._episode().step(self.dt))
 
-    # A step in parts, for a vector env that moves many cars between them:
-    # control(action); facts = env.episode.step(env.dt) (the world's step and the rules);
-    # conclude(facts), itself judge(facts), then the observation of snapshot(), then report.
+    # The stepping protocol: a step in parts, for a vector env that moves many cars between
+    # them. ``step(a)`` is ``control(a)``; ``world.apply_forces(dt)`` (or a batch sets the
+    # cars' forces); ``facts = advance()``; ``conclude(facts)``, itself ``judge(facts)``,
+    # then ``observe(snapshot())``, then ``report``. Nothing else of the env is used.
     def control(self, action: Any) -> None:
         """Check ``action`` and hand it to the car (the first part of a step)."""
         episode = self.episode
         if episode is None:
             raise ResetNeeded("call reset() before step()")
-        episode.world.control(self._actions.read(action))
+        episode.world.control(self.action_spec.read(action))
+
+    @property
+    def world(self) -> World:
+        """The current episode's world (its cars, their contacts and grip)."""
+        return self._episode("the world").world
+
+    def advance(self) -> StepFacts:
+        """The rest of a step's physics, once the cars' forces are set (``world.apply_forces``
+        or a batch): the world advanced by ``dt``, the episode's rules' facts."""
+        return self._episode().advance(self.dt)
 
     def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Rewards, episode end, observation and info of a step whose physics is done."""
         verdict = self.judge(facts)
         snapshot = self.snapshot()
-        return self.report(verdict, snapshot, self._observe(snapshot))
+        return self.report(verdict, snapshot, self.observe(snapshot))
 
     def judge(self, facts: StepFacts) -> Verdict:
         """The step's reward terms and episode end; the clock and the score move on."""
@@ -214,7 +226,8 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, verdict.reward, reason is not None, verdict.truncated, info
 
-    def _observe(self, snapshot: Snapshot) -> Any:
+    def observe(self, snapshot: Snapshot) -> Any:
+        """The observation of ``snapshot``: every sensor's reading (or CarRacing's view)."""
         if not self.sensors:  # CarRacing's view, or a top view on tracks in metres
             return self.pictures.observe(snapshot, self.score)
         observation = {
@@ -246,7 +259,7 @@ class TinyRaceEnv(gym.Env):
     def car(self) -> Any:
         """The current episode's live car (a pymunk body plus its state); read ``snapshot()``
         for a copy."""
-        return self._episode("the car").world.car
+        return self._episode("the car").world.cars[0]
 
     # -- pictures ------------------------------------------------------------------------------
     def render(self) -> np.ndarray | None:

@@ -48,14 +48,20 @@ class ImageEpisode:
         self._judge()
         return StepFacts()
 
-    def step(self, dt: float, forces_applied: bool = False) -> StepFacts:
-        """The world's step with the controls the car holds (full grip: no grass here)."""
-        self.world.step(dt, forces_applied=forces_applied)
+    def step(self, dt: float) -> StepFacts:
+        """The world's step with the controls the cars hold; the rules' facts."""
+        self.world.apply_forces(dt)
+        return self.advance(dt)
+
+    def advance(self, dt: float) -> StepFacts:
+        """The rest of a step whose forces are set: the world advanced (full grip: no grass
+        here), the rules' facts."""
+        self.world.advance(dt)
         return self._judge()
 
     def _judge(self) -> StepFacts:
         """Obstacle colours under the footprint, the cte, the image's bounds."""
-        contacts, car = self.world.contacts, self.world.states()[0]
+        contacts, car = self.world.contacts[0], self.world.states()[0]
         facts = StepFacts()
         if contacts.obstacle_cells:
             corners = footprint_corners(car)

@@ -59,9 +59,15 @@ class MetricEpisode:
         self.world.look(dt)
         return self._progress(StepFacts(tiles_total=len(self.visited)))
 
-    def step(self, dt: float, forces_applied: bool = False) -> StepFacts:
-        """The world's step (a wall stops the car there); cones, bounds, tiles and laps."""
-        contacts = self.world.step(dt, forces_applied=forces_applied)
+    def step(self, dt: float) -> StepFacts:
+        """The world's step with the controls the cars hold; the rules' facts."""
+        self.world.apply_forces(dt)
+        return self.advance(dt)
+
+    def advance(self, dt: float) -> StepFacts:
+        """The rest of a step whose forces are set: the world advanced (a wall stops the car
+        there); cones, bounds, tiles and laps."""
+        contacts = self.world.advance(dt)[0]
         facts = StepFacts(tiles_total=len(self.visited))
         if contacts.crashed:
             facts.wall_hit = True

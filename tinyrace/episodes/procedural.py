@@ -33,15 +33,20 @@ class ProceduralEpisode:
         self.visited = np.zeros(len(self.track.tiles), bool)
         self.visited_count = 0
         self.visit_order: list[int] = []  # tiles in the order first visited (pictures repaint)
-        self.wheels_on_grass = _on_grass(self.world.contacts.wheel_tiles)  # as of the last step
+        self.wheels_on_grass = _on_grass(self.world.contacts[0].wheel_tiles)  # as of the last step
 
     def start(self, dt: float) -> StepFacts:
         """CarRacing's reset takes one physics step with no action."""
         return self.step(dt)
 
-    def step(self, dt: float, forces_applied: bool = False) -> StepFacts:
-        """The world's step with the controls the car holds; the rules' facts."""
-        contacts = self.world.step(dt, forces_applied=forces_applied)
+    def step(self, dt: float) -> StepFacts:
+        """The world's step with the controls the cars hold; the rules' facts."""
+        self.world.apply_forces(dt)
+        return self.advance(dt)
+
+    def advance(self, dt: float) -> StepFacts:
+        """The rest of a step whose forces are set: the world advanced, the rules' facts."""
+        contacts = self.world.advance(dt)[0]
         facts = self._visit(contacts.new_tile_touches)
         facts.wheels_on_grass = self.wheels_on_grass = _on_grass(contacts.wheel_tiles)
         x, y, _ = self.world.states()[0].pose
