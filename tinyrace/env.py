@@ -13,9 +13,7 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
-from tinyrace.episodes.image import ImageEpisode
-from tinyrace.episodes.metric import MetricEpisode
-from tinyrace.episodes.procedural import ProceduralEpisode
+from tinyrace.episodes.episode import Episode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.pictures import Pictures
@@ -35,7 +33,6 @@ from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
 
-Episode = ProceduralEpisode | ImageEpisode | MetricEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn")
 RESET_SOURCE = "<reset options>"
@@ -253,7 +250,8 @@ class TinyRaceEnv(gym.Env):
     @property
     def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
         """The current episode's track data (read-only arrays in track units)."""
-        return self._episode("the track").track
+        detail: ProceduralTrack | ImageTrack | MetricTrack = self._episode("the track").track.detail
+        return detail
 
     @property
     def car(self) -> Any:
