@@ -61,6 +61,7 @@ class TileTouches:
                 self.visited[tile] = True
                 self.visited_count += 1
                 self.visit_order.append(tile)
+                facts.tiles.append(tile)
                 facts.new_tiles += 1
             if tile == 0 and self.visited_count / n > self.lap_percent:
                 facts.lap_finished = True
@@ -113,6 +114,7 @@ class CentrelineProgress:
                 self.visited[tile] = True
                 self.visited_count += 1
                 self.visit_order.append(tile)
+                facts.tiles.append(tile)
                 facts.new_tiles += 1
             if tile == 0 and self.visited_count / n > self.lap_percent:
                 facts.lap_finished = True

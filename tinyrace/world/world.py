@@ -74,6 +74,7 @@ class World:
         self.grass_off_tiles = grass_off_tiles
         self.cars: list[Car] = []
         self.contacts: list[Contacts] = []  # per car
+        self.parked: set[int] = set()  # cars out of the race: they stand still where they are
         self._states: tuple[CarState, ...] | None = None  # the cars' states since the last step
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
@@ -102,6 +103,12 @@ class World:
     def control(self, controls: Sequence[Any], car: int = 0) -> None:
         """Hand the controls of one action (e.g. steer, gas, brake) to car ``car``."""
         self.cars[car].control(*controls)
+
+    def park(self, car: int) -> None:
+        """Take car ``car`` out of the race: it stops now and stays where it is, an obstacle
+        the other cars still meet (its contacts are still reported)."""
+        self.parked.add(car)
+        self.cars[car].stop()
 
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
@@ -162,6 +169,7 @@ class World:
             self.space.remove(body, *body.shapes)
         self.contacts = []
         self.cars = []
+        self.parked = set()
         self._states = None
 
     # -- pickling ----------------------------------------------------------------------------
@@ -201,8 +209,10 @@ class World:
     def apply_forces(self, dt: float) -> None:
         """Every car's forces for a step of ``dt`` seconds, from its controls and its wheels'
         grip (the first half of ``step``)."""
+        parked = self.parked
         for index, car in enumerate(self.cars):
-            car.apply_forces(dt, self.wheel_grip(index))
+            if index not in parked:
+                car.apply_forces(dt, self.wheel_grip(index))
 
     def advance(self, dt: float) -> list[Contacts]:
         """The space stepped by ``dt`` seconds with the forces the cars hold; a car that ran
@@ -212,8 +222,11 @@ class World:
         before = [_place(car.body) for car in cars] if self._walls or len(cars) > 1 else None
         self.look(dt)
         if before is not None:
-            for car, contacts, place in zip(cars, self.contacts, before, strict=True):
-                if contacts.walls or contacts.cars:
+            parked = self.parked
+            for index, (car, contacts, place) in enumerate(
+                zip(cars, self.contacts, before, strict=True)
+            ):
+                if contacts.walls or contacts.cars or index in parked:
                     _crash(car, place)
                     contacts.crashed = bool(contacts.walls)
         return self.contacts
