@@ -54,13 +54,14 @@ class LeanStep:
         core: Any = env.unwrapped
         episode = core.episode
         world = episode.world
-        self.car, self.episode, self.pictures = world.car, episode, core.pictures
+        self.car, self.pictures = world.cars[0], core.pictures
+        self.progress = episode.rules[0][0]  # CarRacing's tile_touches rule of the car
         self.world, self.space = world, world.space._space
-        contacts = world.contacts
+        contacts = world.contacts[0]
         self.touches, self.wheel_tiles = contacts.new_tile_touches, contacts.wheel_tiles
         self.dt, self.t, self.steps, self.score = core.dt, core.t, core.steps, core.score
         self.carried = sum(core._carry.values())  # the reset's tiles, paid by the first step
-        self.tile_reward = TILES_PAID / len(episode.visited)
+        self.tile_reward = TILES_PAID / len(self.progress.visited)
 
     def __call__(self, action: np.ndarray) -> tuple[np.ndarray, float, dict[str, Any]]:
         parts, clock = self.parts, time.perf_counter_ns
@@ -68,7 +69,7 @@ class LeanStep:
         steer, gas, brake = action.tolist()
         if not (-1.0 <= steer <= 1.0 and 0.0 <= gas <= 1.0 and 0.0 <= brake <= 1.0):
             raise ValueError(f"action {action} is outside the space")
-        car, episode = self.car, self.episode
+        car, progress = self.car, self.progress
         car.control(steer, gas, brake)
         car.apply_forces(self.dt, [bool(tiles) for tiles in self.wheel_tiles])
         if parts is not None:
@@ -81,10 +82,10 @@ class LeanStep:
         carried, self.carried = self.carried, 0.0
         reward = TIME_TERM + carried
         for tile in self.touches:
-            if not episode.visited[tile]:
-                episode.visited[tile] = True
-                episode.visited_count += 1
-                episode.visit_order.append(tile)  # the pictures repaint it
+            if not progress.visited[tile]:
+                progress.visited[tile] = True
+                progress.visited_count += 1
+                progress.visit_order.append(tile)  # the pictures repaint it
                 reward += self.tile_reward
         state = car.state()
         self.t += self.dt
@@ -96,7 +97,7 @@ class LeanStep:
         frame = self.pictures.chase_view(OBSERVATION).render(snapshot, self.score)
         if parts is not None:
             started = _add(parts, "the chase view's render", started, clock())
-        info = {"pose": state.pose, "speed": state.speed, "tiles_visited": episode.visited_count}
+        info = {"pose": state.pose, "speed": state.speed, "tiles_visited": progress.visited_count}
         return frame, reward, info
 
 

@@ -109,7 +109,7 @@ def test_grey_rgb_rgba_and_16_bit_pngs_load_alike(tmp_path: Path, channels: int,
     (tmp_path / "track.png").write_bytes(_png(channels=channels, dtype=dtype))
     env = TinyRaceEnv(environment=_folder(tmp_path), render_mode="rgb_array")
     env.reset(seed=0)
-    white = env.course.tracks[0].image[15, 15, :3]
+    white = env.track_source.tracks[0].picture[15, 15, :3]
     assert white.tolist() == [255, 255, 255]
 
 

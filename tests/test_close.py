@@ -147,7 +147,8 @@ def space_counts(episode) -> tuple[int, int, int]:
     """
     bodies, shapes, constraints = episode.world.counts
     track = episode.track
-    sensors = len(track.tiles) if hasattr(track, "tiles") else len(track.cells)
+    test = track.obstacle_test
+    sensors = len(track.tiles) if track.tiles is not None else len(test.cells) if test else 0
     return bodies, shapes - sensors, constraints
 
 

@@ -219,13 +219,14 @@ def test_different_seeds_give_different_procedural_tracks():
 
 
 class InParts(gym.Wrapper):
-    """Steps its env in the parts a batched stepper uses: control, the episode's step
-    (the world's step and the rules), conclude."""
+    """Steps its env in the parts of the stepping protocol a batched stepper uses: control,
+    the world's forces, advance (the world's step and the rules), conclude."""
 
     def step(self, action):
         raw = self.env.unwrapped
         raw.control(action)
-        return raw.conclude(raw.episode.step(raw.dt))
+        raw.world.apply_forces(raw.dt)
+        return raw.conclude(raw.advance())
 
 
 @pytest.mark.parametrize("kind", ["procedural", "image_dynamic_two_cameras"])

@@ -34,10 +34,10 @@ def speed_after(world: World, steps: int) -> float:
 
 def test_wheels_on_a_tile_report_it_and_grip_as_on_road():
     world = dynamic_world(grass_off_tiles=True, road=True)
-    contacts = world.look(DT)
+    [contacts] = world.look(DT)
     assert contacts.new_tile_touches == [0, 0, 0, 0]  # each wheel began touching tile 0
     assert all(tiles == {0} for tiles in contacts.wheel_tiles)
-    assert world.step(DT, [GAS]).new_tile_touches == []  # refilled every step
+    assert world.step(DT, [GAS])[0].new_tile_touches == []  # refilled every step
 
 
 def test_a_wheel_off_the_tiles_grips_as_on_grass_only_where_the_world_says_so():
@@ -53,7 +53,7 @@ def test_a_snapshot_is_a_copy_that_later_steps_leave_alone():
     for _ in range(20):
         world.step(DT, [(0.5, 1.0, 0.0)])
     snapshot = world.snapshot(20 * DT, 20)
-    car = world.car
+    car = world.cars[0]
     assert snapshot.car.pose == car.pose and snapshot.car.speed == car.speed
     assert snapshot.car.hull_angle == car.body.angle
     assert [w.omega for w in snapshot.car.wheels] == [w.omega for w in car.wheels]
@@ -89,7 +89,7 @@ def test_a_wall_puts_the_car_back_and_stops_it():
     world.add_car(car)
     for step in range(200):
         before = world.snapshot(step * DT, step).car.pose
-        contacts = world.step(DT, [(0.0, 1.0)])
+        [contacts] = world.step(DT, [(0.0, 1.0)])
         if contacts.crashed:
             break
     else:
@@ -99,7 +99,45 @@ def test_a_wall_puts_the_car_back_and_stops_it():
     assert 0.5 < after.pose[0] <= 1.0  # its front stopped short of the wall at x = 3
 
 
-def test_a_world_holds_one_car():
-    world = dynamic_world(grass_off_tiles=False, road=False)
-    with pytest.raises(ValueError, match="one car"):
-        world.add_car(DynamicCar.build(world.space, (5.0, 0.0, 0.0)))
+def kinematic_car(world: World, pose: tuple[float, float, float]) -> KinematicThrottleCar:
+    """A 2 m x 1 m car with throttle, taken into ``world``."""
+    car = KinematicThrottleCar.build(world.space, pose, (2.0, 1.0), (10.0, 5.0, 5.0), (30.0, None))
+    world.add_car(car)
+    return car
+
+
+def test_four_cars_driven_into_each_other_collide_and_each_reports_whom_it_touched():
+    """Cars 0 and 1 drive head on along y = 0; car 2 drives into a wall far away; car 3
+    stands still far away. Each car's contacts are its own."""
+    world = World()
+    world.add_walls(np.array([[40.0, 20.0, 41.0, 30.0]]))  # [m] in car 2's way
+    cars = [
+        kinematic_car(world, (-6.0, 0.0, 0.0)),  # rear axle at x = -6, nose toward +x
+        kinematic_car(world, (6.0, 0.0, math.pi)),  # nose toward -x
+        kinematic_car(world, (30.0, 25.0, 0.0)),
+        kinematic_car(world, (-30.0, -30.0, 0.0)),
+    ]
+    gas, idle = (0.0, 1.0), (0.0, 0.0)
+    met, crashed = [], []
+    for step in range(150):
+        contacts = world.step(DT, [gas, gas, gas, idle])
+        met += [(step, i, other) for i, c in enumerate(contacts) for other in c.new_cars]
+        crashed += [i for i, c in enumerate(contacts) if c.crashed]
+    first = min(step for step, _, _ in met)
+    assert {(i, other) for step, i, other in met if step == first} == {(0, 1), (1, 0)}
+    assert {i for _, i, _ in met} == {0, 1}  # who hit whom: only the two, each reports the other
+    assert set(crashed) == {2}  # the wall stopped car 2 alone
+    states = world.states()
+    front_0, front_1 = states[0].pose[0] + 2.0, states[1].pose[0] - 2.0
+    assert front_0 < front_1 < front_0 + 1.0  # stopped nose to nose, never through each other
+    assert states[0].speed == states[1].speed == 0.0  # each stopped where it stood
+    assert states[3].pose == (-30.0, -30.0, 0.0) and cars[3].body.velocity == (0.0, 0.0)
+    assert len(world.contacts) == 4 and world.contacts[2].cars == set()
+
+
+def test_a_world_holds_at_most_sixteen_cars():
+    world = World()
+    for i in range(16):
+        assert kinematic_car(world, (10.0 * i, 0.0, 0.0)) is world.cars[i]
+    with pytest.raises(ValueError, match="at most 16 cars"):
+        kinematic_car(world, (500.0, 0.0, 0.0))

@@ -13,9 +13,7 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
-from tinyrace.episodes.image import ImageEpisode
-from tinyrace.episodes.metric import MetricEpisode
-from tinyrace.episodes.procedural import ProceduralEpisode
+from tinyrace.episodes.episode import Episode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.render.pictures import Pictures
@@ -33,10 +31,10 @@ from tinyrace.tracks.metric import MetricTrack
 from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
+from tinyrace.world.world import World
 
-Episode = ProceduralEpisode | ImageEpisode | MetricEpisode
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
-RESET_OPTIONS = ("randomize", "track", "spawn")
+RESET_OPTIONS = ("randomize", "track", "spawn", "poses")
 RESET_SOURCE = "<reset options>"
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
 
@@ -101,32 +99,36 @@ class TinyRaceEnv(gym.Env):
         assert fps is not None  # resolved by the config loader
         self.dt = 1.0 / fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(fps)}
-        self._actions = parts.car_model.actions(self.config.car)
-        self.action_space = self._actions.space
+        self.action_spec = parts.car_model.actions(self.config.car)  # reads and checks actions
+        self.action_space = self.action_spec.space
         self._ground = EpisodeGround(self.pictures)
-        context = SensorContext(self.config, self._ground)
-        self.sensors: list[Sensor] = [
-            *_cameras(self.config, context),
-            *build_sensors(context, loaded.source),
-        ]
+        self._sensor_context = SensorContext(self.config, self._ground)
+        self._config_source = loaded.source
+        self.sensors: list[Sensor] = self.make_sensors()
         box = self.config.observation == "box" and len(self.sensors) == 1
-        self._box_camera = self.sensors[0].id if box else None
+        self.box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
-        self._shaping = (
+        self.shaping = (
             _checked_shaping(cte_shaping)
             if cte_shaping is not None
             else shaping_from_config(self.config.reward_design)
         )
-        self._terms = active_terms(self.config.reward_design, self._shaping)  # asked per step
+        self.terms = active_terms(self.config.reward_design, self.shaping)  # asked per step
         self.episode: Episode | None = None
+        self.start_facts: list[StepFacts] = []  # every car's facts of the reset's step
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
+
+    def make_sensors(self) -> list[Sensor]:
+        """The config's cameras and sensors, built anew (one set per car that observes)."""
+        context = self._sensor_context
+        return [*_cameras(self.config, context), *build_sensors(context, self._config_source)]
 
     def _observation_space(self) -> spaces.Space[Any]:
         if not self.sensors:
             w, h = OBSERVATION_SIZE
             return spaces.Box(0, 255, (h, w, 3), np.uint8)
-        if self._box_camera is not None:  # ``observation: box``: the one camera's image alone
+        if self.box_camera is not None:  # ``observation: box``: the one camera's image alone
             return self.sensors[0].space
         return spaces.Dict({sensor.id: sensor.space for sensor in self.sensors})
 
@@ -137,7 +139,8 @@ class TinyRaceEnv(gym.Env):
         super().reset(seed=seed)
         options = _check_options(options, self.config.kind)
         draw = self.track_source.draw(self.np_random, options)
-        self.episode = episode = self.course.new_episode(draw)
+        poses = _check_poses(options.get("poses"), self.config.race.num_agents)
+        self.episode = episode = self.course.new_episode(draw, poses)
         self.pictures.reset(draw, episode.visit_order)
         self.layout = draw.track
         for sensor in self.sensors:
@@ -148,15 +151,16 @@ class TinyRaceEnv(gym.Env):
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
-        facts = episode.start(self.dt)
+        self.start_facts = episode.start(self.dt)  # every car's; this env judges the first
+        facts = self.start_facts[0]
         self.t += self.dt
         # The reset step is not rewarded; tiles it touched are paid by the first step (as
         # CarRacing does). Only such events carry over, never states like the cte.
-        terms = reward_terms(facts, self.config.reward_design, self._shaping, charge_time=False)
+        terms = reward_terms(facts, self.config.reward_design, self.shaping, charge_time=False)
         self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
         self.score += sum(self._carry.values())
         snapshot = self.snapshot()
-        observation = self._observe(snapshot)
+        observation = self.observe(snapshot)
         if self.render_mode == "human":
             self.render()
         info = self._info({}, snapshot)
@@ -167,29 +171,40 @@ class TinyRaceEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         self.control(action)
-        return self.conclude(self._episode().step(self.dt))
+        return self.conclude(self._episode().step(self.dt)[0])
 
-    # A step in parts, for a vector env that moves many cars between them:
-    # control(action); facts = env.episode.step(env.dt) (the world's step and the rules);
-    # conclude(facts), itself judge(facts), then the observation of snapshot(), then report.
+    # The stepping protocol: a step in parts, for a vector env that moves many cars between
+    # them. ``step(a)`` is ``control(a)``; ``world.apply_forces(dt)`` (or a batch sets the
+    # cars' forces); ``facts = advance()``; ``conclude(facts)``, itself ``judge(facts)``,
+    # then ``observe(snapshot())``, then ``report``. Nothing else of the env is used.
     def control(self, action: Any) -> None:
         """Check ``action`` and hand it to the car (the first part of a step)."""
         episode = self.episode
         if episode is None:
             raise ResetNeeded("call reset() before step()")
-        episode.world.control(self._actions.read(action))
+        episode.world.control(self.action_spec.read(action))
+
+    @property
+    def world(self) -> World:
+        """The current episode's world (its cars, their contacts and grip)."""
+        return self._episode("the world").world
+
+    def advance(self) -> StepFacts:
+        """The rest of a step's physics, once the cars' forces are set (``world.apply_forces``
+        or a batch): the world advanced by ``dt``, the episode's rules' facts."""
+        return self._episode().advance(self.dt)[0]
 
     def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Rewards, episode end, observation and info of a step whose physics is done."""
         verdict = self.judge(facts)
         snapshot = self.snapshot()
-        return self.report(verdict, snapshot, self._observe(snapshot))
+        return self.report(verdict, snapshot, self.observe(snapshot))
 
     def judge(self, facts: StepFacts) -> Verdict:
         """The step's reward terms and episode end; the clock and the score move on."""
         self.t += self.dt
         self.steps += 1
-        terms = reward_terms(facts, self.config.reward_design, self._shaping, True, self._terms)
+        terms = reward_terms(facts, self.config.reward_design, self.shaping, True, self.terms)
         carried, self._carry = self._carry, {}
         if carried:
             terms = _add_terms(terms, carried)
@@ -214,14 +229,15 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, verdict.reward, reason is not None, verdict.truncated, info
 
-    def _observe(self, snapshot: Snapshot) -> Any:
+    def observe(self, snapshot: Snapshot) -> Any:
+        """The observation of ``snapshot``: every sensor's reading (or CarRacing's view)."""
         if not self.sensors:  # CarRacing's view, or a top view on tracks in metres
             return self.pictures.observe(snapshot, self.score)
         observation = {
             sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
             for sensor in self.sensors
         }
-        return observation if self._box_camera is None else observation[self._box_camera]
+        return observation if self.box_camera is None else observation[self.box_camera]
 
     def snapshot(self) -> Snapshot:
         """A copy of the world's state now (what sensors and pictures read)."""
@@ -240,13 +256,14 @@ class TinyRaceEnv(gym.Env):
     @property
     def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
         """The current episode's track data (read-only arrays in track units)."""
-        return self._episode("the track").track
+        detail: ProceduralTrack | ImageTrack | MetricTrack = self._episode("the track").track.detail
+        return detail
 
     @property
     def car(self) -> Any:
         """The current episode's live car (a pymunk body plus its state); read ``snapshot()``
         for a copy."""
-        return self._episode("the car").world.car
+        return self._episode("the car").world.cars[0]
 
     # -- pictures ------------------------------------------------------------------------------
     def render(self) -> np.ndarray | None:
@@ -339,10 +356,29 @@ def _check_options(options: object, kind: str) -> dict[str, Any]:
             raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
         if key == "randomize" and not isinstance(value, (bool, np.bool_)):
             raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
-        if key != "randomize" and kind == "procedural" and not _is_zero_or_none(value):
+        if key in ("track", "spawn") and kind == "procedural" and not _is_zero_or_none(value):
             allowed = f"expected 0 or None (a procedural track has one {key})"
             raise ConfigError(Problem(RESET_SOURCE, key, value, allowed))
     return dict(options)
+
+
+def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] | None:
+    """The ``poses`` reset option: one finite (x, y, heading) per car [track units, rad]."""
+    if value is None:
+        return None
+    try:
+        poses = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        poses = np.zeros(0)
+    if poses.shape != (count, 3) or not np.isfinite(poses).all():
+        allowed = f"expected {count} finite (x, y, heading) poses, one per car"
+        raise ConfigError(Problem(RESET_SOURCE, "poses", _short(value), allowed))
+    return [(float(x), float(y), float(h)) for x, y, h in poses.tolist()]
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _is_zero_or_none(value: object) -> bool:

@@ -11,8 +11,6 @@ import numpy as np
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
-from tinyrace.episodes.image import ImageCourse
-from tinyrace.episodes.metric import MetricCourse
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.errors import ConfigError, Problem
 
@@ -96,6 +94,7 @@ def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
     from tinyrace.render.metric_pictures import MetricPictures
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
+    from tinyrace.tracks.metric import MetricTrack
 
     if target == "procedural":
         image = procedural_picture(load_env_config().config, seed)
@@ -107,11 +106,11 @@ def picture(target: str, seed: int) -> Picture:
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
-    if isinstance(parts.course, MetricCourse):
-        texture = MetricPictures(parts.config, parts.course.source).textures[0]
-        return Picture(metric_picture(parts.course.tracks[0], texture), name, inputs)
-    assert isinstance(parts.course, ImageCourse)
-    return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)
+    first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
+    if isinstance(first.detail, MetricTrack):
+        texture = MetricPictures(parts.config, parts.source).textures[0]  # type: ignore[arg-type]
+        return Picture(metric_picture(first.detail, texture), name, inputs)
+    return Picture(image_picture(parts.config, first.detail), name, inputs)
 
 
 def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:

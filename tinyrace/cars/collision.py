@@ -14,14 +14,16 @@ FOOTPRINT = 3
 OBSTACLE = 4
 WALL = 5  # solid map cells: the car stops against them
 CONE = 6  # a cone: knocked over when the footprint touches it
+CAR = 7  # a car's solid outline: cars push each other apart
 
 # Filters keep pymunk from pairing shapes that have nothing to report (wheel-obstacle, ...).
-_WHEEL_BIT, _TILE_BIT, _FOOTPRINT_BIT, _OBSTACLE_BIT = 1, 2, 4, 8
+_WHEEL_BIT, _TILE_BIT, _FOOTPRINT_BIT, _OBSTACLE_BIT, _CAR_BIT = 1, 2, 4, 8, 16
 NOTHING = pymunk.ShapeFilter(categories=0, mask=0)  # shapes that only carry mass
 WHEEL_FILTER = pymunk.ShapeFilter(categories=_WHEEL_BIT, mask=_TILE_BIT)
 TILE_FILTER = pymunk.ShapeFilter(categories=_TILE_BIT, mask=_WHEEL_BIT)
 FOOTPRINT_FILTER = pymunk.ShapeFilter(categories=_FOOTPRINT_BIT, mask=_OBSTACLE_BIT)
 OBSTACLE_FILTER = pymunk.ShapeFilter(categories=_OBSTACLE_BIT, mask=_FOOTPRINT_BIT)
+CAR_FILTER = pymunk.ShapeFilter(categories=_CAR_BIT, mask=_CAR_BIT)  # cars meet cars only
 
 
 def footprint_sensor(

@@ -27,6 +27,7 @@ from tinyrace.config.schema import (
     FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
+    RaceConfig,
     RewardConfig,
     RosMapTrackConfig,
     SimConfig,
@@ -54,6 +55,7 @@ SECTIONS = (
     ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
     ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
     ("files", FilesConfig, "files"),
+    ("race", RaceConfig, "race"),
     ("experiment file", ExperimentConfig, ""),
     ("experiment output", OutputConfig, "output"),
 )

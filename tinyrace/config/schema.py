@@ -375,6 +375,26 @@ class FilesConfig:
 
 
 @dataclass(frozen=True)
+class RaceConfig:
+    """Several cars on one track: how many, where they start, how the tiles pay them."""
+
+    num_agents: int = knob(
+        1, "cars on the track (car 0 is the one a single-agent env drives)", low=1, high=16
+    )
+    grid_spacing: float = knob(
+        2.5, "start grid: each car this far behind the one before", "car lengths", low=1.2
+    )
+    grid_offset: float = knob(
+        0.6, "start grid: cars this far left and right of the line, in turn", "car widths", low=0
+    )
+    tile_reward: Literal["own", "first"] = knob(
+        "own",
+        "own: each car is paid for every tile it visits (CarRacing's tile reward per car); "
+        "first: a tile pays only the first car to visit it (cars in index order on a tie)",
+    )
+
+
+@dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
 
@@ -403,6 +423,7 @@ class EnvConfig:
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
     files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
+    race: RaceConfig = knob(RaceConfig(), "several cars on the track (tinyrace.race)")
 
     @property
     def kind(self) -> str:

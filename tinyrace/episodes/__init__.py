@@ -1,9 +1,10 @@
-"""Episodes per track kind: the rules, reading the world's contacts, car states and track.
+"""Episodes: the rules, reading the world's contacts, car states and track.
 
-An episode steps its ``World`` (``tinyrace/world``) and turns what happened into
-``StepFacts`` (tiles visited, laps, bounds, obstacle colours, cte); it draws nothing
-(pictures live in ``tinyrace/render``).
+An episode (``episode.py``) steps its ``World`` (``tinyrace/world``) and turns what
+happened into each car's ``StepFacts`` (tiles visited, laps, bounds, obstacle colours,
+collisions, cte) through the rule parts its track lists (``rules.py``); it draws
+nothing (pictures live in ``tinyrace/render``).
 
-``episodes/setup.py`` turns a loaded config into the env's parts (car model, track
-source, course); a course makes one episode per reset.
+``setup.py`` turns a loaded config into the env's parts (car model, track source,
+course); the course makes one episode per reset.
 """

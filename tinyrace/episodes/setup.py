@@ -12,17 +12,10 @@ from dataclasses import dataclass
 
 from tinyrace.cars.registry import CarModel, car_model_problems, choose_car_model
 from tinyrace.config import EnvConfig, LoadedConfig
-from tinyrace.episodes.image import ImageCourse
-from tinyrace.episodes.metric import MetricCourse
-from tinyrace.episodes.procedural import ProceduralCourse
+from tinyrace.episodes.episode import Course
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
-from tinyrace.tracks.image import ImageSource
-from tinyrace.tracks.metric import MetricSource
-from tinyrace.tracks.procedural_source import ProceduralSource
 from tinyrace.tracks.registry import make_track_source
-
-Course = ProceduralCourse | ImageCourse | MetricCourse
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,13 +38,5 @@ def prepare(loaded: LoadedConfig) -> Parts:
     car_model = choose_car_model(loaded.config, loaded.source)  # raises the problems found
     car = dataclasses.replace(loaded.config.car, model=car_model.name)  # type: ignore[arg-type]
     config = dataclasses.replace(loaded.config, car=car)
-    return Parts(config, car_model, source, _course(config, source, car_model))
-
-
-def _course(config: EnvConfig, source: TrackSource, car_model: CarModel) -> Course:
-    if isinstance(source, ProceduralSource):
-        return ProceduralCourse(config, source, car_model)
-    if isinstance(source, MetricSource):
-        return MetricCourse(config, source, car_model)
-    assert isinstance(source, ImageSource)
-    return ImageCourse(config, source, car_model)
+    wheels = car_model.name == "dynamic"  # its wheels feel the road's tiles
+    return Parts(config, car_model, source, Course(config, car_model, wheels))

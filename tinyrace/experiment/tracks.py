@@ -22,25 +22,25 @@ def save_track_picture(
     picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox, py = y * sy + oy), the
     start pose and, on procedural tracks, the lap line (two points) in track units.
     """
-    episode: Any = env.episode  # ProceduralEpisode, ImageEpisode or MetricEpisode
+    episode: Any = env.episode
     pictures: Any = env.pictures  # its colours (procedural) and ground texture
     procedural = env.config.kind == "procedural"
     key = f"seed{seed}" if procedural else f"track{episode.track_index}"
     if key in known:
         return key, known[key]
     if procedural:
-        track = episode.track
+        track = episode.track.detail
         playfield = cast(ProceduralTrackConfig, env.config.tracks[0]).playfield  # [u]
         image, frame = procedural_ground(track, pictures.colors, playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
     elif env.config.kind in METRIC_KINDS:
-        track = episode.track
+        track = episode.track.detail
         image, frame = metric_ground(track, pictures.ground_texture())
         start = track.spawn
         lap_line = None if track.circuit is None else track.tiles[0][[0, 1]].tolist()
     else:
-        image, frame = image_ground(env.config, episode.track)
+        image, frame = image_ground(env.config, episode.track.detail)
         start, lap_line = episode.track.spawns[episode.spawn_index], None
     name = f"track_{key}.png"
     cv2.imwrite(str(run_dir / name), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))

@@ -17,13 +17,14 @@ How to add a track source (one new kind of ``track.type``):
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
 
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.tracks.circuit import Circuit
 
 Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
 Box = tuple[float, float, float, float]  # (x0, y0, x1, y1) [track units]
@@ -61,6 +62,40 @@ class ColorLayer:
     points: np.ndarray | None = None  # (K, 2) pixel coordinates (x, y), when kept
 
 
+@dataclass(frozen=True)
+class TrackRules:
+    """The rules of an episode on a track: which rule parts it is made of (names in
+    ``tinyrace.episodes.rules.RULES``, in the order they judge a step) and their knobs.
+
+    The track source says this; the episode composes the parts without asking the kind."""
+
+    parts: tuple[str, ...]
+    reset_step: bool = False  # a reset steps the physics once (CarRacing); else it only looks
+    bounds_point: str = "pose"  # the car's point judged against ``bounds``: pose | rear_axle
+    lap_complete_percent: float = 0.95  # back on tile 0 after this fraction closes a lap
+    wall_hit_ends: bool = False  # touching a wall ends the episode
+    cone_hit_ends: bool = False  # knocking a cone over ends the episode
+    info_labels: tuple[str, ...] = ()  # episode labels in info: "track", "spawn", "unit"
+
+
+class ObstacleTest(Protocol):
+    """The narrow phase of the obstacle-colour rule: which obstacles a footprint touches."""
+
+    cells: np.ndarray  # (M, 4) boxes [track units] around obstacle pixels, world sensor order
+
+    def touched(self, corners: np.ndarray, cells: Iterable[int]) -> list[int]:
+        """Obstacle indices (ascending) with a pixel of ``cells`` inside ``corners``."""
+        ...
+
+
+class DistanceTo(Protocol):
+    """A reference the cross-track error is measured to (e.g. a trajectory's pixels)."""
+
+    def query(self, x: float, y: float) -> tuple[float, float, float]:
+        """(distance, nearest x, nearest y) for the point (x, y) [track units]."""
+        ...
+
+
 @dataclass(frozen=True, eq=False)
 class Track:
     """One track, as every part above the track sources sees it. Arrays are read-only."""
@@ -80,6 +115,12 @@ class Track:
     walls: np.ndarray = field(default_factory=_no_boxes)  # (M, 4) solid boxes [track units]
     cones: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (K, 3): x, y, class
     palette: Mapping[str, RGB] = field(default_factory=dict)  # ground colours by name
+    rules: TrackRules = TrackRules(())  # the episode's rule parts on this track
+    circuit: Circuit | None = None  # the road around the reference line (widths, headings)
+    cone_radii: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (K,) [track units]
+    obstacle_test: ObstacleTest | None = None  # obstacle colours' pixels, when there are any
+    trajectory: DistanceTo | None = None  # what the cte is measured to, when not the circuit
+    reference_note: str | None = None  # why the track has no reference line, when it has none
     detail: Any = None  # the source's own data (e.g. ProceduralTrack, ImageTrack)
 
     @property

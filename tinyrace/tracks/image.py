@@ -23,7 +23,7 @@ from tinyrace.config.image_file import read_image_bgr
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.tracks.base import ColorLayer, Track, TrackDraw, pick_index
+from tinyrace.tracks.base import ColorLayer, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.tracks.nearest import NearestPoint
 
 THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
@@ -186,6 +186,15 @@ def _cell_boxes(hits: np.ndarray) -> np.ndarray:
     return np.stack([gx * CELL + x0, gy * CELL + y0, gx * CELL + x1, gy * CELL + y1], axis=1)
 
 
+# tinycarlo's rules: obstacle colours under the footprint, the distance to a trajectory,
+# the picture's bounds at the rear axle; a reset looks at the spawn without moving the car
+IMAGE_RULES = TrackRules(
+    ("obstacle_colours", "trajectory_error", "playfield"),
+    bounds_point="rear_axle",
+    info_labels=("track", "spawn"),
+)
+
+
 class ObstaclePixels:
     """The obstacle pixels of an image track, per cell box, each cell's found on first use.
 
@@ -198,6 +207,7 @@ class ObstaclePixels:
 
     def __init__(self, track: ImageTrack):
         self.track = track
+        self.cells = track.cells  # (M, 4) boxes [px], in the order the world's sensors have them
         self._boxes: list[list[float]] = track.cells.tolist()  # x0, y0, x1, y1 per cell
         self._owners: list[int] = track.cell_obstacles.tolist()  # obstacle index per cell
         self._pixels: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # by cell: x, y
@@ -396,5 +406,8 @@ def as_track(
         spawns=image_track.spawns,
         layers=tuple(layers),
         picture=image_track.image,
+        rules=IMAGE_RULES,
+        obstacle_test=ObstaclePixels(image_track),
+        trajectory=image_track.trajectory,
         detail=image_track,
     )

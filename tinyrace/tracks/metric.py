@@ -25,7 +25,7 @@ from tinyrace.config import (
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
-from tinyrace.tracks.base import Surface, Track, TrackDraw, pick_index
+from tinyrace.tracks.base import Surface, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.tracks.centerline_csv import read_loop
 from tinyrace.tracks.circuit import Circuit
 from tinyrace.tracks.cone_map import RADII, read_cones, road_between
@@ -34,6 +34,7 @@ from tinyrace.tracks.ros_map import OccupancyMap, read_map
 Pose = tuple[float, float, float]
 FILES = FilesConfig()  # the default bounds on the files a track names
 OFF_ROAD_FRICTION = 0.6  # CarRacing's grass grip, as a fraction of the road's
+NO_REFERENCE = "no reference line: this ros_map track has no waypoints (track.waypoints)"
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,10 +61,20 @@ class MetricTrack:
         """(N, 4, 2) [m] progress tiles (none without a reference line)."""
         return np.zeros((0, 4, 2)) if self.circuit is None else self.circuit.tiles
 
-    def as_track(self) -> Track:
-        """The shared track contract (``tinyrace.tracks.base.Track``)."""
+    def as_track(self, config: MetricConfig) -> Track:
+        """The shared track contract (``tinyrace.tracks.base.Track``), with the rules of its
+        episodes: CarRacing's on a road read from a file (tiles passed along the
+        centreline, laps, the cte to it), walls that stop the car, cones knocked over."""
         tiles = None if self.circuit is None else self.circuit.tiles
         surfaces = () if tiles is None else (Surface("road", 1.0, tiles),)
+        progress = ("grass", "centreline_progress") if tiles is not None else ("no_reference",)
+        rules = TrackRules(
+            ("collisions", "playfield", *progress),
+            lap_complete_percent=config.lap_complete_percent,
+            wall_hit_ends=getattr(config, "wall_hit_ends_episode", False),
+            cone_hit_ends=getattr(config, "cone_hit_ends_episode", False),
+            info_labels=("track", "unit"),
+        )
         return Track(
             kind=self.kind,
             unit="m",
@@ -77,6 +88,10 @@ class MetricTrack:
             off_road_friction=OFF_ROAD_FRICTION if self.occupancy is None else 1.0,
             walls=self.walls,
             cones=self.cones,
+            rules=rules,
+            circuit=self.circuit,
+            cone_radii=self.cone_radii,
+            reference_note=NO_REFERENCE if self.circuit is None else None,
             detail=self,
         )
 
@@ -207,7 +222,11 @@ class MetricSource:
                 problems += error.problems
         if problems:
             raise ConfigError(problems)
-        self.tracks = tuple(track.as_track() for track in loaded)
+        configs = [c for c in config.tracks if isinstance(c, METRIC_CONFIGS)]
+        self.tracks = tuple(
+            track.as_track(track_config)
+            for track, track_config in zip(loaded, configs, strict=True)
+        )
 
     def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
         """A track drawn from ``rng`` unless ``options['track']`` picks it (one spawn each)."""

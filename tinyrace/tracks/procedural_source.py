@@ -16,7 +16,7 @@ import numpy as np
 from tinyrace import kernels
 from tinyrace.config import EnvConfig, ProceduralTrackConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.tracks.base import Surface, Track, TrackDraw
+from tinyrace.tracks.base import Surface, Track, TrackDraw, TrackRules
 from tinyrace.tracks.procedural import (
     NoClosedLap,
     ProceduralTrack,
@@ -147,6 +147,11 @@ class ProceduralSource:
                 "background": _rgb(colors.background),
                 "grass": _rgb(colors.grass),
             },
+            rules=TrackRules(
+                ("tile_touches", "playfield"),
+                reset_step=True,  # CarRacing's reset steps the physics once
+                lap_complete_percent=self.config.lap_complete_percent,
+            ),
             detail=generated,
         )
 

@@ -8,7 +8,7 @@ takes each env's step apart (``TinyRaceEnv.step`` is ``control``, the episode's 
 2. every car's tyre forces, spin and steering in one numpy computation, the new
    velocities set on the bodies, skid marks drawn;
 3. stage by stage over the envs: every episode's step with those forces
-   (``forces_applied=True``: the world steps its pymunk space, the rules find the facts),
+   (``TinyRaceEnv.advance``: the world steps its pymunk space, the rules find the facts),
    then every env's ``judge`` (rewards, episode end), every observation, and every
    ``report`` (info), with ``gym.make``'s ``TimeLimit`` counted here instead of called.
    Each stage runs the same code env after env, which keeps it hot in the caches.
@@ -58,7 +58,7 @@ class BatchStepper:
         self.checkers = [_wrapper(env, PassiveEnvChecker) for env in self.envs]
         self.physics = DynamicBatch(len(self.envs))
         self.dt = np.array([core.dt for core in self.cores])  # [s] per env
-        actions = self.cores[0]._actions
+        actions = self.cores[0].action_spec
         self.actions: ActionSpec = actions
         self._stale = np.ones(len(self.envs), dtype=np.bool_)  # rows to load from their cars
         self._discrete = np.array(DISCRETE_CONTROLS)
@@ -76,10 +76,10 @@ class BatchStepper:
                 if type(layer) not in KNOWN_WRAPPERS:
                     return False
                 layer = layer.env
-            if not isinstance(layer, TinyRaceEnv) or layer._actions.kind not in BATCHED_ACTIONS:
+            if not isinstance(layer, TinyRaceEnv) or layer.action_spec.kind not in BATCHED_ACTIONS:
                 return False
             cores.append(layer)
-        return all(core._actions == cores[0]._actions for core in cores)
+        return all(core.action_spec == cores[0].action_spec for core in cores)
 
     def invalidate(self) -> None:
         """The cars may have changed outside this stepper (a reset, a call): reload them."""
@@ -118,7 +118,7 @@ class BatchStepper:
         physics.control(steer, gas, brake)
         on_road = np.ones((len(self.envs), 4), dtype=np.bool_)
         for row in rows:
-            on_road[row] = cores[row]._episode().world.wheel_grip()
+            on_road[row] = cores[row].world.wheel_grip()
         physics.apply_forces(self.dt, rows, on_road)
         physics.store(rows)
         physics.track_skids(rows, on_road)
@@ -129,10 +129,9 @@ class BatchStepper:
         cores = self.cores
         for row, (steer, gas, brake) in zip(rows, controls, strict=True):
             core = cores[row]
-            world = core._episode().world
-            car = world.car
-            car.control(steer, gas, brake)
-            car.apply_forces(core.dt, world.wheel_grip())
+            world = core.world
+            world.control((steer, gas, brake))
+            world.apply_forces(core.dt)
 
     def _finish(self, rows: list[int], write: Write) -> list[Step | None]:
         """The rest of the step, stage by stage over the envs of ``rows``: every world and
@@ -145,9 +144,9 @@ class BatchStepper:
         cores, physics = self.cores, self.physics
         facts = []
         for row in rows:
-            episode = cores[row]._episode()
-            facts.append(episode.step(cores[row].dt, forces_applied=True))
-            if episode.world.contacts.crashed and self.vectorized:  # the car stopped its wheels
+            core = cores[row]
+            facts.append(core.advance())
+            if self.vectorized and core.world.contacts[0].crashed:  # the car stopped its wheels
                 physics.stop(row)  # so do the arrays
         verdicts, error = [], None
         for row, fact in zip(rows, facts, strict=True):
@@ -158,7 +157,7 @@ class BatchStepper:
         if error is not None:
             raise error
         snapshots = [cores[row].snapshot() for row in rows]
-        observations = [cores[row]._observe(s) for row, s in zip(rows, snapshots, strict=True)]
+        observations = [cores[row].observe(s) for row, s in zip(rows, snapshots, strict=True)]
         results: list[Step | None] = [None] * len(self.envs)
         for row, verdict, snapshot, observation in zip(
             rows, verdicts, snapshots, observations, strict=True
@@ -183,9 +182,9 @@ class BatchStepper:
         for row in rows:
             if not stale[row]:
                 continue
-            episode = self.cores[row].episode
-            if episode is not None:
-                car = episode.world.car
+            core = self.cores[row]
+            if core.episode is not None:
+                car = core.world.cars[0]
                 assert isinstance(car, DynamicCar)  # the dynamic car's actions: its car
                 self.physics.load(row, car)
             stale[row] = False

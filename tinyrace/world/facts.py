@@ -14,6 +14,7 @@ class StepFacts:
     """What happened during one step, as the sensors saw it."""
 
     new_tiles: int = 0  # tiles visited for the first time
+    tiles: list[int] = field(default_factory=list)  # which: the tiles first visited this step
     tiles_total: int = 0
     lap_finished: bool = False
     out_of_bounds: bool = False  # left the playfield or the image

@@ -23,3 +23,11 @@ class Snapshot:
     def car(self) -> CarState:
         """The controlled car."""
         return self.cars[0]
+
+    def seen_from(self, car: int) -> Snapshot:
+        """The same moment with car ``car`` first (the car a sensor rides on), the others
+        after it in their order."""
+        if car == 0:
+            return self
+        cars = self.cars
+        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]))

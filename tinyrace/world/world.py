@@ -1,11 +1,19 @@
-"""The pymunk space: the track's static shapes, the car, and the contact facts they produce.
+"""The pymunk space: the track's static shapes, the cars, and the contact facts they produce.
 
-``World.step`` hands the controls to the car, gives each wheel the grip of the ground
-its own contacts report, steps the space and applies the physical consequences (a wall
-stops the car); it returns the contacts as the step's physical facts. ``snapshot``
-copies the car's state for the layers above. Collision callbacks only record facts
-(which tile a wheel touches, which obstacle cell the footprint overlaps); rules and
-rewards are decided elsewhere from those facts.
+``World.step`` hands each car its controls, gives each wheel the grip of the ground its
+own contacts report, steps the space and applies the physical consequences (a wall stops
+a car, and so does another car); it returns every car's contacts as the step's
+physical facts. ``snapshot`` copies the cars' states for the layers above. Collision
+callbacks only record facts (which tile a wheel of which car touches, which obstacle
+cell, wall, cone or other car a car's outline meets); rules and rewards are decided
+elsewhere from those facts.
+
+The stepping protocol (what an env and a batch of envs call, nothing else):
+``control(controls, car)`` per car, then ``step(dt)``, which is ``apply_forces(dt)``
+(each car's forces from its controls and its wheels' grip, ``wheel_grip(car)``)
+followed by ``advance(dt)`` (the space stepped, crashes undone). A batch that computes
+many worlds' forces at once (``tinyrace.vector.batched``) sets them on the cars and
+calls ``advance`` alone.
 """
 
 from __future__ import annotations
@@ -19,6 +27,8 @@ import pymunk
 
 from tinyrace.cars.base import Car
 from tinyrace.cars.collision import (
+    CAR,
+    CAR_FILTER,
     CONE,
     FOOTPRINT,
     OBSTACLE,
@@ -31,55 +41,74 @@ from tinyrace.cars.state import CarState
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.tile_sensors import tile_sensors
 
+MAX_CARS = 16  # cars one world holds
+
 
 @dataclass
 class Contacts:
-    """What the sensors reported; ``new_tile_touches`` is refilled every step."""
+    """What one car's sensors reported; ``new_tile_touches`` and ``new_cars`` are refilled
+    every step."""
 
     wheel_tiles: list[set[int]] = field(default_factory=lambda: [set() for _ in range(4)])
     new_tile_touches: list[int] = field(default_factory=list)  # tiles a wheel began touching
     obstacle_cells: set[int] = field(default_factory=set)  # cells the footprint overlaps now
     walls: set[int] = field(default_factory=set)  # wall boxes the footprint overlaps now
     cones: set[int] = field(default_factory=set)  # cones the footprint overlaps now
+    cars: set[int] = field(default_factory=set)  # other cars (world indices) touching it now
+    new_cars: list[int] = field(default_factory=list)  # cars it began touching this step
     crashed: bool = False  # this step ran into a wall: the car was put back and stopped
+    # (touching another car puts it back and stops it too: ``cars``/``new_cars`` say so)
 
 
 class World:
-    """A pymunk space holding static track sensors and one car.
+    """A pymunk space holding static track sensors and up to ``MAX_CARS`` cars.
 
-    Units are the track's: world units on procedural tracks, pixels on image tracks.
-    ``grass_off_tiles``: a wheel touching no road tile grips as on grass (CarRacing);
-    otherwise every wheel grips as on road.
+    Units are the track's: world units on procedural tracks, pixels on image tracks,
+    metres on metric tracks. ``grass_off_tiles``: a wheel touching no road tile grips as
+    on grass (CarRacing); otherwise every wheel grips as on road. Cars are numbered in
+    the order they were added; ``contacts[i]`` and ``states()[i]`` are car ``i``'s.
     """
 
     def __init__(self, grass_off_tiles: bool = False) -> None:
         self.space = pymunk.Space()
-        self.contacts = Contacts()
         self.grass_off_tiles = grass_off_tiles
         self.cars: list[Car] = []
+        self.contacts: list[Contacts] = []  # per car
+        self.parked: set[int] = set()  # cars out of the race: they stand still where they are
         self._states: tuple[CarState, ...] | None = None  # the cars' states since the last step
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
         self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
         self.space.on_collision(FOOTPRINT, WALL, begin=self._wall_on, separate=self._wall_off)
         self.space.on_collision(FOOTPRINT, CONE, begin=self._cone_on, separate=self._cone_off)
+        self.space.on_collision(CAR, CAR, begin=self._car_on, separate=self._car_off)
 
     # -- cars ----------------------------------------------------------------------------------
-    def add_car(self, car: Car) -> None:
-        """Take ``car`` (already built into ``self.space``) as the world's car."""
-        if self.cars:
-            raise ValueError("a world holds one car: its contacts are that car's")
+    def add_car(self, car: Car) -> int:
+        """Take ``car`` (already built into ``self.space``) into the world; returns its index.
+
+        The world gives it an outline (its footprint's box) that meets other cars' outlines,
+        and tags its shapes with its index for the contacts."""
+        index = len(self.cars)
+        if index >= MAX_CARS:
+            raise ValueError(f"a world holds at most {MAX_CARS} cars")
+        for shape in car.body.shapes:
+            shape.car = index
+        self.space.add(_outline(car.body, index))
         self.cars.append(car)
+        self.contacts.append(Contacts())
         self._states = None
+        return index
 
-    @property
-    def car(self) -> Car:
-        """The controlled car (the live body: the layers above read ``snapshot()``)."""
-        return self.cars[0]
+    def control(self, controls: Sequence[Any], car: int = 0) -> None:
+        """Hand the controls of one action (e.g. steer, gas, brake) to car ``car``."""
+        self.cars[car].control(*controls)
 
-    def control(self, controls: Sequence[Any]) -> None:
-        """Hand the controls of one action (e.g. steer, gas, brake) to the controlled car."""
-        self.cars[0].control(*controls)
+    def park(self, car: int) -> None:
+        """Take car ``car`` out of the race: it stops now and stays where it is, an obstacle
+        the other cars still meet (its contacts are still reported)."""
+        self.parked.add(car)
+        self.cars[car].stop()
 
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
@@ -138,8 +167,9 @@ class World:
         """Take every body but the static track out, so that a track's sensors serve many resets."""
         for body in list(self.space.bodies):
             self.space.remove(body, *body.shapes)
-        self.contacts = Contacts()
+        self.contacts = []
         self.cars = []
+        self.parked = set()
         self._states = None
 
     # -- pickling ----------------------------------------------------------------------------
@@ -166,38 +196,53 @@ class World:
             body.velocity, body.angular_velocity = velocity, spin
 
     # -- stepping ----------------------------------------------------------------------------
-    def step(
-        self, dt: float, actions: Sequence[Sequence[Any]] = (), forces_applied: bool = False
-    ) -> Contacts:
+    def step(self, dt: float, actions: Sequence[Sequence[Any]] = ()) -> list[Contacts]:
         """One step of ``dt`` seconds: ``actions`` (controls per car, if given) handed over,
-        the car's forces with each wheel's grip from its contacts, the space stepped, a car
-        that ran into a wall put back and stopped. Returns this step's contact facts (the
-        world's own object, valid until the next step). ``forces_applied``: the car's
-        forces for this step were set already (a batch computed them, see ``wheel_grip``)."""
-        if actions:
-            for car, controls in zip(self.cars, actions, strict=False):
-                car.control(*controls)
-        car = self.cars[0]
-        contacts = self.contacts
-        before = _place(car.body) if self._walls else None
-        if not forces_applied:
-            car.apply_forces(dt, self.wheel_grip())
-        self.look(dt)
-        if before is not None and contacts.walls:
-            _crash(car, before)
-            contacts.crashed = True
-        return contacts
+        every car's forces with each wheel's grip from its contacts, the space stepped, a
+        car that ran into a wall put back and stopped. Returns every car's contact facts
+        (the world's own objects, valid until the next step)."""
+        for car, controls in zip(self.cars, actions, strict=False):
+            car.control(*controls)
+        self.apply_forces(dt)
+        return self.advance(dt)
 
-    def wheel_grip(self) -> Sequence[bool]:
-        """Per wheel of the car: grips as on road (else as on grass), from its contacts."""
+    def apply_forces(self, dt: float) -> None:
+        """Every car's forces for a step of ``dt`` seconds, from its controls and its wheels'
+        grip (the first half of ``step``)."""
+        parked = self.parked
+        for index, car in enumerate(self.cars):
+            if index not in parked:
+                car.apply_forces(dt, self.wheel_grip(index))
+
+    def advance(self, dt: float) -> list[Contacts]:
+        """The space stepped by ``dt`` seconds with the forces the cars hold; a car that ran
+        into a wall or another car is put back where it stood and stopped (the second half
+        of ``step``; a batch that set many worlds' forces at once calls this alone)."""
+        cars = self.cars
+        before = [_place(car.body) for car in cars] if self._walls or len(cars) > 1 else None
+        self.look(dt)
+        if before is not None:
+            parked = self.parked
+            for index, (car, contacts, place) in enumerate(
+                zip(cars, self.contacts, before, strict=True)
+            ):
+                if contacts.walls or contacts.cars or index in parked:
+                    _crash(car, place)
+                    contacts.crashed = bool(contacts.walls)
+        return self.contacts
+
+    def wheel_grip(self, car: int = 0) -> Sequence[bool]:
+        """Per wheel of car ``car``: grips as on road (else as on grass), from its contacts."""
         if self.grass_off_tiles:
-            return list(map(bool, self.contacts.wheel_tiles))
+            return list(map(bool, self.contacts[car].wheel_tiles))
         return _ALL_ROAD
 
-    def look(self, dt: float) -> Contacts:
+    def look(self, dt: float) -> list[Contacts]:
         """Step the space by ``dt`` seconds without driving (a reset's look at the spawn)."""
-        self.contacts.new_tile_touches.clear()
-        self.contacts.crashed = False
+        for contacts in self.contacts:
+            contacts.new_tile_touches.clear()
+            contacts.new_cars.clear()
+            contacts.crashed = False
         self._states = None
         self.space.step(dt)
         return self.contacts
@@ -222,30 +267,50 @@ class World:
     # (pymunk may hand the pair over in either order when a space is torn down)
     def _wheel_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         wheel, tile = _ordered(arbiter, WHEEL)
-        self.contacts.wheel_tiles[wheel.index].add(tile.index)
-        self.contacts.new_tile_touches.append(tile.index)
+        contacts = self.contacts[wheel.car]
+        contacts.wheel_tiles[wheel.index].add(tile.index)
+        contacts.new_tile_touches.append(tile.index)
 
     def _wheel_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         wheel, tile = _ordered(arbiter, WHEEL)
-        self.contacts.wheel_tiles[wheel.index].discard(tile.index)
+        self.contacts[wheel.car].wheel_tiles[wheel.index].discard(tile.index)
 
     def _cell_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        self.contacts.obstacle_cells.add(_ordered(arbiter, FOOTPRINT)[1].index)
+        car, cell = _ordered(arbiter, FOOTPRINT)
+        self.contacts[car.car].obstacle_cells.add(cell.index)
 
     def _cell_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        self.contacts.obstacle_cells.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+        car, cell = _ordered(arbiter, FOOTPRINT)
+        self.contacts[car.car].obstacle_cells.discard(cell.index)
 
     def _wall_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        self.contacts.walls.add(_ordered(arbiter, FOOTPRINT)[1].index)
+        car, wall = _ordered(arbiter, FOOTPRINT)
+        self.contacts[car.car].walls.add(wall.index)
 
     def _wall_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        self.contacts.walls.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+        car, wall = _ordered(arbiter, FOOTPRINT)
+        self.contacts[car.car].walls.discard(wall.index)
 
     def _cone_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        self.contacts.cones.add(_ordered(arbiter, FOOTPRINT)[1].index)
+        car, cone = _ordered(arbiter, FOOTPRINT)
+        self.contacts[car.car].cones.add(cone.index)
 
     def _cone_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
-        self.contacts.cones.discard(_ordered(arbiter, FOOTPRINT)[1].index)
+        car, cone = _ordered(arbiter, FOOTPRINT)
+        self.contacts[car.car].cones.discard(cone.index)
+
+    def _car_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        a, b = arbiter.shapes
+        for me, other in ((a.car, b.car), (b.car, a.car)):
+            contacts = self.contacts[me]
+            contacts.cars.add(other)
+            contacts.new_cars.append(other)
+
+    def _car_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        a, b = arbiter.shapes
+        if a.car < len(self.contacts) and b.car < len(self.contacts):  # not a torn-down car
+            self.contacts[a.car].cars.discard(b.car)
+            self.contacts[b.car].cars.discard(a.car)
 
 
 _ALL_ROAD = (True, True, True, True)  # per wheel: grips as on road
@@ -261,6 +326,19 @@ def _crash(car: Car, before: Place) -> None:
     """Against a wall: back to where the car stood before the step, at a standstill."""
     car.body.position, car.body.angle = before
     car.stop()
+
+
+def _outline(body: pymunk.Body, index: int) -> pymunk.Poly:
+    """A car's outline for meeting other cars: its footprint's box, a sensor that pairs with
+    other cars' outlines only (a car model may drive its body by velocity, which pymunk's
+    contact impulses would not slow: the world stops both cars instead, as at a wall)."""
+    footprint = next(shape for shape in body.shapes if shape.collision_type == FOOTPRINT)
+    outline = pymunk.Poly(body, footprint.get_vertices())
+    outline.sensor = True
+    outline.collision_type = CAR
+    outline.filter = CAR_FILTER
+    outline.car = index
+    return outline
 
 
 def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:

@@ -1,0 +1,169 @@
+"""Several cars on one track: the PettingZoo ParallelEnv (tinyrace.race)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test
+
+from tinyrace.cars.state import CarState, footprint_corners
+from tinyrace.errors import ConfigError
+from tinyrace.race import aec_env, parallel_env
+
+# one shipped track of every kind (procedural: no environment)
+TRACKS = {
+    "procedural": None,
+    "image": "carolo_cup",
+    "centerline": "circuit",
+    "cone_map": "autocross",
+    "ros_map": "f1tenth_loop",
+}
+
+
+def footprints_overlap(a: CarState, b: CarState) -> bool:
+    """Whether two cars' footprints (convex quads) overlap: no separating axis among their
+    edges' normals."""
+    quads = footprint_corners(a), footprint_corners(b)
+    for quad in quads:
+        for k in range(4):
+            edge = quad[(k + 1) % 4] - quad[k]
+            normal = np.array([-edge[1], edge[0]])
+            pa, pb = quads[0] @ normal, quads[1] @ normal
+            if pa.max() < pb.min() or pb.max() < pa.min():
+                return False
+    return True
+
+
+def make(kind: str, **kwargs):
+    environment = TRACKS[kind]
+    extra = {} if environment is None else {"environment": environment}
+    return parallel_env(**extra, **kwargs)
+
+
+@pytest.mark.filterwarnings("ignore:.*ignores unknown options")
+@pytest.mark.parametrize("kind", sorted(TRACKS))
+def test_pettingzoo_api_and_seed_tests_pass_on_every_track_kind(kind):
+    parallel_api_test(make(kind, num_agents=3), num_cycles=20)
+    parallel_seed_test(lambda: make(kind, num_agents=3), num_cycles=10)
+
+
+@pytest.mark.filterwarnings("ignore:.*ignores unknown options")
+def test_the_aec_form_passes_pettingzoo_api_test():
+    api_test(aec_env(environment="f1tenth_loop", num_agents=2), num_cycles=20)
+
+
+@pytest.mark.parametrize("kind", sorted(TRACKS))
+def test_the_grid_puts_every_car_apart_with_the_pole_at_the_spawn(kind):
+    alone = make(kind, num_agents=1)
+    _, infos = alone.reset(seed=4)
+    env = make(kind, num_agents=8)
+    _, grid = env.reset(seed=4)
+    assert len(grid) == 8
+    state = env.state()
+    cars = env.core.snapshot().cars
+    for i in range(8):
+        for j in range(i + 1, 8):
+            assert not footprints_overlap(cars[i], cars[j]), (i, j, state[i], state[j])
+    # the pole is the single car's spawn, moved sideways by the grid's offset only
+    (x0, y0, h0), (x1, y1, h1) = infos["car_0"]["pose"], grid["car_0"]["pose"]
+    assert h1 == pytest.approx(h0)
+    along = (x1 - x0) * math.cos(h0) + (y1 - y0) * math.sin(h0)
+    assert along == pytest.approx(0.0, abs=1e-6)
+
+
+def test_cars_that_drive_into_each_other_say_whom_they_hit_and_stop():
+    env = parallel_env(environment="f1tenth_loop", num_agents=2)
+    env.reset(seed=0)
+    x, y, heading = env.core.snapshot().cars[0].pose
+    length = env.core.snapshot().cars[0].footprint[0]
+    ahead = (math.cos(heading), math.sin(heading))
+    gap = 3.0 * length
+    poses = [
+        (x, y, heading),
+        (x + gap * ahead[0], y + gap * ahead[1], heading + math.pi),  # nose to nose
+    ]
+    env.reset(seed=0, options={"poses": poses})
+    full = {agent: np.array([0.0, 1.0], dtype=np.float32) for agent in env.agents}
+    hits = []
+    for _ in range(200):
+        _, _, _, _, infos = env.step({a: full[a] for a in env.agents})
+        hits += [(a, tuple(info["cars_hit"])) for a, info in infos.items() if info["cars_hit"]]
+        if hits:
+            break
+    assert sorted(hits) == [("car_0", ("car_1",)), ("car_1", ("car_0",))]
+    cars = env.core.snapshot().cars
+    assert cars[0].speed == cars[1].speed == 0.0  # both stopped where they stood
+
+
+def test_a_tile_pays_only_the_first_car_with_tile_reward_first():
+    def tiles_paid(tile_reward: str) -> list[float]:
+        env = parallel_env(num_agents=2, race={"tile_reward": tile_reward})
+        env.reset(seed=2)
+        gas = np.array([0.0, 0.6, 0.0], dtype=np.float32)
+        paid = [0.0, 0.0]
+        for _ in range(120):
+            _, _, _, _, infos = env.step({a: gas for a in env.agents})
+            for info in infos.values():
+                paid[info["car"]] += info["reward_terms"].get("tiles", 0.0)
+        return paid
+
+    own, first = tiles_paid("own"), tiles_paid("first")
+    assert own[0] > 0 and own[1] > 0  # both cars drive over tiles
+    assert first[0] == own[0]  # the leader visits every tile first
+    assert first[1] < own[1]  # the follower finds most of its tiles paid already
+
+
+def test_a_car_whose_episode_ends_leaves_the_race_parked_and_the_others_go_on():
+    env = parallel_env(environment="f1tenth_loop", num_agents=2)
+    env.reset(seed=0)
+    _, y0, x1, y1 = env.core.layout.bounds
+    cars = env.core.snapshot().cars
+    leaving = (x1 - 0.3, (y0 + y1) / 2, 0.0)  # at the right edge, facing out
+    env.reset(seed=0, options={"poses": [cars[0].pose, leaving]})
+    gas = np.array([0.0, 1.0], dtype=np.float32)
+    for _ in range(100):
+        _, _, terminations, _, infos = env.step({a: gas for a in env.agents})
+        if terminations.get("car_1"):
+            break
+    assert terminations == {"car_0": False, "car_1": True}
+    assert infos["car_1"]["termination"] == "out_of_bounds"
+    assert env.agents == ["car_0"]
+    parked = env.core.snapshot().cars[1].pose
+    for _ in range(5):
+        observations, _, _, _, _ = env.step({"car_0": gas})
+        assert list(observations) == ["car_0"]
+    assert env.core.snapshot().cars[1].pose == parked  # it stands where it left the race
+
+
+def test_actions_for_missing_or_extra_cars_are_refused_naming_them():
+    env = parallel_env(environment="f1tenth_loop", num_agents=2)
+    env.reset(seed=0)
+    gas = np.array([0.0, 1.0], dtype=np.float32)
+    with pytest.raises(ConfigError, match=r"car_1.*no action for this car"):
+        env.step({"car_0": gas})
+    with pytest.raises(ConfigError, match=r"car_7.*no such car"):
+        env.step({"car_0": gas, "car_1": gas, "car_7": gas})
+
+
+def test_more_than_sixteen_cars_is_a_clear_error():
+    with pytest.raises(ConfigError, match=r"race\.num_agents"):
+        parallel_env(num_agents=17)
+
+
+def test_poses_of_the_wrong_shape_are_refused():
+    env = parallel_env(environment="f1tenth_loop", num_agents=2)
+    with pytest.raises(ConfigError, match=r"poses.*2 finite"):
+        env.reset(seed=0, options={"poses": [(0.0, 0.0, 0.0)]})
+
+
+def test_every_car_observes_from_its_own_seat():
+    env = parallel_env(
+        environment="f1tenth_loop",
+        num_agents=2,
+        sensors=[{"type": "lidar", "id": "lidar"}],
+    )
+    observations, _ = env.reset(seed=0)
+    assert set(observations) == {"car_0", "car_1"}
+    assert not np.array_equal(observations["car_0"]["lidar"], observations["car_1"]["lidar"])

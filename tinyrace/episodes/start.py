@@ -1,0 +1,73 @@
+"""Where the cars of an episode start: one at the spawn, or a grid behind it.
+
+The grid follows the track's reference line backwards from the spawn when the track has
+one (the pole position at the spawn, each next car ``spacing`` further back, the cars
+alternating left and right of the line), else a straight line behind the spawn along
+its heading. Distances are in car lengths and widths, so that one config fits tracks in
+any unit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from tinyrace.tracks.base import Pose, Track
+
+
+def grid_poses(
+    track: Track,
+    spawn: Pose,
+    count: int,
+    size: tuple[float, float],
+    spacing: float,
+    offset: float,
+) -> list[Pose]:
+    """``count`` start poses: ``spawn`` first (unchanged for one car), then each car
+    ``spacing`` car lengths behind the one before, ``offset`` car widths to the left
+    (even places) or right (odd places) of the line. ``size``: (length, width) [track units]."""
+    if count == 1:
+        return [spawn]
+    length, width = size
+    distances = [k * spacing * length for k in range(count)]  # [track units] behind the pole
+    sides = [offset * width * (1.0 if k % 2 == 0 else -1.0) for k in range(count)]
+    if track.centerline is not None and len(track.centerline) >= 3:
+        behind = _along_line(track.centerline, spawn, distances)
+    else:
+        x, y, heading = spawn
+        behind = [
+            (x - d * math.cos(heading), y - d * math.sin(heading), heading) for d in distances
+        ]
+    return [_sideways(pose, side) for pose, side in zip(behind, sides, strict=True)]
+
+
+def _along_line(points: np.ndarray, spawn: Pose, distances: Sequence[float]) -> list[Pose]:
+    """Poses on the closed polyline ``points`` at ``distances`` behind the point nearest
+    ``spawn``, facing the direction of travel (the spawn's own heading decides which)."""
+    x, y, heading = spawn
+    loop = np.asarray(points, dtype=np.float64)
+    start = int(np.argmin(np.hypot(loop[:, 0] - x, loop[:, 1] - y)))
+    ahead = loop[(start + 1) % len(loop)] - loop[start]
+    forward = ahead[0] * math.cos(heading) + ahead[1] * math.sin(heading) >= 0
+    order = np.roll(loop, -start, axis=0)  # the spawn's nearest point first
+    if forward:  # walking backwards means walking the points in reverse
+        order = np.concatenate([order[:1], order[:0:-1]])
+    steps = np.diff(np.concatenate([order, order[:1]]), axis=0)
+    reach = np.concatenate([[0.0], np.cumsum(np.hypot(steps[:, 0], steps[:, 1]))])
+    poses = []
+    for distance in distances:
+        d = distance % reach[-1]
+        i = min(int(np.searchsorted(reach, d, side="right")) - 1, len(order) - 1)
+        t = (d - reach[i]) / max(reach[i + 1] - reach[i], 1e-12)
+        px, py = order[i] + t * steps[i]
+        back = math.atan2(steps[i][1], steps[i][0])  # the walk's direction: against travel
+        poses.append((float(px), float(py), back + math.pi))
+    return [spawn, *poses[1:]]  # the pole exactly at the spawn
+
+
+def _sideways(pose: Pose, side: float) -> Pose:
+    """``pose`` moved ``side`` track units to its left (counter-clockwise of its heading)."""
+    x, y, heading = pose
+    return (x - side * math.sin(heading), y + side * math.cos(heading), heading)

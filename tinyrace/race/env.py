@@ -1,0 +1,274 @@
+"""RaceEnv: the cars of one episode as PettingZoo agents, stepped together.
+
+The env builds its parts as a ``TinyRaceEnv`` does (one config: track, car model,
+sensors, rewards) with ``race.num_agents`` cars in the world, and gives every car a seat:
+its own sensors (riding on that car: ``Snapshot.seen_from``), running score, reward terms
+and end. A car whose episode ends (a lap, out of bounds, a collision that ends it) leaves
+``agents`` and is parked where it stands: an obstacle the others still meet. The episode
+ends when every car is out or at ``sim.step_limit`` (all truncated).
+
+Rewards per car are the config's reward terms of that car's facts; with
+``race.tile_reward: first`` a tile pays only the first car to visit it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import ParallelEnv
+
+from tinyrace.env import CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.rewards import ends_episode, reward_terms
+from tinyrace.sensors.base import Sensor
+from tinyrace.world.facts import StepFacts
+from tinyrace.world.snapshot import Snapshot
+
+ACTIONS_SOURCE = "<step actions>"
+
+
+@dataclass
+class Seat:
+    """What the env keeps for one car: its sensors, score, and the reset's carried terms."""
+
+    sensors: list[Sensor]
+    score: float = 0.0
+    carry: dict[str, float] = field(default_factory=dict)
+
+
+class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type information
+    """Cars on one tinyrace track, as a PettingZoo ParallelEnv.
+
+    ## Agents
+    ``car_0`` .. ``car_{N-1}``, N = ``race.num_agents`` (or the ``num_agents`` keyword),
+    at most 16. ``car_0`` starts at the track's spawn, the others on a grid behind it.
+
+    ## Spaces
+    Every car has the action space and observation space of the same config's
+    ``TinyRaceEnv`` (its car model's actions; its sensors, seen from that car).
+
+    ## Rewards, ends, infos
+    Per car, as a ``TinyRaceEnv`` computes them for its one car; infos add ``car`` (the
+    index), ``position`` (place in the race by tiles visited, 1 = leading) and ``cars_hit``
+    (the other cars it touched this step).
+    """
+
+    metadata: dict[str, Any] = {  # noqa: RUF012
+        "name": "tinyrace_race_v0",
+        "render_modes": ["rgb_array"],
+        "render_fps": 50,
+        "is_parallelizable": True,
+    }
+
+    def __init__(
+        self,
+        config: str | Path | Mapping[str, Any] | None = None,
+        environment: str | Path | None = None,
+        num_agents: int | None = None,
+        render_mode: str | None = None,
+        **overrides: Any,
+    ):
+        if num_agents is not None:
+            race = dict(overrides.get("race") or {})
+            overrides = {**overrides, "race": {**race, "num_agents": num_agents}}
+        self.core = core = TinyRaceEnv(config, environment, render_mode=render_mode, **overrides)
+        self.render_mode = render_mode
+        count = core.config.race.num_agents
+        self.possible_agents = [f"car_{i}" for i in range(count)]
+        self.agents: list[str] = []
+        self._index = {agent: i for i, agent in enumerate(self.possible_agents)}
+        self.seats = [Seat(core.sensors)] + [Seat(core.make_sensors()) for _ in range(1, count)]
+        self._observation_spaces = {a: _copy(core.observation_space) for a in self.possible_agents}
+        self._action_spaces = {a: _copy(core.action_space) for a in self.possible_agents}
+        self._claimed = np.zeros(0, bool)  # tiles paid already (tile_reward: first)
+
+    # -- PettingZoo API ---------------------------------------------------------------------
+    def observation_space(self, agent: str) -> spaces.Space[Any]:
+        return self._observation_spaces[agent]
+
+    def action_space(self, agent: str) -> spaces.Space[Any]:
+        return self._action_spaces[agent]
+
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, Any], dict[str, Any]]:
+        core = self.core
+        _, first_info = core.reset(seed=seed, options=_known_options(options))
+        episode = core.episode
+        assert episode is not None
+        self.agents = list(self.possible_agents)
+        tiles = core.layout.tiles
+        self._claimed = np.zeros(0 if tiles is None else len(tiles), bool)
+        facts = core.start_facts
+        snapshot = core.snapshot()
+        for i, seat in enumerate(self.seats):
+            if i > 0:
+                for sensor in seat.sensors:
+                    sensor.reset(core.layout)
+            terms = reward_terms(
+                facts[i], core.config.reward_design, core.shaping, charge_time=False
+            )
+            seat.carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
+            seat.score = sum(seat.carry.values())
+        observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
+        infos = {agent: self._info(snapshot, i, {}, facts[i]) for agent, i in self._live()}
+        infos["car_0"] = {**first_info, **infos["car_0"]}
+        return observations, infos
+
+    def step(
+        self, actions: Mapping[str, Any]
+    ) -> tuple[dict[str, Any], dict[str, float], dict[str, bool], dict[str, bool], dict[str, Any]]:
+        core = self.core
+        episode = core.episode
+        if episode is None or not self.agents:
+            raise ConfigError(Problem(ACTIONS_SOURCE, "", None, "call reset() before step()"))
+        self._check_agents(actions)
+        world = episode.world
+        for agent, i in self._live():
+            world.control(core.action_spec.read(actions[agent]), car=i)
+        facts = episode.step(core.dt)
+        core.t += core.dt
+        core.steps += 1
+        if core.config.race.tile_reward == "first":
+            self._pay_first_visits(facts)
+        limit = core.config.sim.step_limit
+        truncate = limit is not None and core.steps >= limit
+        rewards, terminations, truncations, ended = {}, {}, {}, []
+        terms_of: dict[str, dict[str, float]] = {}
+        reasons: dict[str, str | None] = {}
+        for agent, i in self._live():
+            terms, reward, reason = self._judge(i, facts[i])
+            rewards[agent], terms_of[agent], reasons[agent] = reward, terms, reason
+            terminations[agent] = reason is not None
+            truncations[agent] = truncate and reason is None
+            if reason is not None or truncate:
+                ended.append(agent)
+        snapshot = core.snapshot()
+        observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
+        infos = {}
+        for agent, i in self._live():
+            info = self._info(snapshot, i, terms_of[agent], facts[i])
+            if reasons[agent] is not None:
+                info["termination"] = reasons[agent]
+                info["lap_finished"] = reasons[agent] == "lap_finished"
+            infos[agent] = info
+        for agent in ended:
+            if not truncate:
+                episode.park(self._index[agent])
+        self.agents = [agent for agent in self.agents if agent not in ended]
+        return observations, rewards, terminations, truncations, infos
+
+    def render(self) -> np.ndarray | None:
+        return self.core.render()
+
+    def close(self) -> None:
+        self.core.close()
+
+    def state(self) -> np.ndarray:
+        """Every car's (x, y, heading, speed), car by car."""
+        cars = self.core.snapshot().cars
+        return np.array([[*car.pose, car.speed] for car in cars], dtype=np.float64)
+
+    # -- parts ------------------------------------------------------------------------------
+    def _live(self) -> list[tuple[str, int]]:
+        return [(agent, self._index[agent]) for agent in self.agents]
+
+    def _check_agents(self, actions: Mapping[str, Any]) -> None:
+        """Every live car has an action, and only they: a ConfigError names the others."""
+        if not isinstance(actions, Mapping):
+            allowed = "expected a dict of actions keyed by agent (car_0, car_1, ...)"
+            raise ConfigError(Problem(ACTIONS_SOURCE, "", type(actions).__name__, allowed))
+        missing = [agent for agent in self.agents if agent not in actions]
+        extra = [agent for agent in actions if agent not in self.agents]
+        problems = [
+            Problem(ACTIONS_SOURCE, str(agent), None, "no action for this car, which races on")
+            for agent in missing
+        ] + [
+            Problem(ACTIONS_SOURCE, str(agent), "an action", _not_racing(agent, self))
+            for agent in extra
+        ]
+        if problems:
+            raise ConfigError(problems)
+
+    def _judge(self, car: int, facts: StepFacts) -> tuple[dict[str, float], float, str | None]:
+        """One car's reward terms, reward and end (as ``TinyRaceEnv.judge`` for its car)."""
+        core, seat = self.core, self.seats[car]
+        design = core.config.reward_design
+        terms = reward_terms(facts, design, core.shaping, True, core.terms)
+        carried, seat.carry = seat.carry, {}
+        if carried:
+            terms = {k: terms.get(k, 0.0) + carried.get(k, 0.0) for k in {**terms, **carried}}
+        reward = float(sum(terms.values()))
+        if not facts.out_of_bounds:
+            seat.score += reward - sum(carried.values())
+        return terms, reward, ends_episode(facts, design)
+
+    def _pay_first_visits(self, facts: list[StepFacts]) -> None:
+        """``tile_reward: first``: a tile first visited by several cars pays the first only."""
+        claimed = self._claimed
+        for fact in facts:
+            paid = [tile for tile in fact.tiles if not claimed[tile]]
+            claimed[paid] = True
+            fact.new_tiles = len(paid)
+
+    def _observe(self, snapshot: Snapshot, car: int) -> Any:
+        core = self.core
+        seen = snapshot.seen_from(car)
+        sensors = self.seats[car].sensors
+        if not sensors:
+            return core.pictures.observe(seen, self.seats[car].score)
+        observation = {s.id: s.observe(seen, core.layout, core.np_random) for s in sensors}
+        return observation if core.box_camera is None else observation[core.box_camera]
+
+    def _info(
+        self, snapshot: Snapshot, car: int, terms: dict[str, float], facts: StepFacts
+    ) -> dict[str, Any]:
+        episode = self.core.episode
+        assert episode is not None
+        info = episode.info(snapshot, car)
+        info["reward_terms"] = terms
+        info["car"] = car
+        info["position"] = self._position(car)
+        info["cars_hit"] = [f"car_{other}" for other in episode.world.contacts[car].new_cars]
+        return info
+
+    def _position(self, car: int) -> int:
+        """1 + the number of cars with more progress (tiles visited) than ``car``."""
+        episode = self.core.episode
+        assert episode is not None
+        progress = [_tiles_visited(rules) for rules in episode.rules]
+        return 1 + sum(p > progress[car] for p in progress)
+
+
+def _known_options(options: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """The reset options tinyrace knows; others are left out with a warning (PettingZoo's
+    API test resets with an option no env knows)."""
+    if options is None:
+        return None
+    unknown = [key for key in options if key not in RESET_OPTIONS]
+    if unknown:
+        gym.logger.warn(f"RaceEnv.reset ignores unknown options {unknown}; known: {RESET_OPTIONS}")
+    return {key: value for key, value in options.items() if key in RESET_OPTIONS}
+
+
+def _tiles_visited(rules: list[Any]) -> int:
+    return max((getattr(rule, "visited_count", 0) for rule in rules), default=0)
+
+
+def _not_racing(agent: object, env: RaceEnv) -> str:
+    if agent in env.possible_agents:
+        return "this car is out of the race: it takes no more actions"
+    return f"no such car; the agents are {', '.join(env.possible_agents)}"
+
+
+def _copy(space: spaces.Space[Any]) -> spaces.Space[Any]:
+    """A car's own copy of a space (its own random generator for ``sample``)."""
+    import copy
+
+    return copy.deepcopy(space)
