@@ -80,14 +80,23 @@ class LidarConfig:
         low_open=True,
     )
     position: tuple[float, float] = knob(
-        (0.0, 0.0), "[x, y] from the middle of the front axle: ahead, left", LENGTH
+        (0.0, 0.0), "[x, y] from the middle of the axle that mount names: ahead, left", LENGTH
+    )
+    mount: Literal["front_axle", "rear_axle"] = knob(
+        "front_axle",
+        "the point position is measured from: the middle of the front or the rear axle "
+        "(f1tenth_gym scans from its car's rear axle plus lidar_dist ahead, 0 m by default: "
+        "mount: rear_axle, position: [lidar_dist, 0]; a lidar 0.275 m ahead of the rear "
+        "axle: position: [0.275, 0])",
     )
     range_std: float = knob(0.0, "std of Gaussian range noise", LENGTH, low=0)
     dropout: float = knob(0.0, "chance that a beam returns max_range", low=0, high=1)
-    blocks: tuple[Literal["off_road", "walls", "obstacles", "cones"], ...] = knob(
-        ("off_road", "walls", "obstacles", "cones"),
+    blocks: tuple[Literal["off_road", "walls", "obstacles", "cones"], ...] | None = knob(
+        None,
         "what stops a beam: off_road (beyond the road surfaces), walls, obstacles (colour "
-        "obstacles of picture tracks), cones",
+        "obstacles of picture tracks), cones (null: walls and cones on ROS maps, where "
+        "beams cross the map's pixels exactly and stop at the first occupied one; all four "
+        "elsewhere)",
     )
     hit_classes: bool = knob(
         False,

@@ -378,3 +378,70 @@ def fan_angle(
     reverse = sign < 0
     first = float(angles[-1] if reverse else angles[0])
     return turn + mirror * heading + sign * first, reverse
+
+
+# Exact traversal (ROS maps): beams cross the map's cells as squares, edges on half-integer
+# cell coordinates, and stop where they enter the first blocking one
+LEAP_MARGIN = 0.01  # [cells] a leap stops this far short of any blocking cell's square
+LEAP_MIN = 1.0  # [cells] shorter leaps are not taken: the traversal steps cell by cell
+
+
+@dataclass(frozen=True, eq=False)
+class ExactField:
+    """The blocking cells of a map for the exact traversal (``raycast_numpy.cast_exact``,
+    ``raycast_numba.cast_exact``), padded by PAD blocking cells (the map's edge stops a
+    beam).
+
+    ``leaps`` [cells] is how far a beam may go from any point of a free cell without
+    entering a blocking cell's square (its centre's distance to the nearest blocking
+    centre less sqrt(2), less LEAP_MARGIN), 0 where that is under LEAP_MIN: the traversal
+    leaps there instead of stepping cell by cell. It changes no range: a leap ends in a free
+    cell, and the cell-by-cell steps go on from there.
+    """
+
+    blocked: np.ndarray  # (H, w) uint8, 1 where blocking
+    leaps: np.ndarray  # (H, w) float64 [cells]
+    to_cells: np.ndarray  # 2x3 affine: track units -> cell coordinates of the padded map
+    cells_per_unit: float  # [cells per track unit]
+    classes: np.ndarray | None = None  # (H, w) uint8 hit class of blocking cells and their rim
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        height, width = self.blocked.shape
+        return height, width
+
+    def blocking(self) -> np.ndarray:
+        """(H, w) uint8 view of the padded map, 1 where blocking."""
+        return self.blocked
+
+    def cells(self, point: tuple[float, float]) -> tuple[float, float]:
+        """[cells] of a track point in the padded map."""
+        (a, b, c), (d, e, f) = self.to_cells.tolist()
+        return a * point[0] + b * point[1] + c, d * point[0] + e * point[1] + f
+
+
+def exact_field(
+    blocking: np.ndarray, to_cells: np.ndarray, classes: np.ndarray | None = None
+) -> ExactField:
+    """The exact field of a boolean (H, W) map of blocking cells (``to_cells``: the track ->
+    cell affine, cell centres on integer coordinates); ``classes`` (H, W) uint8 hit classes
+    of the blocking cells, when beams report them. The cell frame must be square (a
+    rotation, a mirror and one scale)."""
+    padded = cv2.copyMakeBorder(
+        blocking.astype(np.uint8), PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1
+    )
+    leaps = _distance(padded).astype(np.float64) - (math.sqrt(2) + LEAP_MARGIN)
+    leaps[leaps < LEAP_MIN] = 0.0
+    shifted = np.asarray(to_cells, np.float64) + np.array([[0, 0, PAD], [0, 0, PAD]])
+    scale = math.sqrt(abs(np.linalg.det(shifted[:, :2])))
+    if classes is not None:  # an end on a cell's edge may round to the free side: the rim too
+        classes = cv2.copyMakeBorder(classes, PAD, PAD, PAD, PAD, cv2.BORDER_CONSTANT, value=1)
+        classes = np.where(classes > 0, classes, cv2.dilate(classes, np.ones((3, 3), np.uint8)))
+    return ExactField(padded, leaps, shifted, scale, classes)
+
+
+def exact_directions(field: ExactField, directions: np.ndarray) -> np.ndarray:
+    """(B, 2) float64 unit vectors in the cell frame of (B, 2) track-unit directions."""
+    turned = np.asarray(directions, np.float64) @ field.to_cells[:, :2].T
+    unit: np.ndarray = turned / np.hypot(turned[:, 0], turned[:, 1])[:, None]
+    return unit
