@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
+from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
@@ -28,6 +29,7 @@ from tinyrace.config.schema import (
     SimConfig,
     TrackConfig,
 )
+from tinyrace.config.sensors import PerspectiveCameraConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_track, track_names
 
@@ -90,7 +92,8 @@ def load_env_config(
         raw = deep_merge(raw, overrides)
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
-    return LoadedConfig(parse_env_config(raw, source), source, base_dir)
+    parsed = with_camera_info(parse_env_config(raw, source), source, base_dir)
+    return LoadedConfig(parsed, source, base_dir)
 
 
 _Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
@@ -187,6 +190,10 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         elif track.type == "image":
             _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
     _check_camera_pixels(config.cameras, parser, at)
+    for i, sensor in enumerate(config.sensors):
+        if isinstance(sensor, PerspectiveCameraConfig):
+            for key, value, allowed in intrinsics_problems(sensor):
+                parser.problem(f"{at}sensors[{i}].{key}", value, allowed)
 
 
 def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:

@@ -50,7 +50,31 @@ class PerspectiveCameraConfig:
         low=-180,
         high=180,
     )
-    fov: float = knob(90.0, "horizontal field of view", "deg", low=1, high=170)
+    fov: float | None = knob(
+        None,
+        "horizontal field of view, the principal point at the image centre (null: 90 unless "
+        "intrinsics or camera_info are given)",
+        "deg",
+        low=1,
+        high=170,
+    )
+    intrinsics: tuple[float, float, float, float] | None = knob(
+        None,
+        "[fx, fy, cx, cy] focal lengths and principal point, pixel centres on integer "
+        "coordinates (OpenCV's camera matrix); instead of fov",
+        "px",
+    )
+    distortion: tuple[float, float, float, float, float] | None = knob(
+        None,
+        "plumb_bob distortion of the intrinsics: [k1, k2, p1, p2, k3] (OpenCV's order; null: none)",
+    )
+    camera_info: str | None = knob(
+        None,
+        "a ROS camera_info YAML (camera_calibration's: image_width, image_height, "
+        "camera_matrix, distortion_model plumb_bob, distortion_coefficients), relative to the "
+        "config's folder; instead of fov and intrinsics (its camera matrix is scaled to "
+        "resolution)",
+    )
     max_range: float | None = knob(
         None,
         "ground farther than this (from the camera's foot) is sky (null: no limit)",

@@ -45,8 +45,9 @@ from tinyrace.sensors.raycast import (
     Fan,
     beam_fan,
     distance_field,
-    exact_directions,
+    exact_fan,
     exact_field,
+    exact_turn,
     fan_angle,
     table_bytes,
 )
@@ -214,9 +215,7 @@ def _picture_labels(
 
 
 Cast = Callable[[DistanceField, Fan, tuple[float, float], float, bool], np.ndarray]
-CastExact = Callable[
-    [np.ndarray, np.ndarray, tuple[float, float], np.ndarray, np.ndarray, float], np.ndarray
-]
+CastExact = Callable[[np.ndarray, tuple[float, float], np.ndarray, np.ndarray, float], np.ndarray]
 
 
 def kernel(wanted: str | None = None) -> tuple[str, Cast]:
@@ -269,6 +268,7 @@ class LidarSensor:
         self.field: DistanceField | None = None
         self.fan: Fan | None = None
         self.exact: ExactField | None = None  # the field of a ROS map (exact traversal)
+        self.exact_fan: tuple[np.ndarray, ...] | None = None  # its beams' (cos, sin)
         self._fans: dict[tuple[Any, ...], Fan] = {}
         self.kernel, self._cast = kernel(kernel_name)
         self._cast_exact = exact_kernel(self.kernel)
@@ -290,6 +290,7 @@ class LidarSensor:
         made = self._fields.get(track, self._tables)
         if isinstance(made, ExactField):
             self.exact, self.field, self.fan = made, None, None
+            self.exact_fan = exact_fan(made, self.angles, track.y_down)
         else:
             self.exact, (self.field, self.fan) = None, made
 
@@ -328,8 +329,10 @@ class LidarSensor:
         """float32 ranges [track units] of the beams from ``origin`` [track units] of a car
         at ``heading`` [rad], without noise."""
         if self.exact is not None:
-            beams = directions(self.angles, heading, y_down)
-            return exact_ranges(self.exact, self._cast_exact, origin, beams, self.max_range)
+            assert self.exact_fan is not None
+            return exact_ranges(
+                self.exact, self._cast_exact, origin, self.exact_fan, heading, self.max_range
+            )
         assert self.field is not None and self.fan is not None, "reset() before observe()"
         first, reverse = fan_angle(self.field, self.angles, heading, y_down)
         return self._cast(self.field, self.fan, origin, first, reverse)
@@ -358,16 +361,19 @@ def exact_ranges(
     field: ExactField,
     cast_exact: CastExact,
     origin: tuple[float, float],
-    beams: np.ndarray,
+    fan: tuple[np.ndarray, ...],
+    heading: float,
     max_range: float,
 ) -> np.ndarray:
-    """float32 ranges [track units] of the (B, 2) unit ``beams`` [track units] from
-    ``origin`` [track units] by the exact traversal of ``field`` (``cast_exact``: either
-    path's), at most ``max_range``; 0 from a blocking cell or off the map."""
-    turned = exact_directions(field, beams)
-    dx, dy = np.ascontiguousarray(turned[:, 0]), np.ascontiguousarray(turned[:, 1])
+    """float32 ranges [track units] of the beams of ``fan`` (``raycast.exact_fan``) of a car
+    at ``heading`` [rad] from ``origin`` [track units] by the exact traversal of ``field``
+    (``cast_exact``: either path's), at most ``max_range``; 0 from a blocking cell or off the
+    map."""
+    ca, sa = fan
+    cb, sb = exact_turn(field, heading)
+    dx, dy = ca * cb - sa * sb, sa * cb + ca * sb  # [cells] the beams turned
     limit = max_range * field.cells_per_unit
-    cells = cast_exact(field.blocked, field.leaps, field.cells(origin), dx, dy, limit)
+    cells = cast_exact(field.cells, field.cell(origin), dx, dy, limit)
     ranges: np.ndarray = np.minimum(cells / field.cells_per_unit, max_range).astype(np.float32)
     return ranges
 

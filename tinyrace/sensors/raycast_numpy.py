@@ -20,7 +20,9 @@ import numpy as np
 from tinyrace.sensors.raycast import (
     BISECTIONS,
     CHECK_EVERY,
+    EXACT_BLOCKED,
     FINE_SAMPLES,
+    LEAP_UNIT,
     MAX_ROUNDS,
     ORIGIN_STEPS,
     OVERSHOOT,
@@ -182,44 +184,44 @@ def _refine(
 
 
 def cast_exact(
-    blocked: np.ndarray,
-    leaps: np.ndarray,
+    cells: np.ndarray,
     origin: tuple[float, float],
     dx: np.ndarray,
     dy: np.ndarray,
     limit: float,
 ) -> np.ndarray:
     """float64 distance [cells] from ``origin`` [cells] along each unit direction (dx, dy)
-    [cells] to the edge of the first blocking cell of ``blocked`` (H, w) (cells are squares
-    centred on integer coordinates), at most ``limit``; 0 for every beam when the origin is
-    off the map or in a blocking cell. An Amanatides-Woo traversal, vectorised over the
-    beams: each round, a beam in a free cell with a leap (``raycast.ExactField``) leaps,
-    the others step into the next cell their line crosses; ``raycast_numba.cast_exact``
-    does the same rounds beam by beam, with the same float64 arithmetic."""
+    [cells] to the edge of the first blocking cell of an exact field's ``cells`` (H, w)
+    (squares centred on integer coordinates; ``raycast.ExactField``), at most ``limit``; 0
+    for every beam when the origin is off the map or in a blocking cell. An Amanatides-Woo
+    traversal, vectorised over the beams: each round, a beam in a free cell with a leap
+    leaps, the others step into the next cell their line crosses;
+    ``raycast_numba.cast_exact`` does the same rounds beam by beam, with the same float64
+    arithmetic."""
     ox, oy = origin
-    height, width = blocked.shape
+    height, width = cells.shape
     beams = len(dx)
     out = np.zeros(beams, np.float64)
     col, row = math.floor(ox + 0.5), math.floor(oy + 0.5)
-    if not (0 <= row < height and 0 <= col < width) or blocked[row, col]:
+    if not (0 <= row < height and 0 <= col < width) or cells[row, col] == EXACT_BLOCKED:
         return out
     half_x = np.where(dx > 0, 0.5, -0.5)
     half_y = np.where(dy > 0, 0.5, -0.5)
     step_x = np.where(dx > 0, 1, -1)
     step_y = np.where(dy > 0, 1, -1)
-    safe_x = np.where(dx != 0, dx, 1.0)
-    safe_y = np.where(dy != 0, dy, 1.0)
+    with np.errstate(divide="ignore"):
+        inv_x, inv_y = 1.0 / dx, 1.0 / dy
     index = np.arange(beams)
     t = np.zeros(beams)
     ix, iy = np.full(beams, col, np.int64), np.full(beams, row, np.int64)
-    tmx = np.where(dx != 0, ((ix + half_x) - ox) / safe_x, np.inf)
-    tmy = np.where(dy != 0, ((iy + half_y) - oy) / safe_y, np.inf)
+    tmx = _edge(ix, half_x, ox, dx, inv_x)
+    tmy = _edge(iy, half_y, oy, dy, inv_y)
+    leap = cells[iy, ix]
     while len(index):
-        leap = leaps[iy, ix]
         jump = leap > 0
         along_x = ~jump & (tmx < tmy)
         along_y = ~jump & ~along_x
-        t = np.where(jump, t + leap, np.where(along_x, tmx, tmy))
+        t = np.where(jump, t + leap / LEAP_UNIT, np.where(along_x, tmx, tmy))
         if jump.any():
             j = np.flatnonzero(jump)
             ix[j] = np.floor((ox + t[j] * dx[index[j]]) + 0.5).astype(np.int64)
@@ -228,12 +230,22 @@ def cast_exact(
         iy += np.where(along_y, step_y[index], 0)
         moved_x, moved_y = jump | along_x, jump | along_y
         gx, gy = index[moved_x], index[moved_y]
-        tmx[moved_x] = np.where(dx[gx] != 0, ((ix[moved_x] + half_x[gx]) - ox) / safe_x[gx], np.inf)
-        tmy[moved_y] = np.where(dy[gy] != 0, ((iy[moved_y] + half_y[gy]) - oy) / safe_y[gy], np.inf)
+        tmx[moved_x] = _edge(ix[moved_x], half_x[gx], ox, dx[gx], inv_x[gx])
+        tmy[moved_y] = _edge(iy[moved_y], half_y[gy], oy, dy[gy], inv_y[gy])
+        leap = cells[iy, ix]
         far = t >= limit
-        stop = far | (blocked[iy, ix] != 0)
+        stop = far | (leap == EXACT_BLOCKED)
         if stop.any():
             out[index[stop]] = np.where(far[stop], limit, t[stop])
             keep = ~stop
-            index, t, ix, iy, tmx, tmy = (a[keep] for a in (index, t, ix, iy, tmx, tmy))
+            index, t, ix, iy, tmx, tmy, leap = (a[keep] for a in (index, t, ix, iy, tmx, tmy, leap))
     return out
+
+
+def _edge(
+    i: np.ndarray, half: np.ndarray, o: float, d: np.ndarray, inverse: np.ndarray
+) -> np.ndarray:
+    """[cells] along each beam from the origin ``o`` to the far edge of its cell ``i`` on
+    one axis (direction ``d``, ``inverse`` 1 / d; inf when d is 0)."""
+    edge: np.ndarray = np.where(d != 0, ((i + half) - o) * np.where(d != 0, inverse, 1.0), np.inf)
+    return edge
