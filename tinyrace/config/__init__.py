@@ -241,12 +241,15 @@ def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -
 
 
 # Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
-# a small racing car's in metres.
+# a small racing car's in metres, and on ROS maps (F1TENTH's maps) F1TENTH's car: wheelbase
+# lf + lr = 0.33 m, width 0.31 m (f1tenth_gym's parameters), the shipped f1tenth_loop's top
+# speed, CarRacing's car scaled to about that wheelbase (3.24 u).
 CAR_DEFAULTS = {
     # [px], [px], [px/s], [px/u]
     "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0},
     # [m], [m], [m/s], [m/u]
     "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0},
+    "ros_map": {"wheelbase": 0.33, "track_width": 0.31, "velocity": 5.0, "pixels_per_unit": 0.1},
 }
 
 
@@ -257,7 +260,8 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     sim = config.sim
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
-    sizes = CAR_DEFAULTS["m" if config.kind in METRIC_KINDS else "px"]
+    unit = "m" if config.kind in METRIC_KINDS else "px"
+    sizes = CAR_DEFAULTS["ros_map" if config.kind == "ros_map" else unit]
     car = config.car
     car = dataclasses.replace(
         car,

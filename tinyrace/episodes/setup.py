@@ -15,6 +15,7 @@ from tinyrace.config import EnvConfig, LoadedConfig
 from tinyrace.episodes.image import ImageCourse
 from tinyrace.episodes.metric import MetricCourse
 from tinyrace.episodes.procedural import ProceduralCourse
+from tinyrace.episodes.start_pose import start_fits, start_problems
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
 from tinyrace.tracks.image import ImageSource
@@ -45,6 +46,10 @@ def prepare(loaded: LoadedConfig) -> Parts:
     car_model = choose_car_model(loaded.config, loaded.source)  # raises the problems found
     car = dataclasses.replace(loaded.config.car, model=car_model.name)  # type: ignore[arg-type]
     config = dataclasses.replace(loaded.config, car=car)
+    if isinstance(source, MetricSource):  # the car must fit at every spawn
+        fits = start_fits(config, source, car_model)
+        if any(not fit.free for fit in fits):
+            raise ConfigError(start_problems(config, fits, loaded.source))
     return Parts(config, car_model, source, _course(config, source, car_model))
 
 
