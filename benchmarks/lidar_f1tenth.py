@@ -97,8 +97,8 @@ def tinyrace_lidar(folder: Path, spawn: np.ndarray, kernel: str) -> LidarSensor:
 def errors(ranges: np.ndarray, reference: np.ndarray) -> str:
     error = np.abs(ranges - reference)
     return (
-        f"median {np.median(error) * 100:.2f} cm, p99 {np.percentile(error, 99) * 100:.1f} cm, "
-        f"max {error.max():.2f} m"
+        f"median {np.median(error) * 1000:.4f} mm, p99 {np.percentile(error, 99) * 1000:.4f} mm, "
+        f"max {error.max() * 1000:.4f} mm"
     )
 
 

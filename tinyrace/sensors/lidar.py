@@ -58,6 +58,7 @@ from tinyrace.world.snapshot import Snapshot
 
 KERNEL_VARIABLE = "TINYRACE_LIDAR"  # environment variable: auto | numba | numpy
 TABLE_LIMIT = 256 * 2**20  # [bytes] the numpy path's sample tables of one lidar, at most
+ROS_MAX_RANGE = 30.0  # [m] max_range on ROS maps unless given: F1TENTH's (f1tenth_gym)
 ROS_BLOCKS = ("walls", "cones")  # what stops a beam on a ROS map unless ``blocks`` says
 ALL_BLOCKS = ("off_road", "walls", "obstacles", "cones")  # ... and on the other tracks
 NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
@@ -395,7 +396,10 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     """The lidar of ``config``; null knobs scale with the car (see LidarConfig)."""
     env = context.env
     length = car_length(env)
-    max_range = config.max_range if config.max_range is not None else 10 * length
+    if config.max_range is not None:
+        max_range = config.max_range
+    else:  # F1TENTH's lidar on its maps, else 10 car lengths
+        max_range = ROS_MAX_RANGE if env.kind == "ros_map" else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
     return LidarSensor(config, max_range, cell, cone_colors, exact_only=env.kind == "ros_map")
