@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -12,6 +13,7 @@ import numpy as np
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
 from tinyrace.config.loader import read_yaml
 from tinyrace.episodes.setup import Parts, prepare
+from tinyrace.episodes.start_pose import start_fits
 from tinyrace.errors import ConfigError, Problem
 
 COMMAND_LINE = "<command line>"  # the source named by errors in command-line arguments
@@ -49,7 +51,25 @@ def validate_path(path: Path) -> tuple[list[str], str]:
         try_one_step(loaded)
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
-    return [], describe(parts.config)
+    return [], describe(parts.config) + start_summary(parts)
+
+
+def start_summary(parts: Parts) -> str:
+    """'; start free: ...' on tracks with walls or cones: the car's footprint at its spawns
+    and how far it is from the nearest wall and cone (``prepare`` refuses a spawn that
+    touches either)."""
+    fits = start_fits(parts.config, getattr(parts.source, "tracks", ()), parts.car_model)
+    if not fits:
+        return ""
+    length, width = fits[0].size
+    text = f"; start free: car footprint {length:.2f} x {width:.2f} m"
+    for name, clearance in (
+        ("wall", min(f.wall_clearance for f in fits)),
+        ("cone", min(f.cone_clearance for f in fits)),
+    ):
+        if math.isfinite(clearance):
+            text += f", {clearance:.2f} m from the nearest {name}"
+    return text
 
 
 def try_one_step(loaded: LoadedConfig) -> None:

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
+from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
@@ -28,6 +29,7 @@ from tinyrace.config.schema import (
     SimConfig,
     TrackConfig,
 )
+from tinyrace.config.sensors import PerspectiveCameraConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_track, track_names
 
@@ -90,7 +92,8 @@ def load_env_config(
         raw = deep_merge(raw, overrides)
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
-    return LoadedConfig(parse_env_config(raw, source), source, base_dir)
+    parsed = with_camera_info(parse_env_config(raw, source), source, base_dir)
+    return LoadedConfig(parsed, source, base_dir)
 
 
 _Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
@@ -187,6 +190,10 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         elif track.type == "image":
             _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
     _check_camera_pixels(config.cameras, parser, at)
+    for i, sensor in enumerate(config.sensors):
+        if isinstance(sensor, PerspectiveCameraConfig):
+            for key, value, allowed in intrinsics_problems(sensor):
+                parser.problem(f"{at}sensors[{i}].{key}", value, allowed)
 
 
 def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:
@@ -234,12 +241,15 @@ def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -
 
 
 # Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
-# a small racing car's in metres.
+# a small racing car's in metres, and on ROS maps (F1TENTH's maps) F1TENTH's car: wheelbase
+# lf + lr = 0.33 m, width 0.31 m (f1tenth_gym's parameters), the shipped f1tenth_loop's top
+# speed, CarRacing's car scaled to about that wheelbase (3.24 u).
 CAR_DEFAULTS = {
     # [px], [px], [px/s], [px/u]
     "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0},
     # [m], [m], [m/s], [m/u]
     "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0},
+    "ros_map": {"wheelbase": 0.33, "track_width": 0.31, "velocity": 5.0, "pixels_per_unit": 0.1},
 }
 
 
@@ -250,7 +260,8 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     sim = config.sim
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
-    sizes = CAR_DEFAULTS["m" if config.kind in METRIC_KINDS else "px"]
+    unit = "m" if config.kind in METRIC_KINDS else "px"
+    sizes = CAR_DEFAULTS["ros_map" if config.kind == "ros_map" else unit]
     car = config.car
     car = dataclasses.replace(
         car,

@@ -216,14 +216,16 @@ class CarConfig:
     )
     wheelbase: float | None = knob(
         None,
-        "kinematic cars: rear to front axle (null: 160 px, 2.5 m on metric tracks)",
+        "kinematic cars: rear to front axle (null: 160 px, 2.5 m on metric tracks, 0.33 m "
+        "on ROS maps: F1TENTH's car)",
         "px or m",
         low=0.01,
         high=10000,
     )
     track_width: float | None = knob(
         None,
-        "kinematic cars: width of the footprint (null: 100 px, 1.6 m on metric tracks)",
+        "kinematic cars: width of the footprint (null: 100 px, 1.6 m on metric tracks, 0.31 "
+        "m on ROS maps)",
         "px or m",
         low=0.01,
         high=10000,
@@ -231,7 +233,7 @@ class CarConfig:
     velocity: float | None = knob(
         None,
         "kinematic: constant speed; kinematic_throttle: top speed "
-        "(null: 500 px/s, 20 m/s on metric tracks)",
+        "(null: 500 px/s, 20 m/s on metric tracks, 5 m/s on ROS maps)",
         "px/s or m/s",
         low=0,
         high=100000,
@@ -249,7 +251,7 @@ class CarConfig:
     pixels_per_unit: float | None = knob(
         None,
         "dynamic car: track units (image px, or m) per CarRacing world unit, which scales the "
-        "car (null: 20 px/u on image tracks, 1 m/u on metric tracks)",
+        "car (null: 20 px/u on image tracks, 1 m/u on metric tracks, 0.1 m/u on ROS maps)",
         "px/u or m/u",
         low=0.001,
         high=1000,

@@ -50,7 +50,31 @@ class PerspectiveCameraConfig:
         low=-180,
         high=180,
     )
-    fov: float = knob(90.0, "horizontal field of view", "deg", low=1, high=170)
+    fov: float | None = knob(
+        None,
+        "horizontal field of view, the principal point at the image centre (null: 90 unless "
+        "intrinsics or camera_info are given)",
+        "deg",
+        low=1,
+        high=170,
+    )
+    intrinsics: tuple[float, float, float, float] | None = knob(
+        None,
+        "[fx, fy, cx, cy] focal lengths and principal point, pixel centres on integer "
+        "coordinates (OpenCV's camera matrix); instead of fov",
+        "px",
+    )
+    distortion: tuple[float, float, float, float, float] | None = knob(
+        None,
+        "plumb_bob distortion of the intrinsics: [k1, k2, p1, p2, k3] (OpenCV's order; null: none)",
+    )
+    camera_info: str | None = knob(
+        None,
+        "a ROS camera_info YAML (camera_calibration's: image_width, image_height, "
+        "camera_matrix, distortion_model plumb_bob, distortion_coefficients), relative to the "
+        "config's folder; instead of fov and intrinsics (its camera matrix is scaled to "
+        "resolution)",
+    )
     max_range: float | None = knob(
         None,
         "ground farther than this (from the camera's foot) is sky (null: no limit)",
@@ -74,20 +98,29 @@ class LidarConfig:
     fov: float = knob(270.0, "field of view, centred ahead", "deg", low=1, high=360)
     max_range: float | None = knob(
         None,
-        "range of a beam that hits nothing (null: 10 car lengths)",
+        "range of a beam that hits nothing (null: 10 car lengths; 30 m on ROS maps, as F1TENTH's)",
         LENGTH,
         low=0,
         low_open=True,
     )
     position: tuple[float, float] = knob(
-        (0.0, 0.0), "[x, y] from the middle of the front axle: ahead, left", LENGTH
+        (0.0, 0.0), "[x, y] from the middle of the axle that mount names: ahead, left", LENGTH
+    )
+    mount: Literal["front_axle", "rear_axle"] = knob(
+        "front_axle",
+        "the point position is measured from: the middle of the front or the rear axle "
+        "(f1tenth_gym scans from its car's rear axle plus lidar_dist ahead, 0 m by default: "
+        "mount: rear_axle, position: [lidar_dist, 0]; a lidar 0.275 m ahead of the rear "
+        "axle: position: [0.275, 0])",
     )
     range_std: float = knob(0.0, "std of Gaussian range noise", LENGTH, low=0)
     dropout: float = knob(0.0, "chance that a beam returns max_range", low=0, high=1)
-    blocks: tuple[Literal["off_road", "walls", "obstacles", "cones"], ...] = knob(
-        ("off_road", "walls", "obstacles", "cones"),
+    blocks: tuple[Literal["off_road", "walls", "obstacles", "cones"], ...] | None = knob(
+        None,
         "what stops a beam: off_road (beyond the road surfaces), walls, obstacles (colour "
-        "obstacles of picture tracks), cones",
+        "obstacles of picture tracks), cones (null: walls and cones on ROS maps, where "
+        "beams cross the map's pixels exactly and stop at the first occupied one; all four "
+        "elsewhere)",
     )
     hit_classes: bool = knob(
         False,

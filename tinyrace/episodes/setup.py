@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from tinyrace.cars.registry import CarModel, car_model_problems, choose_car_model
 from tinyrace.config import EnvConfig, LoadedConfig
 from tinyrace.episodes.episode import Course
+from tinyrace.episodes.start_pose import start_fits, start_problems
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
 from tinyrace.tracks.registry import make_track_source
@@ -38,5 +39,9 @@ def prepare(loaded: LoadedConfig) -> Parts:
     car_model = choose_car_model(loaded.config, loaded.source)  # raises the problems found
     car = dataclasses.replace(loaded.config.car, model=car_model.name)  # type: ignore[arg-type]
     config = dataclasses.replace(loaded.config, car=car)
+    tracks = getattr(source, "tracks", ())  # a source's fixed tracks (none: drawn per reset)
+    fits = start_fits(config, tracks, car_model)  # the car must fit at every spawn
+    if any(not fit.free for fit in fits):
+        raise ConfigError(start_problems(config, fits, loaded.source))
     wheels = car_model.name == "dynamic"  # its wheels feel the road's tiles
     return Parts(config, car_model, source, Course(config, car_model, wheels))

@@ -34,6 +34,7 @@ class EpisodeResult:
     track: str = ""  # which track picture the episode ran on (a key of results.json "tracks")
     video: str | None = None  # file name in the run folder
     trace: str | None = None  # the per-step trace file (record.TRACE_COLUMNS)
+    wall_hits: int | None = None  # tracks in metres: steps on which a wall stopped the car
 
 
 COLUMNS = (
@@ -44,6 +45,7 @@ COLUMNS = (
     ("laps", "laps", "{:d}"),
     ("lap_time", "lap [s]", "{:.2f}"),
     ("obstacle_hits", "hits", "{:d}"),
+    ("wall_hits", "walls", "{:d}"),
     ("mean_abs_cte", "|cte|", "{:.1f}"),
     ("end", "end", "{}"),
 )
@@ -53,6 +55,7 @@ SUMMARIZED = (
     "laps",
     "lap_time",
     "obstacle_hits",
+    "wall_hits",
     "mean_abs_cte",
     "steps_per_second",
 )

@@ -131,6 +131,7 @@ class _Run:
             tiles_total=recorder.info.get("tiles_total"),
             laps=int(recorder.end == "lap_finished"),
             obstacle_hits=recorder.obstacle_hits,
+            wall_hits=recorder.info.get("walls_hit"),
             mean_abs_cte=recorder.mean_abs_cte,
             end=recorder.end,
             steps_per_second=self.progress.rate(recorder.steps),

@@ -26,6 +26,7 @@ from gymnasium import spaces
 
 from tinyrace import kernels
 from tinyrace.config.sensors import LidarConfig
+from tinyrace.sensors import raycast_numpy
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
@@ -40,9 +41,13 @@ from tinyrace.sensors.common import (
 )
 from tinyrace.sensors.raycast import (
     DistanceField,
+    ExactField,
     Fan,
     beam_fan,
     distance_field,
+    exact_fan,
+    exact_field,
+    exact_turn,
     fan_angle,
     table_bytes,
 )
@@ -53,12 +58,15 @@ from tinyrace.world.snapshot import Snapshot
 
 KERNEL_VARIABLE = "TINYRACE_LIDAR"  # environment variable: auto | numba | numpy
 TABLE_LIMIT = 256 * 2**20  # [bytes] the numpy path's sample tables of one lidar, at most
+ROS_MAX_RANGE = 30.0  # [m] max_range on ROS maps unless given: F1TENTH's (f1tenth_gym)
+ROS_BLOCKS = ("walls", "cones")  # what stops a beam on a ROS map unless ``blocks`` says
+ALL_BLOCKS = ("off_road", "walls", "obstacles", "cones")  # ... and on the other tracks
 NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
 CONE_RADII = np.array([0.0, *(RADII[name] for name in CLASSES)])  # [m] by cone class id
 
 
 def hit_classes(
-    field: DistanceField,
+    field: DistanceField | ExactField,
     origin: tuple[float, float],
     directions: np.ndarray,
     ranges: np.ndarray,
@@ -147,6 +155,31 @@ def blocking_map(
     return distance_field(labels > 0, to_cells, labels if classes else None, reach / cell, near)
 
 
+def occupancy_map(
+    track: Track, blocks: tuple[str, ...], classes: bool = False
+) -> ExactField | None:
+    """The exact field of a ROS map track (None on other tracks): one cell per pixel of the
+    map, aligned with the pixels' edges; walls are the occupied pixels themselves, cones
+    discs of their radius, off_road what lies outside the road tiles (a band around the
+    waypoints)."""
+    occupancy = getattr(track.detail, "occupancy", None)
+    if occupancy is None:
+        return None
+    to_cells = occupancy.to_cells()
+    height, width = occupancy.shape
+    labels = np.zeros((height, width), np.uint8)
+    roads = [s.quads for s in track.surfaces if s.name == "road"]
+    if "off_road" in blocks and roads:
+        labels[:] = WALL_CLASS
+        for quads in roads:
+            fill_quads(labels, to_cells, quads, NO_HIT)
+    if "walls" in blocks:
+        labels[occupancy.occupied] = WALL_CLASS
+    if "cones" in blocks and len(track.cones):
+        _draw_cones(labels, to_cells, track, 1.0 / occupancy.info.resolution)
+    return exact_field(labels > 0, to_cells, labels if classes else None)
+
+
 def _pool_max(labels: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     """(h, w) uint8: the largest label among the pixels of each cell of a ``size`` (w, h) grid
     over ``labels`` (a cone or obstacle smaller than a cell keeps its cell; cones win over
@@ -183,6 +216,7 @@ def _picture_labels(
 
 
 Cast = Callable[[DistanceField, Fan, tuple[float, float], float, bool], np.ndarray]
+CastExact = Callable[[np.ndarray, tuple[float, float], np.ndarray, np.ndarray, float], np.ndarray]
 
 
 def kernel(wanted: str | None = None) -> tuple[str, Cast]:
@@ -193,6 +227,15 @@ def kernel(wanted: str | None = None) -> tuple[str, Cast]:
         KERNEL_VARIABLE, "numpy", "tinyrace.sensors.kernels.raycast", wanted
     )
     return name, cast if module is None else typed(Cast, module.cast)
+
+
+def exact_kernel(name: str) -> CastExact:
+    """The exact traversal of the path ``name`` (numba | numpy)."""
+    if name == "numpy":
+        return raycast_numpy.cast_exact
+    from tinyrace.sensors import raycast_numba  # imported: kernel() chose it
+
+    return typed(CastExact, raycast_numba.cast_exact)
 
 
 class LidarSensor:
@@ -210,6 +253,7 @@ class LidarSensor:
         cell: float,
         cone_colors: tuple[RGB, ...],
         kernel_name: str | None = None,
+        exact_only: bool = False,
     ):
         self.config = config
         self.max_range = max_range  # [track units]
@@ -221,27 +265,47 @@ class LidarSensor:
         if config.hit_classes:
             hits = spaces.Box(0, WALL_CLASS + len(CLASSES), (config.beams,), np.uint8)
             self.space = spaces.Dict({"ranges": ranges, "classes": hits})
-        self._fields: PerTrack[tuple[DistanceField, Fan]] = PerTrack()
+        self._fields: PerTrack[tuple[DistanceField, Fan] | ExactField] = PerTrack()
         self.field: DistanceField | None = None
         self.fan: Fan | None = None
+        self.exact: ExactField | None = None  # the field of a ROS map (exact traversal)
+        self.exact_fan: tuple[np.ndarray, ...] | None = None  # its beams' (cos, sin)
         self._fans: dict[tuple[Any, ...], Fan] = {}
         self.kernel, self._cast = kernel(kernel_name)
-        if self.kernel == "numpy":
+        self._cast_exact = exact_kernel(self.kernel)
+        if self.kernel == "numpy" and not exact_only:  # ROS maps need no tables
             _check_tables(config, self.angles)
+
+    def blocks(self, track: Track) -> tuple[str, ...]:
+        """What stops a beam on ``track``: ``blocks``, or by default ROS_BLOCKS on ROS maps
+        (their occupied pixels) and ALL_BLOCKS elsewhere."""
+        if self.config.blocks is not None:
+            return tuple(self.config.blocks)
+        return ROS_BLOCKS if track.kind == "ros_map" else ALL_BLOCKS
 
     @property
     def id(self) -> str:
         return self.config.id
 
     def reset(self, track: Track) -> None:
-        self.field, self.fan = self._fields.get(track, self._tables)
+        made = self._fields.get(track, self._tables)
+        if isinstance(made, ExactField):
+            self.exact, self.field, self.fan = made, None, None
+            self.exact_fan = exact_fan(made, self.angles, track.y_down)
+        else:
+            self.exact, (self.field, self.fan) = None, made
 
-    def _tables(self, track: Track) -> tuple[DistanceField, Fan]:
-        """The field of ``track`` and this lidar's fan on it (built once per track)."""
+    def _tables(self, track: Track) -> tuple[DistanceField, Fan] | ExactField:
+        """The field of ``track`` and this lidar's fan on it (built once per track); on a
+        ROS map, the exact field of its pixels."""
         c = self.config
+        blocks = self.blocks(track)
+        exact = occupancy_map(track, blocks, c.hit_classes)
+        if exact is not None:
+            return exact
         numpy = self.kernel == "numpy"  # the compiled kernel needs neither NEAR maps nor tables
         field = blocking_map(
-            track, c.blocks, self.cell, self.cone_colors, c.hit_classes, self.max_range, numpy
+            track, blocks, self.cell, self.cone_colors, c.hit_classes, self.max_range, numpy
         )
         if not numpy:  # the compiled kernel's skip maps by direction, where they fit
             from tinyrace.sensors.kernels import raycast as raycast_numba  # kernel() chose it
@@ -259,26 +323,60 @@ class LidarSensor:
         """[track units] where the beams start."""
         car = snapshot.car
         ahead, left = self.config.position
-        return mount(car.front_axle, car.pose[2], track.y_down, ahead, left)
+        axle = car.rear_axle if self.config.mount == "rear_axle" else car.front_axle
+        return mount(axle, car.pose[2], track.y_down, ahead, left)
+
+    def scan(self, origin: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
+        """float32 ranges [track units] of the beams from ``origin`` [track units] of a car
+        at ``heading`` [rad], without noise."""
+        if self.exact is not None:
+            assert self.exact_fan is not None
+            return exact_ranges(
+                self.exact, self._cast_exact, origin, self.exact_fan, heading, self.max_range
+            )
+        assert self.field is not None and self.fan is not None, "reset() before observe()"
+        first, reverse = fan_angle(self.field, self.angles, heading, y_down)
+        return self._cast(self.field, self.fan, origin, first, reverse)
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> Any:
         """The ranges; with ``hit_classes``, {"ranges", "classes"} (dropped beams: NO_HIT)."""
-        assert self.field is not None and self.fan is not None, "reset() before observe()"
         heading = snapshot.car.pose[2]
         origin = self.origin(snapshot, track)
-        first, reverse = fan_angle(self.field, self.angles, heading, track.y_down)
-        ranges = self._cast(self.field, self.fan, origin, first, reverse)
+        ranges = self.scan(origin, heading, track.y_down)
         c = self.config
         classes = None
         if c.hit_classes:
             beams = directions(self.angles, heading, track.y_down)
-            classes = hit_classes(self.field, origin, beams, ranges, self.max_range)
+            field = self.exact if self.exact is not None else self.field
+            assert field is not None
+            classes = hit_classes(field, origin, beams, ranges, self.max_range)
         if c.range_std > 0 or c.dropout > 0:
             ranges = add_noise(ranges, rng, c.range_std, c.dropout, self.max_range)
         if classes is None:
             return ranges
         classes[ranges >= self.max_range] = NO_HIT
         return {"ranges": ranges, "classes": classes}
+
+
+def exact_ranges(
+    field: ExactField,
+    cast_exact: CastExact,
+    origin: tuple[float, float],
+    fan: tuple[np.ndarray, ...],
+    heading: float,
+    max_range: float,
+) -> np.ndarray:
+    """float32 ranges [track units] of the beams of ``fan`` (``raycast.exact_fan``) of a car
+    at ``heading`` [rad] from ``origin`` [track units] by the exact traversal of ``field``
+    (``cast_exact``: either path's), at most ``max_range``; 0 from a blocking cell or off the
+    map."""
+    ca, sa = fan
+    cb, sb = exact_turn(field, heading)
+    dx, dy = ca * cb - sa * sb, sa * cb + ca * sb  # [cells] the beams turned
+    limit = max_range * field.cells_per_unit
+    cells = cast_exact(field.cells, field.cell(origin), dx, dy, limit)
+    ranges: np.ndarray = np.minimum(cells / field.cells_per_unit, max_range).astype(np.float32)
+    return ranges
 
 
 def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
@@ -298,7 +396,10 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     """The lidar of ``config``; null knobs scale with the car (see LidarConfig)."""
     env = context.env
     length = car_length(env)
-    max_range = config.max_range if config.max_range is not None else 10 * length
+    if config.max_range is not None:
+        max_range = config.max_range
+    else:  # F1TENTH's lidar on its maps, else 10 car lengths
+        max_range = ROS_MAX_RANGE if env.kind == "ros_map" else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
-    return LidarSensor(config, max_range, cell, cone_colors)
+    return LidarSensor(config, max_range, cell, cone_colors, exact_only=env.kind == "ros_map")

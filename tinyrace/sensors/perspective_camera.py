@@ -23,6 +23,7 @@ from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     GroundImage,
     PerTrack,
+    Unsupported,
     car_length,
     label_names,
     label_table,
@@ -33,6 +34,7 @@ from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
 DEFAULT_HEIGHT = 0.4  # [car lengths] camera height when no position is given
+DEFAULT_FOV = 90.0  # [deg] horizontal field of view without fov, intrinsics or camera_info
 SKY_LABEL = 255  # the ``classes`` label of pixels above the horizon or beyond max_range
 
 
@@ -50,14 +52,22 @@ class PerspectiveCamera:
         self.episode_ground = episode_ground  # the cameras' shared texture of the episode
         h, w = config.resolution
         x, y, z = config.position or (0.0, 0.0, DEFAULT_HEIGHT * length)
+        if config.camera_info is not None and config.intrinsics is None:
+            raise Unsupported(
+                f"camera_info: {config.camera_info} is read when a config is loaded from a "
+                "file or dict (tinyrace.config.load_env_config), not from a parsed EnvConfig"
+            )
+        fov = config.fov if config.fov is not None else DEFAULT_FOV
         self.pinhole = Pinhole(
             (w, h),
-            math.radians(config.fov),
+            math.radians(fov),
             (x, -y, z),  # the core's frame: ahead, right, up
             yaw=-math.radians(config.yaw),  # the core turns + right
             pitch=math.radians(config.pitch),
             roll=math.radians(config.roll),
             max_range=config.max_range,
+            matrix=config.intrinsics,
+            distortion=config.distortion,
         )
         self.pixels_per_unit = pixels_per_unit  # ground texture of tracks without a picture
         shape = (h, w, 3) if config.format == "rgb" else (h, w)

@@ -10,7 +10,12 @@ that depends on the camera alone and is computed once. The whole rows of sky at 
 rows below them are (``warp_below_sky``).
 
 Pixels: u right, v down, a pixel's centre on integer coordinates; the principal point is the
-image centre; the focal length follows from the horizontal field of view.
+image centre and the focal length follows from the horizontal field of view, unless the
+camera has its own ``matrix`` (fx, fy, cx, cy) [px]. With plumb_bob ``distortion`` (k1, k2,
+p1, p2, k3: OpenCV's model, as ``cv2.projectPoints``), no homography maps the ground to the
+image: each pixel's ray is undistorted once (``cv2.undistortPoints``, iterated to 1e-12)
+into the ground point it sees in the car frame, and every image is one ``cv2.remap`` of the
+texture at those points moved by the car's pose (``remap_below_sky``).
 """
 
 from __future__ import annotations
@@ -34,13 +39,57 @@ class Pinhole:
     pitch: float = 0.0  # [rad] + tilts it down toward the ground
     roll: float = 0.0  # [rad] + turns it clockwise about its optical axis
     max_range: float | None = None  # [track units] ground beyond this is sky; None: no limit
+    matrix: tuple[float, float, float, float] | None = None  # [px] fx, fy, cx, cy; None: hfov's
+    distortion: tuple[float, ...] | None = None  # plumb_bob k1, k2, p1, p2, k3; None: none
 
     @cached_property
     def intrinsics(self) -> np.ndarray:
-        """K (3x3): focal length [px] from the fov, principal point at the image centre."""
+        """K (3x3): ``matrix``, or the focal length [px] from the fov, principal point at the
+        image centre."""
+        if self.matrix is not None:
+            fx, fy, cx, cy = self.matrix
+            return np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
         width, height = self.size
         focal = (width / 2) / math.tan(self.hfov / 2)
         return np.array([[focal, 0, (width - 1) / 2], [0, focal, (height - 1) / 2], [0, 0, 1]])
+
+    @property
+    def distorted(self) -> bool:
+        """Whether the lens distorts (any nonzero plumb_bob coefficient)."""
+        return self.distortion is not None and any(self.distortion)
+
+    def _rays(self) -> np.ndarray:
+        """(H, W, 3) each pixel's ray in the car frame (ahead, right, up), not normalised."""
+        width, height = self.size
+        u, v = np.meshgrid(np.arange(width), np.arange(height))
+        if not self.distorted:
+            pixels = np.stack([u, v, np.ones_like(u)], axis=-1).astype(np.float64)
+            rays: np.ndarray = pixels @ np.linalg.inv(self.intrinsics).T @ self.axes
+            return rays
+        points = np.stack([u, v], axis=-1).reshape(-1, 1, 2).astype(np.float64)
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+        ideal = cv2.undistortPoints(
+            points,
+            self.intrinsics,
+            np.asarray(self.distortion, np.float64),
+            R=None,
+            P=None,
+            criteria=criteria,
+        ).reshape(height, width, 2)
+        normal = np.concatenate([ideal, np.ones((height, width, 1))], axis=-1)
+        turned: np.ndarray = normal @ self.axes
+        return turned
+
+    @cached_property
+    def ground_points(self) -> np.ndarray:
+        """(2, H, W) float32 [track units] the ground point (ahead, right) in the car frame
+        each pixel's ray meets (0 where it meets none: sky)."""
+        rays = self._rays()
+        down = -rays[..., 2]
+        reach = np.where(down > 1e-12, self.position[2] / np.where(down > 1e-12, down, 1), 0)
+        ahead = self.position[0] + reach * rays[..., 0]
+        right = self.position[1] + reach * rays[..., 1]
+        return np.stack([ahead, right]).astype(np.float32)
 
     @cached_property
     def axes(self) -> np.ndarray:
@@ -79,10 +128,7 @@ class Pinhole:
     @cached_property
     def sky(self) -> np.ndarray:
         """(H, W) bool: pixels whose ray misses the ground or meets it beyond max_range."""
-        width, height = self.size
-        u, v = np.meshgrid(np.arange(width), np.arange(height))
-        pixels = np.stack([u, v, np.ones_like(u)], axis=-1).astype(np.float64)
-        rays = pixels @ np.linalg.inv(self.intrinsics).T @ self.axes  # car frame
+        rays = self._rays()  # car frame
         down = -rays[..., 2]
         missed: np.ndarray = down <= 1e-12
         reach = self.position[2] / np.where(missed, 1.0, down)  # ray length to the ground
@@ -179,7 +225,11 @@ def warp_below_sky(
 ) -> None:
     """Draw the image rows below the whole rows of sky into ``out`` (H - rows, W, ground's
     channels): the ground texture seen through one homography (texture pixels of
-    ``world_to_ground``, 2x3, car placed by ``placed``, 3x3 car frame -> track)."""
+    ``world_to_ground``, 2x3, car placed by ``placed``, 3x3 car frame -> track), or through
+    the lens's distortion (``remap_below_sky``)."""
+    if camera.distorted:
+        remap_below_sky(camera, ground, world_to_ground, placed, interpolation, out)
+        return
     # image pixel -> ground point (car frame) -> track -> texture pixel; the affine steps keep
     # the homography's last row
     below = camera.below_sky_to_ground
@@ -196,6 +246,28 @@ def warp_below_sky(
         borderValue=0,
     )
     assert warped is out, "cv2 wrote into its own array"
+
+
+def remap_below_sky(
+    camera: Pinhole,
+    ground: np.ndarray,
+    world_to_ground: np.ndarray,
+    placed: np.ndarray,
+    interpolation: int,
+    out: np.ndarray,
+) -> None:
+    """``warp_below_sky`` for a distorting lens: the texture sampled at each pixel's ground
+    point (``Pinhole.ground_points``), moved by the car's pose, by one ``cv2.remap``."""
+    rows = camera.sky_rows
+    ahead, right = camera.ground_points[:, rows:]
+    to_texture = (world_to_ground @ placed).astype(np.float32)  # (2, 3) car frame -> texture
+    (a, b, c), (d, e, f) = to_texture.tolist()
+    map_x = ahead * np.float32(a) + right * np.float32(b) + np.float32(c)
+    map_y = ahead * np.float32(d) + right * np.float32(e) + np.float32(f)
+    done = cv2.remap(
+        ground, map_x, map_y, interpolation, dst=out, borderMode=cv2.BORDER_CONSTANT, borderValue=0
+    )
+    assert done is out, "cv2 wrote into its own array"
 
 
 def render(

@@ -70,6 +70,20 @@ class OccupancyMap:
         rows = self.free.shape[0] - local[:, 1] / self.info.resolution - 0.5
         return np.column_stack((rows, cols))
 
+    def to_cells(self) -> np.ndarray:
+        """2x3 affine: world point [m] -> fractional (col, row) of the picture, pixel centres
+        on integer coordinates (``to_pixel``'s columns and rows as one matrix); a pixel is
+        the square of side 1 around its centre, its edges on half-integer coordinates."""
+        res, (ox, oy, yaw) = self.info.resolution, self.info.origin
+        c, s = math.cos(yaw), math.sin(yaw)
+        height = self.free.shape[0]
+        return np.array(
+            [
+                [c / res, s / res, -(c * ox + s * oy) / res - 0.5],
+                [s / res, -c / res, height - 0.5 + (c * oy - s * ox) / res],
+            ]
+        )
+
     def is_free(self, points: np.ndarray) -> np.ndarray:
         """(K,) bool: whether each world point [m] lies on a free cell (outside: not free)."""
         pixel = np.rint(self.to_pixel(points)).astype(int)

@@ -1,0 +1,146 @@
+"""Start poses that fit: on tracks in metres, the car's footprint at every spawn must touch
+no wall and no cone, or the config is refused (``prepare``: ``gym.make`` and ``tinyrace
+validate`` alike), naming the pose's file and key.
+
+The footprint is the car's as the world sees it (``cars.state.footprint_corners`` of the car
+built at the spawn: rear to front axle, its width wide); walls are the track's solid boxes
+(what stops the car), cones discs of their base radius.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from tinyrace.cars.registry import CarModel
+from tinyrace.cars.state import footprint_corners
+from tinyrace.config import EnvConfig
+from tinyrace.errors import Problem
+from tinyrace.tracks.base import Track
+from tinyrace.world.world import World
+
+
+@dataclass(frozen=True)
+class StartFit:
+    """How one spawn fits: the footprint's corners and its clearances [m]."""
+
+    track_index: int
+    spawn: tuple[float, float, float]  # (x [m], y [m], heading [rad])
+    corners: np.ndarray  # (4, 2) [m]
+    size: tuple[float, float]  # (length rear to front axle, width) [m]
+    wall_clearance: float  # [m] to the nearest wall box; < 0: overlapping (inf: no walls)
+    cone_clearance: float  # [m] to the nearest cone's edge; < 0: overlapping (inf: no cones)
+
+    @property
+    def free(self) -> bool:
+        return self.wall_clearance > 0 and self.cone_clearance > 0
+
+
+def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) -> list[StartFit]:
+    """The fit of the car of ``config`` at every spawn of every track with walls or cones."""
+    fits = []
+    for index, track in enumerate(tracks):
+        if not len(track.walls) and not len(track.cones):
+            continue
+        for spawn in track.spawns:
+            world = World()
+            world.add_car(car_model.build(world.space, spawn, config.car, track))
+            state = world.states()[0]
+            corners = footprint_corners(state)
+            walls = _box_clearance(corners, np.asarray(track.walls, np.float64))
+            cones = _cone_clearance(corners, track.cones[:, :2], track.cone_radii)
+            length, width = state.footprint
+            fits.append(StartFit(index, spawn, corners, (length, width), walls, cones))
+    return fits
+
+
+def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list[Problem]:
+    """A Problem for each spawn whose footprint touches a wall or a cone, named by the key
+    the pose came from (``spawn``, else the file whose first point it is)."""
+    problems = []
+    for fit in fits:
+        if fit.free:
+            continue
+        track = config.tracks[fit.track_index]
+        spawn = getattr(track, "spawn", None)
+        given = spawn is not None
+        key = "spawn" if given else ("waypoints" if track.type == "ros_map" else "file")
+        where = f"tracks[{fit.track_index}].{key}"
+        x, y, heading = fit.spawn
+        length, width = fit.size
+        what = "a wall" if fit.wall_clearance <= 0 else "a cone"
+        pose = f"[{x:.3f}, {y:.3f}, {heading:.3f}]"
+        origin = "" if given else " (the start pose is this file's first point)"
+        allowed = (
+            f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} m, "
+            f"rear to front axle x width, at {pose} [m, m, rad]) touches no wall or cone; it "
+            f"overlaps {what}{origin}: move the spawn (track.spawn) or make the car smaller "
+            "(car.wheelbase, car.track_width)"
+        )
+        value = list(spawn) if spawn is not None else getattr(track, key)
+        problems.append(Problem(source, where, value, allowed))
+    return problems
+
+
+def _box_clearance(corners: np.ndarray, boxes: np.ndarray) -> float:
+    """[m] the smallest distance between the convex polygon ``corners`` and the (M, 4)
+    boxes x0, y0, x1, y1; negative (the overlap along the best separating axis) when one
+    overlaps; inf without boxes."""
+    if len(boxes) == 0:
+        return math.inf
+    polygon = np.asarray(corners, np.float64)
+    # separating axes: the boxes' (x, y) and the polygon's edge normals
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    normals = np.column_stack((-edges[:, 1], edges[:, 0]))
+    normals /= np.hypot(normals[:, 0], normals[:, 1])[:, None]
+    axes = np.vstack(([1.0, 0.0], [0.0, 1.0], normals))  # (A, 2)
+    box_corners = np.stack(
+        [boxes[:, [0, 1]], boxes[:, [2, 1]], boxes[:, [2, 3]], boxes[:, [0, 3]]], axis=1
+    )  # (M, 4, 2)
+    along_box = box_corners @ axes.T  # (M, 4, A)
+    along_polygon = polygon @ axes.T  # (4, A)
+    gap = np.maximum(
+        along_box.min(axis=1) - along_polygon.max(axis=0),
+        along_polygon.min(axis=0) - along_box.max(axis=1),
+    )  # (M, A): > 0 on an axis that separates
+    separation = gap.max(axis=1)  # per box: > 0 apart (a lower bound of the distance)
+    overlapping = separation <= 0
+    if overlapping.any():
+        return float(separation.min())
+    # apart: the exact distance between the polygon and each box (corner to edge, both ways)
+    return float(min(_distance(polygon, box) for box in box_corners[np.argsort(separation)[:8]]))
+
+
+def _distance(a: np.ndarray, b: np.ndarray) -> float:
+    """[m] between two disjoint convex polygons: the nearest corner-to-edge distance."""
+    return min(_points_to_edges(a, b), _points_to_edges(b, a))
+
+
+def _points_to_edges(points: np.ndarray, polygon: np.ndarray) -> float:
+    start = polygon
+    edge = np.roll(polygon, -1, axis=0) - polygon  # (E, 2)
+    offset = points[:, None, :] - start[None, :, :]  # (P, E, 2)
+    t = np.clip((offset * edge).sum(-1) / (edge * edge).sum(-1), 0, 1)
+    nearest = start[None] + t[..., None] * edge[None]
+    return float(np.hypot(*(points[:, None, :] - nearest).transpose(2, 0, 1)).min())
+
+
+def _cone_clearance(corners: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> float:
+    """[m] from the polygon ``corners`` to the nearest cone's edge; negative when a cone
+    overlaps it; inf without cones."""
+    if len(centres) == 0:
+        return math.inf
+    polygon = np.asarray(corners, np.float64)
+    centres = np.asarray(centres, np.float64)
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    offset = centres[:, None, :] - polygon[None]
+    t = np.clip((offset * edges).sum(-1) / (edges * edges).sum(-1), 0, 1)
+    nearest = polygon[None] + t[..., None] * edges[None]
+    to_edge = np.hypot(*(centres[:, None, :] - nearest).transpose(2, 0, 1)).min(axis=1)
+    cross = edges[None, :, 0] * offset[..., 1] - edges[None, :, 1] * offset[..., 0]
+    inside = (cross >= 0).all(axis=1) | (cross <= 0).all(axis=1)
+    distance = np.where(inside, -to_edge, to_edge) - np.asarray(radii, np.float64)
+    return float(distance.min())
