@@ -233,9 +233,9 @@ def exact_kernel(name: str) -> CastExact:
     """The exact traversal of the path ``name`` (numba | numpy)."""
     if name == "numpy":
         return raycast_numpy.cast_exact
-    from tinyrace.sensors import raycast_numba  # imported: kernel() chose it
+    from tinyrace.sensors.kernels import raycast as compiled  # imported: kernel() chose it
 
-    return typed(CastExact, raycast_numba.cast_exact)
+    return typed(CastExact, compiled.cast_exact)
 
 
 class LidarSensor:

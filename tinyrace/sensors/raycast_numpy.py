@@ -196,7 +196,7 @@ def cast_exact(
     for every beam when the origin is off the map or in a blocking cell. An Amanatides-Woo
     traversal, vectorised over the beams: each round, a beam in a free cell with a leap
     leaps, the others step into the next cell their line crosses;
-    ``raycast_numba.cast_exact`` does the same rounds beam by beam, with the same float64
+    ``sensors.kernels.raycast.cast_exact`` does the same rounds beam by beam, with the same float64
     arithmetic."""
     ox, oy = origin
     height, width = cells.shape
