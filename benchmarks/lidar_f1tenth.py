@@ -90,7 +90,7 @@ def tinyrace_lidar(folder: Path, spawn: np.ndarray, kernel: str) -> LidarSensor:
     env.reset(seed=0)
     own: LidarSensor = env.unwrapped.sensors[0]
     lidar = LidarSensor(own.config, MAX_RANGE, own.cell, (), kernel, exact_only=True)
-    lidar.reset(env.unwrapped.episode.layout)
+    lidar.reset(env.unwrapped.layout)
     return lidar
 
 

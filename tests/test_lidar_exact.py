@@ -90,7 +90,7 @@ def test_the_lidar_matches_an_exact_traversal_of_the_pixels(tmp_path, origin):
     env.reset(seed=0)
     lidar = sensors(env)[0]
     twin = LidarSensor(lidar.config, MAX_RANGE, lidar.cell, (), "numpy", exact_only=True)
-    twin.reset(env.unwrapped.episode.layout)
+    twin.reset(env.unwrapped.layout)
     errors = []
     for x, y, heading in poses:
         ranges = lidar.scan((x, y), heading, False)
