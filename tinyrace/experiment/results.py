@@ -25,12 +25,12 @@ class EpisodeResult:
     steps: int
     tiles_visited: int | None  # procedural tracks
     tiles_total: int | None
-    laps: int  # procedural: 1 if the lap was finished
+    laps: int  # laps finished (the env's lap ends the episode where it counts laps)
     obstacle_hits: int  # steps on which the footprint touched an obstacle colour
-    mean_abs_cte: float | None  # [px] image tracks with use_cte
+    mean_abs_cte: float | None  # [track units] where the track has a reference line
     end: str  # lap_finished, out_of_bounds, obstacle, step_limit, max_steps
     steps_per_second: float
-    lap_time: float | None = None  # [s] reset to lap end; None without a finished lap
+    lap_time: float | None = None  # [s] reset to the first lap's end; None without a lap
     track: str = ""  # which track picture the episode ran on (a key of results.json "tracks")
     video: str | None = None  # file name in the run folder
     trace: str | None = None  # the per-step trace file (record.TRACE_COLUMNS)
