@@ -228,8 +228,7 @@ def test_envs_need_neither_matplotlib_nor_tqdm():
 
 
 def legend_names(figure) -> list[str]:
-    legend = figure.axes[0].get_legend()
-    return [] if legend is None else [text.get_text() for text in legend.get_texts()]
+    return [text.get_text() for legend in figure.legends for text in legend.get_texts()]
 
 
 def a_path(crashed: bool, hit_at: int | None = None):
@@ -287,3 +286,13 @@ def test_a_lap_chart_without_laps_says_no_lap_finished():
     some = plots.bars([None, 14.2], ["0", "1"], "lap time [s]", plots.NO_LAP)
     assert [text.get_text() for text in some.axes[0].texts] == ["no lap finished"]  # episode 0
     assert [round(bar.get_height(), 1) for bar in some.axes[0].patches] == [14.2]
+
+
+def test_episodes_starting_at_one_place_share_a_label():
+    from tinyrace.experiment import plots
+
+    picture = np.zeros((100, 200, 3), np.uint8)
+    first, second = a_path(False), a_path(False)
+    second.label = "ep 1"
+    figure = plots.trajectories(picture, (0.0, 200.0, 100.0, 0.0), [first, second], None, "px")
+    assert [text.get_text() for text in figure.axes[0].texts] == ["ep 0, 1"]

@@ -71,22 +71,26 @@ def trajectories(
     lines = None
     for k, path in enumerate(paths):
         lines = _draw_path(ax, path, norm, first=k == 0) or lines
+    _start_labels(ax, paths, 0.02 * abs(extent[1] - extent[0]))
     if lines is not None:  # a colour scale as tall as the picture
         figure.colorbar(lines, cax=ax.inset_axes((1.02, 0.0, 0.03, 1.0)), label=f"speed [{unit}/s]")
     ax.set_xlabel(f"x [{unit}]")
     ax.set_ylabel(f"y [{unit}]")
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
-    _legend(ax)
+    _legend(figure, ax)
     return figure
 
 
-def _legend(ax: Axes) -> None:
+def _legend(figure: Figure, ax: Axes) -> None:
     """A legend of what was drawn, each name once (several episodes crash, hit...)."""
     handles, labels = ax.get_legend_handles_labels()
     unique = dict(zip(labels, handles, strict=True))
     if unique:
-        ax.legend(unique.values(), unique.keys(), loc="upper right", framealpha=0.9)
+        figure.legend(  # under the picture: never over the track
+            unique.values(), unique.keys(), loc="outside lower center", ncol=len(unique),
+            frameon=False,
+        )  # fmt: skip
 
 
 def _draw_path(ax: Axes, path: Path2D, norm: Normalize, first: bool) -> LineCollection | None:
@@ -98,18 +102,35 @@ def _draw_path(ax: Axes, path: Path2D, norm: Normalize, first: bool) -> LineColl
     lines = LineCollection(list(segments), cmap=SPEED_MAP, norm=norm, linewidths=2.2)
     lines.set_array(speed[1:])
     ax.add_collection(lines)
-    start = points[0]
-    ax.plot(*start, "o", ms=9, mfc="#28c83c", mec="black", label="start" if first else None)
-    ax.annotate(
-        path.label, start, xytext=(8, 8), textcoords="offset points", color="white",
-        fontsize=10, bbox={"boxstyle": "round,pad=0.2", "fc": "black", "alpha": 0.6},
-    )  # fmt: skip
+    ax.plot(*points[0], "o", ms=9, mfc="#28c83c", mec="black", label="start" if first else None)
     hits = path.hits[ok]
     if hits.any():
         ax.plot(*points[hits].T, "o", ms=7, mfc="none", mec="#ff9600", label="obstacle hit")
     if path.crashed:
         ax.plot(*points[-1], "X", ms=12, color="#e61e1e", mec="black", label="crash")
     return lines
+
+
+def _start_labels(ax: Axes, paths: Sequence[Path2D], near: float) -> None:
+    """One label per start point: episodes starting within ``near`` [track units] share it
+    ("ep 0, 2")."""
+    groups: list[tuple[np.ndarray, list[str]]] = []
+    for path in paths:
+        ok = np.isfinite(path.points).all(axis=1)
+        if not ok.any():
+            continue
+        start = path.points[ok][0]
+        same = [g for g in groups if np.hypot(*(g[0] - start)) < near]
+        if same:
+            same[0][1].append(path.label.removeprefix("ep "))
+        else:
+            groups.append((start, [path.label]))
+    for start, names in groups:
+        at = (float(start[0]), float(start[1]))
+        ax.annotate(
+            ", ".join(names), at, xytext=(8, 8), textcoords="offset points", color="white",
+            fontsize=10, bbox={"boxstyle": "round,pad=0.2", "fc": "black", "alpha": 0.6},
+        )  # fmt: skip
 
 
 def bars(
@@ -126,14 +147,14 @@ def bars(
     ax.set_xlim(-0.6, max(len(values), 1) - 0.4)
     ax.set_xlabel("episode")
     ax.set_ylabel(y_label)
-    ax.axhline(0.0, color="black", lw=0.8)
-    ax.grid(axis="y", color="#dddddd")
-    ax.set_axisbelow(True)
     if not np.isfinite(numbers).any():
         ax.set_yticks([])
         ax.text(0.5, 0.5, missing, transform=ax.transAxes, ha="center", va="center",
                 fontsize=14, color="#b00000")  # fmt: skip
         return figure
+    ax.axhline(0.0, color="black", lw=0.8)
+    ax.grid(axis="y", color="#dddddd")
+    ax.set_axisbelow(True)
     for k in np.flatnonzero(~np.isfinite(numbers)):
         ax.text(x[k], 0.0, missing, ha="center", va="bottom", rotation=90, color="#b00000")
     return figure
