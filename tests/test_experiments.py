@@ -1,5 +1,6 @@
-"""Experiment files end to end: every shipped config runs; the built-in driver's results;
-results.json, episodes.csv and videos; validation of experiment keys."""
+"""Experiment files end to end: every shipped config runs and its driver finishes a lap; the
+built-in driver's results; results.json, episodes.csv and videos; validation of experiment
+keys."""
 
 from __future__ import annotations
 
@@ -11,9 +12,14 @@ from pathlib import Path
 import imageio_ffmpeg
 import pytest
 
+from tinyrace.drivers import load_driver, run_episode
+from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError
 from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 from tinyrace.experiment import experiment_from_dict, load_experiment, run_experiment, video
+from tinyrace.experiment.record import EpisodeRecorder
+from tinyrace.experiment.route import route_watch
+from tinyrace.experiment.runner import DEFAULT_MAX_STEPS
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS = sorted((CONFIGS_DIR).glob("*.yaml"))
@@ -58,6 +64,36 @@ def test_every_config_runs_a_few_steps(path: Path, tmp_path: Path):
     data = json.loads((result.run_dir / "results.json").read_text())
     assert data["episodes"][0]["steps"] == episode.steps
     assert result.run_dir.name.startswith(path.stem + "-")
+
+
+class LapDone(Exception):
+    """Stops an episode once its first lap is counted (the rest costs test time only)."""
+
+
+@pytest.mark.parametrize("path", CONFIGS, ids=lambda p: p.stem)
+def test_every_shipped_driver_finishes_a_lap(path: Path):
+    """The first episode of each shipped experiment, as ``tinyrace run`` drives and measures
+    it (its driver, seed and step limit; laps as the run counts them), finishes a lap."""
+    experiment = load_experiment(path)
+    config = experiment.config
+    env = TinyRaceEnv(**experiment.env_kwargs)
+    try:
+        limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
+
+        def stop_at_the_lap(recorder: EpisodeRecorder) -> None:
+            if recorder.laps:
+                raise LapDone
+
+        recorder = EpisodeRecorder(
+            env.action_space, env.dt, on_step=stop_at_the_lap, watch=lambda: route_watch(env)
+        )
+        driver = load_driver(config.driver, **config.driver_args)
+        with pytest.raises(LapDone):
+            run_episode(env, driver, config.seed, limit, recorder)
+    finally:
+        env.close()
+    assert recorder.laps == 1 and recorder.steps <= limit
+    assert recorder.lap_time == pytest.approx(recorder.steps * env.dt)
 
 
 def decoded(path: Path) -> tuple[dict, list]:

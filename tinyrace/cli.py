@@ -350,3 +350,7 @@ def _play_missing() -> str | None:
     ):
         return "a display (no DISPLAY or WAYLAND_DISPLAY is set; run it on a desktop session)"
     return None
+
+
+if __name__ == "__main__":  # python -m tinyrace.cli, as python -m tinyrace
+    raise SystemExit(main())

@@ -1,248 +1,176 @@
-"""The report's pictures, drawn with OpenCV and numpy: trajectories over a track picture,
-bar charts per episode and time series. All images are RGB uint8."""
+"""The report's charts, drawn by matplotlib: trajectories over the track picture, a bar per
+episode, time series. Each function returns a ``Figure`` made without pyplot (no window, no
+global backend switch: ``png`` renders it with Agg). Imported only when a report is written."""
 
 from __future__ import annotations
 
-import math
+import io
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
-from numpy.typing import ArrayLike
+from matplotlib.axes import Axes
+from matplotlib.collections import LineCollection
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
-_FONT = cv2.FONT_HERSHEY_SIMPLEX
-INK = (40, 40, 40)  # RGB: axes and text
-GRID = (225, 225, 225)
-PAPER = (255, 255, 255)
-BAR = (70, 110, 180)
-START = (40, 200, 60)
-LAP_LINE = (255, 255, 255)
-CRASH = (230, 30, 30)
-HIT = (255, 150, 0)
+NO_LAP = "no lap finished"
+SPEED_MAP = "turbo"
+BAR = "#4a6fb0"
+LAP_LINE = "#ff00ff"  # magenta: seen on grass, road, kerbs and dark image tracks alike
 
 
 @dataclass
 class Path2D:
-    """One episode's trajectory in picture pixels, with what happened along it."""
+    """One episode's trajectory in track units, with what happened along it."""
 
     label: str
-    points: np.ndarray  # (N, 2) [px]
+    points: np.ndarray  # (N, 2) [track units]
     speed: np.ndarray  # (N,) [track units/s]
     hits: np.ndarray  # (N,) bool: an obstacle was touched at this step
-    crashed: bool  # the episode ended out of bounds or on a done obstacle
+    crashed: bool  # the episode ended out of bounds or on an obstacle
 
 
-def speed_colors(speed: np.ndarray, top: float) -> np.ndarray:
-    """(N, 3) RGB of each speed on OpenCV's turbo map, 0 (blue) .. ``top`` (red)."""
-    level = np.clip(np.nan_to_num(speed) / max(top, 1e-9), 0, 1) * 255
-    bgr = cv2.applyColorMap(level.astype(np.uint8).reshape(-1, 1), cv2.COLORMAP_TURBO)
-    rgb: np.ndarray = bgr.reshape(-1, 3)[:, ::-1]
-    return rgb
+@dataclass
+class Series:
+    """One episode's time series: time [s] and the values of each panel."""
+
+    label: str
+    t: np.ndarray
+    values: dict[str, np.ndarray]  # panel title -> (N,) values
+
+
+def png(figure: Figure) -> bytes:
+    """The figure as PNG bytes (no timestamp: a rebuilt report is the same file)."""
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=100, metadata={"Software": None}, bbox_inches="tight")
+    return buffer.getvalue()
 
 
 def trajectories(
-    background: np.ndarray, paths: Sequence[Path2D], lap_line: np.ndarray | None, unit: str
-) -> np.ndarray:
-    """The track with each path coloured by speed; start, lap line, crashes, hits marked."""
-    image: np.ndarray = background.copy()
-    scale = max(1, round(max(image.shape[:2]) / 800))  # thicker marks on big pictures
-    if lap_line is not None:
-        a, b = (tuple(round(float(v)) for v in p) for p in lap_line)
-        cv2.line(image, a, b, (0, 0, 0), 5 * scale, cv2.LINE_AA)
-        cv2.line(image, a, b, LAP_LINE, 2 * scale, cv2.LINE_AA)
-    speeds = [p.speed[np.isfinite(p.speed)] for p in paths]
-    top = max([float(s.max()) for s in speeds if len(s)] + [1e-9])
-    labels: list[tuple[int, int]] = []  # where labels went: same starts stack their labels
-    for path in paths:
-        _draw_path(image, path, top, scale, labels)
-    _speed_bar(image, top, unit)
-    return image
+    background: np.ndarray,
+    extent: tuple[float, float, float, float],
+    paths: Sequence[Path2D],
+    lap_line: np.ndarray | None,
+    unit: str,
+    size: float = 10.0,
+) -> Figure:
+    """The track picture (RGB, spanning ``extent`` = left, right, bottom, top [track units])
+    with each path coloured by speed; start, lap line, crashes and obstacle hits marked and
+    named in the legend only where drawn. ``size`` [in]: the figure's width."""
+    height, width = background.shape[:2]
+    figure = Figure(figsize=(size, size * height / width), layout="constrained")
+    ax = figure.add_subplot()
+    ax.imshow(background, extent=extent, interpolation="antialiased")
+    finite = [p.speed[np.isfinite(p.speed)] for p in paths]
+    top = max([float(s.max()) for s in finite if len(s)] + [1e-9])
+    norm = Normalize(0.0, top)
+    if lap_line is not None:  # under the paths and the start marks
+        ax.plot(*np.asarray(lap_line).T, color=LAP_LINE, lw=3, label="lap line (start/finish)")
+    lines = None
+    for k, path in enumerate(paths):
+        lines = _draw_path(ax, path, norm, first=k == 0) or lines
+    _start_labels(ax, paths, 0.02 * abs(extent[1] - extent[0]))
+    if lines is not None:  # a colour scale as tall as the picture
+        figure.colorbar(lines, cax=ax.inset_axes((1.02, 0.0, 0.03, 1.0)), label=f"speed [{unit}/s]")
+    ax.set_xlabel(f"x [{unit}]")
+    ax.set_ylabel(f"y [{unit}]")
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    _legend(figure, ax)
+    return figure
 
 
-def _draw_path(
-    image: np.ndarray, path: Path2D, top: float, scale: int, labels: list[tuple[int, int]]
-) -> None:
+def _legend(figure: Figure, ax: Axes) -> None:
+    """A legend of what was drawn, each name once (several episodes crash, hit...)."""
+    handles, labels = ax.get_legend_handles_labels()
+    unique = dict(zip(labels, handles, strict=True))
+    if unique:
+        figure.legend(  # under the picture: never over the track
+            unique.values(), unique.keys(), loc="outside lower center", ncol=len(unique),
+            frameon=False,
+        )  # fmt: skip
+
+
+def _draw_path(ax: Axes, path: Path2D, norm: Normalize, first: bool) -> LineCollection | None:
     ok = np.isfinite(path.points).all(axis=1)
-    points, colors = path.points[ok], speed_colors(path.speed[ok], top)
-    pixels = np.round(points).astype(np.int32)
-    for k in range(1, len(pixels)):
-        color = tuple(int(c) for c in colors[k])
-        cv2.line(image, tuple(pixels[k - 1]), tuple(pixels[k]), color, 2 * scale, cv2.LINE_AA)
-    for hit in np.flatnonzero(path.hits[ok]):
-        cv2.circle(image, tuple(pixels[hit]), 4 * scale, HIT, scale, cv2.LINE_AA)
-    if len(pixels) == 0:
-        return
-    cv2.circle(image, tuple(pixels[0]), 6 * scale, START, -1, cv2.LINE_AA)
-    cv2.circle(image, tuple(pixels[0]), 6 * scale, (0, 0, 0), 1, cv2.LINE_AA)
-    at = (int(pixels[0][0]) + 8 * scale, int(pixels[0][1]) - 6 * scale)
-    while any(abs(at[0] - x) < 40 * scale and abs(at[1] - y) < 16 * scale for x, y in labels):
-        at = (at[0], at[1] + 18 * scale)
-    labels.append(at)
-    _text(image, path.label, at, 0.5 * scale)
+    points, speed = path.points[ok], np.nan_to_num(path.speed[ok])
+    if len(points) < 2:
+        return None
+    segments = np.stack([points[:-1], points[1:]], axis=1)
+    lines = LineCollection(list(segments), cmap=SPEED_MAP, norm=norm, linewidths=2.2)
+    lines.set_array(speed[1:])
+    ax.add_collection(lines)
+    ax.plot(*points[0], "o", ms=9, mfc="#28c83c", mec="black", label="start" if first else None)
+    hits = path.hits[ok]
+    if hits.any():
+        ax.plot(*points[hits].T, "o", ms=7, mfc="none", mec="#ff9600", label="obstacle hit")
     if path.crashed:
-        x, y, r = int(pixels[-1][0]), int(pixels[-1][1]), 9 * scale
-        cv2.line(image, (x - r, y - r), (x + r, y + r), CRASH, 3 * scale, cv2.LINE_AA)
-        cv2.line(image, (x - r, y + r), (x + r, y - r), CRASH, 3 * scale, cv2.LINE_AA)
+        ax.plot(*points[-1], "X", ms=12, color="#e61e1e", mec="black", label="crash")
+    return lines
 
 
-def _speed_bar(image: np.ndarray, top: float, unit: str) -> None:
-    """A colour scale at the top right: 0 .. top speed."""
-    w = image.shape[1]
-    bar_w, bar_h = min(200, w // 3), 12
-    x0, y0 = w - bar_w - 16, 28
-    cv2.rectangle(image, (x0 - 8, 6), (w - 8, y0 + bar_h + 8), (30, 30, 30), -1)
-    colors = speed_colors(np.linspace(0, top, bar_w), top)
-    image[y0 : y0 + bar_h, x0 : x0 + bar_w] = colors[None, :, :]
-    label = f"speed 0 .. {top:.0f} {unit}/s"
-    cv2.putText(image, label, (x0, y0 - 6), _FONT, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
-
-
-def _text(image: np.ndarray, text: str, at: tuple[int, int], size: float) -> None:
-    at = (int(at[0]), int(at[1]))
-    cv2.putText(image, text, at, _FONT, size, (0, 0, 0), 3, cv2.LINE_AA)
-    cv2.putText(image, text, at, _FONT, size, (255, 255, 255), 1, cv2.LINE_AA)
-
-
-# -- charts ------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Axes:
-    """A plotting area inside a picture and the data range it shows."""
-
-    left: int
-    top: int
-    width: int
-    height: int
-    x_range: tuple[float, float]
-    y_range: tuple[float, float]
-    y_ticks: tuple[float, ...] = ()  # labelled grid lines (none: the frame only)
-
-    def pixel(self, x: ArrayLike, y: ArrayLike) -> np.ndarray:
-        (x0, x1), (y0, y1) = self.x_range, self.y_range
-        px = self.left + (np.asarray(x, float) - x0) / (x1 - x0) * self.width
-        py = self.top + self.height - (np.asarray(y, float) - y0) / (y1 - y0) * self.height
-        return np.stack([px, py], axis=-1)
-
-
-def nice_range(values: np.ndarray, include_zero: bool = False) -> tuple[float, float]:
-    """A range that holds every finite value (and 0 if asked), never empty."""
-    finite = np.asarray(values, float)
-    finite = finite[np.isfinite(finite)]
-    low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 1.0)
-    if include_zero:
-        low, high = min(low, 0.0), max(high, 0.0)
-    if high - low < 1e-9:
-        low, high = low - 1.0, high + 1.0
-    pad = 0.05 * (high - low)
-    return low - (pad if low < 0 or not include_zero else 0), high + pad
-
-
-_MANTISSAS = (1.0, 2.0, 2.5, 5.0)  # round tick steps, times a power of ten
-
-
-def nice_ticks(low: float, high: float, most: int = 6) -> tuple[float, ...]:
-    """At most ``most`` (>= 3) ticks a round step apart (1, 2, 2.5 or 5 times a power of
-    ten), from the step's multiple at or below ``low`` to the one at or above ``high``:
-    the smallest such step that needs no more ticks."""
-    span = max(high - low, 1e-12 * max(abs(low), abs(high), 1.0))
-    exponent = math.floor(math.log10(span / (most - 1)))
-    while True:  # ends by the decade after: a step >= span needs at most 3 ticks
-        for mantissa in _MANTISSAS:
-            step = mantissa * 10.0**exponent
-            first, last = math.floor(low / step), math.ceil(high / step)
-            if first * step > low:  # k x step rounded past the range's end: one more
-                first -= 1
-            if last * step < high:
-                last += 1
-            if last - first < most:
-                return tuple(k * step for k in range(first, last + 1))
-        exponent += 1
-
-
-def tick_labels(ticks: Sequence[float]) -> list[str]:
-    """The ticks printed with as many decimals as their step needs."""
-    if len(ticks) < 2:
-        return [f"{t:g}" for t in ticks]
-    step = abs(ticks[1] - ticks[0])
-    decimals = max(0, -math.floor(math.log10(step) + 1e-9))
-    if round(step / 10.0**-decimals, 6) % 1:  # 2.5 x a power of ten: one more decimal
-        decimals += 1
-    return [f"{t:.{decimals}f}" for t in ticks]
-
-
-def value_axis(
-    values: np.ndarray, include_zero: bool
-) -> tuple[tuple[float, float], tuple[float, ...]]:
-    """The range and round ticks of a value axis for ``values`` (the range ends on ticks)."""
-    ticks = nice_ticks(*nice_range(values, include_zero))
-    return (ticks[0], ticks[-1]), ticks
-
-
-def _frame(image: np.ndarray, axes: Axes, title: str, x_label: str) -> None:
-    """Grid, tick labels, title."""
-    left, top, w, h = axes.left, axes.top, axes.width, axes.height
-    for value, label in zip(axes.y_ticks, tick_labels(axes.y_ticks), strict=True):
-        y = round(float(axes.pixel(axes.x_range[0], value)[1]))
-        cv2.line(image, (left, y), (left + w, y), GRID, 1)
-        cv2.putText(image, label, (4, y + 4), _FONT, 0.4, INK, 1, cv2.LINE_AA)
-    cv2.rectangle(image, (left, top), (left + w, top + h), INK, 1)
-    cv2.putText(image, title, (left, top - 8), _FONT, 0.5, INK, 1, cv2.LINE_AA)
-    if x_label:
-        x0, x1 = axes.x_range
-        bottom = top + h + 16
-        cv2.putText(image, f"{x0:.3g}", (left, bottom), _FONT, 0.4, INK, 1, cv2.LINE_AA)
-        end = f"{x1:.3g} {x_label}"
-        width = cv2.getTextSize(end, _FONT, 0.4, 1)[0][0]
-        cv2.putText(image, end, (left + w - width, bottom), _FONT, 0.4, INK, 1, cv2.LINE_AA)
-
-
-def bar_chart(
-    values: Sequence[float | None],
-    labels: Sequence[str],
-    title: str,
-    size: tuple[int, int] = (560, 260),
-) -> np.ndarray:
-    """One bar per value (None: no bar, marked '-')."""
-    width, height = size
-    image = np.full((height, width, 3), PAPER, np.uint8)
-    numbers = np.array([np.nan if v is None else v for v in values], float)
-    y_range, ticks = value_axis(numbers, include_zero=True)
-    axes = Axes(56, 28, width - 72, height - 64, (0, max(len(values), 1)), y_range, ticks)
-    _frame(image, axes, title, "")
-    zero = axes.pixel(0, 0)[1]
-    slot = axes.width / max(len(values), 1)
-    for k, (value, label) in enumerate(zip(numbers, labels, strict=True)):
-        x0 = int(axes.left + k * slot + slot * 0.15)
-        x1 = int(axes.left + (k + 1) * slot - slot * 0.15)
-        if np.isfinite(value):
-            y = axes.pixel(0, value)[1]
-            cv2.rectangle(image, (x0, int(min(y, zero))), (x1, int(max(y, zero))), BAR, -1)
-        else:
-            cv2.putText(image, "-", (x0, int(zero) - 4), _FONT, 0.5, INK, 1, cv2.LINE_AA)
-        cv2.putText(image, label, (x0, axes.top + axes.height + 16), _FONT, 0.4, INK, 1)
-    return image
-
-
-def time_series(
-    t: np.ndarray, panels: Sequence[tuple[str, np.ndarray]], title: str, width: int = 560
-) -> np.ndarray:
-    """Stacked line plots sharing the time axis [s]; a panel without finite values says so."""
-    panel_h, gap = 120, 44
-    height = 44 + len(panels) * (panel_h + gap)
-    image = np.full((height, width, 3), PAPER, np.uint8)
-    cv2.putText(image, title, (8, 16), _FONT, 0.55, INK, 1, cv2.LINE_AA)
-    finite_t = t[np.isfinite(t)]
-    x_range = (float(finite_t.min()), float(finite_t.max())) if len(finite_t) > 1 else (0.0, 1.0)
-    for k, (name, values) in enumerate(panels):
-        ok = np.isfinite(values) & np.isfinite(t)
-        y_range, ticks = value_axis(values, include_zero=True)
-        axes = Axes(56, 20 + gap + k * (panel_h + gap) - 10, width - 72, panel_h, x_range,
-                    y_range, ticks if ok.any() else ())  # fmt: skip
-        _frame(image, axes, name, "s" if k == len(panels) - 1 else "")
+def _start_labels(ax: Axes, paths: Sequence[Path2D], near: float) -> None:
+    """One label per start point: episodes starting within ``near`` [track units] share it
+    ("ep 0, 2")."""
+    groups: list[tuple[np.ndarray, list[str]]] = []
+    for path in paths:
+        ok = np.isfinite(path.points).all(axis=1)
         if not ok.any():
-            cv2.putText(image, "(not measured on this track)", (axes.left + 10,
-                        axes.top + panel_h // 2), _FONT, 0.45, INK, 1)  # fmt: skip
             continue
-        points = np.round(axes.pixel(t[ok], values[ok])).astype(np.int32)
-        cv2.polylines(image, [points.reshape(-1, 1, 2)], False, BAR, 1, cv2.LINE_AA)
-    return image
+        start = path.points[ok][0]
+        same = [g for g in groups if np.hypot(*(g[0] - start)) < near]
+        if same:
+            same[0][1].append(path.label.removeprefix("ep "))
+        else:
+            groups.append((start, [path.label]))
+    for start, names in groups:
+        at = (float(start[0]), float(start[1]))
+        ax.annotate(
+            ", ".join(names), at, xytext=(8, 8), textcoords="offset points", color="white",
+            fontsize=10, bbox={"boxstyle": "round,pad=0.2", "fc": "black", "alpha": 0.6},
+        )  # fmt: skip
+
+
+def bars(
+    values: Sequence[float | None], labels: Sequence[str], y_label: str, missing: str
+) -> Figure:
+    """One bar per episode; an episode without a value gets the word ``missing`` instead,
+    and a chart without any value says so across the plot."""
+    figure = Figure(figsize=(6, 3.4), layout="constrained")
+    ax = figure.add_subplot()
+    x = np.arange(len(values))
+    numbers = np.array([np.nan if v is None else v for v in values], float)
+    ax.bar(x[np.isfinite(numbers)], numbers[np.isfinite(numbers)], color=BAR, width=0.6)
+    ax.set_xticks(x, labels)
+    ax.set_xlim(-0.6, max(len(values), 1) - 0.4)
+    ax.set_xlabel("episode")
+    ax.set_ylabel(y_label)
+    if not np.isfinite(numbers).any():
+        ax.set_yticks([])
+        ax.text(0.5, 0.5, missing, transform=ax.transAxes, ha="center", va="center",
+                fontsize=14, color="#b00000")  # fmt: skip
+        return figure
+    ax.axhline(0.0, color="black", lw=0.8)
+    ax.grid(axis="y", color="#dddddd")
+    ax.set_axisbelow(True)
+    for k in np.flatnonzero(~np.isfinite(numbers)):
+        ax.text(x[k], 0.0, missing, ha="center", va="bottom", rotation=90, color="#b00000")
+    return figure
+
+
+def time_series(series: Sequence[Series], panels: Sequence[str]) -> Figure:
+    """Stacked panels sharing the time axis [s], one line per episode in each."""
+    figure = Figure(figsize=(10, 1.0 + 2.2 * len(panels)), layout="constrained")
+    axes = figure.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, panel in zip(axes, panels, strict=True):
+        for entry in series:
+            ax.plot(entry.t, entry.values[panel], lw=1.2, label=entry.label)
+        ax.set_ylabel(panel)
+        ax.grid(color="#e4e4e4")
+        ax.yaxis.set_major_locator(MaxNLocator(5))
+    axes[-1].set_xlabel("time since reset [s]")
+    if len(series) > 1:
+        axes[0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), title="episode")
+    return figure

@@ -1,5 +1,5 @@
-"""A dependency-free progress bar on stderr: episode, step, return and lap progress, redrawn
-at most ten times a second on a terminal; one line per finished episode otherwise."""
+"""Where a run is, on stderr: a tqdm bar per episode on a terminal (steps, return, lap
+progress, steps/s), and one line per finished episode everywhere (also in logs and pipes)."""
 
 from __future__ import annotations
 
@@ -8,71 +8,87 @@ import time
 from typing import TYPE_CHECKING, Any, TextIO
 
 if TYPE_CHECKING:
+    from tqdm import tqdm
+
     from tinyrace.experiment.record import EpisodeRecorder
     from tinyrace.experiment.results import EpisodeResult
 
 
 class Progress:
-    """Shows where a run is; ``enabled=False`` shows nothing (``--quiet``)."""
+    """Shows where a run is; ``enabled=False`` shows nothing (``--quiet``).
+
+    ``interval`` [s]: the bar is redrawn at most this often.
+    """
 
     def __init__(
-        self, episodes: int, limit: int = 0, stream: TextIO | None = None, enabled: bool = True
+        self,
+        episodes: int,
+        limit: int = 0,
+        stream: TextIO | None = None,
+        enabled: bool = True,
+        interval: float = 0.1,
     ):
         self.episodes = episodes
         self.limit = limit  # steps per episode at most (0: unknown)
         self.stream = stream or sys.stderr
         self.enabled = enabled
-        self.live = enabled and self.stream.isatty()
-        self._last = 0.0
+        self.live = enabled and self.stream.isatty()  # a bar only where it can be redrawn
+        self.interval = interval
+        self._bar: tqdm[Any] | None = None
         self._episode = 0
         self._episode_started = time.perf_counter()
 
     def start_episode(self, episode: int) -> None:
         self._episode = episode
         self._episode_started = time.perf_counter()
+        if self.live:
+            from tqdm import tqdm
+
+            self.close()
+            self._bar = tqdm(
+                total=self.limit or None,
+                desc=f"episode {episode + 1}/{self.episodes}",
+                unit="step",
+                file=self.stream,
+                leave=False,
+                mininterval=self.interval,
+                dynamic_ncols=True,
+            )
 
     def rate(self, steps: int) -> float:
         """[steps/s] in the current episode so far."""
         return steps / max(time.perf_counter() - self._episode_started, 1e-9)
 
     def update(self, recorder: EpisodeRecorder) -> None:
-        if not self.live or time.perf_counter() - self._last < 0.1:
+        """After a step: the bar's step count, return and lap progress."""
+        bar = self._bar
+        if bar is None:
             return
-        self._last = time.perf_counter()
-        self._draw(self.line(recorder))
-
-    def line(self, recorder: EpisodeRecorder) -> str:
-        """``[####    ] episode 2/5  step 340/1000  return 512.3  lap 64%  8,000 steps/s``."""
-        limit = self.limit or recorder.steps
-        done = (self._episode + min(recorder.steps / max(limit, 1), 1.0)) / self.episodes
-        bar = "#" * int(done * 20)
-        steps = f"{recorder.steps}/{self.limit}" if self.limit else str(recorder.steps)
-        parts = [
-            f"[{bar:<20}] episode {self._episode + 1}/{self.episodes}",
-            f"step {steps}",
-            f"return {recorder.episode_return:.1f}",
-            f"lap {_lap(recorder.info)}",
-            f"{self.rate(recorder.steps):,.0f} steps/s",
-        ]
-        return "  ".join(parts)
-
-    def _draw(self, text: str) -> None:
-        self.stream.write(f"\r{text} ")
-        self.stream.flush()
+        bar.set_postfix_str(
+            f"return {recorder.episode_return:.1f}, lap {_lap(recorder.info)}", refresh=False
+        )
+        bar.update(recorder.steps - bar.n)
 
     def end_episode(self, episode: int, result: EpisodeResult) -> None:
+        """The episode's line: return, steps, lap time and how it ended."""
+        self.close()
         if not self.enabled:
             return
         lap = f", lap {result.lap_time:.2f} s" if result.lap_time is not None else ""
         summary = f"return {result.episode_return:.1f}, {result.steps} steps{lap}, {result.end}"
-        prefix = "\r" if self.live else ""
-        self.stream.write(f"{prefix}episode {episode + 1}/{self.episodes}: {summary}{' ' * 30}\n")
+        self.stream.write(f"episode {episode + 1}/{self.episodes}: {summary}\n")
         self.stream.flush()
+
+    def close(self) -> None:
+        """Clear the bar (at an episode's end, and when a run stops early)."""
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
 
 
 def _lap(info: dict[str, Any]) -> str:
-    """Lap progress: the share of tiles visited (procedural tracks); '-' where laps are not
-    counted (image tracks)."""
+    """Lap progress: the share of tiles visited (tracks with progress tiles); '-' where the
+    env counts no tiles (image tracks)."""
     total = info.get("tiles_total")
     if not total:
         return "-"

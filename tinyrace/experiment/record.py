@@ -12,6 +12,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.actions import DISCRETE_CONTROLS
+from tinyrace.experiment.route import RouteWatch
 from tinyrace.experiment.video import VideoWriter
 
 TRACE_COLUMNS = (
@@ -23,9 +24,11 @@ TRACE_COLUMNS = (
     "speed",  # [track units/s]
     "steer",  # the driver's steering, -1..1 (+ right); 0 at the reset
     "reward",
-    "cte",  # [px] image tracks with use_cte; empty otherwise
+    "cte",  # [track units] the env's (image tracks with use_cte, metric tracks), else the
+    # distance to the centreline (procedural); empty without a line
     "obstacle_hit",  # 1 when the footprint touched an obstacle colour
     "wheels_on_grass",  # procedural tracks
+    "laps",  # laps finished so far
 )
 
 
@@ -34,6 +37,8 @@ class EpisodeRecorder:
 
     ``frame`` gives the picture to put in the video after the reset and after each step;
     ``on_step`` is called after each step with the recorder (progress, stop requests).
+    ``watch`` gives, after the reset, the track's reference line: the cross-track error
+    where the env reports none, and laps where the env counts none (image tracks).
     """
 
     def __init__(
@@ -43,11 +48,16 @@ class EpisodeRecorder:
         video: VideoWriter | None = None,
         frame: Callable[[Any], np.ndarray] | None = None,
         on_step: Callable[[EpisodeRecorder], None] | None = None,
+        watch: Callable[[], RouteWatch | None] | None = None,
     ):
         self.space = space
         self.dt = dt  # [s] per step
         self.video, self.frame = video, frame
         self.on_step = on_step
+        self.watch = watch
+        self.route: RouteWatch | None = None
+        self.laps = 0
+        self.lap_steps: list[int] = []  # the step that finished each lap
         self.episode_return = 0.0
         self.steps = 0
         self.frames = 0  # written to the video
@@ -57,6 +67,7 @@ class EpisodeRecorder:
         self.rows: list[tuple[Any, ...]] = []
 
     def start(self, observation: Any, info: dict[str, Any]) -> None:
+        self.route = self.watch() if self.watch is not None else None
         self._record(0.0, 0.0, info)
         self._film(observation)
 
@@ -72,10 +83,12 @@ class EpisodeRecorder:
         self.episode_return += reward
         self.steps += 1
         self.obstacle_hits += bool(info.get("obstacles_hit"))
-        self._record(self._steer(action), reward, info)
-        self._film(observation)
         if terminated or truncated:
             self.end = info.get("termination", "step_limit") if terminated else "step_limit"
+        if self.end == "lap_finished":  # the env counted it
+            self._lap_done(1)
+        self._record(self._steer(action), reward, info)
+        self._film(observation)
         if self.on_step is not None:
             self.on_step(self)
 
@@ -83,6 +96,11 @@ class EpisodeRecorder:
         self.info = info
         x, y, heading = info.get("pose", (np.nan, np.nan, np.nan))
         cte = info.get("cte")
+        if self.route is not None and np.isfinite(x) and np.isfinite(y):
+            if cte is None:
+                cte = self.route.distance(x, y)
+            if "tiles_total" not in info:  # the env counts no laps here
+                self._lap_done(self.route.laps(x, y))
         self.rows.append(
             (
                 self.steps,
@@ -96,8 +114,14 @@ class EpisodeRecorder:
                 "" if cte is None else cte,
                 int(bool(info.get("obstacles_hit"))),
                 info.get("wheels_on_grass", ""),
+                self.laps,
             )
         )
+
+    def _lap_done(self, laps: int) -> None:
+        while self.laps < laps:
+            self.laps += 1
+            self.lap_steps.append(self.steps)
 
     def _film(self, observation: Any) -> None:
         if self.video is not None and self.frame is not None:
@@ -111,15 +135,15 @@ class EpisodeRecorder:
 
     @property
     def mean_abs_cte(self) -> float | None:
-        """[px] over the steps (the reset excluded); None without a cte."""
+        """[track units] over the steps (the reset excluded); None without a cte."""
         column = TRACE_COLUMNS.index("cte")
         ctes = [abs(row[column]) for row in self.rows[1:] if row[column] != ""]
         return sum(ctes) / len(ctes) if ctes else None
 
     @property
     def lap_time(self) -> float | None:
-        """[s] from the reset to the step that finished the lap; None without a lap."""
-        return self.steps * self.dt if self.end == "lap_finished" else None
+        """[s] from the reset to the step that finished the first lap; None without a lap."""
+        return self.lap_steps[0] * self.dt if self.lap_steps else None
 
     def close(self) -> None:
         """Finish the video (also after an interruption: the file still plays)."""

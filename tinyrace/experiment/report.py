@@ -1,26 +1,45 @@
-"""``report.html`` for a run folder: self-contained (pictures inline as data URIs, no network,
-no JavaScript), with the pictures also saved beside it. Built from the run's files only
-(results.json, episodes.csv, the traces and track pictures), so ``tinyrace report RUN_DIR``
-rebuilds it."""
+"""``report.html`` for a run folder: self-contained (pictures inline as PNG data URIs, no
+network, no JavaScript), with the pictures also saved beside it. Built from the run's files
+only (results.json, episodes.csv, the traces and track pictures), so ``tinyrace report
+RUN_DIR`` rebuilds it. The charts are matplotlib's, imported here only when a report is
+written."""
 
 from __future__ import annotations
 
 import base64
 import html
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
 
-from tinyrace.experiment import plots
 from tinyrace.experiment.record import read_trace
-from tinyrace.experiment.results import EpisodeResult, read_files, summary_text, table
-from tinyrace.render.track_picture import PictureFrame
+from tinyrace.experiment.results import EpisodeResult, read_files, summary_rows, table_rows
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 REPORT_FILE = "report.html"
 CRASHES = ("out_of_bounds", "obstacle")
+CTE_LEFT_OUT = (
+    "The cross-track error panel is left out: this track has no reference line to measure "
+    "it against (an image track needs reward_design.cross_track_error.use_cte and its "
+    "trajectory_color; a ros_map track a waypoint or raceline CSV)."
+)
+
+
+@dataclass
+class Picture:
+    """One chart of the report: its file name, caption and figure."""
+
+    name: str
+    caption: str
+    figure: Figure
+    wide: bool = False
+    section: str = "Per episode"
 
 
 def rebuild_report(run_dir: Path) -> Path:
@@ -30,38 +49,42 @@ def rebuild_report(run_dir: Path) -> Path:
 
 
 def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]) -> Path:
-    """Draw the pictures, save them as PNG and write report.html; returns its path."""
-    pictures = _track_pictures(run_dir, header, results)
-    labels = [str(r.episode) for r in results]
-    pictures.append(
-        ("report_returns.png", "Return per episode",
-         plots.bar_chart([r.episode_return for r in results], labels, "return per episode"))
-    )  # fmt: skip
-    pictures.append(
-        ("report_lap_times.png", "Lap time per episode (no bar: no lap finished)",
-         plots.bar_chart([r.lap_time for r in results], labels, "lap time [s]"))
-    )  # fmt: skip
+    """Draw the charts, save them as PNG and write report.html; returns its path."""
+    from tinyrace.experiment import plots
+
     unit = _unit(header)
-    for result in results:
-        trace = _trace(run_dir, result)
-        if trace is None:
-            continue
-        panels = [
-            (f"speed [{unit}/s]", trace["speed"]),
-            ("steering (-1 left .. +1 right)", trace["steer"]),
-            (f"cross-track error [{unit}]", trace["cte"]),
-        ]
-        title = f"episode {result.episode} (seed {result.seed}): {result.end}"
-        name = f"report_episode_{result.episode:03d}.png"
-        pictures.append((name, title, plots.time_series(trace["t"], panels, title)))
+    traces = {r.episode: _trace(run_dir, r) for r in results}
+    pictures = _track_pictures(run_dir, header, results, traces)
+    labels = [str(r.episode) for r in results]
+    returns = plots.bars([r.episode_return for r in results], labels, "return", "no return")
+    pictures.append(Picture("report_returns.png", "Return (sum of rewards) per episode.", returns))
+    lap_times = [r.lap_time for r in results]
+    laps = plots.bars(lap_times, labels, "lap time [s]", plots.NO_LAP)
+    pictures.append(Picture("report_lap_times.png", _lap_caption(lap_times), laps))
+    notes = []
+    series, panels = _series(results, traces, unit)
+    if series:
+        caption = "Speed, steering and cross-track error over each episode."
+        if not any(p.startswith("cross-track") for p in panels):
+            caption, notes = "Speed and steering over each episode.", [CTE_LEFT_OUT]
+        figure = plots.time_series(series, panels)
+        pictures.append(Picture("report_time_series.png", caption, figure, True, "Over time"))
     blobs = []
-    for name, caption, image in pictures:
-        _, data = cv2.imencode(".png", cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
-        (run_dir / name).write_bytes(data.tobytes())
-        blobs.append((caption, data.tobytes()))
+    for picture in pictures:
+        data = plots.png(picture.figure)
+        (run_dir / picture.name).write_bytes(data)
+        blobs.append((picture, data))
     path = run_dir / REPORT_FILE
-    path.write_text(_html(header, results, blobs), encoding="utf-8")
+    path.write_text(_html(header, results, blobs, notes, unit), encoding="utf-8")
     return path
+
+
+def _lap_caption(lap_times: Sequence[float | None]) -> str:
+    finished = sum(t is not None for t in lap_times)
+    if finished == 0:
+        return "Lap time per episode: no lap finished in any episode."
+    missing = "" if finished == len(lap_times) else " (the others: no lap finished)"
+    return f"Time from the reset to the end of the first lap: {finished} episode(s){missing}."
 
 
 def _unit(header: dict[str, Any]) -> str:
@@ -75,41 +98,123 @@ def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None
     return read_trace(path) if path is not None and path.is_file() else None
 
 
+def _series(
+    results: Sequence[EpisodeResult], traces: dict[int, dict[str, np.ndarray] | None], unit: str
+) -> tuple[list[Any], list[str]]:
+    """Each traced episode's time series, and the panels that have data in some episode."""
+    from tinyrace.experiment.plots import Series
+
+    names = {
+        "speed": f"speed [{unit}/s]",
+        "steer": "steering\n[-1 left .. +1 right]",
+        "cte": f"cross-track error [{unit}]",
+    }
+    series = []
+    for result in results:
+        trace = traces[result.episode]
+        if trace is not None:
+            values = {title: trace[key] for key, title in names.items()}
+            series.append(Series(str(result.episode), trace["t"], values))
+    panels = [
+        title for title in names.values() if any(np.isfinite(s.values[title]).any() for s in series)
+    ]
+    return series, panels
+
+
 def _track_pictures(
-    run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]
-) -> list[tuple[str, str, np.ndarray]]:
+    run_dir: Path,
+    header: dict[str, Any],
+    results: Sequence[EpisodeResult],
+    traces: dict[int, dict[str, np.ndarray] | None],
+) -> list[Picture]:
     """One picture per track with the trajectories of the episodes run on it."""
+    from tinyrace.experiment import plots
+
     pictures = []
     tracks: dict[str, Any] = header.get("tracks") or {}
     for key, entry in tracks.items():
         background = cv2.imread(str(run_dir / entry["image"]))
         if background is None:
             continue
-        frame = PictureFrame(*entry["frame"]).pixels
         paths = []
         for result in (r for r in results if r.track == key):
-            trace = _trace(run_dir, result)
-            if trace is None:
-                continue
-            points = frame(np.stack([trace["x"], trace["y"]], axis=-1))
-            crashed = result.end in CRASHES
-            hits = trace["obstacle_hit"] > 0
-            paths.append(
-                plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
-            )
-        lap = None if entry.get("lap_line") is None else frame(np.array(entry["lap_line"]))
-        image = plots.trajectories(background[..., ::-1], paths, lap, entry.get("unit", ""))
+            trace = traces[result.episode]
+            if trace is not None:
+                points = np.stack([trace["x"], trace["y"]], axis=-1)
+                hits, crashed = trace["obstacle_hit"] > 0, result.end in CRASHES
+                paths.append(
+                    plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
+                )
+        lap_line = entry.get("lap_line")
+        unit = entry.get("unit", "")
+        extent = _extent(entry["frame"], background.shape)
+        size = 10.0 if len(tracks) == 1 else 6.5  # [in] wide: two pictures side by side
+        figure = plots.trajectories(background[..., ::-1], extent, paths, lap_line, unit, size)
         episodes = ", ".join(p.label.removeprefix("ep ") for p in paths) or "none"
-        caption = (
-            f"Track {key}: episodes {episodes}. Colour: speed; green dot: start; "
-            "white line: lap line; red X: crash; orange rings: obstacle hits."
-        )
-        pictures.append((f"report_track_{key}.png", caption, image))
+        caption = f"Track {key}: the path of episode(s) {episodes}, coloured by speed."
+        if lap_line is None and any(r.laps for r in results if r.track == key):
+            caption += " Laps here are counted by progress round the track's drawn trajectory."
+        name = f"report_track_{key}.png"
+        pictures.append(Picture(name, caption, figure, len(tracks) == 1, "Where the car went"))
     return pictures
 
 
+def _extent(frame: Sequence[float], shape: tuple[int, ...]) -> tuple[float, float, float, float]:
+    """(left, right, bottom, top) [track units] of a picture's outer pixel edges."""
+    sx, ox, sy, oy = frame
+    height, width = shape[:2]
+    return (
+        (-0.5 - ox) / sx,
+        (width - 0.5 - ox) / sx,
+        (height - 0.5 - oy) / sy,
+        (-0.5 - oy) / sy,
+    )
+
+
+def _table(head: Sequence[str], rows: Sequence[Sequence[str]], text: Sequence[int]) -> str:
+    """An HTML table; the columns but ``text`` hold numbers (right-aligned)."""
+    cells = "".join(f"<th scope=col>{html.escape(h)}</th>" for h in head)
+    body = "\n".join(
+        "<tr>"
+        + "".join(
+            f"<td{'' if k in text else ' class=num'}>{html.escape(c)}</td>"
+            for k, c in enumerate(row)
+        )
+        + "</tr>"
+        for row in rows
+    )
+    return f"<table>\n<thead><tr>{cells}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
+
+
+def _figure(picture: Picture, data: bytes) -> str:
+    source = base64.b64encode(data).decode()
+    caption = html.escape(picture.caption)
+    return (
+        f"<figure class={'wide' if picture.wide else 'small'}>"
+        f"<img alt='{caption}' src='data:image/png;base64,{source}'>"
+        f"<figcaption>{caption}</figcaption></figure>"
+    )
+
+
+STYLE = """
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 1100px; color: #222;
+       padding: 0 1em; }
+table { border-collapse: collapse; margin: 0.5em 0 1.5em; }
+th, td { padding: 0.3em 0.8em; border-bottom: 1px solid #ddd; text-align: left; }
+th { background: #f2f2f2; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+img { max-width: 100%; }
+figure { margin: 1.5em 0; } figcaption { color: #444; font-size: 0.95em; }
+figure.small { display: inline-block; vertical-align: top; width: 48%; margin-right: 1%; }
+.warn { color: #b00; font-weight: bold; } .note { color: #555; font-style: italic; }
+"""
+
+
 def _html(
-    header: dict[str, Any], results: Sequence[EpisodeResult], blobs: list[tuple[str, bytes]]
+    header: dict[str, Any],
+    results: Sequence[EpisodeResult],
+    blobs: list[tuple[Picture, bytes]],
+    notes: Sequence[str],
+    unit: str,
 ) -> str:
     title = f"tinyrace run {header.get('started', '')}"
     state = []
@@ -118,31 +223,31 @@ def _html(
     if header.get("error"):
         state.append(f"<p class=warn>Stopped by an error: {html.escape(header['error'])}</p>")
     planned = header.get("episodes_planned", len(results))
+    head, rows = table_rows(results, unit)
+    stats_head, stats = summary_rows(header.get("summary") or {}, unit)
+    sections: dict[str, list[str]] = {}
+    for picture, data in blobs:
+        sections.setdefault(picture.section, []).append(_figure(picture, data))
+    if notes:
+        sections.setdefault("Over time", []).extend(
+            f"<p class=note>{html.escape(n)}</p>" for n in notes
+        )
     figures = "\n".join(
-        f"<figure class={'wide' if caption.startswith('Track') else 'small'}>"
-        f"<img alt='{html.escape(caption)}' "
-        f"src='data:image/png;base64,{base64.b64encode(data).decode()}'>"
-        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
-        for caption, data in blobs
+        f"<h3>{html.escape(name)}</h3>\n" + "\n".join(parts) for name, parts in sections.items()
     )
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; color: #222; }}
-pre {{ background: #f4f4f4; padding: 1em; overflow-x: auto; }}
-img {{ max-width: 100%; border: 1px solid #ccc; }}
-figure {{ margin: 1.5em 1em 1.5em 0; }} .warn {{ color: #b00; font-weight: bold; }}
-figure.small {{ display: inline-block; vertical-align: top; max-width: 560px; }}
-</style></head><body>
+<style>{STYLE}</style></head><body>
 <h1>{html.escape(title)}</h1>
 <p>Experiment: {html.escape(str(header.get("experiment", "")))};
-{len(results)} of {planned} episode(s) finished; track kind: {header.get("track_kind", "?")}.</p>
+{len(results)} of {planned} episode(s) finished; track kind:
+{html.escape(str(header.get("track_kind", "?")))}; lengths in {html.escape(unit)}.</p>
 {"".join(state)}
 <h2>Episodes</h2>
-<pre>{html.escape(table(results))}</pre>
-<h2>Summary (mean ± std)</h2>
-<pre>{html.escape(summary_text(header.get("summary") or {}))}</pre>
-<h2>Pictures</h2>
+{_table(head, rows, text=[len(head) - 1])}
+<h2>Summary</h2>
+{_table(stats_head, stats, text=[0])}
+<h2>Charts</h2>
 {figures}
 </body></html>
 """

@@ -25,12 +25,12 @@ class EpisodeResult:
     steps: int
     tiles_visited: int | None  # procedural tracks
     tiles_total: int | None
-    laps: int  # procedural: 1 if the lap was finished
+    laps: int  # laps finished (the env's lap ends the episode where it counts laps)
     obstacle_hits: int  # steps on which the footprint touched an obstacle colour
-    mean_abs_cte: float | None  # [px] image tracks with use_cte
+    mean_abs_cte: float | None  # [track units] where the track has a reference line
     end: str  # lap_finished, out_of_bounds, obstacle, step_limit, max_steps
     steps_per_second: float
-    lap_time: float | None = None  # [s] reset to lap end; None without a finished lap
+    lap_time: float | None = None  # [s] reset to the first lap's end; None without a lap
     track: str = ""  # which track picture the episode ran on (a key of results.json "tracks")
     video: str | None = None  # file name in the run folder
     trace: str | None = None  # the per-step trace file (record.TRACE_COLUMNS)
@@ -46,18 +46,18 @@ COLUMNS = (
     ("lap_time", "lap [s]", "{:.2f}"),
     ("obstacle_hits", "hits", "{:d}"),
     ("wall_hits", "walls", "{:d}"),
-    ("mean_abs_cte", "|cte|", "{:.1f}"),
+    ("mean_abs_cte", "|cte|", "{:.2f}"),
     ("end", "end", "{}"),
 )
-SUMMARIZED = (
-    "episode_return",
-    "steps",
-    "laps",
-    "lap_time",
-    "obstacle_hits",
-    "wall_hits",
-    "mean_abs_cte",
-    "steps_per_second",
+SUMMARIZED = (  # key, title ({unit}: the track's length unit)
+    ("episode_return", "return"),
+    ("steps", "steps"),
+    ("laps", "laps"),
+    ("lap_time", "lap time [s]"),
+    ("obstacle_hits", "obstacle hits [steps]"),
+    ("wall_hits", "wall hits [steps]"),
+    ("mean_abs_cte", "mean |cross-track error| [{unit}]"),
+    ("steps_per_second", "speed of the simulation [steps/s]"),
 )
 
 
@@ -68,10 +68,20 @@ def _cell(result: EpisodeResult, key: str, fmt: str) -> str:
     return "-" if value is None else fmt.format(value)
 
 
+def table_rows(
+    results: Sequence[EpisodeResult], unit: str = ""
+) -> tuple[list[str], list[list[str]]]:
+    """The episode table's column titles (lengths in ``unit``) and one row of cells per
+    episode ('-': not measured)."""
+    titles = [f"{title} [{unit}]" if key == "mean_abs_cte" and unit else title
+              for key, title, _ in COLUMNS]  # fmt: skip
+    return titles, [[_cell(r, key, fmt) for key, _, fmt in COLUMNS] for r in results]
+
+
 def table(results: Sequence[EpisodeResult]) -> str:
     """A fixed-width table, one row per episode."""
-    rows = [[title for _, title, _ in COLUMNS]]
-    rows += [[_cell(r, key, fmt) for key, _, fmt in COLUMNS] for r in results]
+    titles, cells = table_rows(results)
+    rows = [titles, *cells]
     widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
     lines = ["  ".join(cell.rjust(w) for cell, w in zip(row, widths, strict=True)) for row in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
@@ -81,13 +91,29 @@ def table(results: Sequence[EpisodeResult]) -> str:
 def summary(results: Sequence[EpisodeResult]) -> dict[str, dict[str, float]]:
     """Mean and (population) standard deviation of each numeric metric over the episodes."""
     stats = {}
-    for key in SUMMARIZED:
+    for key, _ in SUMMARIZED:
         values = [getattr(r, key) for r in results if getattr(r, key) is not None]
         if values:
             mean = sum(values) / len(values)
             std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
             stats[key] = {"mean": mean, "std": std}
     return stats
+
+
+def summary_rows(
+    stats: dict[str, dict[str, float]], unit: str = ""
+) -> tuple[list[str], list[list[str]]]:
+    """The summary table's column titles and one row per metric: title, mean, std."""
+    titles = dict(SUMMARIZED)
+    rows = [
+        [
+            titles.get(key, key).format(unit=unit or "track units"),
+            f"{s['mean']:.2f}",
+            f"{s['std']:.2f}",
+        ]
+        for key, s in stats.items()
+    ]
+    return ["metric", "mean", "std"], rows
 
 
 def summary_text(stats: dict[str, dict[str, float]]) -> str:

@@ -24,6 +24,7 @@ from tinyrace.experiment.load import Experiment, check_view, importable_from
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
+from tinyrace.experiment.route import route_watch
 from tinyrace.experiment.tracks import save_track_picture
 from tinyrace.experiment.video import open_video
 from tinyrace.sensors.view import sensor_view
@@ -101,8 +102,10 @@ class _Run:
             except Interrupted as exc:
                 interrupted = exc.signum
             except BaseException as exc:
+                self.progress.close()
                 self._fail(exc)
                 raise
+            self.progress.close()  # an interrupted episode's bar
             if interrupted is None:  # a signal after the last step: still say so
                 interrupted = stop.signum
             self._write(interrupted)
@@ -129,7 +132,7 @@ class _Run:
             steps=recorder.steps,
             tiles_visited=recorder.info.get("tiles_visited"),
             tiles_total=recorder.info.get("tiles_total"),
-            laps=int(recorder.end == "lap_finished"),
+            laps=recorder.laps,
             obstacle_hits=recorder.obstacle_hits,
             wall_hits=recorder.info.get("walls_hit"),
             mean_abs_cte=recorder.mean_abs_cte,
@@ -156,7 +159,12 @@ class _Run:
             stop.check()
 
         return EpisodeRecorder(
-            self.env.action_space, self.env.dt, video, self._frame, on_step=on_step
+            self.env.action_space,
+            self.env.dt,
+            video,
+            self._frame,
+            on_step=on_step,
+            watch=lambda: route_watch(self.env),
         )
 
     def _frame(self, observation: Any) -> np.ndarray:
