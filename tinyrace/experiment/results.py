@@ -61,6 +61,9 @@ SUMMARIZED = (  # key, title ({unit}: the track's length unit)
 )
 
 
+ONLY_MEASURED = ("wall_hits",)  # columns shown only when an episode measured them
+
+
 def _cell(result: EpisodeResult, key: str, fmt: str) -> str:
     if key == "tiles":
         return "-" if result.tiles_total is None else f"{result.tiles_visited}/{result.tiles_total}"
@@ -72,17 +75,23 @@ def table_rows(
     results: Sequence[EpisodeResult], unit: str = ""
 ) -> tuple[list[str], list[list[str]]]:
     """The episode table's column titles (lengths in ``unit``) and one row of cells per
-    episode ('-': not measured)."""
+    episode ('-': not measured); a column only some tracks measure (walls) is left out
+    when no episode measured it."""
+    columns = [c for c in COLUMNS if c[0] not in ONLY_MEASURED or _measured(results, c[0])]
     titles = [f"{title} [{unit}]" if key == "mean_abs_cte" and unit else title
-              for key, title, _ in COLUMNS]  # fmt: skip
-    return titles, [[_cell(r, key, fmt) for key, _, fmt in COLUMNS] for r in results]
+              for key, title, _ in columns]  # fmt: skip
+    return titles, [[_cell(r, key, fmt) for key, _, fmt in columns] for r in results]
+
+
+def _measured(results: Sequence[EpisodeResult], key: str) -> bool:
+    return any(getattr(r, key) is not None for r in results)
 
 
 def table(results: Sequence[EpisodeResult]) -> str:
     """A fixed-width table, one row per episode."""
     titles, cells = table_rows(results)
     rows = [titles, *cells]
-    widths = [max(len(row[i]) for row in rows) for i in range(len(COLUMNS))]
+    widths = [max(len(row[i]) for row in rows) for i in range(len(titles))]
     lines = ["  ".join(cell.rjust(w) for cell, w in zip(row, widths, strict=True)) for row in rows]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
