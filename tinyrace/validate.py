@@ -108,7 +108,7 @@ def picture(target: str, seed: int) -> Picture:
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
     if isinstance(parts.course, MetricCourse):
-        texture = MetricPictures(parts.config, parts.course.source).textures[0]
+        texture = MetricPictures(parts.config, parts.course.source).ground_texture()
         return Picture(metric_picture(parts.course.tracks[0], texture), name, inputs)
     assert isinstance(parts.course, ImageCourse)
     return Picture(image_picture(parts.config, parts.course.tracks[0]), name, inputs)

@@ -24,8 +24,11 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace import kernels
+from tinyrace import cache, kernels
+from tinyrace.cache.codec import DataclassCodec
+from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
+from tinyrace.sensors import common, raycast
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
@@ -55,6 +58,8 @@ KERNEL_VARIABLE = "TINYRACE_LIDAR"  # environment variable: auto | numba | numpy
 TABLE_LIMIT = 256 * 2**20  # [bytes] the numpy path's sample tables of one lidar, at most
 NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
 CONE_RADII = np.array([0.0, *(RADII[name] for name in CLASSES)])  # [m] by cone class id
+FIELDS = DataclassCodec(DistanceField)  # cache files of shared fields and fans
+FANS = DataclassCodec(Fan)
 
 
 def hit_classes(
@@ -210,8 +215,10 @@ class LidarSensor:
         cell: float,
         cone_colors: tuple[RGB, ...],
         kernel_name: str | None = None,
+        settings: cache.Settings | None = None,
     ):
         self.config = config
+        self.cache = settings  # where the fields and fans of fixed tracks are shared
         self.max_range = max_range  # [track units]
         self.cell = cell  # [track units]
         self.cone_colors = cone_colors
@@ -237,7 +244,20 @@ class LidarSensor:
         self.field, self.fan = self._fields.get(track, self._tables)
 
     def _tables(self, track: Track) -> tuple[DistanceField, Fan]:
-        """The field of ``track`` and this lidar's fan on it (built once per track)."""
+        """The field of ``track`` and this lidar's fan on it (built once per track; on a
+        fixed track, once for every env of the process, and kept in the cache folder)."""
+        if track.kind == "procedural":  # a track of its own at every reset
+            field = self._field(track)
+            return field, self._fan(field, track.y_down)
+        c = self.config
+        key = ("lidar field", cache.content(track), c.blocks, self.cell, self.cone_colors,
+               c.hit_classes, self.max_range, self.kernel, _CODE)  # fmt: skip
+        field = cache.shared(key, lambda: self._field(track), self.cache, FIELDS)
+        fan_key = (key, self.angles, track.y_down)
+        fan = cache.shared(fan_key, lambda: self._fan(field, track.y_down), self.cache, FANS)
+        return field, fan
+
+    def _field(self, track: Track) -> DistanceField:
         c = self.config
         numpy = self.kernel == "numpy"  # the compiled kernel needs neither NEAR maps nor tables
         field = blocking_map(
@@ -247,13 +267,17 @@ class LidarSensor:
             from tinyrace.sensors import raycast_numba  # imported: kernel() chose it
 
             field = raycast_numba.with_sectors(field)
+        return field
+
+    def _fan(self, field: DistanceField, y_down: bool) -> Fan:
         # a fan depends on the map's width and cell frame only: tracks made anew at every
         # reset (procedural) share it
-        key = (field.shape[1], *field.to_cells[:, :2].ravel().tolist(), track.y_down)
+        key = (field.shape[1], *field.to_cells[:, :2].ravel().tolist(), y_down)
         if key not in self._fans:
             self._fans.clear()
-            self._fans[key] = beam_fan(field, self.angles, self.max_range, track.y_down, numpy)
-        return field, self._fans[key]
+            numpy = self.kernel == "numpy"
+            self._fans[key] = beam_fan(field, self.angles, self.max_range, y_down, numpy)
+        return self._fans[key]
 
     def origin(self, snapshot: Snapshot, track: Track) -> tuple[float, float]:
         """[track units] where the beams start."""
@@ -281,6 +305,9 @@ class LidarSensor:
         return {"ranges": ranges, "classes": classes}
 
 
+_CODE = cache.code(__file__, common.__file__, raycast.__file__)  # what makes a field
+
+
 def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
     """Unsupported when the numpy path's tables for these beams would exceed TABLE_LIMIT
     (beams packed closer than the tables' angle step multiply their rows)."""
@@ -301,4 +328,4 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     max_range = config.max_range if config.max_range is not None else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
-    return LidarSensor(config, max_range, cell, cone_colors)
+    return LidarSensor(config, max_range, cell, cone_colors, settings=cache_settings(env))
