@@ -175,7 +175,9 @@ def _layout(entry: Entry) -> tuple[bytes, list[tuple[np.ndarray, int, int]]]:
         start = len(meta)
 
 
-def _payload(meta: bytes, layout: list[tuple[np.ndarray, int, int]]) -> Iterator[bytes | memoryview]:
+def _payload(
+    meta: bytes, layout: list[tuple[np.ndarray, int, int]]
+) -> Iterator[bytes | memoryview]:
     yield meta
     position = len(meta)
     for array, offset, end in layout:
