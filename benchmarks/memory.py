@@ -54,7 +54,6 @@ def memory(pid: int) -> tuple[float, float]:
 def one_process(track: str, count: int) -> dict[str, object]:
     """``count`` envs made, reset and stepped in this process, one after the other."""
     import gymnasium as gym
-
     import tinyrace  # noqa: F401  (registers the ids)
 
     env_id, kwargs = TRACKS[track]
