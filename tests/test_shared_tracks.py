@@ -61,7 +61,6 @@ def test_envs_of_one_track_share_its_data_read_only():
     second = make("circuit", sensors=[LIDAR])
     for env in (first, second):
         env.reset(seed=0)
-        env.render  # noqa: B018  (nothing to draw; the texture is read below)
     for mine, theirs in zip(shared_parts(first), shared_parts(second), strict=True):
         assert mine is theirs
     found = [a for part in shared_parts(first) for a in arrays_in(part)]
