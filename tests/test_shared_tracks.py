@@ -192,3 +192,27 @@ def test_an_extra_env_on_the_circuit_costs_little_memory(kwargs: dict):
             env.step(env.action_space.sample())
         held.append(env)
     assert (_memory() - before) / 3 <= 20.0  # [MB] per env (unshared: about 170)
+
+
+@pytest.mark.skipif(not Path("/proc/self/maps").exists(), reason="Linux /proc only")
+def test_worker_processes_map_one_cache_file():
+    """A vector env's workers share the circuit's texture and lidar tables: both map the
+    same cache files, read-only."""
+    import multiprocessing
+
+    from tinyrace.vector import make_batch
+
+    envs = make_batch("tinyrace/TinyRace-v0", 4, workers=2, environment="circuit", sensors=[LIDAR])
+    try:
+        envs.reset(seed=0)
+        folder = str(cache.default_folder())
+        mapped = []
+        for worker in multiprocessing.active_children():
+            with open(f"/proc/{worker.pid}/maps") as maps:
+                lines = [line.split() for line in maps if folder in line and ".npc" in line]
+            assert all(fields[1].startswith("r-") for fields in lines)  # read-only pages
+            mapped.append({fields[-1] for fields in lines})
+        assert len(mapped) == 2
+        assert len(mapped[0]) >= 2 and mapped[0] == mapped[1]  # texture and lidar field
+    finally:
+        envs.close()
