@@ -15,6 +15,8 @@ reset, and stepped 5 times with random actions.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import ctypes
 import json
 import multiprocessing
 import os
@@ -51,6 +53,14 @@ def memory(pid: int) -> tuple[float, float]:
     return found["Pss:"], found["Rss:"]
 
 
+def trimmed(pid: int) -> tuple[float, float]:
+    """(PSS, RSS) [MB] of this process after glibc has returned its free blocks (the
+    loading of a track leaves some behind; malloc reuses them for the next env)."""
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    return memory(pid)
+
+
 def one_process(track: str, count: int) -> dict[str, object]:
     """``count`` envs made, reset and stepped in this process, one after the other."""
     import gymnasium as gym
@@ -69,8 +79,16 @@ def one_process(track: str, count: int) -> dict[str, object]:
         envs.append(env)
         if i == 0:
             first = memory(os.getpid())
+            first_trimmed = trimmed(os.getpid())
     pss, rss = memory(os.getpid())
-    return {"imports": before, "first": first, "all": (pss, rss), "resets": resets}
+    return {
+        "imports": before,
+        "first": first,
+        "all": (pss, rss),
+        "first trimmed": first_trimmed,
+        "all trimmed": trimmed(os.getpid()),
+        "resets": resets,
+    }
 
 
 def two_workers(track: str, count: int) -> dict[str, object]:
@@ -103,8 +121,10 @@ def measure(track: str, count: int, mode: str, cache: str) -> dict[str, object]:
 
 
 def table(tracks: list[str], counts: list[int]) -> None:
-    print("| track | envs | one process: PSS (RSS) [MB] | per extra env | 2 workers: PSS "
-          "[MB] | reset: first env (empty / filled cache), a later env [s] |")  # fmt: skip
+    print(
+        "| track | envs | one process: PSS (RSS) [MB] | per extra env, raw / trimmed [MB] "
+        "| 2 workers: PSS [MB] | reset: first env (empty / filled cache), a later env [s] |"
+    )
     print("|---|---|---|---|---|---|")
     for track in tracks:
         with tempfile.TemporaryDirectory(prefix="tinyrace-memory-") as cache:
@@ -115,12 +135,14 @@ def table(tracks: list[str], counts: list[int]) -> None:
                 pss, rss = alone["all"]  # type: ignore[misc]
                 first_pss = alone["first"][0]  # type: ignore[index]
                 extra = (pss - first_pss) / (count - 1) if count > 1 else float("nan")
+                trim = alone["all trimmed"][0] - alone["first trimmed"][0]  # type: ignore[index]
+                extras = "-" if count == 1 else f"{extra:.1f} / {trim / (count - 1):.1f}"
                 resets = alone["resets"]  # type: ignore[index]
                 later = f"{resets[-1]:.2f}" if count > 1 else "-"  # type: ignore[index]
                 first = f"{cold['resets'][0]:.2f} / {resets[0]:.2f}"  # type: ignore[index]
                 print(
                     f"| {track} | {count} | {pss:.0f} ({rss:.0f}) | "
-                    f"{'-' if count == 1 else f'{extra:.1f}'} | {workers['all'][0]:.0f} | "  # type: ignore[index]
+                    f"{extras} | {workers['all'][0]:.0f} | "  # type: ignore[index]
                     f"{first}, {later} |",
                     flush=True,
                 )
