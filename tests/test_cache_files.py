@@ -262,3 +262,11 @@ def test_cache_clear_removes_only_cache_files(tmp_path: Path, capsys):
     assert cli.main(["cache", "clear", "--dir", str(tmp_path)]) == 0
     assert "removed 1 cache file(s)" in capsys.readouterr().out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+
+
+def test_no_lock_file_is_left_for_an_entry_not_stored(tmp_path: Path):
+    cache.forget()
+    small = cache.shared("small", lambda: Table(np.zeros(10), (1, 1), 0.0, np.float32(0)),
+                         cache.Settings(tmp_path), CODEC)  # fmt: skip
+    assert not small.values.flags.writeable
+    assert not tmp_path.exists() or not any(tmp_path.iterdir())

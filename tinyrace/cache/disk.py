@@ -204,11 +204,14 @@ def locked(folder: Path, key: str) -> Iterator[None]:
         yield
         return
     folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / f"{key}{LOCK_SUFFIX}", "a") as lock:
+    path = folder / f"{key}{LOCK_SUFFIX}"
+    with open(path, "a") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         try:
             yield
         finally:
+            if not path_of(folder, key).exists():  # nothing stored: no lock file left behind
+                _remove(path)
             fcntl.flock(lock, fcntl.LOCK_UN)
 
 
@@ -235,6 +238,7 @@ def trim(folder: Path, max_bytes: int) -> None:
         if total <= max_bytes:
             break
         _remove(path)
+        _remove(path.with_suffix(LOCK_SUFFIX))
         total -= size
 
 
