@@ -6,12 +6,21 @@ pytest's default import mode already puts this folder on sys.path; this also cov
 
 from __future__ import annotations
 
+import atexit
+import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 HERE = str(Path(__file__).resolve().parent)
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
+
+if "TINYRACE_CACHE_DIR" not in os.environ:  # the tests' cache files go to a folder of their own
+    _CACHE = tempfile.mkdtemp(prefix="tinyrace-test-cache-")
+    os.environ["TINYRACE_CACHE_DIR"] = _CACHE
+    atexit.register(shutil.rmtree, _CACHE, True)
 
 import gymnasium as gym  # noqa: E402
 import pytest  # noqa: E402

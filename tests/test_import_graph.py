@@ -16,7 +16,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "tinyrace"
 
 # Bottom to top; a module may import from its own layer and the layers below it.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "examples", "actions", "kernels"),
+    ("errors", "examples", "actions", "kernels", "cache"),
     ("config",),
     ("tracks",),
     ("cars",),

@@ -145,6 +145,7 @@ def _parser() -> argparse.ArgumentParser:
     play.add_argument("--seed", type=_count(0, "a whole number >= 0"), default=None)
     play.set_defaults(handler=_play)
     _examples_parser(commands)
+    _cache_parser(commands)
     for command in commands.choices.values():  # also after the command: tinyrace run --debug
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS)
     return parser
@@ -159,6 +160,19 @@ def _examples_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
     copy = actions.add_parser("copy", help="copy a shipped track and/or config (never overwrites)")
     copy.add_argument("name", help="a name from `tinyrace examples`")
     copy.add_argument("dir", nargs="?", default=".", help="where to copy it (default: here)")
+
+
+def _cache_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
+    cache = commands.add_parser(
+        "cache", help="show (info) or empty (clear) the folder of shared track data"
+    )
+    cache.add_argument("action", nargs="?", choices=("info", "clear"), default="info")
+    cache.add_argument(
+        "--dir",
+        help="the cache folder (default: $TINYRACE_CACHE_DIR, else $XDG_CACHE_HOME/tinyrace, "
+        "else ~/.cache/tinyrace; a config's cache.dir names another)",
+    )
+    cache.set_defaults(handler=_cache)
 
 
 # -- run ---------------------------------------------------------------------------------------
@@ -281,6 +295,23 @@ def _examples(args: argparse.Namespace) -> int:
     for example in shown:
         print(f"{example.kind:<6}  {example.name:<{width}}  {example.summary}")
     print("run one: tinyrace run NAME; copy one out to edit: tinyrace examples copy NAME [DIR]")
+    return 0
+
+
+# -- cache -------------------------------------------------------------------------------------
+def _cache(args: argparse.Namespace) -> int:
+    from tinyrace.cache import default_folder, disk
+
+    folder = Path(args.dir).expanduser() if args.dir else default_folder()
+    if args.action == "clear":
+        removed = disk.clear(folder)
+        print(f"removed {removed} cache file(s) from {folder}")
+        return 0
+    files = disk.entries(folder)
+    size = sum(path.stat().st_size for path in files)
+    print(f"cache folder: {folder}")
+    print(f"{len(files)} file(s), {size / 2**20:.1f} MB (cache.max_size caps it; default 2048 MB)")
+    print("empty it: tinyrace cache clear")
     return 0
 
 

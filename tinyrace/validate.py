@@ -128,7 +128,7 @@ def picture(target: str, seed: int) -> Picture:
     parts = build_course(loaded)
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
     if isinstance(first.detail, MetricTrack):
-        texture = MetricPictures(parts.config, parts.source).textures[0]  # type: ignore[arg-type]
+        texture = MetricPictures(parts.config, parts.source).ground_texture()  # type: ignore[arg-type]
         return Picture(metric_picture(first.detail, texture), name, inputs)
     return Picture(image_picture(parts.config, first.detail), name, inputs)
 

@@ -8,12 +8,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
+from tinyrace.cache import Settings, default_folder
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
     MAX_CAMERA_PIXELS,
     METRIC_KINDS,
+    CacheConfig,
     CameraConfig,
     CarConfig,
     CenterlineTrackConfig,
@@ -35,6 +37,7 @@ from tinyrace.examples import find_track, track_names
 
 __all__ = [
     "METRIC_KINDS",
+    "CacheConfig",
     "CameraConfig",
     "CarConfig",
     "CenterlineTrackConfig",
@@ -51,10 +54,18 @@ __all__ = [
     "RosMapTrackConfig",
     "SimConfig",
     "TrackConfig",
+    "cache_settings",
     "load_env_config",
 ]
 
 TRACK_FILE = "track.yaml"
+
+
+def cache_settings(config: EnvConfig) -> Settings:
+    """Where the config's envs keep shared track data on disk, and how much (``cache``)."""
+    cache = config.cache
+    folder = Path(cache.dir).expanduser() if cache.dir is not None else default_folder()
+    return Settings(folder, int(cache.max_size * 2**20))
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from typing import Any, Literal, Union
 from tinyrace.config.colors import Color
 from tinyrace.config.experiment import ExperimentConfig, OutputConfig
 from tinyrace.config.schema import (
+    CacheConfig,
     CameraConfig,
     CarConfig,
     CenterlineTrackConfig,
@@ -56,6 +57,7 @@ SECTIONS = (
     ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
     ("files", FilesConfig, "files"),
     ("race", RaceConfig, "race"),
+    ("cache", CacheConfig, "cache"),
     ("experiment file", ExperimentConfig, ""),
     ("experiment output", OutputConfig, "output"),
 )

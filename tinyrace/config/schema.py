@@ -397,6 +397,27 @@ class RaceConfig:
 
 
 @dataclass(frozen=True)
+class CacheConfig:
+    """``cache``: where envs keep the read-only data of a fixed track (ground textures, lidar
+    tables) that worker processes share through memory-mapped files. ``tinyrace cache info``
+    shows the folder, ``tinyrace cache clear`` empties it."""
+
+    dir: str | None = knob(
+        None,
+        "folder of the cache files; null: $TINYRACE_CACHE_DIR, else $XDG_CACHE_HOME/tinyrace, "
+        "else ~/.cache/tinyrace",
+    )
+    max_size: float = knob(
+        2048.0,
+        "the cache files together at most (the least recently used go first); 0: no files, "
+        "envs share their track within each process only",
+        "MB",
+        low=0,
+        high=1_000_000,
+    )
+
+
+@dataclass(frozen=True)
 class EnvConfig:
     """A whole environment: what a track.yaml holds."""
 
@@ -426,6 +447,7 @@ class EnvConfig:
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
     files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
     race: RaceConfig = knob(RaceConfig(), "several cars on the track (tinyrace.race)")
+    cache: CacheConfig = knob(CacheConfig(), "where shared track data is kept on disk")
 
     @property
     def kind(self) -> str:

@@ -1,8 +1,10 @@
-"""The ground of a track in metres, drawn once per env, and its overview picture.
+"""The ground of a track in metres, drawn once per track, and its overview picture.
 
 The road (tiles), a start line, the cones by class and a ROS map's cells are drawn
 into one RGBx texture with y up (north at the top of the picture); cameras sample it
-with one affine warp, as on the other track kinds.
+with one affine warp, as on the other track kinds. ``shared_ground`` gives every env of
+the same track the same read-only texture (``tinyrace.cache``: one per process, pages
+shared between processes through a cache file).
 """
 
 from __future__ import annotations
@@ -10,7 +12,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from tinyrace import cache
+from tinyrace.cache.codec import DataclassCodec
+from tinyrace.sensors import texture
 from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.tracks.base import Track
 from tinyrace.tracks.metric import MetricTrack
 
 MAX_SIDE = 8192  # [px] the texture's longest side
@@ -26,6 +32,17 @@ CONE_COLORS = {  # RGB by class id (tinyrace.tracks.cone_map.CLASSES order, from
 }
 MAP_COLORS = {"free": ROAD, "unknown": (40, 40, 40), "occupied": (0, 0, 0)}
 _BITS = 4  # cv2 fixed-point vertices: 1/16 px
+TEXTURES = DataclassCodec(GroundTexture, GroundTexture.complete)  # stored with every level
+
+
+def shared_ground(
+    layout: Track, track: MetricTrack, pixels_per_meter: float, settings: cache.Settings
+) -> GroundTexture:
+    """``paint_ground(track, pixels_per_meter)``, one read-only texture for every env of
+    this track (``layout``: its ``Track``); in the cache folder of ``settings``."""
+    key = ("metric ground", cache.content(layout), pixels_per_meter,
+           cache.code(__file__, texture.__file__))  # fmt: skip
+    return cache.shared(key, lambda: paint_ground(track, pixels_per_meter), settings, TEXTURES)
 
 
 def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:

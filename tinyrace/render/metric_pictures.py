@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 
 from tinyrace.cars.state import footprint_corners
-from tinyrace.config import CameraConfig, EnvConfig
-from tinyrace.render.metric_ground import MetricOverview, paint_ground
+from tinyrace.config import CameraConfig, EnvConfig, cache_settings
+from tinyrace.render.metric_ground import MetricOverview, shared_ground
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.birdseye_camera import RoiCamera
 from tinyrace.sensors.texture import GroundTexture, transform_points
@@ -24,14 +24,18 @@ DEFAULT_PIXELS_PER_METER = 20.0  # [px/m] when the track config names none
 
 
 class MetricPictures:
-    """Every track's ground texture (made once per env); overviews when first drawn."""
+    """Every track's ground texture and overview, each made when first read (a camera,
+    the default view or a frame); textures are shared with the other envs of the track."""
 
     def __init__(self, config: EnvConfig, source: MetricSource):
+        self.layouts = source.tracks
         self.tracks: list[MetricTrack] = [layout.detail for layout in source.tracks]
-        self.textures = [
-            paint_ground(track, getattr(track_config, "pixels_per_meter", DEFAULT_PIXELS_PER_METER))
-            for track, track_config in zip(self.tracks, config.tracks, strict=True)
+        self.scales = [  # [px/m] of each track's texture
+            getattr(track_config, "pixels_per_meter", DEFAULT_PIXELS_PER_METER)
+            for track_config in config.tracks
         ]
+        self.cache = cache_settings(config)
+        self.textures: list[GroundTexture | None] = [None] * len(self.tracks)
         self.overviews: list[MetricOverview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
         self.view: RoiCamera | None = None  # the default view, made at the first observation
@@ -76,5 +80,10 @@ class MetricPictures:
         return overview.render(footprint_corners(snapshot.car), windows, images)
 
     def ground_texture(self) -> GroundTexture:
-        """The track picture the cameras see."""
-        return self.textures[self.index]
+        """The track picture the cameras see (painted, or mapped, at its first read)."""
+        texture = self.textures[self.index]
+        if texture is None:
+            i = self.index
+            texture = shared_ground(self.layouts[i], self.tracks[i], self.scales[i], self.cache)
+            self.textures[i] = texture
+        return texture

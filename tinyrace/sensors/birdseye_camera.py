@@ -28,6 +28,7 @@ from tinyrace.sensors.common import (
     label_names,
     label_table,
     paint_labels,
+    shared_ground,
 )
 from tinyrace.sensors.texture import GroundTexture, compose
 from tinyrace.tracks.base import Track
@@ -122,7 +123,8 @@ class BirdseyeCamera:
     def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
         ppu = self.camera(track).pixels_per_unit  # [label px per track unit] as the output's
-        return paint_labels(track, table, ppu), label_names(table)
+        ground = shared_ground(track, "labels", ppu, lambda: paint_labels(track, table, ppu))
+        return ground, label_names(table)
 
     def camera(self, track: Track) -> RoiCamera:
         """The camera on the current episode's ground texture."""

@@ -15,6 +15,7 @@ from typing import Generic, TypeVar
 import cv2
 import numpy as np
 
+from tinyrace import cache
 from tinyrace.cars.dynamic_shape import SIZE, WHEEL_POSITIONS
 from tinyrace.config import EnvConfig
 from tinyrace.tracks.base import Track
@@ -199,6 +200,16 @@ def paint_colors(track: Track, pixels_per_unit: float) -> GroundImage:
         color = track.palette.get(surface.name, (128, 128, 128))
         fill_quads(image, to_pixels, surface.quads, (*_rgb(color), 255))
     return GroundImage(image, to_pixels)
+
+
+def shared_ground(
+    track: Track, what: str, pixels_per_unit: float, paint: Callable[[], GroundImage]
+) -> GroundImage:
+    """``paint()``, made once for every env of this process on a fixed track (read-only,
+    ``tinyrace.cache``); on a procedural track, for this episode alone."""
+    if track.kind == "procedural":
+        return paint()
+    return cache.shared((what, cache.content(track), pixels_per_unit), paint)
 
 
 def _rgb(color: Sequence[float]) -> RGB:

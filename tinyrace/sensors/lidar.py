@@ -24,9 +24,11 @@ import cv2
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace import kernels
+from tinyrace import cache, kernels
+from tinyrace.cache.codec import DataclassCodec
+from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors import raycast_numpy
+from tinyrace.sensors import common, raycast, raycast_numpy
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
@@ -63,6 +65,8 @@ ROS_BLOCKS = ("walls", "cones")  # what stops a beam on a ROS map unless ``block
 ALL_BLOCKS = ("off_road", "walls", "obstacles", "cones")  # ... and on the other tracks
 NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
 CONE_RADII = np.array([0.0, *(RADII[name] for name in CLASSES)])  # [m] by cone class id
+FIELDS = DataclassCodec(DistanceField)  # cache files of shared fields and fans
+FANS = DataclassCodec(Fan)
 
 
 def hit_classes(
@@ -254,8 +258,10 @@ class LidarSensor:
         cone_colors: tuple[RGB, ...],
         kernel_name: str | None = None,
         exact_only: bool = False,
+        settings: cache.Settings | None = None,
     ):
         self.config = config
+        self.cache = settings  # where the fields and fans of fixed tracks are shared
         self.max_range = max_range  # [track units]
         self.cell = cell  # [track units]
         self.cone_colors = cone_colors
@@ -296,13 +302,26 @@ class LidarSensor:
             self.exact, (self.field, self.fan) = None, made
 
     def _tables(self, track: Track) -> tuple[DistanceField, Fan] | ExactField:
-        """The field of ``track`` and this lidar's fan on it (built once per track); on a
-        ROS map, the exact field of its pixels."""
-        c = self.config
+        """The field of ``track`` and this lidar's fan on it (built once per track; on a
+        fixed track, once for every env of the process, and kept in the cache folder); on a
+        ROS map, the exact field of its pixels (per env)."""
         blocks = self.blocks(track)
-        exact = occupancy_map(track, blocks, c.hit_classes)
+        exact = occupancy_map(track, blocks, self.config.hit_classes)
         if exact is not None:
             return exact
+        if track.kind == "procedural":  # a track of its own at every reset
+            field = self._field(track, blocks)
+            return field, self._fan(field, track.y_down)
+        c = self.config
+        key = ("lidar field", cache.content(track), blocks, self.cell, self.cone_colors,
+               c.hit_classes, self.max_range, self.kernel, _CODE)  # fmt: skip
+        field = cache.shared(key, lambda: self._field(track, blocks), self.cache, FIELDS)
+        fan_key = (key, self.angles, track.y_down)
+        fan = cache.shared(fan_key, lambda: self._fan(field, track.y_down), self.cache, FANS)
+        return field, fan
+
+    def _field(self, track: Track, blocks: tuple[str, ...]) -> DistanceField:
+        c = self.config
         numpy = self.kernel == "numpy"  # the compiled kernel needs neither NEAR maps nor tables
         field = blocking_map(
             track, blocks, self.cell, self.cone_colors, c.hit_classes, self.max_range, numpy
@@ -311,13 +330,17 @@ class LidarSensor:
             from tinyrace.sensors.kernels import raycast as raycast_numba  # kernel() chose it
 
             field = raycast_numba.with_sectors(field)
+        return field
+
+    def _fan(self, field: DistanceField, y_down: bool) -> Fan:
         # a fan depends on the map's width and cell frame only: tracks made anew at every
         # reset (procedural) share it
-        key = (field.shape[1], *field.to_cells[:, :2].ravel().tolist(), track.y_down)
+        key = (field.shape[1], *field.to_cells[:, :2].ravel().tolist(), y_down)
         if key not in self._fans:
             self._fans.clear()
-            self._fans[key] = beam_fan(field, self.angles, self.max_range, track.y_down, numpy)
-        return field, self._fans[key]
+            numpy = self.kernel == "numpy"
+            self._fans[key] = beam_fan(field, self.angles, self.max_range, y_down, numpy)
+        return self._fans[key]
 
     def origin(self, snapshot: Snapshot, track: Track) -> tuple[float, float]:
         """[track units] where the beams start."""
@@ -379,6 +402,9 @@ def exact_ranges(
     return ranges
 
 
+_CODE = cache.code(__file__, common.__file__, raycast.__file__)  # what makes a field
+
+
 def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
     """Unsupported when the numpy path's tables for these beams would exceed TABLE_LIMIT
     (beams packed closer than the tables' angle step multiply their rows)."""
@@ -402,4 +428,11 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
         max_range = ROS_MAX_RANGE if env.kind == "ros_map" else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
-    return LidarSensor(config, max_range, cell, cone_colors, exact_only=env.kind == "ros_map")
+    return LidarSensor(
+        config,
+        max_range,
+        cell,
+        cone_colors,
+        exact_only=env.kind == "ros_map",
+        settings=cache_settings(env),
+    )

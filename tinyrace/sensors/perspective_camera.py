@@ -28,6 +28,7 @@ from tinyrace.sensors.common import (
     label_names,
     label_table,
     paint_labels,
+    shared_ground,
 )
 from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, warp_below_sky
 from tinyrace.tracks.base import Track
@@ -101,7 +102,8 @@ class PerspectiveCamera:
     def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
         names = {**label_names(table), SKY_LABEL: "sky"}
-        return paint_labels(track, table, self.pixels_per_unit), names
+        ppu = self.pixels_per_unit
+        return shared_ground(track, "labels", ppu, lambda: paint_labels(track, table, ppu)), names
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         car = snapshot.car

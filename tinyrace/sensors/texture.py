@@ -10,6 +10,7 @@ images about 2.5x faster than 3-channel ones.
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
@@ -167,8 +168,14 @@ class GroundTexture:
         if pixels is None:
             finer = self.image(level - 1)
             pixels = cv2.resize(finer, self.sizes[level], interpolation=cv2.INTER_AREA)
+            pixels.setflags(write=finer.flags.writeable)  # a shared texture stays read-only
             self.levels[level] = pixels
         return pixels
+
+    def complete(self) -> None:
+        """Make every level now (a texture about to be stored whole)."""
+        for level in range(len(self.levels)):
+            self.image(level)
 
     def __post_init__(self) -> None:
         # [texture px per world unit] of each level, for picking one by the output's scale
@@ -180,7 +187,9 @@ class GroundTexture:
         self._shift_scale: list[Affine | None] = [
             _six(m) if m[0, 1] == 0 and m[1, 0] == 0 else None for m in self.from_pixels
         ]
-        self._scratch: dict[tuple[int, int], np.ndarray] = {}  # 4-channel warp targets by size
+        # 4-channel warp targets by size and thread: envs that share a texture may run in
+        # threads of one process
+        self._scratch: dict[tuple[int, int, int], np.ndarray] = {}
         self._border_value = (*self.border, 0)  # the warp's RGBx outside the texture
         self.drawing: str | None = None  # the composition's path (numba | numpy), at first use
         self._compose: Callable[[Affine, Affine], np.ndarray] | None = None
@@ -239,9 +248,10 @@ class GroundTexture:
         self, level: int, texture_to_out: np.ndarray, size: tuple[int, int], out: np.ndarray | None
     ) -> np.ndarray:
         """Sample ``level`` through ``texture_to_out`` into an RGB image of ``size`` (w, h)."""
-        scratch = self._scratch.get(size)
+        key = (*size, threading.get_ident())
+        scratch = self._scratch.get(key)
         if scratch is None:
-            scratch = self._scratch[size] = np.empty((size[1], size[0], 4), np.uint8)
+            scratch = self._scratch[key] = np.empty((size[1], size[0], 4), np.uint8)
         pixels = self.levels[level]
         cv2.warpAffine(
             self.image(level) if pixels is None else pixels,

@@ -18,7 +18,13 @@ import numpy as np
 
 from tinyrace.config import EnvConfig
 from tinyrace.sensors.base import Sensor
-from tinyrace.sensors.common import GroundImage, PerTrack, car_length, paint_colors
+from tinyrace.sensors.common import (
+    GroundImage,
+    PerTrack,
+    car_length,
+    paint_colors,
+    shared_ground,
+)
 from tinyrace.sensors.cones import ConesSensor
 from tinyrace.sensors.lidar import LidarSensor
 from tinyrace.sensors.lookahead import LookaheadSensor
@@ -57,7 +63,10 @@ class SensorView:
 
     def render(self, snapshot: Snapshot, track: Track, observation: dict[str, Any]) -> np.ndarray:
         """(SIZE, SIZE + images, 3) uint8 RGB."""
-        ground = self._grounds.get(track, lambda t: paint_colors(t, self.pixels_per_unit))
+        ppu = self.pixels_per_unit
+        ground = self._grounds.get(
+            track, lambda t: shared_ground(t, "colours", ppu, lambda: paint_colors(t, ppu))
+        )
         car = snapshot.car
         to_view = self._car_to_view()  # car frame (ahead, left) -> view px
         world_to_car = _world_to_car(car.front_axle, car.pose[2], track.y_down)
