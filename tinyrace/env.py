@@ -20,7 +20,13 @@ from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
-from tinyrace.rewards import active_terms, ends_episode, reward_terms, shaping_from_config
+from tinyrace.rewards import (
+    REWARD_TERMS,
+    active_terms,
+    ends_episode,
+    reward_terms,
+    shaping_from_config,
+)
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import build_sensors, sensor_type
@@ -37,6 +43,7 @@ RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn", "poses")
 RESET_SOURCE = "<reset options>"
 CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
+CARRIED = {name: REWARD_TERMS[name] for name in CARRIED_TERMS}  # the only terms a reset asks
 
 
 class TinyRaceEnv(gym.Env):
@@ -156,7 +163,8 @@ class TinyRaceEnv(gym.Env):
         self.t += self.dt
         # The reset step is not rewarded; tiles it touched are paid by the first step (as
         # CarRacing does). Only such events carry over, never states like the cte.
-        terms = reward_terms(facts, self.config.reward_design, self.shaping, charge_time=False)
+        design = self.config.reward_design
+        terms = reward_terms(facts, design, self.shaping, False, CARRIED)
         self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
         self.score += sum(self._carry.values())
         snapshot = self.snapshot()

@@ -34,7 +34,7 @@ def _show(value: object) -> str:
         text = _SHORT.repr(value)
     except Exception:  # a user object whose repr fails
         text = f"<{type(value).__name__}>"
-    return text if len(text) <= 80 else text[:77] + "..."
+    return text if len(text) <= 80 else text[:38] + "..." + text[-39:]  # both ends of a path
 
 
 class ConfigError(ValueError):

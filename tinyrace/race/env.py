@@ -23,7 +23,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from tinyrace.env import CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
+from tinyrace.env import CARRIED, CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.rewards import ends_episode, reward_terms
 from tinyrace.sensors.base import Sensor
@@ -111,9 +111,7 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
             if i > 0:
                 for sensor in seat.sensors:
                     sensor.reset(core.layout)
-            terms = reward_terms(
-                facts[i], core.config.reward_design, core.shaping, charge_time=False
-            )
+            terms = reward_terms(facts[i], core.config.reward_design, core.shaping, False, CARRIED)
             seat.carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
             seat.score = sum(seat.carry.values())
         observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
