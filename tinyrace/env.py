@@ -104,7 +104,8 @@ class TinyRaceEnv(gym.Env):
         self._actions = parts.car_model.actions(self.config.car)
         self.action_space = self._actions.space
         self._ground = EpisodeGround(self.pictures)
-        context = SensorContext(self.config, self._ground)
+        self.car_facts = parts.car_model.describe(self.config)
+        context = SensorContext(self.config, self._ground, self.car_facts)
         self.sensors: list[Sensor] = [
             *_cameras(self.config, context),
             *build_sensors(context, loaded.source),

@@ -36,7 +36,7 @@ class MetricEpisode:
         self.track_config = config.tracks[draw.track_index]
         self.lap_percent: float = getattr(self.track_config, "lap_complete_percent", 0.95)
         tiles = len(self.track.tiles)
-        self.grip_tiles = tiles > 0 and config.car.model == "dynamic"  # wheels feel the road
+        self.grip_tiles = tiles > 0 and car_model.wheels  # wheels feel the road
         self.world = World(grass_off_tiles=self.grip_tiles and self.track.occupancy is None)
         if self.grip_tiles:
             self.world.add_tiles(self.track.tiles)

@@ -43,7 +43,7 @@ def prepare(loaded: LoadedConfig) -> Parts:
     except ConfigError as exc:
         raise ConfigError(problems + exc.problems) from None
     car_model = choose_car_model(loaded.config, loaded.source)  # raises the problems found
-    car = dataclasses.replace(loaded.config.car, model=car_model.name)  # type: ignore[arg-type]
+    car = dataclasses.replace(loaded.config.car, model=car_model.name)
     config = dataclasses.replace(loaded.config, car=car)
     return Parts(config, car_model, source, _course(config, source, car_model))
 

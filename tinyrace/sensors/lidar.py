@@ -31,7 +31,6 @@ from tinyrace.sensors.common import (
     RGB,
     PerTrack,
     Unsupported,
-    car_length,
     color_mask,
     fill_boxes,
     fill_quads,
@@ -296,8 +295,7 @@ def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
 
 def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     """The lidar of ``config``; null knobs scale with the car (see LidarConfig)."""
-    env = context.env
-    length = car_length(env)
+    length = context.car.length
     max_range = config.max_range if config.max_range is not None else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
