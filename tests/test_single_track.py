@@ -167,7 +167,7 @@ def test_a_wall_stops_it():
     env = make("f1tenth_loop")
     env.reset(seed=0)
     for _ in range(300):  # straight ahead at 5 m/s: the corridor bends away
-        _, _, term, trunc, info = env.step(np.array([0.0, 5.0], np.float32))
+        _, _, _, _, info = env.step(np.array([0.0, 5.0], np.float32))
         if info["walls_hit"]:
             break
     assert info["walls_hit"] > 0

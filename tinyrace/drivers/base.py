@@ -74,7 +74,7 @@ class ActionAdapter:
         return np.clip(np.array(values, np.float32), box.low, box.high)
 
 
-_KIND_BY_SHAPE = {(3,): "pedals", (2,): "steer_throttle", (1,): "steer"}
+_KIND_BY_SHAPE: dict[tuple[int, ...], str] = {(3,): "pedals", (2,): "steer_throttle", (1,): "steer"}
 
 
 class DiscreteChooser:
