@@ -35,14 +35,13 @@ CARS: tuple[tuple[str, dict[str, Any]], ...] = (
 
 def lap(track: str, car: dict[str, Any], steps: int, cameras: bool) -> tuple[str, float]:
     """(lap time [s] or why there is none, steps per second)."""
-    extra: dict[str, Any] = {}
+    extra: dict[str, Any] = {"sim": {"step_limit": steps}}
     if not cameras:
-        extra = {"cameras": [], "sensors": [{"id": "motion", "type": "state"}]}
+        extra.update(cameras=[], sensors=[{"id": "motion", "type": "state"}])
     env = gym.make(
         "tinyrace/TinyRace-v0",
         environment=str(TRACKS_DIR / track),
         car=car,
-        max_episode_steps=steps,
         **extra,
     )
     driver = CenterlineDriver()

@@ -175,17 +175,18 @@ def test_a_wall_stops_it():
     env.close()
 
 
-LAPS = {  # track: (preset, steps within which a lap completes)
-    "f1tenth_loop": ("f1tenth", 700),
-    "autocross": ("vehicle2", 1500),
-    "circuit": ("vehicle1", 5000),
+LAPS = {  # (track, actions): (preset, steps within which a lap completes)
+    ("f1tenth_loop", "continuous"): ("f1tenth", 700),
+    ("f1tenth_loop", "raw"): ("f1tenth", 700),
+    ("autocross", "continuous"): ("vehicle2", 1500),
+    ("circuit", "continuous"): ("vehicle1", 5000),
 }
 
 
-@pytest.mark.parametrize("track", sorted(LAPS))
-def test_the_centerline_driver_laps_with_the_single_track_car(track):
-    preset, limit = LAPS[track]
-    env = make(track, preset=preset)
+@pytest.mark.parametrize(("track", "actions"), sorted(LAPS))
+def test_the_centerline_driver_laps_with_the_single_track_car(track, actions):
+    preset, limit = LAPS[track, actions]
+    env = make(track, preset=preset, actions=actions)
     driver = CenterlineDriver()
     observation, info = env.reset(seed=0)
     driver.reset(env)
