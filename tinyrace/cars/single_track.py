@@ -31,13 +31,12 @@ class SingleTrackCar:
     body: pymunk.Body
     params: model.VehicleParameters
     raw: bool  # actions are the model's inputs (else a target angle and speed)
-    substeps: int | None  # RK4 steps per world step (None: enough for stability)
+    substeps: int | None  # RK4 steps per world step (None: enough for stability at the speed)
     delta: float = 0.0  # [rad] front-wheel angle, + left
     v: float = 0.0  # [m/s] speed
     yaw_rate: float = 0.0  # [rad/s]
     slip: float = 0.0  # [rad] slip angle at the centre of gravity
     action: tuple[float, float] = (0.0, 0.0)
-    _stable: tuple[float, int] = (0.0, 1)  # (dt [s], the substeps it needs)
 
     @classmethod
     def build(
@@ -83,12 +82,12 @@ class SingleTrackCar:
         body.angular_velocity = (end[4] - psi) / dt
 
     def steps_per(self, dt: float) -> int:
-        """RK4 steps in a world step of ``dt`` [s]."""
+        """RK4 steps in a world step of ``dt`` [s]: the knob's, or as many as the speed now
+        needs (the yaw and slip motion stiffens as 1/v: many near the switch speed, one at
+        speed)."""
         if self.substeps is not None:
             return self.substeps
-        if self._stable[0] != dt:
-            self._stable = (dt, model.substeps_for(self.params, dt))
-        return self._stable[1]
+        return model.substeps_for(self.params, dt, self.v)
 
     def stop(self) -> None:
         """A crash: the car stands still (its wheels keep their angle)."""

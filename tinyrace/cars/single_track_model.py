@@ -247,7 +247,11 @@ def stiffness(p: VehicleParameters, v: float) -> float:
 STABLE_STEP = 2.0  # |eigenvalue| * step kept under this (RK4 is stable to about 2.78)
 
 
-def substeps_for(p: VehicleParameters, dt: float) -> int:
-    """RK4 steps per ``dt`` [s] that keep the stiffest motion (just above the switch to the
-    kinematic model) stable."""
-    return max(1, math.ceil(stiffness(p, p.kinematic_below) * dt / STABLE_STEP))
+def substeps_for(p: VehicleParameters, dt: float, v: float | None = None) -> int:
+    """RK4 steps per ``dt`` [s] that keep the yaw and slip motion stable over a step that
+    starts at speed ``v`` [m/s] (the speed may fall by ``a_max * dt`` in it); None: at any
+    speed (the stiffest, just above the switch to the kinematic model)."""
+    slowest = p.kinematic_below
+    if v is not None:
+        slowest = max(abs(v) - p.a_max * dt, slowest)
+    return max(1, math.ceil(stiffness(p, slowest) * dt / STABLE_STEP))

@@ -225,7 +225,7 @@ class CarConfig:
     )
     substeps: int | None = knob(
         None,
-        "single_track: RK4 steps per sim step (null: enough to be stable at the switch speed)",
+        "single_track: RK4 steps per sim step (null: as many as the speed needs to be stable)",
         low=1,
         high=1000,
     )

@@ -139,7 +139,7 @@ class CenterlineDriver:
         brake_margin: float = 8.0,  # [u/s] brake only this much above the target
         gas_gain: float = 0.2,  # [s/u] gas per u/s below the target speed
         corner_gas_cut: float = 0.7,  # fraction of gas taken away at full lock
-        grip_share: float = 0.5,  # of the tyres' grip the speed profile plans with
+        grip_share: float = 0.35,  # of the tyres' grip the speed profile plans with
     ):
         self.grip_share = grip_share
         self.lookahead = lookahead
