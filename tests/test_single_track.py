@@ -197,3 +197,22 @@ def test_the_centerline_driver_laps_with_the_single_track_car(track, actions):
     assert info.get("lap_finished") is True
     assert info["walls_hit"] == 0 and info["cones_hit"] == 0
     env.close()
+
+
+class Keys:
+    """pygame's key constants, as ``tinyrace.play`` reads them."""
+
+    K_RIGHT, K_LEFT, K_UP, K_DOWN = range(4)
+
+
+@pytest.mark.parametrize("actions", ["continuous", "raw"])
+def test_the_keyboard_steers_left_with_the_left_arrow(actions):
+    from tinyrace.play import _action
+
+    env = make("f1tenth_loop", actions=actions).unwrapped
+    _, info = env.reset(seed=0)
+    heading = info["pose"][2]
+    for _ in range(10):  # left and up
+        _, _, _, _, info = env.step(_action(env, [0, 1, 1, 0], Keys))
+    assert info["pose"][2] > heading + 0.05 and info["speed"] > 0.5
+    env.close()
