@@ -216,3 +216,16 @@ def test_the_keyboard_steers_left_with_the_left_arrow(actions):
         _, _, _, _, info = env.step(_action(env, [0, 1, 1, 0], Keys))
     assert info["pose"][2] > heading + 0.05 and info["speed"] > 0.5
     env.close()
+
+
+def test_cones_count_it_as_they_count_the_other_cars():
+    """Straight ahead from autocross's start, the car meets a cone: it is knocked and counted
+    (cone_hit_ends_episode is off there), as for the kinematic car with throttle."""
+    env = make("autocross")
+    env.reset(seed=0)
+    for _ in range(200):
+        _, _, terminated, truncated, info = env.step(np.array([0.0, 5.0], np.float32))
+        if info["cones_hit"] or terminated or truncated:
+            break
+    assert info["cones_hit"] == 1
+    env.close()
