@@ -29,6 +29,14 @@ DISCRETE_CONTROLS = (
     (0.0, 0.0, 0.8),
 )
 _FLOAT32 = np.dtype(np.float32)
+ACTION_KINDS = {  # ActionSpec.kind -> what the action's controls are
+    "discrete": "CarRacing's Discrete(5): nothing, right, left, gas, brake",
+    "pedals": "[steer -1..1 (+ right), gas 0..1, brake 0..1]",
+    "steer": "[steer -1..1 (+ right)]",
+    "steer_throttle": "[steer -1..1 (+ right), throttle -1..1 (< 0 brakes)]",
+    "angle_speed": "[steering angle rad (+ left), speed m/s]",
+    "rate_accel": "[steering velocity rad/s (+ left), acceleration m/s^2]",
+}
 
 
 @dataclass(frozen=True)
@@ -36,19 +44,18 @@ class ActionSpec:
     """How actions look for one car: the gymnasium space and how to read an action."""
 
     space: spaces.Box | spaces.Discrete
-    kind: str  # "discrete", "dynamic" ([steer, gas, brake]), "kinematic" ([steer]) or
-    # "kinematic_throttle" ([steer, throttle])
+    kind: str  # what the controls mean, in order (see ``ACTION_KINDS``)
 
     @classmethod
-    def for_car(cls, model: str, actions: str) -> ActionSpec:
-        if model == "kinematic":
-            return cls(spaces.Box(-1.0, 1.0, (1,), np.float32), "kinematic")
-        if model == "kinematic_throttle":
-            return cls(spaces.Box(-1.0, 1.0, (2,), np.float32), "kinematic_throttle")
-        if actions == "discrete":
-            return cls(spaces.Discrete(len(DISCRETE_CONTROLS)), "discrete")
-        low, high = np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32)
-        return cls(spaces.Box(low, high, dtype=np.float32), "dynamic")
+    def box(cls, low: tuple[float, ...], high: tuple[float, ...], kind: str) -> ActionSpec:
+        """A float32 Box from ``low`` to ``high`` whose controls mean ``kind``."""
+        lows, highs = np.array(low, np.float32), np.array(high, np.float32)
+        return cls(spaces.Box(lows, highs, dtype=np.float32), kind)
+
+    @classmethod
+    def discrete(cls) -> ActionSpec:
+        """CarRacing's Discrete(5) (``DISCRETE_CONTROLS``)."""
+        return cls(spaces.Discrete(len(DISCRETE_CONTROLS)), "discrete")
 
     def __post_init__(self) -> None:
         if isinstance(self.space, spaces.Box):  # plain floats: cheaper to compare per step
@@ -62,7 +69,7 @@ class ActionSpec:
     _shape: tuple[int, ...] = dataclasses.field(default=(), init=False, repr=False, compare=False)
 
     def read(self, action: object) -> tuple[float, ...]:
-        """The controls of a valid action: (steer, gas, brake), (steer,) or (steer, throttle)."""
+        """The controls of a valid action, in the order of its kind (see ``ACTION_KINDS``)."""
         if self.kind == "discrete":
             return DISCRETE_CONTROLS[self._index(action)]
         # the common case, a float32 array of the space's shape, checked without numpy calls

@@ -109,7 +109,8 @@ class TinyRaceEnv(gym.Env):
         self.action_spec = parts.car_model.actions(self.config.car)  # reads and checks actions
         self.action_space = self.action_spec.space
         self._ground = EpisodeGround(self.pictures)
-        self._sensor_context = SensorContext(self.config, self._ground)
+        self.car_facts = parts.car_model.describe(self.config)
+        self._sensor_context = SensorContext(self.config, self._ground, self.car_facts)
         self._config_source = loaded.source
         self.sensors: list[Sensor] = self.make_sensors()
         box = self.config.observation == "box" and len(self.sensors) == 1

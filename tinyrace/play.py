@@ -6,8 +6,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 
 from tinyrace.actions import BRAKE, GAS, LEFT, NOTHING, RIGHT
+from tinyrace.cars.registry import model_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.validate import load_any
 
@@ -60,6 +62,9 @@ def _read_keys(pygame: Any) -> tuple[Any, bool, bool]:
 
 def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
     steer = float(keys[pygame.K_RIGHT]) - float(keys[pygame.K_LEFT])
+    kind = model_of(env.config).actions(env.config.car).kind
+    if kind in ("angle_speed", "rate_accel"):  # the single-track car
+        return _single_track_action(env, kind, steer, keys[pygame.K_UP], keys[pygame.K_DOWN])
     if env.action_space.shape == (1,):
         return np.array([steer], np.float32)
     gas, brake = float(keys[pygame.K_UP]), 0.8 * float(keys[pygame.K_DOWN])
@@ -78,3 +83,21 @@ def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
             else NOTHING
         )
     return np.array([steer, gas, brake], np.float32)
+
+
+def _single_track_action(
+    env: TinyRaceEnv, kind: str, steer: float, up: Any, down: Any
+) -> np.ndarray:
+    """Right/left at full lock (or full steering rate); up: half the top speed (or full
+    acceleration), down: a stop (or full braking), neither: the speed held (or coasting)."""
+    facts, space = env.car_facts, env.action_space
+    assert isinstance(space, spaces.Box)  # the single-track car's actions
+    right = 1.0 if facts.steer_per_rad > 0 else -1.0  # the action's sign of a right turn
+    if kind == "angle_speed":
+        speed = facts.top_speed / 2 if up else 0.0 if down else env.car.speed
+        action = np.array([steer * right * facts.steer_lock, speed], np.float32)
+    else:
+        high = np.asarray(space.high, np.float32)
+        action = np.array([steer * right * high[0], (float(up) - float(down)) * high[1]])
+    clipped: np.ndarray = np.clip(action.astype(np.float32), space.low, space.high)
+    return clipped

@@ -6,10 +6,13 @@ How to add a car model:
    for one step, ``stop`` halts it after a crash, ``state()`` copies what sensors and
    pictures may read). The world (``tinyrace/world/world.py``) owns the built car and
    calls these; nothing above the world sees the car itself.
-2. Register it in ``tinyrace/cars/registry.py``: a ``CarModel`` entry with its builder,
-   the track kinds it can drive on, the track kinds it is the default for, and its
-   action spaces. That entry is the only place that decides which car a config gets.
-3. Add its name to ``CarConfig.model`` in ``tinyrace/config/schema.py``.
+2. Register it: ``register(CarModel(...))`` (``tinyrace/cars/registry.py``) with its
+   builder, the track kinds it can drive on, the track kinds it is the default for, its
+   ``car.actions`` and action space, its facts for a config (``CarFacts``: size, limits,
+   grip) and what it can do (wheels, throttle). That entry is the only place that decides
+   which car a config gets, and the only place sensors, episodes and drivers learn about
+   the car from; ``car.model`` takes any registered name (``tests/test_toy_car_model.py``
+   registers one from its test file alone).
 """
 
 from __future__ import annotations

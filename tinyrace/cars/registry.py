@@ -1,23 +1,33 @@
-"""The car models by name: the one place that decides which car a config gets.
+"""The car models by name: the one place that decides which car a config gets, and the one
+place that knows each model's facts.
 
 Each ``CarModel`` says which track kinds it drives on, which it is the default for
-(``car.model: null``), which ``car.actions`` it accepts, how to build it and its action
-space. ``choose_car_model`` applies those rules for ``gym.make`` and ``tinyrace
-validate`` alike. To add a model, see ``tinyrace/cars/base.py``.
+(``car.model: null``), which ``car.actions`` it accepts, how to build it, its action space,
+its size and limits for a config (``CarFacts``) and what it can do (wheels, throttle).
+Everything above the cars layer asks the entry (``model_of(config)``); nothing compares
+model names. ``choose_car_model`` applies those rules for ``gym.make`` and ``tinyrace
+validate`` alike. To add a model, see ``tinyrace/cars/base.py``: one module and one
+``register`` call.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import pymunk
 
 from tinyrace.actions import ActionSpec
+from tinyrace.cars import single_track_model
 from tinyrace.cars.base import Car, Pose
 from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.dynamic_shape import SIZE, WHEEL_POSITIONS, DynamicCarSpec
 from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
+from tinyrace.cars.single_track import SingleTrackCar
+from tinyrace.cars.state import CarFacts
 from tinyrace.config import METRIC_KINDS, CarConfig, EnvConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Track
@@ -35,7 +45,17 @@ class CarModel:
     action_kinds: frozenset[str]  # accepted ``car.actions`` values
     build: CarBuilder  # adds the car to a space at a pose
     actions: Callable[[CarConfig], ActionSpec]  # its action space and how to read actions
+    facts: Callable[[EnvConfig], CarFacts]  # its size and limits for a (resolved) config
+    # (``describe`` adds ``wheels`` and ``throttle``)
+    wheels: bool  # models its four wheels (wheel speeds and slip; tiles give grip)
+    throttle: bool  # its speed follows the actions (False: a constant speed)
+    units: str  # the unit of its own parameters: "track" (the track's px, m or u) or "m"
     doc: str
+
+    def describe(self, config: EnvConfig) -> CarFacts:
+        """Its facts for ``config``: size and limits, with what it can do."""
+        facts = self.facts(config)
+        return dataclasses.replace(facts, wheels=self.wheels, throttle=self.throttle)
 
 
 def _known(value: float | None) -> float:
@@ -76,46 +96,147 @@ def _build_kinematic_throttle(
 
 
 def _kinematic_throttle_actions(config: CarConfig) -> ActionSpec:
-    return ActionSpec.for_car("kinematic_throttle", config.actions)
+    return ActionSpec.box((-1.0, -1.0), (1.0, 1.0), "steer_throttle")
 
 
 def _dynamic_actions(config: CarConfig) -> ActionSpec:
-    return ActionSpec.for_car("dynamic", config.actions)
+    if config.actions == "discrete":
+        return ActionSpec.discrete()
+    return ActionSpec.box((-1.0, 0.0, 0.0), (1.0, 1.0, 1.0), "pedals")
 
 
 def _kinematic_actions(config: CarConfig) -> ActionSpec:
-    return ActionSpec.for_car("kinematic", config.actions)
+    return ActionSpec.box((-1.0,), (1.0,), "steer")
 
 
-CAR_MODELS: dict[str, CarModel] = {
-    "dynamic": CarModel(
+def _dynamic_scale(config: EnvConfig) -> float:
+    """[track units per CarRacing unit] of the dynamic car on this config's track."""
+    return 1.0 if config.kind == "procedural" else _known(config.car.pixels_per_unit)
+
+
+def _dynamic_facts(config: EnvConfig) -> CarFacts:
+    scale = _dynamic_scale(config)
+    fps = config.sim.fps or 50.0
+    spec = DynamicCarSpec()
+    length = (WHEEL_POSITIONS[0][1] - WHEEL_POSITIONS[2][1]) * SIZE * scale
+    width = (WHEEL_POSITIONS[1][0] - WHEEL_POSITIONS[0][0]) * SIZE * scale
+    # a steer action s asks for s rad, which the servo stops at its lock
+    top = spec.max_translation * scale * fps
+    return CarFacts(length, width, top, 2 * math.pi * fps, spec.steer_limit, 1.0)
+
+
+def _kinematic_facts(config: EnvConfig) -> CarFacts:
+    car = config.car
+    lock = math.radians(car.max_steering_angle)
+    speed, wheelbase = _known(car.velocity), _known(car.wheelbase)
+    yaw_rate = speed * math.tan(lock) / wheelbase
+    return CarFacts(wheelbase, _known(car.track_width), speed, yaw_rate, lock, 1.0 / lock)
+
+
+def single_track_parameters(car: CarConfig) -> single_track_model.VehicleParameters:
+    """The preset of ``car.preset`` with the config's overrides."""
+    params = single_track_model.PRESETS[car.preset]
+    if car.kinematic_below is not None:
+        params = dataclasses.replace(params, kinematic_below=car.kinematic_below)
+    return params
+
+
+def _single_track_actions(config: CarConfig) -> ActionSpec:
+    p = single_track_parameters(config)
+    if config.actions == "raw":  # [steering velocity rad/s, acceleration m/s^2]
+        limits = ((p.steer_rate_min, -p.a_max), (p.steer_rate_max, p.a_max))
+        return ActionSpec.box(*limits, "rate_accel")
+    return ActionSpec.box((p.steer_min, p.v_min), (p.steer_max, p.v_max), "angle_speed")
+
+
+def _single_track_facts(config: EnvConfig) -> CarFacts:
+    p = single_track_parameters(config.car)
+    lock = max(-p.steer_min, p.steer_max)
+    top = max(p.v_max, -p.v_min)
+    grip = p.mu * single_track_model.G
+    # the action's angle turns left (toward growing headings on the y-up metre tracks)
+    return CarFacts(p.wheelbase, p.width, top, top * math.tan(lock) / p.wheelbase, lock, -1.0, grip)
+
+
+def _build_single_track(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
+    params = single_track_parameters(config)
+    return SingleTrackCar.build(space, pose, params, config.actions == "raw", config.substeps)
+
+
+CAR_MODELS: dict[str, CarModel] = {}
+
+
+def register(model: CarModel) -> None:
+    """Add ``model`` to the registry (a new name, or a replacement of the same name)."""
+    CAR_MODELS[model.name] = model
+
+
+register(
+    CarModel(
         name="dynamic",
         track_kinds=frozenset({"procedural", "image", *METRIC_KINDS}),
         default_for=frozenset({"procedural"}),
         action_kinds=frozenset({"continuous", "discrete"}),
         build=_build_dynamic,
         actions=_dynamic_actions,
+        facts=_dynamic_facts,
+        wheels=True,
+        throttle=True,
+        units="track",
         doc="CarRacing-v3's rear-wheel-drive car with tyre slip",
-    ),
-    "kinematic": CarModel(
+    )
+)
+register(
+    CarModel(
         name="kinematic",
         track_kinds=frozenset({"image"}),
         default_for=frozenset({"image"}),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic,
         actions=_kinematic_actions,
+        facts=_kinematic_facts,
+        wheels=False,
+        throttle=False,
+        units="track",
         doc="tinycarlo's constant-speed kinematic bicycle",
-    ),
-    "kinematic_throttle": CarModel(
+    )
+)
+register(
+    CarModel(
         name="kinematic_throttle",
         track_kinds=frozenset(METRIC_KINDS),
         default_for=frozenset(METRIC_KINDS),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic_throttle,
         actions=_kinematic_throttle_actions,
+        facts=_kinematic_facts,
+        wheels=False,
+        throttle=True,
+        units="track",
         doc="a kinematic bicycle with throttle in metres (tinycarlo 2's car): [steer, throttle]",
-    ),
-}
+    )
+)
+register(
+    CarModel(
+        name="single_track",
+        track_kinds=frozenset(METRIC_KINDS),  # its parameters are in metres
+        default_for=frozenset(),
+        action_kinds=frozenset({"continuous", "raw"}),
+        build=_build_single_track,
+        actions=_single_track_actions,
+        facts=_single_track_facts,
+        wheels=False,
+        throttle=True,
+        units="m",
+        doc="CommonRoad's single-track dynamic car (F1TENTH's): [steering angle, speed] or raw "
+        "[steering velocity, acceleration]; car.preset f1tenth or CommonRoad's vehicle1..3",
+    )
+)
+
+
+def model_of(config: EnvConfig) -> CarModel:
+    """The registry entry of a config's car (``car.model``, or the track kind's default)."""
+    return choose_car_model(config, "<config>")
 
 
 def car_model_problems(config: EnvConfig, source: str) -> list[Problem]:

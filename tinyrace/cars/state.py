@@ -37,6 +37,22 @@ class SkidView:
     on_grass: np.ndarray  # (marks,) bool: drawn in mud colour
 
 
+@dataclass(frozen=True)
+class CarFacts:
+    """A car model's size, limits and abilities for one config, in the track's units (px, m
+    or u): what sensors and drivers ask of a car before it drives (the registry answers)."""
+
+    length: float  # [track units] rear to front axle (sensor ranges, camera mounts, drivers)
+    width: float  # [track units]
+    top_speed: float  # [track units/s] the most it drives (the dynamic car: its per-step cap)
+    yaw_rate: float  # [rad/s] the largest yaw rate
+    steer_lock: float  # [rad] the front wheels' largest angle
+    steer_per_rad: float  # steering action per rad of front-wheel angle to the right
+    grip: float = math.inf  # [track units/s^2] the acceleration its tyres hold (inf: no slip)
+    wheels: bool = False  # models its four wheels (wheel speeds and slip; tiles give grip)
+    throttle: bool = True  # its speed follows the actions (False: a constant speed)
+
+
 def read_only(array: np.ndarray) -> np.ndarray:
     """A view of ``array`` that cannot be written through."""
     view: np.ndarray = array.view()

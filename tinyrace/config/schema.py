@@ -206,13 +206,36 @@ METRIC_KINDS = ("centerline", "cone_map", "ros_map")  # track kinds in metres
 class CarConfig:
     """``car``: the car model and its parameters, in the track's unit (px or m)."""
 
-    model: Literal["kinematic", "dynamic", "kinematic_throttle"] | None = knob(
+    model: str | None = knob(
         None,
-        "kinematic bicycle at constant speed (tinycarlo), CarRacing's dynamic car, or a "
-        "kinematic bicycle with throttle (tinycarlo 2); null: by track kind",
+        "a registered car model: kinematic (tinycarlo's bicycle at constant speed), dynamic "
+        "(CarRacing's car), kinematic_throttle (tinycarlo 2's bicycle with throttle), "
+        "single_track (CommonRoad's single-track dynamics, F1TENTH's car); null: by track kind",
     )
-    actions: Literal["continuous", "discrete"] = knob(
-        "continuous", "dynamic car only: Box [steer, gas, brake] or CarRacing's Discrete(5)"
+    actions: Literal["continuous", "discrete", "raw"] = knob(
+        "continuous",
+        "dynamic: Box [steer, gas, brake] or CarRacing's Discrete(5); single_track: continuous "
+        "[steering angle rad, speed m/s] through F1TENTH's controllers, or raw [steering "
+        "velocity rad/s, acceleration m/s^2]",
+    )
+    preset: Literal["f1tenth", "vehicle1", "vehicle2", "vehicle3"] = knob(
+        "f1tenth",
+        "single_track: parameters of F1TENTH's car, or CommonRoad's vehicle 1 (Ford Escort), "
+        "2 (BMW 320i) or 3 (VW Vanagon); the preset sets the car's size",
+    )
+    substeps: int | None = knob(
+        None,
+        "single_track: RK4 steps per sim step (null: as many as the speed needs to be stable)",
+        low=1,
+        high=1000,
+    )
+    kinematic_below: float | None = knob(
+        None,
+        "single_track: below this speed the kinematic model moves the car (null: the preset's, "
+        "0.5 for f1tenth as F1TENTH's gym, 0.1 for CommonRoad's vehicles)",
+        "m/s",
+        low=0.01,
+        high=10,
     )
     wheelbase: float | None = knob(
         None,

@@ -27,13 +27,24 @@ class Driver(Protocol):
 class ActionAdapter:
     """Turns ``(steer, gas, brake)`` into an action of ``space``.
 
-    Box(3,): the controls themselves, clipped; Box(1,): the steering only (the
-    kinematic car); Box(2,): steering and throttle = gas - brake (the kinematic car with
-    throttle); Discrete(5): see ``DiscreteChooser``.
+    By the actions' kind (``ActionSpec.kind``; None: by the space's shape): pedals (Box(3,)),
+    the controls themselves, clipped; steer (Box(1,)), the steering only (the kinematic car);
+    steer_throttle (Box(2,)), steering and throttle = gas - brake (the kinematic car with
+    throttle); discrete (Discrete(5)), see ``DiscreteChooser``. The single-track car's
+    angle_speed and rate_accel read the steer as the wheel angle [rad] itself (the car model's
+    ``steer_per_rad`` makes it so: + left on its y-up tracks) and take
+    the ``speed`` pair (target, now) the driver gives: the target itself, or an acceleration
+    toward it; rate_accel turns the wheel at the rate that reaches the wanted angle.
     """
 
-    def __init__(self, space: spaces.Space[Any], dt: float = 1 / 50):
+    SPEED_GAIN = 5.0  # [1/s] rate_accel: acceleration per unit of speed error
+
+    def __init__(self, space: spaces.Space[Any], dt: float = 1 / 50, kind: str | None = None):
         self.space = space
+        self.dt = dt  # [s]
+        shape = getattr(space, "shape", None) or ()
+        self.kind = kind or _KIND_BY_SHAPE.get(shape, "discrete")
+        self.wheel = 0.0  # [rad] rate_accel: the wheel angle its steering rates give, + left
         self._discrete = DiscreteChooser(dt) if isinstance(space, spaces.Discrete) else None
         if self._discrete is None and not (
             isinstance(space, spaces.Box) and space.shape in ((3,), (2,), (1,))
@@ -42,17 +53,28 @@ class ActionAdapter:
                 f"drivers know Box(3,), Box(2,), Box(1,) and Discrete(5) actions, not {space}"
             )
 
-    def __call__(self, controls: Controls) -> Any:
+    def __call__(self, controls: Controls, speed: tuple[float, float] = (0.0, 0.0)) -> Any:
         if self._discrete is not None:
             return self._discrete.choose(controls)
         steer, gas, brake = controls
         box = cast(spaces.Box, self.space)  # __init__ let only Box and Discrete through
+        if self.kind == "angle_speed":
+            return np.clip(np.array((steer, speed[0]), np.float32), box.low, box.high)
+        if self.kind == "rate_accel":
+            low, high = float(box.low[0]), float(box.high[0])
+            rate = min(max((steer - self.wheel) / self.dt, low), high)
+            self.wheel += rate * self.dt
+            accel = self.SPEED_GAIN * (speed[0] - speed[1])
+            return np.clip(np.array((rate, accel), np.float32), box.low, box.high)
         by_size: dict[tuple[int, ...], tuple[float, ...]] = {
             (1,): (steer,),
             (2,): (steer, gas - brake),
         }
         values = by_size.get(box.shape, controls)
         return np.clip(np.array(values, np.float32), box.low, box.high)
+
+
+_KIND_BY_SHAPE: dict[tuple[int, ...], str] = {(3,): "pedals", (2,): "steer_throttle", (1,): "steer"}
 
 
 class DiscreteChooser:

@@ -11,7 +11,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.cars.dynamic_shape import SIZE, DynamicCarSpec
+from tinyrace.cars.dynamic_shape import SIZE
+from tinyrace.cars.registry import model_of
 from tinyrace.drivers.base import ActionAdapter, Controls
 
 if TYPE_CHECKING:
@@ -29,7 +30,8 @@ class Route:
     y_down: bool  # image tracks: y grows downwards and headings grow clockwise
     unit: float  # [track units per u]: distances and speeds scale with the car
     steer_lock: float  # [rad] the front wheels' largest angle
-    steer_per_rad: float  # steering action per rad of wheel angle
+    steer_per_rad: float  # steering action per rad of wheel angle to the right
+    grip: float = math.inf  # [track units/s^2] what the tyres hold (inf: no slip model)
 
 
 def route_of(env: gym.Env) -> Route:
@@ -37,13 +39,13 @@ def route_of(env: gym.Env) -> Route:
     drawn into an image track (``reward_design.cross_track_error.use_cte``), put in order
     from the car's pose."""
     unwrapped = cast("TinyRaceEnv", env.unwrapped)
-    track, car = unwrapped.track, unwrapped.car
+    track, car, facts = unwrapped.track, unwrapped.car, unwrapped.car_facts
     unit = car.footprint[0] / CARRACING_WHEELBASE  # the car's wheelbase sets the scale
-    if unwrapped.config.car.model in ("kinematic", "kinematic_throttle"):
-        lock = math.radians(unwrapped.config.car.max_steering_angle)
-        steering = {"steer_lock": lock, "steer_per_rad": 1.0 / lock}
-    else:  # a steer action s asks for s rad, which the servo stops at its lock
-        steering = {"steer_lock": DynamicCarSpec().steer_limit, "steer_per_rad": 1.0}
+    steering = {
+        "steer_lock": facts.steer_lock,
+        "steer_per_rad": facts.steer_per_rad,
+        "grip": facts.grip,
+    }
     centerline = getattr(track, "centerline", None)
     if centerline is not None:
         return Route(np.asarray(centerline, float), True, False, unit, **steering)
@@ -122,7 +124,9 @@ class CenterlineDriver:
     trajectory (see ``route_of``); the pose is ``info["pose"]`` (x, y, heading).
     Lengths and speeds below are in CarRacing's units (u, u/s) and scale with the
     car's wheelbase on image tracks. The kinematic car's speed is fixed: there the
-    driver only steers.
+    driver only steers. A car with a tyre model (``grip``) keeps the profile's lateral and
+    braking accelerations under ``grip_share`` of its grip; a car whose actions are a steering
+    angle and a speed (the single-track car) is given the profile's speed.
     """
 
     def __init__(
@@ -135,7 +139,9 @@ class CenterlineDriver:
         brake_margin: float = 8.0,  # [u/s] brake only this much above the target
         gas_gain: float = 0.2,  # [s/u] gas per u/s below the target speed
         corner_gas_cut: float = 0.7,  # fraction of gas taken away at full lock
+        grip_share: float = 0.35,  # of the tyres' grip the speed profile plans with
     ):
+        self.grip_share = grip_share
         self.lookahead = lookahead
         self.lookahead_per_speed = lookahead_per_speed
         self.top_speed = top_speed
@@ -151,27 +157,35 @@ class CenterlineDriver:
         self._adapt: ActionAdapter | None = None
 
     def reset(self, env: gym.Env) -> None:
-        self.follow(route_of(env), env.action_space, cast("TinyRaceEnv", env.unwrapped).dt)
+        unwrapped = cast("TinyRaceEnv", env.unwrapped)
+        config = unwrapped.config
+        kind = model_of(config).actions(config.car).kind
+        self.follow(route_of(env), env.action_space, unwrapped.dt, kind)
 
-    def follow(self, route: Route, action_space: spaces.Space[Any], dt: float) -> None:
-        """Start on ``route`` (what ``reset`` does with the env's route); ``dt`` [s] per step."""
+    def follow(
+        self, route: Route, action_space: spaces.Space[Any], dt: float, kind: str | None = None
+    ) -> None:
+        """Start on ``route`` (what ``reset`` does with the env's route); ``dt`` [s] per step;
+        ``kind`` the actions' (``ActionSpec.kind``; None: read from the space's shape)."""
         self.route = route
         steps = np.linalg.norm(np.diff(route.points, axis=0), axis=1)
         self._spacing = float(steps.mean()) if len(steps) else 1.0
         self.target_speeds = speed_profile(
             route.points,
             self.top_speed * route.unit,
-            self.lateral_accel * route.unit,
-            self.brake_accel * route.unit,
+            min(self.lateral_accel * route.unit, self.grip_share * route.grip),
+            min(self.brake_accel * route.unit, self.grip_share * route.grip),
             route.closed,
         )
         self._nearest = -1  # unknown: search the whole route once
-        self._adapt = ActionAdapter(action_space, dt)
+        self._adapt = ActionAdapter(action_space, dt, kind)
+        self._speed = (0.0, 0.0)  # [track units/s] (target, now) at the last controls
 
     def act(self, observation: Any, info: dict[str, Any]) -> Any:
         if self._adapt is None:
             raise RuntimeError("call reset(env) before act()")
-        return self._adapt(self.controls(info["pose"], info["speed"]))
+        controls = self.controls(info["pose"], info["speed"])
+        return self._adapt(controls, self._speed)
 
     def controls(self, pose: Sequence[float], speed: float) -> Controls:
         """(steer, gas, brake) for the car at ``pose`` moving at ``speed`` [track units/s]."""
@@ -194,6 +208,7 @@ class CenterlineDriver:
         gas_gain = self.gas_gain / route.unit
         gas = min(max((limit - speed) * gas_gain, 0.0), 1.0) * grip_left
         brake = 0.8 if speed > limit + self.brake_margin * route.unit else 0.0
+        self._speed = (float(limit), speed)
         return steer, gas, brake
 
     def _following(self) -> Route:

@@ -116,10 +116,10 @@ class Course:
     """What lasts across resets: one world per track, furnished once with what the track's
     rule parts need (a new track, as CarRacing draws every reset, gets a new world)."""
 
-    def __init__(self, config: EnvConfig, car_model: CarModel, wheels: bool):
+    def __init__(self, config: EnvConfig, car_model: CarModel):
         self.config = config
         self.car_model = car_model
-        self.wheels = wheels  # the car model has wheels that feel the road's tiles
+        self.wheels = car_model.wheels  # its wheels feel the road's tiles (grip, grass)
         self._worlds: weakref.WeakKeyDictionary[Track, World] = weakref.WeakKeyDictionary()
 
     def new_episode(self, draw: TrackDraw, poses: Sequence[Pose] | None = None) -> Episode:

@@ -37,11 +37,10 @@ def prepare(loaded: LoadedConfig) -> Parts:
     except ConfigError as exc:
         raise ConfigError(problems + exc.problems) from None
     car_model = choose_car_model(loaded.config, loaded.source)  # raises the problems found
-    car = dataclasses.replace(loaded.config.car, model=car_model.name)  # type: ignore[arg-type]
+    car = dataclasses.replace(loaded.config.car, model=car_model.name)
     config = dataclasses.replace(loaded.config, car=car)
     tracks = getattr(source, "tracks", ())  # a source's fixed tracks (none: drawn per reset)
     fits = start_fits(config, tracks, car_model)  # the car must fit at every spawn
     if any(not fit.free for fit in fits):
         raise ConfigError(start_problems(config, fits, loaded.source))
-    wheels = car_model.name == "dynamic"  # its wheels feel the road's tiles
-    return Parts(config, car_model, source, Course(config, car_model, wheels))
+    return Parts(config, car_model, source, Course(config, car_model))

@@ -23,6 +23,7 @@ import numpy as np
 from gymnasium import spaces
 
 if TYPE_CHECKING:
+    from tinyrace.cars.state import CarFacts
     from tinyrace.config import EnvConfig
     from tinyrace.sensors.texture import GroundTexture
     from tinyrace.tracks.base import Track
@@ -73,10 +74,12 @@ class Ground(Protocol):
 
 @dataclass(frozen=True, eq=False)
 class SensorContext:
-    """What a sensor may use when it is built: the env's config and its ground pictures."""
+    """What a sensor may use when it is built: the env's config, its ground pictures and
+    its car model's facts (size, limits, wheels)."""
 
     env: EnvConfig
     ground: Ground
+    car: CarFacts
 
 
 SensorBuilder = Callable[[Any, SensorContext], Sensor]

@@ -1,5 +1,5 @@
-"""What several sensor types share: the car's nominal size, mounts in the car frame, and
-the ground of a track drawn as colours or as class labels.
+"""What several sensor types share: mounts in the car frame, and the ground of a track
+drawn as colours or as class labels (the car's size comes from ``SensorContext.car``).
 
 Car frame: x ahead, y to the left [track units]; headings follow the track's convention
 (counter-clockwise on y-up tracks, clockwise on y-down picture tracks).
@@ -16,38 +16,15 @@ import cv2
 import numpy as np
 
 from tinyrace import cache
-from tinyrace.cars.dynamic_shape import SIZE, WHEEL_POSITIONS
-from tinyrace.config import EnvConfig
 from tinyrace.tracks.base import Track
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px
 MAX_MAP_SIDE = 4096  # [cells] largest side of a map a sensor draws of a whole track
-KINEMATIC_MODELS = ("kinematic", "kinematic_throttle")  # car models sized by car.wheelbase
 
 RGB = tuple[int, int, int]
 LabelTable = tuple[tuple[str, RGB | None], ...]
 FillValue = int | tuple[int, ...]
 _T = TypeVar("_T")
-
-
-def car_length(config: EnvConfig) -> float:
-    """[track units] rear to front axle of the configured car, known before any reset."""
-    car = config.car
-    if car.model in KINEMATIC_MODELS:
-        return known(car.wheelbase)
-    wheelbase = (WHEEL_POSITIONS[0][1] - WHEEL_POSITIONS[2][1]) * SIZE  # [u]
-    return wheelbase * dynamic_scale(config)
-
-
-def dynamic_scale(config: EnvConfig) -> float:
-    """[track units per CarRacing unit] of the dynamic car on this config's track."""
-    return 1.0 if config.kind == "procedural" else known(config.car.pixels_per_unit)
-
-
-def known(value: float | None) -> float:
-    """A car knob whose null default the config loader has filled by track kind."""
-    assert value is not None, "car knobs are resolved when the config is loaded"
-    return value
 
 
 def mount(

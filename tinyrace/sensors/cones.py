@@ -29,7 +29,7 @@ from gymnasium import spaces
 from tinyrace import kernels
 from tinyrace.config.sensors import ConesConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, Unsupported, car_length
+from tinyrace.sensors.common import PerTrack, Unsupported
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
@@ -310,5 +310,5 @@ def build(config: ConesConfig, context: SensorContext) -> ConesSensor:
     env = context.env
     if env.kind == "procedural":
         raise Unsupported("expected a track with cones (an image track with cone colours)")
-    max_range = config.max_range if config.max_range is not None else 10 * car_length(env)
+    max_range = config.max_range if config.max_range is not None else 10 * context.car.length
     return ConesSensor(config, max_range)

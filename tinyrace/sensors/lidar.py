@@ -34,7 +34,6 @@ from tinyrace.sensors.common import (
     RGB,
     PerTrack,
     Unsupported,
-    car_length,
     color_mask,
     fill_boxes,
     fill_quads,
@@ -421,7 +420,7 @@ def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
 def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     """The lidar of ``config``; null knobs scale with the car (see LidarConfig)."""
     env = context.env
-    length = car_length(env)
+    length = context.car.length
     if config.max_range is not None:
         max_range = config.max_range
     else:  # F1TENTH's lidar on its maps, else 10 car lengths

@@ -25,7 +25,7 @@ from gymnasium import spaces
 from tinyrace.config.schema import RosMapTrackConfig
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported, car_length
+from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -287,5 +287,5 @@ def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:
         )
     if any(isinstance(t, RosMapTrackConfig) and t.waypoints is None for t in env.tracks):
         raise Unsupported("expected track.waypoints on a ros_map track: lookahead follows them")
-    spacing = config.spacing if config.spacing is not None else car_length(env)
+    spacing = config.spacing if config.spacing is not None else context.car.length
     return LookaheadSensor(config, spacing)

@@ -24,7 +24,6 @@ from tinyrace.sensors.common import (
     GroundImage,
     PerTrack,
     Unsupported,
-    car_length,
     label_names,
     label_table,
     paint_labels,
@@ -148,7 +147,7 @@ def build(config: PerspectiveCameraConfig, context: SensorContext) -> Perspectiv
     """The camera of ``config``; tracks without a picture are drawn at the procedural
     track's ``pixels_per_unit`` (8 px per car length on other sources)."""
     env = context.env
-    length = car_length(env)
+    length = context.car.length
     track = env.tracks[0]
     ppu = getattr(track, "pixels_per_unit", None) or 8.0 / length
     return PerspectiveCamera(config, length, ppu, context.ground)

@@ -28,13 +28,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.cars.dynamic_shape import DynamicCarSpec
-from tinyrace.cars.state import CarState
+from tinyrace.cars.state import CarFacts, CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.schema import ProceduralTrackConfig
 from tinyrace.config.sensors import StateConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import KINEMATIC_MODELS, car_length, dynamic_scale, known
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -92,23 +90,15 @@ class Limits:
         return -high, high
 
 
-def limits(env: EnvConfig) -> Limits:
+def limits(env: EnvConfig, car: CarFacts) -> Limits:
     """The configured car's limits: top speed, yaw rate, steering lock and pose extent."""
     fps = env.sim.fps or 50.0
-    car = env.car
-    if car.model in KINEMATIC_MODELS:  # velocity: the constant or the top speed
-        lock = math.radians(car.max_steering_angle)
-        speed, wheelbase = known(car.velocity), known(car.wheelbase)
-        motion = Limits(speed, speed * math.tan(lock) / wheelbase, lock)
-    else:
-        scale = dynamic_scale(env)
-        spec = DynamicCarSpec()
-        motion = Limits(spec.max_translation * scale * fps, 2 * math.pi * fps, spec.steer_limit)
+    motion = Limits(car.top_speed, car.yaw_rate, car.steer_lock)
     if env.kind != "procedural":
         return motion
     # the playfield bounds the body's centre after a step (the next one ends the episode)
     playfield = max(t.playfield for t in env.tracks if isinstance(t, ProceduralTrackConfig))
-    return replace(motion, extent=playfield + motion.speed / fps + car_length(env))
+    return replace(motion, extent=playfield + motion.speed / fps + car.length)
 
 
 class StateSensor:
@@ -139,5 +129,5 @@ class StateSensor:
 def build(config: StateConfig, context: SensorContext) -> StateSensor:
     """The state sensor of ``config``: wheel speeds and slips when the car models wheels."""
     env = context.env
-    wheels = env.car.model == "dynamic"
-    return StateSensor(config, wheels, y_down=env.kind == "image", bounds=limits(env))
+    bounds = limits(env, context.car)
+    return StateSensor(config, context.car.wheels, y_down=env.kind == "image", bounds=bounds)

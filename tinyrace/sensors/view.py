@@ -16,15 +16,10 @@ from weakref import WeakKeyDictionary
 import cv2
 import numpy as np
 
+from tinyrace.cars.state import CarFacts
 from tinyrace.config import EnvConfig
 from tinyrace.sensors.base import Sensor
-from tinyrace.sensors.common import (
-    GroundImage,
-    PerTrack,
-    car_length,
-    paint_colors,
-    shared_ground,
-)
+from tinyrace.sensors.common import GroundImage, PerTrack, paint_colors, shared_ground
 from tinyrace.sensors.cones import ConesSensor
 from tinyrace.sensors.lidar import LidarSensor
 from tinyrace.sensors.lookahead import LookaheadSensor
@@ -43,9 +38,10 @@ Point = Sequence[float] | np.ndarray  # (x, y)
 
 
 class SensorHost(Protocol):
-    """What the view needs of an env: its config and its sensors."""
+    """What the view needs of an env: its config, its car's facts and its sensors."""
 
     config: EnvConfig
+    car_facts: CarFacts
     sensors: list[Sensor]
 
 
@@ -190,7 +186,7 @@ def sensor_view(env: SensorHost) -> SensorView:
     sensor range (at least 3 car lengths)."""
     view = _VIEWS.get(env)
     if view is None:
-        length = car_length(env.config)
+        length = env.car_facts.length
         ranges = [float(getattr(s, "max_range", 0.0) or 0.0) for s in env.sensors]
         reach = max([3 * length, *[r for r in ranges if r < 100 * length]])
         view = _VIEWS[env] = SensorView(env.sensors, reach, 16.0 / length)

@@ -35,7 +35,7 @@ from tinyrace.cars.dynamic_batch import DynamicBatch
 from tinyrace.env import TinyRaceEnv
 
 KNOWN_WRAPPERS = (TimeLimit, OrderEnforcing, PassiveEnvChecker)  # gym.make's own
-BATCHED_ACTIONS = ("dynamic", "discrete")  # action kinds of the dynamic car
+BATCHED_ACTIONS = ("pedals", "discrete")  # action kinds of the dynamic car
 # cars from which the tyre forces are one numpy computation. Measured (callgrind, random
 # actions): the numpy step costs about 900k instructions + 63k per car (mostly the Python
 # per car around it: body reads, velocities, wheel copies, skid marks), the scalar model
