@@ -279,8 +279,9 @@ def test_an_env_whose_rewards_fail_leaves_the_others_of_its_batch_consistent() -
             assert (env.steps, env.score) == (twin.unwrapped.steps, twin.unwrapped.score)
             ours, theirs = env.snapshot().car, twin.unwrapped.snapshot().car
             assert ours._replace(skids=None) == theirs._replace(skids=None)  # views: no ==
-        # its shaping ran at the reset and 4 steps; the 5th step raised (counted, as env.step)
-        assert batch._local.envs[1].unwrapped.steps == 5
+        # its shaping ran at 5 steps (a reset asks no shaping); the 6th step raised (counted,
+        # as env.step counts it)
+        assert batch._local.envs[1].unwrapped.steps == 6
     finally:
         batch.close()
         for twin in alone:
