@@ -38,6 +38,7 @@ class Table:
 
 
 MAX_DATA_BYTES = 64 << 20  # [bytes] a track data file (a real circuit's CSV is ~50 kB)
+MAX_ROWS = 200_000  # rows of numbers in a track data file (a real circuit has ~1,000 points)
 
 
 def read_text(path: Path, source: str, key: str) -> str:
@@ -56,9 +57,9 @@ def read_text(path: Path, source: str, key: str) -> str:
 
 
 def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> Table:
-    """Numeric rows of a ``,`` or ``;`` separated file; each row must have one of ``columns``
-    counts of cells. Blank lines and ``#`` comments are skipped; the last comment before the
-    first row is taken as the header."""
+    """Numeric rows of a ``,``, ``;`` or tab separated file; each row must have one of
+    ``columns`` counts of cells. Blank lines and ``#`` comments are skipped; the last comment
+    before the first row is taken as the header. More than ``MAX_ROWS`` rows are refused."""
     text = read_text(path, source, key)
     rows: list[list[float]] = []
     lines: list[int] = []
@@ -72,6 +73,12 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
             if not rows:
                 header = _split(line.lstrip("#"))
             continue
+        if rows:  # the common case first: as many finite numbers as the first row
+            row = _fast_numbers(line, len(rows[0]))
+            if row is not None:
+                rows.append(row)
+                lines.append(number)
+                continue
         cells = _split(line)
         if not rows and not lines and _is_header(cells):
             header = cells  # a header line without '#'
@@ -81,6 +88,9 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
         if row is not None:
             rows.append(row)
             lines.append(number)
+        if len(rows) > MAX_ROWS:
+            allowed = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
+            raise ConfigError(Problem(str(path), f"line {number}", f"row {len(rows):,}", allowed))
     if problems:
         raise ConfigError(problems[:20])
     width = len(rows[0]) if rows else columns[0]
@@ -88,8 +98,19 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
     return Table(str(path), values, np.array(lines, int), tuple(h.lower() for h in header))
 
 
+def _fast_numbers(line: str, width: int) -> list[float] | None:
+    """The row's ``width`` finite numbers, or None when the careful reading must say why."""
+    separator = ";" if ";" in line else "," if "," in line or "\t" not in line else "\t"
+    try:
+        values = [float(cell) for cell in line.split(separator)]
+    except ValueError:
+        return None
+    total = sum(values)
+    return values if len(values) == width and total - total == 0 else None
+
+
 def _split(line: str) -> tuple[str, ...]:
-    separator = ";" if ";" in line else ","
+    separator = ";" if ";" in line else "," if "," in line or "\t" not in line else "\t"
     return tuple(cell.strip() for cell in line.split(separator))
 
 

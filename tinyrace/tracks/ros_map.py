@@ -28,6 +28,9 @@ from tinyrace.tracks.csv_rows import read_text
 
 MODES = ("trinary", "scale", "raw")
 DEFAULT_FILES = FilesConfig()
+RESOLUTION_RANGE = (1e-4, 1e3)  # [m/px] a map's resolution (F1TENTH maps: 0.05)
+MAX_COORDINATE = 1e7  # [m] |x| and |y| of a map's origin
+MIN_MAP_SIDE = 2  # [cells] a map's width and height (one cell has no extent to drive in)
 
 
 @dataclass(frozen=True)
@@ -144,6 +147,12 @@ def read_map(path: Path, source: str, key: str, files: FilesConfig = DEFAULT_FIL
     info = read_info(path, text, files.paths_outside_folder)
     where = _where(text, "image")
     bgr = read_image_bgr(info.image, files.max_image_pixels, str(path), where, str(info.image))
+    if min(bgr.shape[:2]) < MIN_MAP_SIDE:
+        height, width = bgr.shape[:2]
+        allowed = (
+            f"expected a map of at least {MIN_MAP_SIDE} x {MIN_MAP_SIDE} cells ({width} x {height})"
+        )
+        raise ConfigError(Problem(str(path), where, str(info.image), allowed))
     gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)  # equal channels: the grey values unchanged
     occupancy = gray.astype(np.float32) / 255.0
     if not info.negate:
@@ -173,11 +182,14 @@ def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
             if not (path.parent / image).is_file():
                 bad("image", f"expected an existing picture; {path.parent / image} does not exist")
     resolution = data.get("resolution")
-    if not _number(resolution) or resolution <= 0:
-        bad("resolution", "expected a number > 0 [m/px]")
+    low, high = RESOLUTION_RANGE
+    if not _number(resolution) or not low <= resolution <= high:
+        bad("resolution", f"expected a number from {low:g} to {high:g} [m/px]")
     origin = data.get("origin")
     if not (isinstance(origin, list) and len(origin) == 3 and all(map(_number, origin))):
         bad("origin", "expected [x, y, yaw] numbers [m, m, rad]")
+    elif max(abs(origin[0]), abs(origin[1])) > MAX_COORDINATE:
+        bad("origin", f"expected x and y within +-{MAX_COORDINATE:g} m")
     negate = data.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
         bad("negate", "expected 0 or 1")
