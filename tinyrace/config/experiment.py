@@ -19,6 +19,9 @@ from typing import Any
 
 from tinyrace.config.knobs import knob
 
+MAX_EPISODES = 1_000_000  # episodes of one run (its files hold one row each)
+MAX_SEED = 2**63 - 1  # the largest first seed (numpy's seeds are 64-bit)
+
 
 @dataclass(frozen=True)
 class OutputConfig:
@@ -52,8 +55,8 @@ class ExperimentConfig:
         "centerline", "random, constant, centerline, or module:callable (your own policy)"
     )
     driver_args: dict[str, Any] = knob(MappingProxyType({}), "keyword arguments for the driver")
-    episodes: int = knob(5, "how many episodes", low=1, high=1_000_000)
-    seed: int = knob(0, "episode i is reset with seed + i", low=0)
+    episodes: int = knob(5, "how many episodes", low=1, high=MAX_EPISODES)
+    seed: int = knob(0, "episode i is reset with seed + i", low=0, high=MAX_SEED)
     max_steps: int | None = knob(
         None, "stop an episode after this many steps (null: the env's own limits)", "steps", low=1
     )

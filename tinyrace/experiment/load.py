@@ -139,9 +139,22 @@ def _track_file(value: object, base_dir: Path, source: str) -> Path:
     return path
 
 
+TRACK_FILE_KEYS = ("image", "file", "waypoints")  # the files a track entry names
+
+
+def _check_exists(path: Path, value: str, source: str, where: str) -> None:
+    try:
+        found = path.is_file()
+    except (OSError, ValueError):  # a name the file system cannot hold
+        found = False
+    if not found:
+        allowed = f"expected an existing file, relative to {Path(source).name}: {path} is none"
+        raise ConfigError(Problem(source, where, value, allowed))
+
+
 def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> dict[str, Any]:
-    """Inline track images are relative to the experiment file (and stay in its folder unless
-    ``files.paths_outside_folder``): make them absolute."""
+    """Inline track files (images, CSVs, map YAMLs) are relative to the experiment file (and
+    stay in its folder unless ``files.paths_outside_folder``): make them absolute."""
     files = sections.get("files")
     outside = isinstance(files, Mapping) and files.get("paths_outside_folder") is True
     for key in ("track", "tracks"):
@@ -151,10 +164,12 @@ def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> d
         )
         resolved = []
         for index, entry in enumerate(entries):
-            if isinstance(entry, Mapping) and isinstance(entry.get("image"), str):
-                where = f"env.{key}[{index}].image"
-                image = inside_folder(entry["image"], base_dir, outside, source, where)
-                entry = {**entry, "image": str(image)}
+            for name in TRACK_FILE_KEYS:
+                if isinstance(entry, Mapping) and isinstance(entry.get(name), str):
+                    where = f"env.{key}[{index}].{name}"
+                    found = inside_folder(entry[name], base_dir, outside, source, where)
+                    _check_exists(found, entry[name], source, where)
+                    entry = {**entry, name: str(found)}
             resolved.append(entry)
         if entries:
             sections = {**sections, key: resolved[0] if isinstance(tracks, Mapping) else resolved}

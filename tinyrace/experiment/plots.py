@@ -35,6 +35,8 @@ class Path2D:
 
 def speed_colors(speed: np.ndarray, top: float) -> np.ndarray:
     """(N, 3) RGB of each speed on OpenCV's turbo map, 0 (blue) .. ``top`` (red)."""
+    if len(speed) == 0:  # OpenCV maps no pixels to None
+        return np.zeros((0, 3), np.uint8)
     level = np.clip(np.nan_to_num(speed) / max(top, 1e-9), 0, 1) * 255
     bgr = cv2.applyColorMap(level.astype(np.uint8).reshape(-1, 1), cv2.COLORMAP_TURBO)
     rgb: np.ndarray = bgr.reshape(-1, 3)[:, ::-1]

@@ -14,9 +14,16 @@ from typing import Any
 import cv2
 import numpy as np
 
+from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS, read_image_bgr
 from tinyrace.experiment import plots
-from tinyrace.experiment.record import read_trace
-from tinyrace.experiment.results import EpisodeResult, read_files, summary_text, table
+from tinyrace.experiment.results import (
+    EPISODES_FILE,
+    RESULTS_FILE,
+    EpisodeResult,
+    summary_text,
+    table,
+)
+from tinyrace.experiment.run_folder import check_outputs, read_episodes, read_header, read_trace
 from tinyrace.render.track_picture import PictureFrame
 
 REPORT_FILE = "report.html"
@@ -24,13 +31,27 @@ CRASHES = ("out_of_bounds", "obstacle")
 
 
 def rebuild_report(run_dir: Path) -> Path:
-    """Rebuild ``report.html`` and its pictures from a run folder's files."""
-    header, results = read_files(run_dir)
-    return write_report(run_dir, header, results)
+    """Rebuild ``report.html`` and its pictures from a run folder's files (checked: a
+    ConfigError names the file, the field and what was expected)."""
+    header = read_header(run_dir)
+    return write_report(run_dir, header, read_episodes(run_dir))
+
+
+def _inputs(header: dict[str, Any], results: Sequence[EpisodeResult]) -> list[str]:
+    """The run files the report reads."""
+    names = [RESULTS_FILE, EPISODES_FILE, *(r.trace for r in results if r.trace)]
+    names += [r.video for r in results if r.video]
+    return names + [entry["image"] for entry in (header.get("tracks") or {}).values()]
 
 
 def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]) -> Path:
-    """Draw the pictures, save them as PNG and write report.html; returns its path."""
+    """Draw the pictures, save them as PNG and write report.html; returns its path.
+
+    Refused (a ConfigError) when one of the files to write is one the report reads."""
+    outputs = [REPORT_FILE, "report_returns.png", "report_lap_times.png"]
+    outputs += [f"report_track_{key}.png" for key in header.get("tracks") or {}]
+    outputs += [f"report_episode_{r.episode:03d}.png" for r in results if r.trace]
+    check_outputs(run_dir, outputs, _inputs(header, results))
     pictures = _track_pictures(run_dir, header, results)
     labels = [str(r.episode) for r in results]
     pictures.append(
@@ -75,6 +96,25 @@ def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None
     return read_trace(path) if path is not None and path.is_file() else None
 
 
+def _background(run_dir: Path, key: str, name: str) -> np.ndarray | None:
+    """A track picture of the run folder (None when missing), read within the pixel cap."""
+    path = run_dir / name
+    if not path.is_file():
+        return None
+    where = f"tracks.{key}.image"
+    return read_image_bgr(path, DEFAULT_MAX_IMAGE_PIXELS, str(run_dir / RESULTS_FILE), where)
+
+
+def _on_picture(pixels: np.ndarray) -> np.ndarray:
+    """Pixel positions clipped to a band around the picture (hand-edited frames may send them
+    to 1e300); NaN stays NaN (not drawn)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.clip(pixels, -PIXEL_BAND, PIXEL_BAND)
+
+
+PIXEL_BAND = 1e5  # [px] how far off the picture a drawn position may lie
+
+
 def _track_pictures(
     run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]
 ) -> list[tuple[str, str, np.ndarray]]:
@@ -82,7 +122,7 @@ def _track_pictures(
     pictures = []
     tracks: dict[str, Any] = header.get("tracks") or {}
     for key, entry in tracks.items():
-        background = cv2.imread(str(run_dir / entry["image"]))
+        background = _background(run_dir, key, entry["image"])
         if background is None:
             continue
         frame = PictureFrame(*entry["frame"]).pixels
@@ -91,13 +131,14 @@ def _track_pictures(
             trace = _trace(run_dir, result)
             if trace is None:
                 continue
-            points = frame(np.stack([trace["x"], trace["y"]], axis=-1))
+            points = _on_picture(frame(np.stack([trace["x"], trace["y"]], axis=-1)))
             crashed = result.end in CRASHES
             hits = trace["obstacle_hit"] > 0
             paths.append(
                 plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
             )
         lap = None if entry.get("lap_line") is None else frame(np.array(entry["lap_line"]))
+        lap = None if lap is None or not np.isfinite(lap).all() else _on_picture(lap)
         image = plots.trajectories(background[..., ::-1], paths, lap, entry.get("unit", ""))
         episodes = ", ".join(p.label.removeprefix("ep ") for p in paths) or "none"
         caption = (

@@ -101,11 +101,13 @@ class _Run:
             except Interrupted as exc:
                 interrupted = exc.signum
             except BaseException as exc:
-                self._fail(exc)
+                with stop.hold():
+                    self._fail(exc)
                 raise
-            if interrupted is None:  # a signal after the last step: still say so
-                interrupted = stop.signum
-            self._write(interrupted)
+            with stop.hold():  # a second Ctrl-C does not cut the files short
+                if interrupted is None:  # a signal after the last step: still say so
+                    interrupted = stop.signum
+                self._write(interrupted)
         return RunResult(self.run_dir, self.results, interrupted)
 
     def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
