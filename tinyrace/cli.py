@@ -95,7 +95,7 @@ def _count(low: int, what: str, high: int | None = None) -> Callable[[str], int]
 
 def _parser() -> argparse.ArgumentParser:
     from tinyrace import __version__
-    from tinyrace.config.experiment import MAX_EPISODES, MAX_SEED
+    from tinyrace.config.bounds import MAX_EPISODES, MAX_SEED
 
     parser = _Parser(prog="tinyrace", description=__doc__)
     parser.add_argument("--version", action="version", version=f"tinyrace {__version__}")

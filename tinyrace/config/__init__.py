@@ -8,10 +8,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
-    MAX_CAMERA_PIXELS,
     METRIC_KINDS,
     CameraConfig,
     CarConfig,
@@ -246,21 +246,22 @@ def _check_image_track(
 
 
 def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
-    """Every camera's pixels together: the ``cameras`` and the perspective ``sensors``."""
-    sizes = [(f"cameras[{i}]", c.resolution) for i, c in enumerate(config.cameras)]
+    """Every camera's pixels together: the ``cameras`` and the perspective ``sensors`` (whose
+    pixels count PERSPECTIVE_PIXEL_WEIGHT times: each keeps a ray and its ground point)."""
+    sizes = [(f"cameras[{i}]", c.resolution, 1) for i, c in enumerate(config.cameras)]
     sizes += [
-        (f"sensors[{i}]", s.resolution)
+        (f"sensors[{i}]", s.resolution, PERSPECTIVE_PIXEL_WEIGHT)
         for i, s in enumerate(config.sensors)
         if isinstance(s, PerspectiveCameraConfig)
     ]
-    total = sum(height * width for _, (height, width) in sizes)  # [px]
+    total = sum(height * width * weight for _, (height, width), weight in sizes)  # [px]
     if total > MAX_CAMERA_PIXELS:
         allowed = (
-            f"expected cameras (cameras and perspective_camera sensors) of at most "
-            f"{MAX_CAMERA_PIXELS:,} px together (here {total:,})"
+            f"expected cameras of at most {MAX_CAMERA_PIXELS:,} px together, a perspective_camera "
+            f"pixel counted {PERSPECTIVE_PIXEL_WEIGHT} times (here {total:,})"
         )
         where = "cameras" if not config.sensors else "sensors"
-        parser.problem(f"{at}{where}", {k: list(r) for k, r in sizes}, allowed)
+        parser.problem(f"{at}{where}", {k: list(r) for k, r, _ in sizes}, allowed)
 
 
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB

@@ -17,10 +17,8 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
+from tinyrace.config.bounds import MAX_EPISODES
 from tinyrace.config.knobs import knob
-
-MAX_EPISODES = 1_000_000  # episodes of one run (its files hold one row each)
-MAX_SEED = 2**63 - 1  # the largest first seed (numpy's seeds are 64-bit)
 
 
 @dataclass(frozen=True)
@@ -56,7 +54,7 @@ class ExperimentConfig:
     )
     driver_args: dict[str, Any] = knob(MappingProxyType({}), "keyword arguments for the driver")
     episodes: int = knob(5, "how many episodes", low=1, high=MAX_EPISODES)
-    seed: int = knob(0, "episode i is reset with seed + i", low=0, high=MAX_SEED)
+    seed: int = knob(0, "episode i is reset with seed + i", low=0)
     max_steps: int | None = knob(
         None, "stop an episode after this many steps (null: the env's own limits)", "steps", low=1
     )

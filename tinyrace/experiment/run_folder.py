@@ -19,13 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_CSV_FIELD, MAX_RUN_FILE_BYTES
 from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.record import TRACE_COLUMNS
 from tinyrace.experiment.results import EPISODES_FILE, RESULTS_FILE, EpisodeResult
 
-MAX_RUN_FILE_BYTES = 128 << 20  # [bytes] results.json, episodes.csv or a trace file
-MAX_CSV_FIELD = 4096  # [characters] one field of episodes.csv or a trace
 KEY = re.compile(r"[A-Za-z0-9_.-]{1,64}")  # a track key, also part of a picture's file name
 FILE_NAME = re.compile(r"[A-Za-z0-9_.-]{1,128}")  # a file the run folder holds (no folders)
 

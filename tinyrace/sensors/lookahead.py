@@ -23,6 +23,7 @@ import math
 import numpy as np
 from gymnasium import spaces
 
+from tinyrace.config.bounds import MAX_LOOKAHEAD_GRID
 from tinyrace.config.schema import RosMapTrackConfig
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.errors import ConfigError, Problem
@@ -32,7 +33,7 @@ from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
 FINE = 8  # grid points per spacing
-MAX_GRID = 1_000_000  # grid points of a reference line (its length / spacing x FINE)
+MAX_GRID = MAX_LOOKAHEAD_GRID  # grid points of a reference line (its length / spacing x FINE)
 WINDOW = 16  # grid points searched either side of the previous match (2 spacings)
 REACH = 4  # the observation's x and y saturate at this many times K spacings
 PAIRS = np.dtype((np.float64, (2,)))  # a complex array viewed as (N, 2) real rows

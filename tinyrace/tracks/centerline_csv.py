@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_COORDINATE
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import Table, read_table
 
 MIN_POINTS = 4
-MAX_COORDINATE = 1e7  # [m] |x|, |y| and widths after scale (a quarter of the Earth's girth)
 # Column positions by row width when the header names none: x, y, right width, left width.
 _BY_WIDTH = {2: (0, 1, None, None), 4: (0, 1, 2, 3), 6: (1, 2, None, None), 7: (1, 2, None, None)}
 _NAMES = {

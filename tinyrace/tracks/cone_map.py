@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_CONE_ROAD_POINTS, MAX_CONES, MAX_COORDINATE
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import read_text
@@ -22,8 +23,6 @@ from tinyrace.tracks.csv_rows import read_text
 CLASSES = ("blue", "yellow", "orange", "big_orange", "unknown")  # class id = index + 1
 RADII = {"blue": 0.115, "yellow": 0.115, "orange": 0.115, "big_orange": 0.145, "unknown": 0.115}
 MIN_EDGE_CONES = 3
-MAX_CONES = 10_000  # cones in one map (a Formula Student track has a few hundred)
-MAX_COORDINATE = 1e7  # [m] |x| and |y| of a cone after scale
 _COLUMNS = ("tag", "x", "y", "direction", "x_variance", "y_variance", "covariance")
 
 
@@ -167,12 +166,10 @@ def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
     return np.asarray(points[order], float)
 
 
-MAX_EDGE_POINTS = 4 * 200_000  # points of an edge resampled a quarter spacing apart
-
-
 def _check_edge_length(cones: Cones, tag: str, length: float, spacing: float) -> None:
-    """An edge that goes round a loop at least 3 spacings long, in at most MAX_EDGE_POINTS."""
-    if length >= 3 * spacing and length / (spacing / 4) <= MAX_EDGE_POINTS:
+    """An edge that goes round a loop at least 3 spacings long, in at most
+    MAX_CONE_ROAD_POINTS spacings (each point is matched against the other edge's)."""
+    if length >= 3 * spacing and length / spacing <= MAX_CONE_ROAD_POINTS:
         return
     if length < 3 * spacing:
         allowed = (
@@ -181,8 +178,8 @@ def _check_edge_length(cones: Cones, tag: str, length: float, spacing: float) ->
         )
     else:
         allowed = (
-            f"expected a track.spacing >= {4 * length / MAX_EDGE_POINTS:.3g} m for a {tag} edge "
-            f"of {length:.0f} m (at most {MAX_EDGE_POINTS // 4:,} points along it)"
+            f"expected a track.spacing >= {length / MAX_CONE_ROAD_POINTS:.3g} m for a {tag} "
+            f"edge of {length:.0f} m (at most {MAX_CONE_ROAD_POINTS:,} points along it)"
         )
     raise ConfigError(Problem(cones.path, "", f"{tag} edge of {length:.3g} m", allowed))
 

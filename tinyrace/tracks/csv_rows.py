@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_DATA_BYTES, MAX_ROWS
 from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
 
@@ -35,10 +36,6 @@ class Table:
     def problem(self, row: int, column: int | None, value: object, allowed: str) -> Problem:
         name = self.header[column] if column is not None and column < len(self.header) else ""
         return Problem(self.path, self.where(row, column, name), value, allowed)
-
-
-MAX_DATA_BYTES = 64 << 20  # [bytes] a track data file (a real circuit's CSV is ~50 kB)
-MAX_ROWS = 200_000  # rows of numbers in a track data file (a real circuit has ~1,000 points)
 
 
 def read_text(path: Path, source: str, key: str) -> str:

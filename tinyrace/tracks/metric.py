@@ -22,6 +22,7 @@ from tinyrace.config import (
     EnvConfig,
     RosMapTrackConfig,
 )
+from tinyrace.config.bounds import MAX_TRACK_POINTS
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
@@ -33,7 +34,6 @@ from tinyrace.tracks.cone_map import RADII, read_cones, road_between
 from tinyrace.tracks.ros_map import OccupancyMap, read_map
 
 Pose = tuple[float, float, float]
-MAX_TRACK_POINTS = 200_000  # centreline points after resampling (track length / spacing)
 FILES = FilesConfig()  # the default bounds on the files a track names
 OFF_ROAD_FRICTION = 0.6  # CarRacing's grass grip, as a fraction of the road's
 

@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_CROSSING_PAIRS
+
 
 def segment_lengths(loop: np.ndarray) -> np.ndarray:
     """(N,) length of the segment from point i to point i + 1 (the last one closes the loop)."""
@@ -82,9 +84,6 @@ def signed_area(loop: np.ndarray) -> float:
     """Shoelace area: positive for a counter-clockwise loop (y up)."""
     x, y = loop[:, 0], loop[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-
-
-MAX_CROSSING_PAIRS = 50_000_000  # segment pairs sharing a grid cell that one check may test
 
 
 class TooDense(ValueError):

@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 import yaml
 
+from tinyrace.config.bounds import MAX_COORDINATE, MIN_MAP_SIDE, RESOLUTION_RANGE
 from tinyrace.config.image_file import read_image_bgr
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
@@ -28,9 +29,6 @@ from tinyrace.tracks.csv_rows import read_text
 
 MODES = ("trinary", "scale", "raw")
 DEFAULT_FILES = FilesConfig()
-RESOLUTION_RANGE = (1e-4, 1e3)  # [m/px] a map's resolution (F1TENTH maps: 0.05)
-MAX_COORDINATE = 1e7  # [m] |x| and |y| of a map's origin
-MIN_MAP_SIDE = 2  # [cells] a map's width and height (one cell has no extent to drive in)
 
 
 @dataclass(frozen=True)

@@ -57,13 +57,12 @@ from gymnasium.vector.utils import (
     read_from_shared_memory,
 )
 
+from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.worker import CLOSED, _Slice, work
 
-MAX_ENVS = 256  # envs in one vector env (each holds its own track, textures and car)
-MAX_WORKERS = 64  # worker processes of one vector env
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
 ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
 
