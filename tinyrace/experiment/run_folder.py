@@ -133,7 +133,7 @@ def _csv_rows(path: Path) -> list[tuple[int, dict[str, str]]]:
             rows.append((reader.line_num, row))
     except csv.Error as exc:
         allowed = f"expected CSV with fields of at most {MAX_CSV_FIELD:,} characters ({exc})"
-        raise _problem(path, f"line {reader.line_num}", "", allowed) from None
+        raise _problem(path, f"line {reader.line_num + 1}", "", allowed) from None
     finally:
         csv.field_size_limit(limit)
     return rows

@@ -108,7 +108,7 @@ class _Run:
                 if interrupted is None:  # a signal after the last step: still say so
                     interrupted = stop.signum
                 self._write(interrupted)
-        return RunResult(self.run_dir, self.results, interrupted)
+        return RunResult(self.run_dir, self.results, interrupted or stop.signum)
 
     def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
         seed = self.config.seed + episode

@@ -70,6 +70,11 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
             if not rows:
                 header = _split(line.lstrip("#"))
             continue
+        if len(rows) >= MAX_ROWS:
+            allowed = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
+            raise ConfigError(
+                Problem(str(path), f"line {number}", f"row {len(rows) + 1:,}", allowed)
+            )
         if rows:  # the common case first: as many finite numbers as the first row
             row = _fast_numbers(line, len(rows[0]))
             if row is not None:
@@ -85,9 +90,6 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
         if row is not None:
             rows.append(row)
             lines.append(number)
-        if len(rows) > MAX_ROWS:
-            allowed = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
-            raise ConfigError(Problem(str(path), f"line {number}", f"row {len(rows):,}", allowed))
     if problems:
         raise ConfigError(problems[:20])
     width = len(rows[0]) if rows else columns[0]
