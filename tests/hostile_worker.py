@@ -111,7 +111,7 @@ def _finite_inside(space: Any, observation: Any) -> str | None:
     return None
 
 
-def metric_case(folder: str, steps: int = 3) -> dict[str, Any]:
+def metric_case(folder: str, steps: int = 2) -> dict[str, Any]:
     """Build the env of a track folder, reset it and step it: a ConfigError or a working env
     whose observations are finite and inside the observation space."""
     from tinyrace.env import TinyRaceEnv

@@ -138,7 +138,9 @@ def _number(value: float) -> str:
 
 def bounds_section() -> str:
     """The fixed bounds (``tinyrace/config/bounds.py``) as a table."""
-    lines = ["#### Fixed bounds", "", _doc_text(sys.modules[BOUNDS[0].__module__]), ""]
+    blocks = inspect.cleandoc(sys.modules[BOUNDS[0].__module__].__doc__ or "").split("\n\n")
+    doc = "\n\n".join(" ".join(block.split()) for block in blocks)
+    lines = ["#### Fixed bounds", "", doc, ""]
     lines += ["| constant | value | unit | bounds |", "|---|---|---|---|"]
     lines += [f"| `{b.name}` | {_number(b.value)} | {b.unit} | {b.what} |" for b in BOUNDS]
     return "\n".join(lines)

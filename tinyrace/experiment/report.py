@@ -109,7 +109,7 @@ def _on_picture(pixels: np.ndarray) -> np.ndarray:
     """Pixel positions clipped to a band around the picture (hand-edited frames may send them
     to 1e300); NaN stays NaN (not drawn)."""
     with np.errstate(invalid="ignore", over="ignore"):
-        return np.clip(pixels, -PIXEL_BAND, PIXEL_BAND)
+        return np.asarray(np.clip(pixels, -PIXEL_BAND, PIXEL_BAND), np.float64)
 
 
 PIXEL_BAND = 1e5  # [px] how far off the picture a drawn position may lie

@@ -104,11 +104,3 @@ def write_files(
         writer.writeheader()
         writer.writerows(rows)
     return payload
-
-
-def read_files(run_dir: Path) -> tuple[dict[str, Any], list[EpisodeResult]]:
-    """results.json's header and the episodes of episodes.csv (what ``tinyrace report`` reads),
-    each checked (``tinyrace.experiment.run_folder``)."""
-    from tinyrace.experiment.run_folder import read_episodes, read_header
-
-    return read_header(run_dir), read_episodes(run_dir)

@@ -58,6 +58,9 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
     ``columns`` counts of cells. Blank lines and ``#`` comments are skipped; the last comment
     before the first row is taken as the header. More than ``MAX_ROWS`` rows are refused."""
     text = read_text(path, source, key)
+    fast = _fast_table(text, str(path), columns)
+    if fast is not None:
+        return fast
     rows: list[list[float]] = []
     lines: list[int] = []
     header: tuple[str, ...] = ()
@@ -71,10 +74,8 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
                 header = _split(line.lstrip("#"))
             continue
         if len(rows) >= MAX_ROWS:
-            allowed = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
-            raise ConfigError(
-                Problem(str(path), f"line {number}", f"row {len(rows) + 1:,}", allowed)
-            )
+            bound = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
+            raise ConfigError(Problem(str(path), f"line {number}", f"row {len(rows) + 1:,}", bound))
         if rows:  # the common case first: as many finite numbers as the first row
             row = _fast_numbers(line, len(rows[0]))
             if row is not None:
@@ -95,6 +96,43 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
     width = len(rows[0]) if rows else columns[0]
     values = np.array(rows, np.float64).reshape(len(rows), width)
     return Table(str(path), values, np.array(lines, int), tuple(h.lower() for h in header))
+
+
+def _fast_table(text: str, path: str, columns: tuple[int, ...]) -> Table | None:
+    """The table of a well-formed file (one separator, rows of one allowed width, finite
+    numbers, at most MAX_ROWS), converted by numpy at once; None: read it row by row."""
+    data: list[str] = []
+    numbers: list[int] = []
+    header: tuple[str, ...] = ()
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line[0] == "#":
+            if not data:
+                header = _split(line.lstrip("#"))
+            continue
+        data.append(line)
+        numbers.append(number)
+        if len(data) > MAX_ROWS + 1:
+            return None
+    if data and _is_header(_split(data[0])):
+        header, data, numbers = _split(data[0]), data[1:], numbers[1:]
+    if not data or len(data) > MAX_ROWS:
+        return None
+    first = data[0]
+    separator = ";" if ";" in first else "," if "," in first or "\t" not in first else "\t"
+    width = first.count(separator) + 1
+    if width not in columns or any(line.count(separator) != width - 1 for line in data):
+        return None
+    try:
+        values = np.array([c for line in data for c in line.split(separator)], np.float64)
+    except ValueError:
+        return None
+    if not np.isfinite(values).all():
+        return None
+    lower = tuple(h.lower() for h in header)
+    return Table(path, values.reshape(len(data), width), np.array(numbers, int), lower)
 
 
 def _fast_numbers(line: str, width: int) -> list[float] | None:

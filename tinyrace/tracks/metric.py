@@ -95,13 +95,10 @@ def load_metric_track(
     Its files stay inside the config's folder unless ``files.paths_outside_folder``; a
     picture is checked against ``files.max_image_pixels`` before it is decoded."""
     where = f"tracks[{index}]"
-    # Paths a file names stay in its folder; a dict's or kwargs' are the programmer's own
-    # (an experiment's inline tracks arrive so, made absolute and checked against its folder).
-    outside = files.paths_outside_folder or source.startswith("<")
     for key in ("file", "waypoints"):
         name = getattr(config, key, None)
         if name is not None:
-            inside_folder(name, base_dir, outside, source, f"{where}.{key}")
+            inside_folder(name, base_dir, files.paths_outside_folder, source, f"{where}.{key}")
     return LOADERS[config.type](config, where, base_dir, source, files)
 
 

@@ -144,7 +144,8 @@ def _candidate_pairs(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.
         )
         firsts.append(np.minimum(hit, k))
         seconds.append(np.maximum(hit, k))
-    pairs = np.unique(np.concatenate(firsts) * np.int64(n) + np.concatenate(seconds))
+    pairs = np.sort(np.concatenate(firsts) * np.int64(n) + np.concatenate(seconds))
+    pairs = pairs[np.r_[True, pairs[1:] != pairs[:-1]]] if len(pairs) else pairs  # each once
     return pairs // n, pairs % n
 
 
