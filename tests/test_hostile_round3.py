@@ -218,7 +218,8 @@ def test_report_never_writes_over_a_file_it_reads(tmp_path, capsys):
     (run / "episodes.csv").write_text(rows)
     before = digest(run / "report.html")
     assert cli.main(["report", str(run)]) == 2
-    assert "report.html" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "episodes.csv: got 'report.html'" in err, err  # the file that named it
     assert digest(run / "report.html") == before
 
 

@@ -37,11 +37,12 @@ def rebuild_report(run_dir: Path) -> Path:
     return write_report(run_dir, header, read_episodes(run_dir))
 
 
-def _inputs(header: dict[str, Any], results: Sequence[EpisodeResult]) -> list[str]:
-    """The run files the report reads."""
-    names = [RESULTS_FILE, EPISODES_FILE, *(r.trace for r in results if r.trace)]
-    names += [r.video for r in results if r.video]
-    return names + [entry["image"] for entry in (header.get("tracks") or {}).values()]
+def _inputs(header: dict[str, Any], results: Sequence[EpisodeResult]) -> dict[str, str]:
+    """The run files the report reads, each with the file that names it."""
+    names = {RESULTS_FILE: RESULTS_FILE, EPISODES_FILE: EPISODES_FILE}
+    names |= {name: EPISODES_FILE for r in results for name in (r.trace, r.video) if name}
+    tracks = (header.get("tracks") or {}).values()
+    return names | {entry["image"]: RESULTS_FILE for entry in tracks}
 
 
 def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]) -> Path:

@@ -196,14 +196,15 @@ def read_trace(path: Path) -> dict[str, np.ndarray]:
     return columns
 
 
-def check_outputs(run_dir: Path, outputs: list[str], inputs: list[str]) -> None:
-    """The report's files: never one it read, never a folder."""
-    read = {(run_dir / name).resolve() for name in inputs}
+def check_outputs(run_dir: Path, outputs: list[str], inputs: dict[str, str]) -> None:
+    """The report's files: never one it reads (``inputs``: name -> the file naming it), never
+    a folder."""
+    read = {(run_dir / name).resolve(): named_in for name, named_in in inputs.items()}
     for name in outputs:
         target = run_dir / name
         if target.resolve() in read:
-            allowed = "expected the report's own files apart from the run files it reads"
-            raise _problem(run_dir / RESULTS_FILE, name, name, allowed)
+            allowed = f"expected a run file apart from the report's own ({name} is written by it)"
+            raise _problem(run_dir / read[target.resolve()], "", name, allowed)
         if target.is_dir() or (target.exists() and not target.is_file()):
             allowed = "expected a file the report may replace, not a folder or special file"
             raise _problem(target, "", name, allowed)
