@@ -144,9 +144,7 @@ def vector_case(args: dict[str, Any]) -> dict[str, Any]:
     from tinyrace.errors import ConfigError
 
     try:
-        envs = gym.make_vec(
-            "tinyrace/TinyRace-v0", vectorization_mode="vector_entry_point", **args
-        )
+        envs = gym.make_vec("tinyrace/TinyRace-v0", vectorization_mode="vector_entry_point", **args)
         try:
             envs.action_space.seed(0)
             observation, _ = envs.reset(seed=0)
