@@ -97,6 +97,68 @@ def options_case(env_name: str, folder: str | None, options: Any) -> dict[str, A
     return {"outcome": "ok"}
 
 
+def _finite_inside(space: Any, observation: Any) -> str | None:
+    """Why an observation is not finite or not inside its space (None when it is)."""
+    import numpy as np
+
+    arrays = observation.values() if isinstance(observation, dict) else [observation]
+    for array in arrays:
+        floats = isinstance(array, np.ndarray) and array.dtype.kind == "f"
+        if floats and not np.isfinite(array).all():
+            return "an observation is not finite"
+    if not space.contains(observation):
+        return "an observation is outside the observation space"
+    return None
+
+
+def metric_case(folder: str, steps: int = 2) -> dict[str, Any]:
+    """Build the env of a track folder, reset it and step it: a ConfigError or a working env
+    whose observations are finite and inside the observation space."""
+    from tinyrace.env import TinyRaceEnv
+    from tinyrace.errors import ConfigError
+
+    try:
+        env = TinyRaceEnv(environment=folder)
+        try:
+            env.action_space.seed(0)
+            observation, _ = env.reset(seed=0)
+            wrong = _finite_inside(env.observation_space, observation)
+            for _ in range(steps):
+                if wrong is not None:
+                    break
+                observation, *_ = env.step(env.action_space.sample())
+                wrong = _finite_inside(env.observation_space, observation)
+        finally:
+            env.close()
+    except ConfigError as exc:
+        return {"outcome": "config_error", "make": _problems(exc)}
+    if wrong is not None:
+        return {"outcome": "bad_observation", "error": wrong}
+    return {"outcome": "ok", "make": []}
+
+
+def vector_case(args: dict[str, Any]) -> dict[str, Any]:
+    """``gym.make_vec`` (the batched vector env) with the given arguments, reset and stepped."""
+    import gymnasium as gym
+
+    from tinyrace.errors import ConfigError
+
+    try:
+        envs = gym.make_vec("tinyrace/TinyRace-v0", vectorization_mode="vector_entry_point", **args)
+        try:
+            envs.action_space.seed(0)
+            observation, _ = envs.reset(seed=0)
+            observation, *_ = envs.step(envs.action_space.sample())
+            wrong = _finite_inside(envs.observation_space, observation)
+        finally:
+            envs.close()
+    except ConfigError as exc:
+        return {"outcome": "config_error", "make": _problems(exc)}
+    if wrong is not None:
+        return {"outcome": "bad_observation", "error": wrong}
+    return {"outcome": "ok", "make": []}
+
+
 def probe_case(action: str) -> dict[str, Any]:
     """Misbehaviour on purpose, to show the campaign sees it: too much memory, a hang, a death."""
     import time
@@ -111,7 +173,14 @@ def probe_case(action: str) -> dict[str, Any]:
     return {"outcome": "ok"}
 
 
-CASES = {"config": config_case, "argv": argv_case, "options": options_case, "probe": probe_case}
+CASES = {
+    "config": config_case,
+    "argv": argv_case,
+    "options": options_case,
+    "probe": probe_case,
+    "metric": metric_case,
+    "vector": vector_case,
+}
 
 
 def _run(case: dict[str, Any], seconds: int) -> dict[str, Any]:

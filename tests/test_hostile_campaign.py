@@ -65,9 +65,10 @@ def _settings(examples: int):
 class Worker:
     """One worker process; restarted after a case that killed, hung or broke it."""
 
-    def __init__(self) -> None:
+    def __init__(self, seconds: int = SECONDS) -> None:
         self.process: subprocess.Popen | None = None
         self.restarts = -1
+        self.seconds = seconds
         self._start()
 
     def _start(self) -> None:
@@ -78,7 +79,7 @@ class Worker:
         for name in ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY"):  # `play` opens no window
             env.pop(name, None)  # (.ci/run exports SDL's dummy driver, which would play on)
         self.process = subprocess.Popen(
-            [sys.executable, str(WORKER), str(MEMORY), str(SECONDS)],
+            [sys.executable, str(WORKER), str(MEMORY), str(self.seconds)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,  # OpenCV's warnings about broken files
@@ -94,7 +95,7 @@ class Worker:
 
     def receive(self) -> dict[str, Any]:
         """The case's outcome; 'died' or 'hung' when the worker gave none."""
-        outcome = self._receive(SECONDS + 20)  # the alarm cannot stop a long C call
+        outcome = self._receive(self.seconds + 20)  # the alarm cannot stop a long C call
         if outcome is None:
             try:
                 self.process.wait(timeout=2)  # it closed its pipe: it is exiting
@@ -140,9 +141,9 @@ class Worker:
 class Campaign:
     """The workers, a scratch folder per case, and the tally of what was run."""
 
-    def __init__(self, root: Path):
+    def __init__(self, root: Path, seconds: int = SECONDS):
         self.root = root
-        self.workers = [Worker() for _ in range(WORKERS)]
+        self.workers = [Worker(seconds) for _ in range(WORKERS)]
         self.counts: collections.Counter[str] = collections.Counter()
         self.outcomes: collections.Counter[str] = collections.Counter()
         self._next = 0

@@ -50,13 +50,18 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("tinyrace: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:  # a path the system refuses: too long, no permission, a full disk
+        if args.debug:
+            raise
+        from tinyrace.validate import system_reason
+
+        name = _short(str(exc.filename)) if exc.filename is not None else "a path"
+        return _user_error(f"{name!r}: the system refuses it ({system_reason(exc)})")
     except Exception as exc:
         if args.debug:
             raise
-        print(
-            f"tinyrace: internal error: {type(exc).__name__}: {exc} (--debug shows where)",
-            file=sys.stderr,
-        )
+        text = _short(f"{type(exc).__name__}: {exc}", 2000)
+        print(f"tinyrace: internal error: {text} (--debug shows where)", file=sys.stderr)
         return 1
 
 
@@ -73,16 +78,16 @@ def _one_line(exc: Exception) -> str:
     return " ".join(str(exc).split())
 
 
-def _count(low: int, what: str) -> Callable[[str], int]:
-    """An argparse type: a whole number >= ``low``."""
+def _count(low: int, what: str, high: int | None = None) -> Callable[[str], int]:
+    """An argparse type: a whole number from ``low`` (to ``high``)."""
 
     def parse(text: str) -> int:
         try:
-            value = int(text)
+            value = int(text) if len(text) <= 40 else None
         except ValueError:
             value = None
-        if value is None or value < low:
-            raise argparse.ArgumentTypeError(f"got {text!r}; expected {what}")
+        if value is None or value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"got {_short(text)!r}; expected {what}")
         return value
 
     return parse
@@ -90,6 +95,7 @@ def _count(low: int, what: str) -> Callable[[str], int]:
 
 def _parser() -> argparse.ArgumentParser:
     from tinyrace import __version__
+    from tinyrace.config.bounds import MAX_EPISODES, MAX_SEED
 
     parser = _Parser(prog="tinyrace", description=__doc__)
     parser.add_argument("--version", action="version", version=f"tinyrace {__version__}")
@@ -103,10 +109,14 @@ def _parser() -> argparse.ArgumentParser:
         "-o", "--out", help="folder for run folders (overrides output.dir; default: ./runs)"
     )
     run.add_argument(
-        "--episodes", type=_count(1, "a whole number >= 1"), help="override the episodes"
+        "--episodes",
+        type=_count(1, f"a whole number from 1 to {MAX_EPISODES:,}", MAX_EPISODES),
+        help="override the episodes",
     )
     run.add_argument(
-        "--seed", type=_count(0, "a whole number >= 0"), help="override the first seed"
+        "--seed",
+        type=_count(0, f"a whole number from 0 to {MAX_SEED}", MAX_SEED),
+        help="override the first seed",
     )
     run.add_argument("--no-video", action="store_true", help="write no videos")
     run.add_argument("--force", action="store_true", help="allow run folders inside a track folder")
@@ -227,19 +237,31 @@ def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
 
 def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
     """``--out`` checked: a folder, and (unless ``force``) not inside a track folder."""
-    from tinyrace.validate import track_folder_holding
+    from tinyrace.validate import system_reason, track_folder_holding
 
     path = Path(out if out is not None else default)
-    if path.exists() and not path.is_dir():
-        raise UsageError(f"argument -o/--out: {str(path)!r} is a file; expected a folder")
-    inside = track_folder_holding(path.resolve())
+    where = "argument -o/--out" if out is not None else "output.dir (run folders)"
+    try:
+        if path.exists() and not path.is_dir():
+            raise UsageError(f"{where}: {_short(str(path))!r} is a file; expected a folder")
+        inside = track_folder_holding(path.resolve())
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte
+        raise UsageError(
+            f"{where}: {_short(str(path))!r} is no folder the system can make "
+            f"({system_reason(exc)})"
+        ) from None
     if inside is not None and not force:
-        where = "argument -o/--out" if out is not None else "output.dir (run folders)"
         raise UsageError(
             f"{where}: {str(path)!r} lies inside the track folder {str(inside)!r}; "
             "expected a folder outside it (run elsewhere, give -o, or --force)"
         )
     return None if out is None else path
+
+
+def _short(text: str, limit: int = 80) -> str:
+    """``text``, its middle cut out when longer than ``limit`` characters."""
+    half = (limit - 3) // 2
+    return text if len(text) <= limit else text[:half] + "..." + text[-half:]
 
 
 def _json_summary(result: RunResult) -> dict[str, Any]:
@@ -264,7 +286,9 @@ def _report(args: argparse.Namespace) -> int:
             "(expected a folder holding results.json and episodes.csv)"
         )
     try:
-        path = rebuild_report(run_dir)
+        path = rebuild_report(run_dir)  # a ConfigError names the file and field
+    except ConfigError:
+        raise
     except (ValueError, KeyError, TypeError) as exc:  # results.json or episodes.csv edited
         raise UsageError(
             f"argument run_dir: cannot read the run in {args.run_dir!r} "
@@ -333,7 +357,7 @@ def _validate(args: argparse.Namespace) -> int:
 def _show(args: argparse.Namespace) -> int:
     import cv2
 
-    from tinyrace.validate import check_output, picture
+    from tinyrace.validate import check_output, picture, system_reason
 
     target = args.path if args.path == "procedural" else str(find_example(args.path))
     shown = picture(target, args.seed)
@@ -343,7 +367,7 @@ def _show(args: argparse.Namespace) -> int:
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        allowed = f"a path whose folder can be made ({type(exc).__name__}: {exc})"
+        allowed = f"a path whose folder can be made ({system_reason(exc)})"
         raise ConfigError(Problem("<command line>", "-o/--output", str(output), allowed)) from None
     try:
         written = cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))

@@ -121,7 +121,8 @@ def picture(target: str, seed: int) -> Picture:
         return Picture(image, f"procedural-seed{seed}", ())
     path = Path(target)
     loaded = load_any(path)
-    name = (path if path.is_dir() or path.name != TRACK_FILE else path.parent).stem
+    named = (path if path.is_dir() or path.name != TRACK_FILE else path.parent).resolve()
+    name = named.name if named.is_dir() else named.stem  # `show .` names the folder
     inputs = input_files(path, loaded)
     if loaded.config.kind == "procedural":
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
@@ -135,13 +136,29 @@ def picture(target: str, seed: int) -> Picture:
 
 def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:
     """Every file a config was read from: the YAML files and the track images."""
-    files = [path / TRACK_FILE if path.is_dir() else path, Path(loaded.source)]
+    files = [path / TRACK_FILE if path.is_dir() else path]
+    if not loaded.source.startswith("<"):
+        files.append(Path(loaded.source))
     for track in loaded.config.tracks:
         for key in ("image", "file", "waypoints"):  # picture and metric track files
             name = getattr(track, key, None)
             if isinstance(name, str):
                 files.append(loaded.base_dir / name)
+        if track.type == "ros_map":  # the map YAML names its picture
+            files += _map_image(loaded.base_dir / track.file)
     return tuple(dict.fromkeys(f.resolve() for f in files))
+
+
+def _map_image(map_yaml: Path) -> list[Path]:
+    """The picture a ROS map YAML names (none when it cannot be read: nothing is written
+    then, the command fails on the map first)."""
+    from tinyrace.tracks.csv_rows import read_text
+    from tinyrace.tracks.ros_map import read_info
+
+    try:
+        return [read_info(map_yaml, read_text(map_yaml, str(map_yaml), "file"), True).image]
+    except ConfigError:
+        return []
 
 
 def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
@@ -152,9 +169,18 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     """
     try:
         _check_output(output, inputs, force)
+    except ConfigError:
+        raise
     except (OSError, ValueError) as exc:  # a name too long, a NUL byte, no permission
-        allowed = f"a path the system can write ({type(exc).__name__}: {exc})"
+        allowed = f"a path the system can write ({system_reason(exc)})"
         raise ConfigError(Problem(COMMAND_LINE, "-o/--output", str(output), allowed)) from None
+
+
+def system_reason(exc: BaseException) -> str:
+    """Why the system refused a path, short (an OSError's text repeats the whole path)."""
+    reason = getattr(exc, "strerror", None) or str(exc)
+    text = f"{type(exc).__name__}: {reason}"
+    return text if len(text) <= 160 else text[:157] + "..."
 
 
 PICTURE_SUFFIXES = (".png", ".jpg", ".jpeg")

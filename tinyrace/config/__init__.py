@@ -9,11 +9,11 @@ from pathlib import Path
 from typing import Any, cast
 
 from tinyrace.cache import Settings, default_folder
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
-    MAX_CAMERA_PIXELS,
     METRIC_KINDS,
     CacheConfig,
     CameraConfig,
@@ -31,7 +31,12 @@ from tinyrace.config.schema import (
     SimConfig,
     TrackConfig,
 )
-from tinyrace.config.sensors import PerspectiveCameraConfig
+from tinyrace.config.sensors import (
+    ConesConfig,
+    LidarConfig,
+    PerspectiveCameraConfig,
+    SensorConfig,
+)
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.examples import find_track, track_names
 
@@ -180,9 +185,7 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if image and not config.cameras and not config.sensors:
         allowed = "an image track needs at least one camera (id, resolution, roi, position)"
         parser.problem(f"{at}cameras", [], allowed)
-    if config.observation == "box" and len(config.cameras) > 1:
-        ids = [c.id for c in config.cameras]
-        parser.problem(f"{at}observation", "box", f"box needs exactly one camera, not {ids}")
+    _check_box(config, parser, at)
     ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
     cameras = len(config.cameras)
     for i, cam_id in enumerate(ids):
@@ -200,11 +203,39 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
             _check_texture_side(track, parser, f"{at}tracks[{i}]")
         elif track.type == "image":
             _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
-    _check_camera_pixels(config.cameras, parser, at)
+    _check_camera_pixels(config, parser, at)
     for i, sensor in enumerate(config.sensors):
         if isinstance(sensor, PerspectiveCameraConfig):
             for key, value, allowed in intrinsics_problems(sensor):
                 parser.problem(f"{at}sensors[{i}].{key}", value, allowed)
+            position = sensor.position
+            if position and not position[2] > 0:
+                allowed = "expected a camera above the ground: position [x, y, z] with z > 0"
+                parser.problem(f"{at}sensors[{i}].position", list(position), allowed)
+
+
+def _one_array(sensor: SensorConfig) -> bool:
+    """Whether a sensor's observation is one array (a Box), not a Dict of arrays."""
+    if isinstance(sensor, LidarConfig):
+        return not sensor.hit_classes
+    return not isinstance(sensor, ConesConfig)
+
+
+def _check_box(config: EnvConfig, parser: Parser, at: str) -> None:
+    """``observation: box`` is one camera's image: exactly one camera or image sensor."""
+    if config.observation != "box":
+        return
+    ids = [c.id for c in config.cameras] + [s.id for s in config.sensors]
+    allowed = ""
+    if len(ids) > 1:
+        allowed = f"box needs exactly one camera or sensor, not {ids} (use dict)"
+    elif config.sensors and not _one_array(config.sensors[0]):
+        allowed = (
+            f"box needs a camera or a sensor of one array, not a {config.sensors[0].type} "
+            "sensor whose observation is a Dict (cones; lidar with hit_classes): use dict"
+        )
+    if allowed:
+        parser.problem(f"{at}observation", "box", allowed)
 
 
 def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:
@@ -230,12 +261,23 @@ def _check_image_track(
         parser.problem(f"{at}.plane_size", [height, width], allowed)
 
 
-def _check_camera_pixels(cameras: tuple[CameraConfig, ...], parser: Parser, at: str) -> None:
-    total = sum(c.resolution[0] * c.resolution[1] for c in cameras)  # [px]
+def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
+    """Every camera's pixels together: the ``cameras`` and the perspective ``sensors`` (whose
+    pixels count PERSPECTIVE_PIXEL_WEIGHT times: each keeps a ray and its ground point)."""
+    sizes = [(f"cameras[{i}]", c.resolution, 1) for i, c in enumerate(config.cameras)]
+    sizes += [
+        (f"sensors[{i}]", s.resolution, PERSPECTIVE_PIXEL_WEIGHT)
+        for i, s in enumerate(config.sensors)
+        if isinstance(s, PerspectiveCameraConfig)
+    ]
+    total = sum(height * width * weight for _, (height, width), weight in sizes)  # [px]
     if total > MAX_CAMERA_PIXELS:
-        sizes = [list(c.resolution) for c in cameras]
-        allowed = f"expected cameras of at most {MAX_CAMERA_PIXELS:,} px together (here {total:,})"
-        parser.problem(f"{at}cameras", sizes, allowed)
+        allowed = (
+            f"expected cameras of at most {MAX_CAMERA_PIXELS:,} px together, a perspective_camera "
+            f"pixel counted {PERSPECTIVE_PIXEL_WEIGHT} times (here {total:,})"
+        )
+        where = "cameras" if not config.sensors else "sensors"
+        parser.problem(f"{at}{where}", {k: list(r) for k, r, _ in sizes}, allowed)
 
 
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
+from tinyrace.config.bounds import MAX_EPISODES
 from tinyrace.config.knobs import knob
 
 
@@ -52,7 +53,7 @@ class ExperimentConfig:
         "centerline", "random, constant, centerline, or module:callable (your own policy)"
     )
     driver_args: dict[str, Any] = knob(MappingProxyType({}), "keyword arguments for the driver")
-    episodes: int = knob(5, "how many episodes", low=1, high=1_000_000)
+    episodes: int = knob(5, "how many episodes", low=1, high=MAX_EPISODES)
     seed: int = knob(0, "episode i is reset with seed + i", low=0)
     max_steps: int | None = knob(
         None, "stop an episode after this many steps (null: the env's own limits)", "steps", low=1

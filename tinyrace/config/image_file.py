@@ -87,18 +87,43 @@ def _jpeg_header(data: bytes) -> ImageHeader:
 
 
 def _pnm_header(data: bytes) -> ImageHeader:
-    fields = data[:512].split(maxsplit=4)  # magic, width, height, maxval, pixels
-    try:
-        width, height, maxval = (int(f) for f in fields[1:4])
-    except (ValueError, IndexError):
-        raise _Bad("a PGM/PPM with a broken header (corrupt)") from None
-    channels = 1 if fields[0] == b"P5" else 3
+    width, height, maxval, start = _pnm_fields(data)
+    channels = 1 if data[:2] == b"P5" else 3
     if not 0 < maxval < 65536:
         raise _Bad(f"a PGM/PPM with maxval {maxval} (expected 1 to 65535)")
     needed = width * height * channels * (1 if maxval < 256 else 2)
-    if len(data) < needed:
+    if len(data) - start < needed:
         raise _Bad("a PGM/PPM shorter than its header says (truncated)")
     return ImageHeader("PNM", width, height, channels)
+
+
+_PNM_HEADER_BYTES = 4096  # [bytes] the magic, width, height, maxval and comments among them
+
+
+def _pnm_fields(data: bytes) -> tuple[int, int, int, int]:
+    """Width, height, maxval and where the pixels start; ``#`` comments (map_saver's
+    ``# CREATOR: ...`` line) may stand between any two header fields."""
+    fields: list[int] = []
+    at = 2
+    while len(fields) < 3:
+        while at < len(data) and data[at : at + 1].isspace():
+            at += 1
+        if data[at : at + 1] == b"#":  # a comment runs to the end of its line
+            end = data.find(b"\n", at, _PNM_HEADER_BYTES)
+            if end < 0:
+                raise _Bad("a PGM/PPM with a broken header (corrupt)")
+            at = end + 1
+            continue
+        end = at
+        while end < len(data) and data[end : end + 1].isdigit() and end - at < 10:
+            end += 1
+        if end == at or at >= _PNM_HEADER_BYTES:
+            raise _Bad("a PGM/PPM with a broken header (corrupt)")
+        fields.append(int(data[at:end]))
+        at = end
+    if not data[at : at + 1].isspace():
+        raise _Bad("a PGM/PPM with a broken header (corrupt)")
+    return fields[0], fields[1], fields[2], at + 1
 
 
 def check_size(header: ImageHeader, max_pixels: int) -> str | None:

@@ -14,6 +14,7 @@ import typing
 from pathlib import Path
 from typing import Any, Literal, Union
 
+from tinyrace.config.bounds import BOUNDS
 from tinyrace.config.colors import Color
 from tinyrace.config.experiment import ExperimentConfig, OutputConfig
 from tinyrace.config.schema import (
@@ -135,9 +136,23 @@ def _doc_text(cls: type) -> str:
     return "\n\n".join(" ".join(block.split()) for block in blocks)
 
 
+def _number(value: float) -> str:
+    return f"{int(value):,}" if value == int(value) and value < 1e12 else f"{value:g}"
+
+
+def bounds_section() -> str:
+    """The fixed bounds (``tinyrace/config/bounds.py``) as a table."""
+    blocks = inspect.cleandoc(sys.modules[BOUNDS[0].__module__].__doc__ or "").split("\n\n")
+    doc = "\n\n".join(" ".join(block.split()) for block in blocks)
+    lines = ["#### Fixed bounds", "", doc, ""]
+    lines += ["| constant | value | unit | bounds |", "|---|---|---|---|"]
+    lines += [f"| `{b.name}` | {_number(b.value)} | {b.unit} | {b.what} |" for b in BOUNDS]
+    return "\n".join(lines)
+
+
 def markdown() -> str:
     """The whole reference as Markdown."""
-    return "\n\n".join(section(*s) for s in SECTIONS)
+    return "\n\n".join([*(section(*s) for s in SECTIONS), bounds_section()])
 
 
 def embed(readme: str) -> str:

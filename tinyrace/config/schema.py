@@ -10,13 +10,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal, Union
 
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS as MAX_CAMERA_PIXELS  # re-exported
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 from tinyrace.config.knobs import REQUIRED, knob
 from tinyrace.config.sensors import SensorConfig
 
 MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
-MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together
 
 
 @dataclass(frozen=True)
@@ -381,7 +381,8 @@ class FilesConfig:
     Fixed bounds, not knobs: a YAML file is at most 1 MiB, nests at most 32 levels and expands
     (aliases included) to at most 200,000 values; a key may appear once per mapping; FIFOs and
     devices are refused. Overview frames are at most 32 Mpx (a larger one is downscaled
-    further) and all cameras together at most 4096 x 4096 px.
+    further) and all cameras together (perspective_camera sensors too) at most 4096 x 4096 px;
+    the other fixed bounds are listed at the end of this reference.
     """
 
     max_image_pixels: int = knob(

@@ -3,8 +3,10 @@ after the current step (files and videos are then finished); a second one stops 
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import threading
+from collections.abc import Iterator
 from types import FrameType
 from typing import Any
 
@@ -32,6 +34,7 @@ class StopSignals:
 
     def __init__(self) -> None:
         self.signum: int | None = None
+        self.holding = False  # inside hold(): the files are written, signals only noted
         self._previous: dict[int, Any] = {}
 
     def __enter__(self) -> StopSignals:
@@ -46,9 +49,18 @@ class StopSignals:
         self._previous.clear()
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
-        if self.signum is not None:  # asked twice: do not wait for the step to end
+        if self.signum is not None and not self.holding:  # asked twice: do not wait for the step
             raise Interrupted(signum)
-        self.signum = signum
+        self.signum = self.signum or signum
+
+    @contextlib.contextmanager
+    def hold(self) -> Iterator[None]:
+        """A block that signals do not break (the run's files being written): they are noted."""
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
 
     def check(self) -> None:
         """Raise Interrupted if a stop was asked for."""

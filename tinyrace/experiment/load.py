@@ -10,7 +10,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tinyrace.config import TRACK_FILE, EnvConfig, load_env_config, parse_env_config
+from tinyrace.config import (
+    METRIC_KINDS,
+    TRACK_FILE,
+    EnvConfig,
+    LoadedConfig,
+    load_env_config,
+    parse_env_config,
+)
 from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.paths import inside_folder
@@ -65,7 +72,12 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
         kwargs["config"] = str(track_file)
     env_config = parse_env_config(merged, source, prefix="env")
     check_view(config, env_config, source)
-    return Experiment(config, source, env_config, {**kwargs, **sections}, base_dir)
+    env_kwargs = {**kwargs, **sections}
+    if track_path is None and env_config.kind in METRIC_KINDS:
+        # inline metric tracks: their files are read relative to the experiment file, and
+        # problems found when they are read name it
+        env_kwargs = {"config": LoadedConfig(env_config, source, base_dir)}
+    return Experiment(config, source, env_config, env_kwargs, base_dir)
 
 
 _IMAGE_SENSORS = ("birdseye_camera", "perspective_camera")  # their observation is a picture
@@ -139,9 +151,22 @@ def _track_file(value: object, base_dir: Path, source: str) -> Path:
     return path
 
 
+TRACK_FILE_KEYS = ("image", "file", "waypoints")  # the files a track entry names
+
+
+def _check_exists(path: Path, value: str, source: str, where: str) -> None:
+    try:
+        found = path.is_file()
+    except (OSError, ValueError):  # a name the file system cannot hold
+        found = False
+    if not found:
+        allowed = f"expected an existing file, relative to {Path(source).name}: {path} is none"
+        raise ConfigError(Problem(source, where, value, allowed))
+
+
 def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> dict[str, Any]:
-    """Inline track images are relative to the experiment file (and stay in its folder unless
-    ``files.paths_outside_folder``): make them absolute."""
+    """Inline track files (images, CSVs, map YAMLs) are relative to the experiment file (and
+    stay in its folder unless ``files.paths_outside_folder``): make them absolute."""
     files = sections.get("files")
     outside = isinstance(files, Mapping) and files.get("paths_outside_folder") is True
     for key in ("track", "tracks"):
@@ -151,10 +176,13 @@ def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> d
         )
         resolved = []
         for index, entry in enumerate(entries):
-            if isinstance(entry, Mapping) and isinstance(entry.get("image"), str):
-                where = f"env.{key}[{index}].image"
-                image = inside_folder(entry["image"], base_dir, outside, source, where)
-                entry = {**entry, "image": str(image)}
+            for name in TRACK_FILE_KEYS:
+                if isinstance(entry, Mapping) and isinstance(entry.get(name), str):
+                    where = f"env.{key}[{index}].{name}"
+                    found = inside_folder(entry[name], base_dir, outside, source, where)
+                    _check_exists(found, entry[name], source, where)
+                    if name == "image":  # metric files stay relative: see _metric_kwargs
+                        entry = {**entry, name: str(found)}
             resolved.append(entry)
         if entries:
             sections = {**sections, key: resolved[0] if isinstance(tracks, Mapping) else resolved}

@@ -13,11 +13,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import cv2
 import numpy as np
 
-from tinyrace.experiment.record import read_trace
-from tinyrace.experiment.results import EpisodeResult, read_files, summary_rows, table_rows
+from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS, read_image_bgr
+from tinyrace.experiment.results import (
+    EPISODES_FILE,
+    RESULTS_FILE,
+    EpisodeResult,
+    summary_rows,
+    table_rows,
+)
+from tinyrace.experiment.run_folder import check_outputs, read_episodes, read_header, read_trace
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -43,15 +49,30 @@ class Picture:
 
 
 def rebuild_report(run_dir: Path) -> Path:
-    """Rebuild ``report.html`` and its pictures from a run folder's files."""
-    header, results = read_files(run_dir)
-    return write_report(run_dir, header, results)
+    """Rebuild ``report.html`` and its pictures from a run folder's files (checked: a
+    ConfigError names the file, the field and what was expected)."""
+    header = read_header(run_dir)
+    return write_report(run_dir, header, read_episodes(run_dir))
+
+
+def _inputs(header: dict[str, Any], results: Sequence[EpisodeResult]) -> dict[str, str]:
+    """The run files the report reads, each with the file that names it."""
+    names = {RESULTS_FILE: RESULTS_FILE, EPISODES_FILE: EPISODES_FILE}
+    names |= {name: EPISODES_FILE for r in results for name in (r.trace, r.video) if name}
+    tracks = (header.get("tracks") or {}).values()
+    return names | {entry["image"]: RESULTS_FILE for entry in tracks}
 
 
 def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]) -> Path:
-    """Draw the charts, save them as PNG and write report.html; returns its path."""
+    """Draw the charts, save them as PNG and write report.html; returns its path.
+
+    Refused (a ConfigError) when one of the files to write is one the report reads."""
     from tinyrace.experiment import plots
 
+    outputs = [REPORT_FILE, "report_returns.png", "report_lap_times.png"]
+    outputs += ["report_time_series.png"]
+    outputs += [f"report_track_{key}.png" for key in header.get("tracks") or {}]
+    check_outputs(run_dir, outputs, _inputs(header, results))
     unit = _unit(header)
     traces = {r.episode: _trace(run_dir, r) for r in results}
     pictures = _track_pictures(run_dir, header, results, traces)
@@ -133,21 +154,23 @@ def _track_pictures(
     pictures = []
     tracks: dict[str, Any] = header.get("tracks") or {}
     for key, entry in tracks.items():
-        background = cv2.imread(str(run_dir / entry["image"]))
+        background = _background(run_dir, key, entry["image"])
         if background is None:
             continue
+        extent = _extent(entry["frame"], background.shape)
         paths = []
         for result in (r for r in results if r.track == key):
             trace = traces[result.episode]
             if trace is not None:
-                points = np.stack([trace["x"], trace["y"]], axis=-1)
+                points = _near(np.stack([trace["x"], trace["y"]], axis=-1), extent)
                 hits, crashed = trace["obstacle_hit"] > 0, result.end in CRASHES
                 paths.append(
                     plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
                 )
         lap_line = entry.get("lap_line")
+        if lap_line is not None and not np.isfinite(np.asarray(lap_line, np.float64)).all():
+            lap_line = None
         unit = entry.get("unit", "")
-        extent = _extent(entry["frame"], background.shape)
         size = 10.0 if len(tracks) == 1 else 6.5  # [in] wide: two pictures side by side
         figure = plots.trajectories(background[..., ::-1], extent, paths, lap_line, unit, size)
         episodes = ", ".join(p.label.removeprefix("ep ") for p in paths) or "none"
@@ -157,6 +180,26 @@ def _track_pictures(
         name = f"report_track_{key}.png"
         pictures.append(Picture(name, caption, figure, len(tracks) == 1, "Where the car went"))
     return pictures
+
+
+def _background(run_dir: Path, key: str, name: str) -> np.ndarray | None:
+    """A track picture of the run folder (None when missing), read within the pixel cap."""
+    path = run_dir / name
+    if not path.is_file():
+        return None
+    where = f"tracks.{key}.image"
+    return read_image_bgr(path, DEFAULT_MAX_IMAGE_PIXELS, str(run_dir / RESULTS_FILE), where)
+
+
+def _near(points: np.ndarray, extent: tuple[float, float, float, float]) -> np.ndarray:
+    """Points clipped to a band around the picture's extent (hand-edited traces or frames
+    may send them to 1e300); NaN stays NaN (not drawn)."""
+    left, right, bottom, top = extent
+    reach = 100.0 * max(abs(right - left), abs(top - bottom), 1e-9)
+    low = (min(left, right) - reach, min(bottom, top) - reach)
+    high = (max(left, right) + reach, max(bottom, top) + reach)
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.asarray(np.clip(points, low, high), np.float64)
 
 
 def _extent(frame: Sequence[float], shape: tuple[int, ...]) -> tuple[float, float, float, float]:

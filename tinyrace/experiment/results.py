@@ -142,27 +142,3 @@ def write_files(
         writer.writeheader()
         writer.writerows(rows)
     return payload
-
-
-def read_files(run_dir: Path) -> tuple[dict[str, Any], list[EpisodeResult]]:
-    """results.json's header and the episodes of episodes.csv (what ``tinyrace report`` reads)."""
-    header = json.loads((run_dir / RESULTS_FILE).read_text())
-    with (run_dir / EPISODES_FILE).open(newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    return header, [_episode(row) for row in rows]
-
-
-def _episode(row: dict[str, str]) -> EpisodeResult:
-    values: dict[str, Any] = {}
-    for f in fields_of(EpisodeResult):
-        text = row.get(f.name, "")
-        kind = str(f.type)
-        if text == "" and ("None" in kind or f.name == "track"):
-            values[f.name] = None if "None" in kind else ""
-        elif kind.startswith("int"):
-            values[f.name] = int(text)
-        elif kind.startswith("float"):
-            values[f.name] = float(text)
-        else:
-            values[f.name] = text
-    return EpisodeResult(**values)

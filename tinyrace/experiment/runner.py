@@ -103,13 +103,15 @@ class _Run:
                 interrupted = exc.signum
             except BaseException as exc:
                 self.progress.close()
-                self._fail(exc)
+                with stop.hold():
+                    self._fail(exc)
                 raise
             self.progress.close()  # an interrupted episode's bar
-            if interrupted is None:  # a signal after the last step: still say so
-                interrupted = stop.signum
-            self._write(interrupted)
-        return RunResult(self.run_dir, self.results, interrupted)
+            with stop.hold():  # a second Ctrl-C does not cut the files short
+                if interrupted is None:  # a signal after the last step: still say so
+                    interrupted = stop.signum
+                self._write(interrupted)
+        return RunResult(self.run_dir, self.results, interrupted or stop.signum)
 
     def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
         seed = self.config.seed + episode

@@ -17,19 +17,23 @@ arithmetic) and as complex numbers (``PlanePoints``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 from gymnasium import spaces
 
+from tinyrace.config.bounds import MAX_LOOKAHEAD_GRID
 from tinyrace.config.schema import RosMapTrackConfig
 from tinyrace.config.sensors import LookaheadConfig
+from tinyrace.errors import ConfigError, Problem
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
 FINE = 8  # grid points per spacing
+MAX_GRID = MAX_LOOKAHEAD_GRID  # grid points of a reference line (its length / spacing x FINE)
 WINDOW = 16  # grid points searched either side of the previous match (2 spacings)
 REACH = 4  # the observation's x and y saturate at this many times K spacings
 PAIRS = np.dtype((np.float64, (2,)))  # a complex array viewed as (N, 2) real rows
@@ -54,6 +58,17 @@ class ReferenceLine:
         if closed:
             line = np.vstack([line, line[:1]])
         s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+        if not s[-1] / (spacing / FINE) <= MAX_GRID:
+            raise ConfigError(
+                Problem(
+                    "<sensors>",
+                    "lookahead spacing",
+                    spacing,
+                    f"expected a spacing >= {s[-1] * FINE / MAX_GRID:.3g} track units on this "
+                    f"track (a line {s[-1]:.4g} long; at most {MAX_GRID // FINE:,} points of "
+                    "lookahead per lap)",
+                )
+            )
         intervals = max(round(s[-1] / (spacing / FINE)), 2)
         count = intervals if closed else intervals + 1
         grid = np.linspace(0.0, s[-1], count, endpoint=not closed)
@@ -238,7 +253,12 @@ class LookaheadSensor:
         return self.config.id
 
     def reset(self, track: Track) -> None:
-        self._line = line = self._lines.get(track, self._build_line)
+        try:
+            self._line = line = self._lines.get(track, self._build_line)
+        except ConfigError as exc:  # name the sensor
+            problem = exc.problems[0]
+            where = f"sensors[id {self.config.id}].spacing"
+            raise ConfigError(dataclasses.replace(problem, path=where)) from None
         self._index = None
         curvature = np.abs(line.table[:, 2].astype(np.float32)).max(initial=0.0)
         self._curvature_fits = bool(curvature <= self.space.high[0, 2])

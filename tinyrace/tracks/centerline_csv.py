@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_COORDINATE
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import Table, read_table
@@ -45,13 +46,17 @@ def read_loop(path: Path, source: str, key: str, scale: float = 1.0) -> Loop:
     repeats the one before, and a loop that crosses itself.
     """
     table = read_table(path, source, key, tuple(_BY_WIDTH))
+    problems = _check_count(table)
+    if problems:
+        raise ConfigError(problems)
     columns = _columns(table)
     x, y, right, left = columns
     points = table.values[:, [x, y]] * scale
     widths = None
     if right is not None and left is not None:
         widths = table.values[:, [right, left]] * scale
-    problems = _check_count(table) or _check_widths(table, widths, (right, left))
+    problems = _check_size(table, points, widths, scale)
+    problems = problems or _check_widths(table, widths, (right, left))
     problems = problems or _check_repeats(table, points) or _check_crossing(table, points)
     if problems:
         raise ConfigError(problems)
@@ -59,9 +64,12 @@ def read_loop(path: Path, source: str, key: str, scale: float = 1.0) -> Loop:
 
 
 def _columns(table: Table) -> tuple[int, int, int | None, int | None]:
-    """Which columns hold x, y and the widths: by header name, else by row width."""
-    found = {}
+    """Which columns hold x, y and the widths: by header name (a header as wide as the rows),
+    else by row width."""
+    found: dict[str, int | None] = dict.fromkeys(_NAMES)
     for role, names in _NAMES.items():
+        if len(table.header) != table.values.shape[1]:
+            break
         found[role] = next((table.header.index(n) for n in names if n in table.header), None)
     if found["x"] is not None and found["y"] is not None:
         return found["x"], found["y"], found["right"], found["left"]
@@ -72,8 +80,24 @@ def _check_count(table: Table) -> list[Problem]:
     if len(table.values) >= MIN_POINTS:
         return []
     where = table.where(len(table.values) - 1) if len(table.values) else ""
-    allowed = f"expected a closed loop of at least {MIN_POINTS} points"
+    allowed = (
+        f"expected a closed loop of at least {MIN_POINTS} points (rows of numbers separated "
+        "by ',', ';' or tabs)"
+    )
     return [Problem(table.path, where, f"{len(table.values)} points", allowed)]
+
+
+def _check_size(
+    table: Table, points: np.ndarray, widths: np.ndarray | None, scale: float
+) -> list[Problem]:
+    """Coordinates and widths (times ``scale``) within +-MAX_COORDINATE metres."""
+    values = points if widths is None else np.hstack((points, widths))
+    rows = np.flatnonzero(~(np.abs(values) <= MAX_COORDINATE).all(axis=1))
+    allowed = (
+        f"expected coordinates and widths within +-{MAX_COORDINATE:g} m after scale "
+        f"(scale {scale:g})"
+    )
+    return [table.problem(int(r), None, values[r].tolist(), allowed) for r in rows[:5]]
 
 
 def _check_widths(
@@ -102,7 +126,11 @@ def _check_repeats(table: Table, points: np.ndarray) -> list[Problem]:
 
 
 def _check_crossing(table: Table, points: np.ndarray) -> list[Problem]:
-    pair = polyline.self_intersection(points)
+    try:
+        pair = polyline.self_intersection(points)
+    except polyline.TooDense as exc:
+        allowed = f"expected a loop that does not cross itself; it cannot be checked: {exc}"
+        return [Problem(table.path, "", f"{len(points):,} points", allowed)]
     if pair is None:
         return []
     i, j = pair

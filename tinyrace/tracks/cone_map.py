@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_CONE_ROAD_POINTS, MAX_CONES, MAX_COORDINATE
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import read_text
@@ -65,9 +66,17 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
             positions.append(cone[1])
             tags.append(cone[0])
             lines.append(number)
+        if len(positions) > MAX_CONES:
+            allowed = f"expected at most {MAX_CONES:,} cones (tinyrace's bound)"
+            raise ConfigError(Problem(str(path), f"line {number}", f"cone {len(tags):,}", allowed))
     if problems:
         raise ConfigError(problems[:20])
     array = np.array(positions, np.float64).reshape(-1, 2) * scale
+    far = np.flatnonzero(~(np.abs(array) <= MAX_COORDINATE).all(axis=1))
+    if len(far):
+        allowed = f"expected x and y within +-{MAX_COORDINATE:g} m after scale (scale {scale:g})"
+        where = f"line {lines[far[0]]}"
+        raise ConfigError(Problem(str(path), where, array[far[0]].tolist(), allowed))
     return Cones(str(path), array, tuple(tags), tuple(lines))
 
 
@@ -113,6 +122,8 @@ def road_between(cones: Cones, spacing: float, max_gap: float) -> ConeRoad:
     """
     blue = _edge_loop(cones, "blue", max_gap)
     yellow = _edge_loop(cones, "yellow", max_gap)
+    for tag, edge in (("blue", blue), ("yellow", yellow)):
+        _check_edge_length(cones, tag, polyline.perimeter(edge), spacing)
     dense_blue, _ = polyline.resample(blue, spacing / 4)
     dense_yellow, _ = polyline.resample(yellow, spacing / 4)
     guide, _ = polyline.resample(blue, spacing)
@@ -153,6 +164,24 @@ def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
     if closing > max_gap:
         _gap_error(cones, index[order[-1]], tag, closing, max_gap)
     return np.asarray(points[order], float)
+
+
+def _check_edge_length(cones: Cones, tag: str, length: float, spacing: float) -> None:
+    """An edge that goes round a loop at least 3 spacings long, in at most
+    MAX_CONE_ROAD_POINTS spacings (each point is matched against the other edge's)."""
+    if length >= 3 * spacing and length / spacing <= MAX_CONE_ROAD_POINTS:
+        return
+    if length < 3 * spacing:
+        allowed = (
+            f"expected the {tag} cones to go round a loop at least 3 x track.spacing "
+            f"({3 * spacing:g} m) long (these enclose {length:.3g} m)"
+        )
+    else:
+        allowed = (
+            f"expected a track.spacing >= {length / MAX_CONE_ROAD_POINTS:.3g} m for a {tag} "
+            f"edge of {length:.0f} m (at most {MAX_CONE_ROAD_POINTS:,} points along it)"
+        )
+    raise ConfigError(Problem(cones.path, "", f"{tag} edge of {length:.3g} m", allowed))
 
 
 def _start_cones_beside(cones: Cones, tag: str) -> np.ndarray:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_DATA_BYTES, MAX_ROWS
 from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
 
@@ -37,9 +38,6 @@ class Table:
         return Problem(self.path, self.where(row, column, name), value, allowed)
 
 
-MAX_DATA_BYTES = 64 << 20  # [bytes] a track data file (a real circuit's CSV is ~50 kB)
-
-
 def read_text(path: Path, source: str, key: str) -> str:
     """The file's text; a missing, unreadable, oversize or non-regular file (a FIFO, a
     device) is a problem of ``key`` in ``source``, found before the file is read whole."""
@@ -56,10 +54,13 @@ def read_text(path: Path, source: str, key: str) -> str:
 
 
 def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> Table:
-    """Numeric rows of a ``,`` or ``;`` separated file; each row must have one of ``columns``
-    counts of cells. Blank lines and ``#`` comments are skipped; the last comment before the
-    first row is taken as the header."""
+    """Numeric rows of a ``,``, ``;`` or tab separated file; each row must have one of
+    ``columns`` counts of cells. Blank lines and ``#`` comments are skipped; the last comment
+    before the first row is taken as the header. More than ``MAX_ROWS`` rows are refused."""
     text = read_text(path, source, key)
+    fast = _fast_table(text, str(path), columns)
+    if fast is not None:
+        return fast
     rows: list[list[float]] = []
     lines: list[int] = []
     header: tuple[str, ...] = ()
@@ -72,6 +73,15 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
             if not rows:
                 header = _split(line.lstrip("#"))
             continue
+        if len(rows) >= MAX_ROWS:
+            bound = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
+            raise ConfigError(Problem(str(path), f"line {number}", f"row {len(rows) + 1:,}", bound))
+        if rows:  # the common case first: as many finite numbers as the first row
+            row = _fast_numbers(line, len(rows[0]))
+            if row is not None:
+                rows.append(row)
+                lines.append(number)
+                continue
         cells = _split(line)
         if not rows and not lines and _is_header(cells):
             header = cells  # a header line without '#'
@@ -88,8 +98,56 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
     return Table(str(path), values, np.array(lines, int), tuple(h.lower() for h in header))
 
 
+def _fast_table(text: str, path: str, columns: tuple[int, ...]) -> Table | None:
+    """The table of a well-formed file (one separator, rows of one allowed width, finite
+    numbers, at most MAX_ROWS), converted by numpy at once; None: read it row by row."""
+    data: list[str] = []
+    numbers: list[int] = []
+    header: tuple[str, ...] = ()
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line[0] == "#":
+            if not data:
+                header = _split(line.lstrip("#"))
+            continue
+        data.append(line)
+        numbers.append(number)
+        if len(data) > MAX_ROWS + 1:
+            return None
+    if data and _is_header(_split(data[0])):
+        header, data, numbers = _split(data[0]), data[1:], numbers[1:]
+    if not data or len(data) > MAX_ROWS:
+        return None
+    first = data[0]
+    separator = ";" if ";" in first else "," if "," in first or "\t" not in first else "\t"
+    width = first.count(separator) + 1
+    if width not in columns or any(line.count(separator) != width - 1 for line in data):
+        return None
+    try:
+        values = np.array([c for line in data for c in line.split(separator)], np.float64)
+    except ValueError:
+        return None
+    if not np.isfinite(values).all():
+        return None
+    lower = tuple(h.lower() for h in header)
+    return Table(path, values.reshape(len(data), width), np.array(numbers, int), lower)
+
+
+def _fast_numbers(line: str, width: int) -> list[float] | None:
+    """The row's ``width`` finite numbers, or None when the careful reading must say why."""
+    separator = ";" if ";" in line else "," if "," in line or "\t" not in line else "\t"
+    try:
+        values = [float(cell) for cell in line.split(separator)]
+    except ValueError:
+        return None
+    total = sum(values)
+    return values if len(values) == width and total - total == 0 else None
+
+
 def _split(line: str) -> tuple[str, ...]:
-    separator = ";" if ";" in line else ","
+    separator = ";" if ";" in line else "," if "," in line or "\t" not in line else "\t"
     return tuple(cell.strip() for cell in line.split(separator))
 
 

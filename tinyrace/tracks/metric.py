@@ -22,9 +22,11 @@ from tinyrace.config import (
     EnvConfig,
     RosMapTrackConfig,
 )
+from tinyrace.config.bounds import MAX_TRACK_POINTS
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
+from tinyrace.tracks import polyline
 from tinyrace.tracks.base import Surface, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.tracks.centerline_csv import read_loop
 from tinyrace.tracks.circuit import Circuit
@@ -122,6 +124,7 @@ def _centerline(
     widths = loop.widths
     if widths is None:
         widths = np.full((len(loop.points), 2), config.default_width / 2)
+    _check_length(loop.points, config.spacing, source, where, loop.table.path)
     circuit = Circuit.build(loop.points, widths, config.spacing)
     return MetricTrack(
         "centerline",
@@ -137,6 +140,7 @@ def _cone_map(
 ) -> MetricTrack:
     cones = read_cones(base_dir / config.file, source, f"{where}.file", config.scale)
     road = road_between(cones, config.spacing, config.max_cone_gap)
+    _check_length(road.centerline, config.spacing, source, where, cones.path)
     circuit = Circuit.build(road.centerline, road.widths, config.spacing)
     low = cones.positions.min(axis=0) - config.margin
     high = cones.positions.max(axis=0) + config.margin
@@ -162,6 +166,7 @@ def _ros_map(
         if widths is None:  # the free space around each waypoint
             clearance = occupancy.clearance(loop.points)
             widths = np.column_stack((clearance, clearance))
+        _check_length(loop.points, config.spacing, source, where, loop.table.path)
         circuit = Circuit.build(loop.points, widths, config.spacing)
     spawn = _ros_spawn(config, circuit, occupancy, where, source)
     corners = occupancy.to_world(
@@ -178,6 +183,20 @@ def _ros_map(
         walls=occupancy.wall_boxes(),
         occupancy=occupancy,
     )
+
+
+def _check_length(points: np.ndarray, spacing: float, source: str, where: str, path: str) -> None:
+    """A loop at least 3 spacings long, resampled into at most MAX_TRACK_POINTS points."""
+    length = polyline.perimeter(points)  # [m]
+    if length < 3 * spacing:
+        allowed = f"expected a loop at least 3 x {where}.spacing ({3 * spacing:g} m) long"
+        raise ConfigError(Problem(path, "", f"a loop of {length:.3g} m", allowed))
+    if length / spacing > MAX_TRACK_POINTS:
+        allowed = (
+            f"expected a spacing >= {length / MAX_TRACK_POINTS:.3g} m: the {length:.0f} m loop "
+            f"in at most {MAX_TRACK_POINTS:,} points"
+        )
+        raise ConfigError(Problem(source, f"{where}.spacing", spacing, allowed))
 
 
 def _ros_spawn(

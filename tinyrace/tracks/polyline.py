@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from tinyrace.config.bounds import MAX_CROSSING_PAIRS
+
 
 def segment_lengths(loop: np.ndarray) -> np.ndarray:
     """(N,) length of the segment from point i to point i + 1 (the last one closes the loop)."""
@@ -84,32 +86,97 @@ def signed_area(loop: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
-def self_intersection(loop: np.ndarray, chunk: int = 256) -> tuple[int, int] | None:
+class TooDense(ValueError):
+    """A loop whose segments crowd one area so that the crossing check would not end soon."""
+
+
+def self_intersection(loop: np.ndarray) -> tuple[int, int] | None:
     """The first pair (i, j), i < j, of non-adjacent segments that cross, or None.
 
-    Segment i runs from point i to point i + 1. Quadratic in N but vectorised in chunks
-    of ``chunk`` segments against all others, with a bounding-box test first.
+    Segment i runs from point i to point i + 1. A uniform grid of cells about the median
+    segment long: only segments whose bounding boxes share a cell are tested, so a loop of
+    evenly spaced points costs O(N log N). Raises TooDense when more than
+    ``MAX_CROSSING_PAIRS`` pairs share cells (segments piled into one area).
     """
     a, b = loop, np.roll(loop, -1, axis=0)
-    n = len(loop)
     low, high = np.minimum(a, b), np.maximum(a, b)
-    for start in range(0, n, chunk):
-        i = np.arange(start, min(start + chunk, n))[:, None]
-        j = np.arange(n)[None, :]
-        apart = (j > i + 1) & ~((i == 0) & (j == n - 1))  # each pair once, neighbours excluded
-        boxes = (
-            (low[i, 0] <= high[j, 0])
-            & (low[j, 0] <= high[i, 0])
-            & (low[i, 1] <= high[j, 1])
-            & (low[j, 1] <= high[i, 1])
+    first, second = _candidate_pairs(low, high)
+    n = len(loop)
+    apart = (second > first + 1) & ~((first == 0) & (second == n - 1))  # neighbours excluded
+    first, second = first[apart], second[apart]
+    boxes = (
+        (low[first, 0] <= high[second, 0])
+        & (low[second, 0] <= high[first, 0])
+        & (low[first, 1] <= high[second, 1])
+        & (low[second, 1] <= high[first, 1])
+    )
+    first, second = first[boxes], second[boxes]
+    crossing = np.zeros(len(first), bool)
+    for start in range(0, len(first), 1 << 20):  # bounded temporaries
+        part = slice(start, start + (1 << 20))
+        i, j = first[part], second[part]
+        crossing[part] = _crosses(a[i], b[i], a[j], b[j])
+    if not crossing.any():
+        return None
+    order = np.lexsort((second[crossing], first[crossing]))
+    return int(first[crossing][order[0]]), int(second[crossing][order[0]])
+
+
+def _candidate_pairs(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(i, j), i < j, of segments whose bounding boxes may overlap: short segments by the
+    cells of a uniform grid they share, each long one (over 8 cells) against all."""
+    n = len(low)
+    size = high - low
+    extent = float(np.max(high.max(axis=0) - low.min(axis=0)))
+    cell = max(2.0 * float(np.median(np.hypot(*size.T))), extent / n, 1e-300)
+    long = np.flatnonzero(size.max(axis=1) > 8 * cell)
+    if len(long) * n > MAX_CROSSING_PAIRS:
+        raise TooDense(f"{len(long):,} of {n:,} segments are far longer than the others")
+    short = np.setdiff1d(np.arange(n), long, assume_unique=True)
+    first, second = _grid_pairs(low[short], high[short], cell)
+    firsts, seconds = [short[first]], [short[second]]
+    for k in long:  # a long segment's bounding box against every other one
+        hit = np.flatnonzero(
+            (low[:, 0] <= high[k, 0])
+            & (low[k, 0] <= high[:, 0])
+            & (low[:, 1] <= high[k, 1])
+            & (low[k, 1] <= high[:, 1])
         )
-        ii, jj = np.nonzero(apart & boxes)
-        ii = ii + start
-        crossing = _crosses(a[ii], b[ii], a[jj], b[jj])
-        if crossing.any():
-            k = int(np.argmax(crossing))
-            return int(ii[k]), int(jj[k])
-    return None
+        firsts.append(np.minimum(hit, k))
+        seconds.append(np.maximum(hit, k))
+    pairs = np.sort(np.concatenate(firsts) * np.int64(n) + np.concatenate(seconds))
+    pairs = pairs[np.r_[True, pairs[1:] != pairs[:-1]]] if len(pairs) else pairs  # each once
+    return pairs // n, pairs % n
+
+
+def _grid_pairs(low: np.ndarray, high: np.ndarray, cell: float) -> tuple[np.ndarray, np.ndarray]:
+    """(i, j), i < j, indices into ``low``/``high`` of boxes sharing a grid cell."""
+    origin = low.min(axis=0) if len(low) else np.zeros(2)
+    c0 = np.floor((low - origin) / cell).astype(np.int64)
+    c1 = np.floor((high - origin) / cell).astype(np.int64)
+    counts = (c1[:, 0] - c0[:, 0] + 1) * (c1[:, 1] - c0[:, 1] + 1)  # at most 9 x 9 cells
+    owner = np.repeat(np.arange(len(low)), counts)
+    rank = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
+    width = np.repeat(c1[:, 0] - c0[:, 0] + 1, counts)
+    cx = np.repeat(c0[:, 0], counts) + rank % width
+    cy = np.repeat(c0[:, 1], counts) + rank // width
+    key = cx * (int(c1[:, 1].max(initial=0)) + 2) + cy
+    order = np.lexsort((owner, key))
+    key, owner = key[order], owner[order]
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if len(key) else np.zeros(0, int)
+    sizes = np.diff(np.r_[starts, len(key)])
+    if int((sizes * (sizes - 1) // 2).sum()) > MAX_CROSSING_PAIRS:
+        raise TooDense(f"more than {MAX_CROSSING_PAIRS:,} segment pairs crowd the same area")
+    group_end = np.repeat(starts + sizes, sizes)
+    firsts, seconds = [np.zeros(0, int)], [np.zeros(0, int)]
+    at = np.arange(len(key))
+    step = 1
+    while len(at):  # owners are sorted within a cell: the pairs come out with i < j
+        at = at[at + step < group_end[at]]
+        firsts.append(owner[at])
+        seconds.append(owner[at + step])
+        step += 1
+    return np.concatenate(firsts), np.concatenate(seconds)
 
 
 def _crosses(p1: np.ndarray, p2: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray:

@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 import yaml
 
+from tinyrace.config.bounds import MAX_COORDINATE, MIN_MAP_SIDE, RESOLUTION_RANGE
 from tinyrace.config.image_file import read_image_bgr
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
@@ -158,6 +159,12 @@ def read_map(path: Path, source: str, key: str, files: FilesConfig = DEFAULT_FIL
     info = read_info(path, text, files.paths_outside_folder)
     where = _where(text, "image")
     bgr = read_image_bgr(info.image, files.max_image_pixels, str(path), where, str(info.image))
+    if min(bgr.shape[:2]) < MIN_MAP_SIDE:
+        height, width = bgr.shape[:2]
+        allowed = (
+            f"expected a map of at least {MIN_MAP_SIDE} x {MIN_MAP_SIDE} cells ({width} x {height})"
+        )
+        raise ConfigError(Problem(str(path), where, str(info.image), allowed))
     gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)  # equal channels: the grey values unchanged
     occupancy = gray.astype(np.float32) / 255.0
     if not info.negate:
@@ -187,11 +194,14 @@ def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
             if not (path.parent / image).is_file():
                 bad("image", f"expected an existing picture; {path.parent / image} does not exist")
     resolution = data.get("resolution")
-    if not _number(resolution) or resolution <= 0:
-        bad("resolution", "expected a number > 0 [m/px]")
+    low, high = RESOLUTION_RANGE
+    if not _number(resolution) or not low <= resolution <= high:
+        bad("resolution", f"expected a number from {low:g} to {high:g} [m/px]")
     origin = data.get("origin")
     if not (isinstance(origin, list) and len(origin) == 3 and all(map(_number, origin))):
         bad("origin", "expected [x, y, yaw] numbers [m, m, rad]")
+    elif max(abs(origin[0]), abs(origin[1])) > MAX_COORDINATE:
+        bad("origin", f"expected x and y within +-{MAX_COORDINATE:g} m")
     negate = data.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
         bad("negate", "expected 0 or 1")

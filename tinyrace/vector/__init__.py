@@ -57,6 +57,8 @@ from gymnasium.vector.utils import (
     read_from_shared_memory,
 )
 
+from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
+from tinyrace.errors import ConfigError, Problem
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.worker import CLOSED, _Slice, work
@@ -95,10 +97,8 @@ class BatchVectorEnv(VectorEnv):
         numpy_from: int = NUMPY_FROM,
     ):
         env_fns = list(env_fns)
-        if not env_fns:
-            raise ValueError("BatchVectorEnv needs at least one env function")
-        if workers < 0:
-            raise ValueError(f"workers must be >= 0 (0: in this process), got {workers}")
+        _check_count("num_envs", len(env_fns), 1, MAX_ENVS, "(len(env_fns))")
+        _check_count("workers", workers, 0, MAX_WORKERS, "(0: in this process)")
         self.env_fns, self.copy = env_fns, copy
         self.num_envs = len(env_fns)
         self.autoreset_mode = AutoresetMode.NEXT_STEP
@@ -321,6 +321,7 @@ def make_batch(
 ) -> BatchVectorEnv:
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``; ``workers=0``
     steps them all in this process."""
+    _check_count("num_envs", num_envs, 1, MAX_ENVS)
     maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv(
         [maker] * num_envs,
@@ -347,7 +348,17 @@ def make_tinyrace_vec(
 
 def _workers(num_envs: int, workers: int | None) -> int:
     """One worker process per core by default, never more than envs."""
+    _check_count("num_envs", num_envs, 1, MAX_ENVS)
     return workers if workers is not None else max(1, min(num_envs, os.cpu_count() or 1))
+
+
+def _check_count(name: str, value: object, low: int, high: int, note: str = "") -> None:
+    """A whole number from ``low`` to ``high``, else a ConfigError naming the argument."""
+    whole = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if whole and low <= int(value) <= high:  # type: ignore[call-overload]
+        return
+    allowed = f"expected a whole number from {low} to {high} {note}".rstrip()
+    raise ConfigError(Problem("<make_vec arguments>", name, value, allowed))
 
 
 def _make(id: str, kwargs: dict[str, Any]) -> gym.Env:
