@@ -11,8 +11,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from tinyrace.errors import ConfigError, Problem
-from tinyrace.examples import find_example, find_experiment
+from tinyrace.errors import ConfigError, Problem, one_line
+from tinyrace.examples import find_example
 
 if TYPE_CHECKING:
     from tinyrace.experiment import Experiment, RunResult
@@ -96,9 +96,15 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     commands = parser.add_subparsers(dest="command")
     run = commands.add_parser(
-        "run", help="run an experiment file (default: configs/carracing.yaml)"
+        "run",
+        help="run an experiment, or a track with the default driver (default: carracing)",
     )
-    run.add_argument("experiment", nargs="?", help="experiment YAML or a shipped config's name")
+    run.add_argument(
+        "experiment",
+        nargs="?",
+        metavar="NAME_OR_PATH",
+        help="an experiment file, a track folder or track.yaml, or a shipped name",
+    )
     run.add_argument(
         "-o", "--out", help="folder for run folders (overrides output.dir; default: ./runs)"
     )
@@ -170,20 +176,17 @@ def default_experiment() -> Path:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tinyrace.experiment import load_experiment, print_report, run_experiment
+    from tinyrace.experiment import print_report, run_experiment
+    from tinyrace.experiment.target import load_target
 
-    path = find_experiment(args.experiment) if args.experiment else default_experiment()
-    if path.is_dir() or path.name == "track.yaml":
-        raise UsageError(
-            f"argument experiment: {str(path)!r} is a track, not an experiment; name it in an "
-            "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
-        )
-    experiment = _overridden(load_experiment(path), args)
+    experiment, track = load_target(args.experiment or default_experiment(), "NAME_OR_PATH")
+    experiment = _overridden(experiment, args)
     out = _out_folder(args.out, experiment.config.output.dir, args.force)
     config = experiment.config
     if not (args.quiet or args.json):
         what = f"{config.episodes} episodes, driver {config.driver}"
-        print(f"tinyrace: running {experiment.source} ({what})")
+        kind = "the track " if track else ""
+        print(f"tinyrace: running {kind}{experiment.source} ({what})")
     result = run_experiment(experiment, out, show_progress=not args.quiet)
     if args.json:
         print(json.dumps(_json_summary(result), indent=2))
@@ -253,8 +256,7 @@ def _report(args: argparse.Namespace) -> int:
         path = rebuild_report(run_dir)
     except (ValueError, KeyError, TypeError) as exc:  # results.json or episodes.csv edited
         raise UsageError(
-            f"argument run_dir: cannot read the run in {args.run_dir!r} "
-            f"({type(exc).__name__}: {exc})"
+            f"argument run_dir: cannot read the run in {args.run_dir!r} ({one_line(exc)})"
         ) from exc
     print(f"wrote {path}")
     return 0
@@ -312,7 +314,7 @@ def _show(args: argparse.Namespace) -> int:
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        allowed = f"a path whose folder can be made ({type(exc).__name__}: {exc})"
+        allowed = f"a path whose folder can be made ({one_line(exc)})"
         raise ConfigError(Problem("<command line>", "-o/--output", str(output), allowed)) from None
     try:
         written = cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
@@ -350,3 +352,7 @@ def _play_missing() -> str | None:
     ):
         return "a display (no DISPLAY or WAYLAND_DISPLAY is set; run it on a desktop session)"
     return None
+
+
+if __name__ == "__main__":  # python -m tinyrace.cli
+    raise SystemExit(main())

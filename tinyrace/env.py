@@ -105,10 +105,11 @@ class TinyRaceEnv(gym.Env):
         self.action_space = self._actions.space
         self._ground = EpisodeGround(self.pictures)
         context = SensorContext(self.config, self._ground)
-        self.sensors: list[Sensor] = [
-            *_cameras(self.config, context),
-            *build_sensors(context, loaded.source),
-        ]
+        try:
+            sensors = build_sensors(context, loaded.source)
+        except ConfigError as exc:
+            raise ConfigError(loaded.blame(exc.problems)) from None
+        self.sensors: list[Sensor] = [*_cameras(self.config, context), *sensors]
         box = self.config.observation == "box" and len(self.sensors) == 1
         self._box_camera = self.sensors[0].id if box else None
         self.observation_space = self._observation_space()
