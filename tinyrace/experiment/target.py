@@ -11,7 +11,7 @@ track.yaml, a run folder) is a ConfigError saying what it is and what was expect
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from tinyrace.config import TRACK_FILE
@@ -41,9 +41,9 @@ def load_target(value: str | Path, key: str = "experiment") -> tuple[Experiment,
             raise ConfigError(Problem(COMMAND_LINE, key, str(value), not_runnable(path)))
         return track_experiment(track_file), True
     raw = read_yaml(path)  # a missing or unreadable file: its own message
-    if raw is None or is_experiment(raw):
-        return experiment_from_dict(raw if raw is not None else {}, str(path), path.parent), False
-    return track_experiment(path), True
+    if isinstance(raw, Mapping) and raw and not is_experiment(raw):
+        return track_experiment(path), True  # track sections: a track.yaml or env config
+    return experiment_from_dict(raw if raw is not None else {}, str(path), path.parent), False
 
 
 def track_experiment(track_file: Path) -> Experiment:
