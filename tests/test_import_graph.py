@@ -26,7 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rewards",),
     ("episodes",),
     ("env", "carracing"),
-    ("drivers", "experiment", "vector", "validate", "play", "cli", "__main__", "__init__"),
+    ("drivers", "experiment", "vector", "validate", "play", "train", "cli", "__main__", "__init__"),
 )
 
 
