@@ -100,6 +100,17 @@ def blame(problems: list[Problem], source: str, overrides: Overrides) -> list[Pr
 _SINGULAR = {"tracks": "track", "cameras": "camera", "sensors": "sensor"}  # key aliases
 
 
+def _spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[str, Any]:
+    """``overrides`` with a section named as the file names it (``track=`` over a file's
+    ``tracks:`` replaces it, rather than being the same key given twice)."""
+    renamed = dict(overrides)
+    for plural, singular in _SINGULAR.items():
+        for given, written in ((plural, singular), (singular, plural)):
+            if given in renamed and written in raw and written not in renamed:
+                renamed[written] = renamed.pop(given)
+    return renamed
+
+
 def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
     """Whether the value at ``path`` (``cameras[0].roi``) came from ``keys``: mappings merge
     key by key, anything else an override gives replaces the file's value whole."""
@@ -141,7 +152,7 @@ def load_env_config(
         )
     raw, source, base_dir = _read_source(cast(_Source, config), environment)
     if laid.keys:
-        raw = deep_merge(raw, laid.keys)
+        raw = deep_merge(raw, _spelled_as(laid.keys, raw))
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
     try:
