@@ -198,3 +198,10 @@ def test_command_line_names_get_a_did_you_mean(tmp_path, monkeypatch, capsys, ar
     monkeypatch.chdir(tmp_path)
     assert cli.main(argv) == 2
     assert f"did you mean '{meant}'?" in capsys.readouterr().err
+
+
+def test_reset_options_get_a_did_you_mean():
+    env = gym.make("tinyrace/TinyRace-v0")
+    with pytest.raises(ConfigError, match="did you mean 'spawn'"):
+        env.reset(seed=0, options={"spwan": 0})
+    env.close()

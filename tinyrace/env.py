@@ -17,7 +17,7 @@ from tinyrace.episodes.image import ImageEpisode
 from tinyrace.episodes.metric import MetricEpisode
 from tinyrace.episodes.procedural import ProceduralEpisode
 from tinyrace.episodes.setup import prepare
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
 from tinyrace.render.setup import make_pictures
@@ -336,7 +336,8 @@ def _check_options(options: object, kind: str) -> dict[str, Any]:
         raise ConfigError(Problem(RESET_SOURCE, "", options, "expected a dict or None"))
     for key, value in options.items():
         if key not in RESET_OPTIONS:
-            allowed = f"unknown option; valid: {', '.join(RESET_OPTIONS)}"
+            hint = did_you_mean(key, RESET_OPTIONS)
+            allowed = f"unknown option; {hint}valid: {', '.join(RESET_OPTIONS)}"
             raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
         if key == "randomize" and not isinstance(value, (bool, np.bool_)):
             raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
