@@ -66,7 +66,7 @@ def test_an_experiments_env_trains_with_its_own_policy(here: Path, name: str):
 
 def test_python_dash_m_tinyrace_train_is_the_command(here: Path):
     done = subprocess.run(
-        [sys.executable, "-m", "tinyrace.train", "--timesteps", "0"],
+        [sys.executable, "-m", "tinyrace", "train", "--timesteps", "0"],
         capture_output=True,
         text=True,
         timeout=120,

@@ -7,7 +7,7 @@ it. Pixels are stacked four frames deep; the policy fits the observation: a CNN 
 image, one network per key for a dict of observations, an MLP for a vector::
 
     tinyrace train --timesteps 200000 --envs 4            # saves ppo_carracing.zip
-    python -m tinyrace.train formula_student --timesteps 100000 --out fs.zip
+    python -m tinyrace train formula_student --timesteps 100000 --out fs.zip
 
 It prints the mean return of a few deterministic evaluation episodes at the end.
 """
@@ -15,7 +15,6 @@ It prints the mean return of a few deterministic evaluation episodes at the end.
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
@@ -167,14 +166,3 @@ def evaluate(model: BaseAlgorithm, env: TrainEnv, episodes: int, seed: int) -> t
         vec.close()
     mean, std = cast(tuple[float, float], result)  # not the per-episode lists: not asked for
     return float(mean), float(std)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m tinyrace.train ARGS``: the same as ``tinyrace train ARGS``."""
-    from tinyrace.cli import main as cli
-
-    return cli(["train", *(sys.argv[1:] if argv is None else argv)])
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -174,7 +175,7 @@ def _read_source(
             raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
         folder = find_track(environment)  # a path that exists wins over a shipped track's name
         config = folder / TRACK_FILE
-        if not _safely(config.is_file):
+        if not _safely(lambda: os.path.lexists(config)):  # a FIFO or a folder: read_yaml says
             raise ConfigError(Problem(KWARGS, "environment", str(environment), _no_track(folder)))
     if config is None:
         return {}, DEFAULTS, Path.cwd()
