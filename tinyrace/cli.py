@@ -169,36 +169,13 @@ def _examples_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
 
 
 def _train_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
+    from tinyrace.train import add_arguments
+
     train = commands.add_parser(
         "train",
         help='train PPO (Stable-Baselines3) on an env; needs pip install "tinyrace[train]"',
     )
-    train.add_argument(
-        "target",
-        nargs="?",
-        metavar="NAME_OR_PATH",
-        help="an experiment or track, as run takes it (default: CarRacing-v0's pixels)",
-    )
-    train.add_argument(
-        "--timesteps", type=_count(1, "a whole number >= 1"), default=200_000, help="env steps"
-    )
-    train.add_argument(
-        "--envs", type=_count(1, "a whole number >= 1"), default=4, help="envs, one process each"
-    )
-    train.add_argument("--seed", type=_count(0, "a whole number >= 0"), default=0)
-    train.add_argument("--out", help="model file (default: ppo_<name>.zip in this folder)")
-    train.add_argument(
-        "--eval-episodes",
-        type=_count(1, "a whole number >= 1"),
-        default=3,
-        help="deterministic episodes whose mean return is printed at the end",
-    )
-    train.add_argument(
-        "--max-episode-steps",
-        type=_count(1, "a whole number >= 1"),
-        help="end every episode after this many steps (training and evaluation)",
-    )
-    train.add_argument("--force", action="store_true", help="replace an existing model file")
+    add_arguments(train, _count)
     train.set_defaults(handler=_train)
 
 
@@ -282,7 +259,7 @@ def _train(args: argparse.Namespace) -> int:
     from tinyrace import train
 
     env = train.train_env(args.target, args.max_episode_steps)  # its problems before the import
-    out = _model_file(args.out or f"ppo_{env.name}.zip", args.force)
+    out = train.model_file(args.out or f"ppo_{env.name}.zip", args.force)
     lacking = train.missing()
     if lacking:
         print(f"tinyrace: error: {lacking}", file=sys.stderr)
@@ -295,19 +272,6 @@ def _train(args: argparse.Namespace) -> int:
     episodes = f"{args.eval_episodes} episode{'s' if args.eval_episodes > 1 else ''}"
     print(f"evaluation: mean return {mean:.1f} ± {std:.1f} over {episodes} (deterministic)")
     return 0
-
-
-def _model_file(name: str, force: bool) -> Path:
-    """``--out`` checked before training: a .zip file path, not an existing file unless
-    ``force`` (SB3 would add .zip to any other name)."""
-    path = Path(name)
-    if path.suffix != ".zip":
-        raise UsageError(f"argument --out: {name!r}; expected a file name ending in .zip")
-    if path.is_dir() or (path.exists() and not force):
-        raise UsageError(
-            f"argument --out: {name!r} exists; expected a new file name (or --force to replace it)"
-        )
-    return path
 
 
 # -- report ------------------------------------------------------------------------------------

@@ -14,13 +14,17 @@ It prints the mean return of a few deterministic evaluation episodes at the end.
 
 from __future__ import annotations
 
+import argparse
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 from gymnasium import spaces
+
+from tinyrace.errors import ConfigError, Problem
 
 if TYPE_CHECKING:
     from stable_baselines3.common.base_class import BaseAlgorithm
@@ -41,6 +45,54 @@ class TrainEnv:
     env_id: str
     kwargs: dict[str, Any] = field(default_factory=dict)
     name: str = "carracing"  # the default model file is ppo_<name>.zip
+
+
+def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], Any]) -> None:
+    """``tinyrace train``'s arguments; ``count(low, what)`` parses a whole number >= low."""
+    parser.add_argument(
+        "target",
+        nargs="?",
+        metavar="NAME_OR_PATH",
+        help="an experiment or track, as run takes it (default: CarRacing-v0's pixels)",
+    )
+    whole, positive = count(0, "a whole number >= 0"), count(1, "a whole number >= 1")
+    parser.add_argument("--timesteps", type=positive, default=200_000, help="env steps")
+    parser.add_argument("--envs", type=positive, default=4, help="envs, one process each")
+    parser.add_argument(
+        "--seed",
+        type=whole,
+        default=0,
+        help="seeds the envs (env i: seed + i) and the network; evaluation from seed + 1000",
+    )
+    parser.add_argument("--out", help="model file (default: ppo_<name>.zip in this folder)")
+    parser.add_argument(
+        "--eval-episodes",
+        type=positive,
+        default=3,
+        help="deterministic episodes whose mean return is printed at the end",
+    )
+    parser.add_argument(
+        "--max-episode-steps",
+        type=positive,
+        help="end every episode after this many steps (training and evaluation)",
+    )
+    parser.add_argument("--force", action="store_true", help="replace an existing model file")
+
+
+def model_file(name: str, force: bool) -> Path:
+    """``--out`` checked before training: a .zip file path (SB3 adds .zip to any other
+    name), not a folder, and not an existing file unless ``force``."""
+    path = Path(name)
+    allowed = None
+    if path.suffix != ".zip":
+        allowed = "expected a file name ending in .zip"
+    elif path.is_dir():
+        allowed = "expected a .zip file name, not a folder"
+    elif path.exists() and not force:
+        allowed = "expected a new file name: this one exists (or --force to replace it)"
+    if allowed is not None:
+        raise ConfigError(Problem("<command line>", "--out", name, allowed))
+    return path
 
 
 def missing() -> str | None:
