@@ -7,6 +7,7 @@ collected by the main test run (testpaths is ``tests``), so that run needs no to
 from __future__ import annotations
 
 import math
+import os
 import re
 import subprocess
 import sys
@@ -16,6 +17,7 @@ import numpy as np
 import pytest
 import torch
 from stable_baselines3 import PPO
+from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 
 from tinyrace import cli, train
 
@@ -38,7 +40,7 @@ def test_tinyrace_train_saves_a_model_and_prints_its_evaluation(here: Path, caps
     assert found and math.isfinite(float(found[1])) and float(found[2]) == 0.0, out
     model = PPO.load(here / "model.zip")
     assert model.num_timesteps >= 256
-    assert model.observation_space.shape == (96, 96, 12)  # four frames of CarRacing's pixels
+    assert model.observation_space.shape == (12, 96, 96)  # 4 frames, channels first in SB3
     observation = np.zeros((1, 96, 96, 12), np.uint8)
     action, _ = model.predict(observation, deterministic=True)
     assert model.action_space.contains(action[0].astype(np.float32))
@@ -59,7 +61,7 @@ def test_an_experiments_env_trains_with_its_own_policy(here: Path, name: str):
     """A camera dict (formula_student) and sensors with a nested dict (cones) both train."""
     env = train.train_env(name, max_episode_steps=20)
     model = train.train(env, 32, envs=1, subprocesses=False)
-    assert type(model.policy).__name__ == "MultiInputPolicy"
+    assert isinstance(model.policy, MultiInputActorCriticPolicy)  # one network per key
     mean, std = train.evaluate(model, env, episodes=1, seed=0)
     assert math.isfinite(mean) and std == 0.0
 
@@ -67,6 +69,7 @@ def test_an_experiments_env_trains_with_its_own_policy(here: Path, name: str):
 def test_python_dash_m_tinyrace_train_is_the_command(here: Path):
     done = subprocess.run(
         [sys.executable, "-m", "tinyrace", "train", "--timesteps", "0"],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},  # this checkout's tinyrace
         capture_output=True,
         text=True,
         timeout=120,
