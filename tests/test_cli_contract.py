@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from tinyrace import cli
-from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
+from tinyrace.examples import CONFIGS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 CAROLO = str(CONFIGS_DIR / "carolo_cup.yaml")
@@ -152,8 +152,7 @@ def test_run_folders_go_to_the_current_folder(tmp_path: Path, monkeypatch):
     assert not (CONFIGS_DIR / "runs").exists() and not (CONFIGS_DIR.parent / "runs").exists()
 
 
-def test_a_track_is_not_an_experiment(capsys):
-    track = TRACKS_DIR / "segmented"
-    for path in (track, track / "track.yaml"):
-        assert cli.main(["run", str(path)]) == 2
-        one_error_line(capsys, "argument experiment", "is a track", "env.environment")
+def test_a_folder_that_is_no_track_is_not_run(tmp_path: Path, capsys):
+    """Tracks run with the default driver (tests/test_run_targets.py); other folders don't."""
+    assert cli.main(["run", str(tmp_path)]) == 2
+    one_error_line(capsys, "NAME_OR_PATH", "holds no track.yaml", "expected an experiment file")

@@ -79,8 +79,6 @@ def bad_obstacle_reward(tmp_path):
 # (make the folder, the key path, the value as shown, words of what is allowed)
 # (the YAML file is named in every message, also when it or its folder is missing)
 CASES = {
-    "missing folder": (missing_folder, "environment", "'{folder}'", "track folder holding"),
-    "missing track.yaml": (missing_yaml, "environment", "'{folder}'", "does not exist"),
     "missing image": (missing_image, "tracks[0].image", "'gone.png'", "does not exist"),
     "unreadable image": (garbage_image, "tracks[0].image", "'bad.png'", "PNG or JPEG"),
     "unknown key": (unknown_key, "car.wheelbse", "150", "did you mean 'wheelbase'?"),
@@ -109,6 +107,23 @@ CASES = {
         "a number or one of: done",
     ),
 }
+
+
+@pytest.mark.parametrize(
+    ("make", "allowed"),
+    [
+        (missing_folder, "expected a track folder holding track.yaml or a shipped track"),
+        (missing_yaml, "expected a track folder holding track.yaml; this folder holds no"),
+    ],
+)
+def test_a_missing_track_folder_names_the_keyword_argument(tmp_path, make, allowed):
+    """No track.yaml was read: the problem is the ``environment=`` argument itself."""
+    folder = make(tmp_path)
+    with pytest.raises(ConfigError) as caught:
+        make_env(folder)
+    (problem,) = caught.value.problems
+    assert (problem.source, problem.path, problem.value) == ("<kwargs>", "environment", str(folder))
+    assert problem.allowed.startswith(allowed), problem.allowed
 
 
 @pytest.mark.parametrize("case", CASES)

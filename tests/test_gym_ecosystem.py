@@ -138,9 +138,12 @@ def test_the_module_prefixed_id_registers_tinyrace_in_a_fresh_process():
 def test_readme_trains_with_the_train_extra_and_ci_runs_its_test():
     readme = (ROOT / "README.md").read_text()
     section = readme.split("## Train an agent", 1)[1].split("\n## ", 1)[0]
-    assert 'pip install -e ".[train]"' in section
+    assert 'pip install "tinyrace[train]"' in section and "tinyrace train --timesteps" in section
     assert '"tinyrace:tinyrace/CarRacing-v0"' in section and "PPOConfig" in section
-    assert (ROOT / "examples" / "train_ppo.py").is_file()
+    sb3 = next(b for b in section.split("```python")[1:] if "stable_baselines3" in b)
+    assert '\nif __name__ == "__main__":\n    envs = ' in sb3  # SubprocVecEnv under the guard
     ci = (ROOT / ".ci" / "run").read_text()
     main_tests = ci.index('pip install -e ".[test]" && python -m pytest -q')
-    assert main_tests < ci.index("torch==") < ci.index('".[train]"') < ci.index("tests_train")
+    train_stage = ci.index("torch==")
+    assert main_tests < train_stage < ci.index('".[train]"') < ci.index("tests_train")
+    assert ci.index("tinyrace train --timesteps") > train_stage  # the command, as installed

@@ -26,7 +26,18 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rewards",),
     ("episodes",),
     ("env", "carracing"),
-    ("drivers", "experiment", "vector", "race", "validate", "play", "cli", "__main__", "__init__"),
+    (
+        "drivers",
+        "experiment",
+        "vector",
+        "race",
+        "validate",
+        "play",
+        "train",
+        "cli",
+        "__main__",
+        "__init__",
+    ),
 )
 
 

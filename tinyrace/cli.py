@@ -11,8 +11,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from tinyrace.errors import ConfigError, Problem
-from tinyrace.examples import find_example, find_experiment
+from tinyrace.errors import ConfigError, Problem, one_line
+from tinyrace.examples import find_example
 
 if TYPE_CHECKING:
     from tinyrace.experiment import Experiment, RunResult
@@ -102,9 +102,15 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     commands = parser.add_subparsers(dest="command")
     run = commands.add_parser(
-        "run", help="run an experiment file (default: configs/carracing.yaml)"
+        "run",
+        help="run an experiment, or a track with the default driver (default: carracing)",
     )
-    run.add_argument("experiment", nargs="?", help="experiment YAML or a shipped config's name")
+    run.add_argument(
+        "experiment",
+        nargs="?",
+        metavar="NAME_OR_PATH",
+        help="an experiment file, a track folder or track.yaml, or a shipped name",
+    )
     run.add_argument(
         "-o", "--out", help="folder for run folders (overrides output.dir; default: ./runs)"
     )
@@ -156,6 +162,7 @@ def _parser() -> argparse.ArgumentParser:
     play.set_defaults(handler=_play)
     _examples_parser(commands)
     _cache_parser(commands)
+    _train_parser(commands)
     for command in commands.choices.values():  # also after the command: tinyrace run --debug
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS)
     return parser
@@ -185,6 +192,17 @@ def _cache_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
     cache.set_defaults(handler=_cache)
 
 
+def _train_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
+    from tinyrace.train import add_arguments
+
+    train = commands.add_parser(
+        "train",
+        help='train PPO (Stable-Baselines3) on an env; needs pip install "tinyrace[train]"',
+    )
+    add_arguments(train, _count)
+    train.set_defaults(handler=_train)
+
+
 # -- run ---------------------------------------------------------------------------------------
 def default_experiment() -> Path:
     """The shipped CarRacing experiment (package data, found from any folder)."""
@@ -194,20 +212,17 @@ def default_experiment() -> Path:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from tinyrace.experiment import load_experiment, print_report, run_experiment
+    from tinyrace.experiment import print_report, run_experiment
+    from tinyrace.experiment.target import load_target
 
-    path = find_experiment(args.experiment) if args.experiment else default_experiment()
-    if path.is_dir() or path.name == "track.yaml":
-        raise UsageError(
-            f"argument experiment: {str(path)!r} is a track, not an experiment; name it in an "
-            "experiment file's env.environment (tinyrace examples copy formula_student shows one)"
-        )
-    experiment = _overridden(load_experiment(path), args)
+    experiment, track = load_target(args.experiment or default_experiment(), "NAME_OR_PATH")
+    experiment = _overridden(experiment, args)
     out = _out_folder(args.out, experiment.config.output.dir, args.force)
     config = experiment.config
     if not (args.quiet or args.json):
         what = f"{config.episodes} episodes, driver {config.driver}"
-        print(f"tinyrace: running {experiment.source} ({what})")
+        kind = "the track " if track else ""
+        print(f"tinyrace: running {kind}{experiment.source} ({what})")
     result = run_experiment(experiment, out, show_progress=not args.quiet)
     if args.json:
         print(json.dumps(_json_summary(result), indent=2))
@@ -275,6 +290,26 @@ def _json_summary(result: RunResult) -> dict[str, Any]:
     }
 
 
+# -- train -------------------------------------------------------------------------------------
+def _train(args: argparse.Namespace) -> int:
+    from tinyrace import train
+
+    env = train.train_env(args.target, args.max_episode_steps)  # its problems before the import
+    out = train.model_file(args.out or f"ppo_{env.name}.zip", args.force)
+    lacking = train.missing()
+    if lacking:
+        print(f"tinyrace: error: {lacking}", file=sys.stderr)
+        return 2
+    print(f"tinyrace: training PPO on {env.name} for {args.timesteps} steps, {args.envs} env(s)")
+    model = train.train(env, args.timesteps, args.envs, args.seed)
+    model.save(out)
+    print(f"saved {out}")
+    mean, std = train.evaluate(model, env, args.eval_episodes, seed=args.seed + 1000)
+    episodes = f"{args.eval_episodes} episode{'s' if args.eval_episodes > 1 else ''}"
+    print(f"evaluation: mean return {mean:.1f} ± {std:.1f} over {episodes} (deterministic)")
+    return 0
+
+
 # -- report ------------------------------------------------------------------------------------
 def _report(args: argparse.Namespace) -> int:
     from tinyrace.experiment import rebuild_report
@@ -291,8 +326,7 @@ def _report(args: argparse.Namespace) -> int:
         raise
     except (ValueError, KeyError, TypeError) as exc:  # results.json or episodes.csv edited
         raise UsageError(
-            f"argument run_dir: cannot read the run in {args.run_dir!r} "
-            f"({type(exc).__name__}: {exc})"
+            f"argument run_dir: cannot read the run in {args.run_dir!r} ({one_line(exc)})"
         ) from exc
     print(f"wrote {path}")
     return 0

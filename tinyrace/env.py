@@ -15,7 +15,7 @@ from gymnasium.error import ResetNeeded
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.episode import Episode
 from tinyrace.episodes.setup import prepare
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
 from tinyrace.render.setup import make_pictures
@@ -112,6 +112,7 @@ class TinyRaceEnv(gym.Env):
         self.car_facts = parts.car_model.describe(self.config)
         self._sensor_context = SensorContext(self.config, self._ground, self.car_facts)
         self._config_source = loaded.source
+        self._blame = loaded.blame
         self.sensors: list[Sensor] = self.make_sensors()
         box = self.config.observation == "box" and len(self.sensors) == 1
         self.box_camera = self.sensors[0].id if box else None
@@ -130,7 +131,11 @@ class TinyRaceEnv(gym.Env):
     def make_sensors(self) -> list[Sensor]:
         """The config's cameras and sensors, built anew (one set per car that observes)."""
         context = self._sensor_context
-        return [*_cameras(self.config, context), *build_sensors(context, self._config_source)]
+        try:
+            sensors = build_sensors(context, self._config_source)
+        except ConfigError as exc:
+            raise ConfigError(self._blame(exc.problems)) from None
+        return [*_cameras(self.config, context), *sensors]
 
     def _observation_space(self) -> spaces.Space[Any]:
         if not self.sensors:
@@ -361,7 +366,8 @@ def _check_options(options: object, kind: str) -> dict[str, Any]:
         raise ConfigError(Problem(RESET_SOURCE, "", options, "expected a dict or None"))
     for key, value in options.items():
         if key not in RESET_OPTIONS:
-            allowed = f"unknown option; valid: {', '.join(RESET_OPTIONS)}"
+            hint = did_you_mean(key, RESET_OPTIONS)
+            allowed = f"unknown option; {hint}valid: {', '.join(RESET_OPTIONS)}"
             raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
         if key == "randomize" and not isinstance(value, (bool, np.bool_)):
             raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import difflib
 import reprlib
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 
@@ -35,6 +37,29 @@ def _show(value: object) -> str:
     except Exception:  # a user object whose repr fails
         text = f"<{type(value).__name__}>"
     return text if len(text) <= 80 else text[:38] + "..." + text[-39:]  # both ends of a path
+
+
+def did_you_mean(value: object, names: Iterable[str], cutoff: float = 0.6) -> str:
+    """``"did you mean 'x'? "`` when ``value`` is a close misspelling of one of ``names``, else
+    ``""``: put before the list of valid names in a message."""
+    if not isinstance(value, str):
+        return ""
+    close = difflib.get_close_matches(value, list(names), n=1, cutoff=cutoff)
+    return f"did you mean {close[0]!r}? " if close and close[0] != value else ""
+
+
+def one_of(value: object, names: Iterable[str], what: str = "one of") -> str:
+    """What a name lookup allows: the closest name first (if any), then every valid name."""
+    listed = sorted(set(names))
+    return f"{did_you_mean(value, listed)}expected {what}: {', '.join(listed)}"
+
+
+def one_line(exc: BaseException) -> str:
+    """An exception as one line, to quote inside another message: a ConfigError's problems
+    joined by '; ' (not its multi-line text), anything else ``Type: text`` on one line."""
+    if isinstance(exc, ConfigError):
+        return "; ".join(str(p) for p in exc.problems)
+    return " ".join(f"{type(exc).__name__}: {exc}".split())
 
 
 class ConfigError(ValueError):

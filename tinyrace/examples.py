@@ -1,9 +1,10 @@
 """The example tracks and experiment configs shipped with the package, found by bare name.
 
-A value that names an existing file or folder is always that path; otherwise a bare
-name (``formula_student``) stands for the shipped track folder or experiment file of
-that name, from any working folder. An unknown name raises a ConfigError that lists
-the known names.
+A value that names an existing file or folder is always that path (a bare name ``NAME``
+first as ``NAME.yaml`` in the working folder, as ``tinyrace examples copy`` leaves it);
+otherwise a bare name (``formula_student``) stands for the shipped track folder or
+experiment file of that name, from any working folder. An unknown name raises a
+ConfigError that lists the known names, the closest first.
 
 Their one copy is the repository's top-level ``example_tracks/`` and ``configs/``
 folders. pyproject.toml's ``package-dir`` maps them to the packages
@@ -17,7 +18,7 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, did_you_mean, one_of
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -83,9 +84,10 @@ def shipped_track(name: object, source: str = "<kwargs>", key: str = "environmen
     """The shipped track folder called ``name``; ConfigError listing the known tracks if none."""
     if is_bare_name(name) and name in track_names():
         return TRACKS_DIR / str(name)
+    names = track_names()
     allowed = (
-        f"expected a track folder holding {TRACK_FILE} "
-        f"or a shipped track: {', '.join(track_names())}"
+        f"{did_you_mean(name, names)}expected a track folder holding {TRACK_FILE} "
+        f"or a shipped track: {', '.join(names)}"
     )
     raise ConfigError(Problem(source, key, str(name), allowed))
 
@@ -99,29 +101,41 @@ def find_track(value: str | Path) -> Path:
 
 def find_experiment(value: str | Path, key: str = "experiment") -> Path:
     """An experiment file as given if it exists, else the shipped config of that name."""
-    path = Path(value)
+    path = local_path(value)
     if _exists(path) or not is_bare_name(str(value)):
         return path  # the loader reports a missing file in its own words
     if str(value) in config_names():
         return CONFIGS_DIR / f"{value}{CONFIG_SUFFIX}"
-    allowed = f"expected a YAML file or a shipped config: {', '.join(config_names())}"
+    allowed = one_of(value, config_names(), "a YAML file or a shipped config")
     raise ConfigError(Problem("<command line>", key, str(value), allowed))
 
 
 def find_example(value: str | Path, key: str = "path") -> Path:
-    """For validate/show/play: a path if it exists, else a shipped config, else a shipped track."""
-    path = Path(value)
+    """For run/validate/show/play: a path if it exists (``NAME.yaml`` here first), else a
+    shipped config, else a shipped track."""
+    path = local_path(value)
     if _exists(path) or not is_bare_name(str(value)):
         return path
     if str(value) in config_names():
         return CONFIGS_DIR / f"{value}{CONFIG_SUFFIX}"
     if str(value) in track_names():
         return TRACKS_DIR / str(value)
+    hint = did_you_mean(value, [*config_names(), *track_names()])
     allowed = (
-        f"expected a path, a shipped config ({', '.join(config_names())}) "
+        f"{hint}expected a path, a shipped config ({', '.join(config_names())}) "
         f"or a shipped track ({', '.join(track_names())})"
     )
     raise ConfigError(Problem("<command line>", key, str(value), allowed))
+
+
+def local_path(value: str | Path) -> Path:
+    """``value`` as a path; a bare ``NAME`` is ``NAME.yaml`` when that file is here (a copied
+    experiment, which runs its copied track folder ``NAME`` beside it)."""
+    if is_bare_name(str(value)):
+        named = Path(f"{value}{CONFIG_SUFFIX}")
+        if _is_file(named):
+            return named
+    return Path(value)
 
 
 def copy_example(name: str, folder: Path) -> list[Path]:
@@ -132,10 +146,8 @@ def copy_example(name: str, folder: Path) -> list[Path]:
     """
     chosen = [e for e in examples() if e.name == name]
     if not chosen:
-        names = sorted({e.name for e in examples()})
-        raise ConfigError(
-            Problem("<command line>", "name", name, f"expected one of: {', '.join(names)}")
-        )
+        allowed = one_of(name, {e.name for e in examples()})
+        raise ConfigError(Problem("<command line>", "name", name, allowed))
     if _exists(folder) and not folder.is_dir():
         allowed = "a folder (or a path that does not exist yet), not a file"
         raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed))
@@ -155,6 +167,13 @@ def copy_example(name: str, folder: Path) -> list[Path]:
         allowed = f"a folder that can be written ({type(exc).__name__}: {exc})"
         raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed)) from None
     return [target for _, target in targets]
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except (OSError, ValueError):  # a name the OS refuses (too long, NUL byte)
+        return False
 
 
 def _exists(path: Path) -> bool:

@@ -22,15 +22,15 @@ COMMAND_LINE = "<command line>"  # the source named by errors in command-line ar
 def load_any(path: Path) -> LoadedConfig:
     """The env config behind a track folder, a track.yaml or an experiment file."""
     from tinyrace.experiment import is_experiment, load_experiment
+    from tinyrace.experiment.target import not_runnable
 
     if path.is_dir():
+        if not (path / TRACK_FILE).is_file():  # say what the folder is instead
+            raise ConfigError(Problem(COMMAND_LINE, "path", str(path), not_runnable(path)))
         return load_env_config(environment=path)
     raw = read_yaml(path)
     if is_experiment(raw):
-        experiment = load_experiment(path)
-        kwargs = dict(experiment.env_kwargs)
-        config = kwargs.pop("config", None)
-        return load_env_config(config=config, overrides=kwargs)
+        return load_experiment(path).loaded  # named in the experiment or its track file
     return load_env_config(config=path)
 
 
@@ -170,7 +170,7 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     try:
         _check_output(output, inputs, force)
     except ConfigError:
-        raise
+        raise  # its own message, never quoted inside another
     except (OSError, ValueError) as exc:  # a name too long, a NUL byte, no permission
         allowed = f"a path the system can write ({system_reason(exc)})"
         raise ConfigError(Problem(COMMAND_LINE, "-o/--output", str(output), allowed)) from None

@@ -29,7 +29,7 @@ from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.single_track import SingleTrackCar
 from tinyrace.cars.state import CarFacts
 from tinyrace.config import METRIC_KINDS, CarConfig, EnvConfig
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.tracks.base import Track
 
 CarBuilder = Callable[[pymunk.Space, Pose, CarConfig, Track], Car]
@@ -248,8 +248,7 @@ def car_model_problems(config: EnvConfig, source: str) -> list[Problem]:
         return [Problem(source, "car.model", config.car.model, allowed)]
     model = CAR_MODELS.get(name)
     if model is None:
-        allowed = f"expected one of: {', '.join(sorted(CAR_MODELS))}"
-        return [Problem(source, "car.model", name, allowed)]
+        return [Problem(source, "car.model", name, one_of(name, CAR_MODELS))]
     problems = []
     if kind not in model.track_kinds:
         allowed = (

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import os
+import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,7 +39,7 @@ from tinyrace.config.sensors import (
     PerspectiveCameraConfig,
     SensorConfig,
 )
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.examples import find_track, track_names
 
 __all__ = [
@@ -54,6 +56,7 @@ __all__ = [
     "EnvConfig",
     "ImageTrackConfig",
     "LoadedConfig",
+    "Overrides",
     "ProceduralTrackConfig",
     "RewardConfig",
     "RosMapTrackConfig",
@@ -73,6 +76,20 @@ def cache_settings(config: EnvConfig) -> Settings:
     return Settings(folder, int(cache.max_size * 2**20))
 
 
+KWARGS = "<kwargs>"  # the source named by problems of ``gym.make``'s keyword arguments
+DEFAULTS = "<defaults>"  # the source of a config made of defaults and overrides only
+
+
+@dataclass(frozen=True)
+class Overrides:
+    """Keys laid over a config file (``gym.make``'s keyword arguments, an experiment's
+    ``env:``), and what a problem in one of them names: their source and a key prefix."""
+
+    keys: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    source: str = KWARGS
+    prefix: str = ""  # e.g. "env." inside an experiment file
+
+
 @dataclass(frozen=True)
 class LoadedConfig:
     """A validated config, with where it came from (for errors) and where its images live."""
@@ -80,36 +97,88 @@ class LoadedConfig:
     config: EnvConfig
     source: str  # file path or "<dict>", used in error messages
     base_dir: Path  # images are relative to this
+    overrides: Overrides = Overrides()  # what was laid over ``source``
+
+    def blame(self, problems: list[Problem]) -> list[Problem]:
+        """Each problem named where its value came from: a key given as an override names
+        the overrides' source (a keyword argument, the experiment file), not the track file."""
+        return blame(problems, self.source, self.overrides)
+
+
+def blame(problems: list[Problem], source: str, overrides: Overrides) -> list[Problem]:
+    """``problems`` found in ``source`` merged with ``overrides``, each renamed to the
+    overrides' source when its key path lies in an override (or no file was read)."""
+    renamed = []
+    for p in problems:
+        if p.source == source and (source == DEFAULTS or _overridden(p.path, overrides.keys)):
+            p = Problem(overrides.source, f"{overrides.prefix}{p.path}", p.value, p.allowed)
+        renamed.append(p)
+    return renamed
+
+
+_SINGULAR = {"tracks": "track", "cameras": "camera", "sensors": "sensor"}  # key aliases
+
+
+def _spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[str, Any]:
+    """``overrides`` with a section named as the file names it (``track=`` over a file's
+    ``tracks:`` replaces it, rather than being the same key given twice)."""
+    renamed = dict(overrides)
+    for plural, singular in _SINGULAR.items():
+        for given, written in ((plural, singular), (singular, plural)):
+            if given in renamed and written in raw and written not in renamed:
+                renamed[written] = renamed.pop(given)
+    return renamed
+
+
+def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
+    """Whether the value at ``path`` (``cameras[0].roi``) came from ``keys``: mappings merge
+    key by key, anything else an override gives replaces the file's value whole."""
+    node: Any = keys
+    for token in re.findall(r"\[\d+\]|[^.\[\]]+", path):
+        if not isinstance(node, Mapping):
+            return True  # inside a list or value the override replaced
+        if token.startswith("["):
+            continue  # a mapping standing for a list of one (``track:``)
+        token = token if token in node else _SINGULAR.get(token, token)  # tracks: track:
+        if token not in node:
+            return False
+        node = node[token]
+    return bool(path)
 
 
 def load_env_config(
     config: str | Path | Mapping[str, Any] | LoadedConfig | None = None,
     environment: str | Path | None = None,
-    overrides: Mapping[str, Any] | None = None,
+    overrides: Mapping[str, Any] | Overrides | None = None,
 ) -> LoadedConfig:
     """Read a track folder (``environment``), a YAML path or a dict, apply overrides, validate.
 
     With neither ``config`` nor ``environment``, the result is the default procedural track.
-    Raises ConfigError listing every problem found.
+    Raises ConfigError listing every problem found, each named where it came from: the file
+    and key path, or the keyword argument (plain ``overrides`` are ``gym.make``'s).
     """
-    if isinstance(config, LoadedConfig) and not overrides and environment is None:
+    laid = overrides if isinstance(overrides, Overrides) else Overrides(overrides or {})
+    if isinstance(config, LoadedConfig) and not laid.keys and environment is None:
         return config  # already validated (e.g. by ``tinyrace play``)
     if config is not None and environment is not None:
         raise ConfigError(
             Problem(
-                "<kwargs>",
+                KWARGS,
                 "environment",
                 str(environment),
                 "give either config= or environment=, not both",
             )
         )
     raw, source, base_dir = _read_source(cast(_Source, config), environment)
-    if overrides:
-        raw = deep_merge(raw, overrides)
+    if laid.keys:
+        raw = deep_merge(raw, _spelled_as(laid.keys, raw))
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
-    parsed = with_camera_info(parse_env_config(raw, source), source, base_dir)
-    return LoadedConfig(parsed, source, base_dir)
+    try:
+        parsed = with_camera_info(parse_env_config(raw, source), source, base_dir)
+    except ConfigError as exc:
+        raise ConfigError(blame(exc.problems, source, laid)) from None
+    return LoadedConfig(parsed, source, base_dir, laid)
 
 
 _Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
@@ -124,20 +193,14 @@ def _read_source(
             raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
         folder = find_track(environment)  # a path that exists wins over a shipped track's name
         config = folder / TRACK_FILE
-        if not _safely(config.is_file):
-            missing = (
-                f"no such folder; shipped tracks: {', '.join(track_names())}"
-                if not _safely(folder.is_dir)
-                else f"{config} does not exist"
-            )
-            allowed = f"expected a track folder holding {TRACK_FILE} ({missing})"
-            raise ConfigError(Problem(str(config), "environment", str(environment), allowed))
+        if not _safely(lambda: os.path.lexists(config)):  # a FIFO or a folder: read_yaml says
+            raise ConfigError(Problem(KWARGS, "environment", str(environment), _no_track(folder)))
     if config is None:
-        return {}, "<defaults>", Path.cwd()
+        return {}, DEFAULTS, Path.cwd()
     if isinstance(config, Mapping):
         return dict(config), "<dict>", Path.cwd()
     if not isinstance(config, (str, Path)):
-        raise ConfigError(Problem("<kwargs>", "config", config, "expected a YAML path or a dict"))
+        raise ConfigError(Problem(KWARGS, "config", config, "expected a YAML path or a dict"))
     path = Path(config)
     if _safely(path.is_dir):
         path = path / TRACK_FILE
@@ -151,6 +214,17 @@ def _read_source(
             )
         )
     return dict(raw), str(path), path.parent
+
+
+def _no_track(folder: Path) -> str:
+    """What ``environment=`` expected, and what ``folder`` is instead."""
+    expected = f"expected a track folder holding {TRACK_FILE}"
+    if _safely(folder.is_file):
+        return f"{expected}; this is a file: give a YAML config file as config= instead"
+    if _safely(folder.is_dir):
+        return f"{expected}; this folder holds no {TRACK_FILE}"
+    names = track_names()
+    return f"{did_you_mean(str(folder), names)}{expected} or a shipped track: {', '.join(names)}"
 
 
 def _safely(check: Callable[[], bool]) -> bool:

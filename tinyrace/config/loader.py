@@ -8,7 +8,6 @@ dataclasses told apart by their ``type`` key.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import types
 import typing
@@ -17,7 +16,7 @@ from typing import Any, Literal, Union
 
 from tinyrace.config.colors import Color
 from tinyrace.config.yaml_file import read_yaml  # re-exported: the one way to read YAML
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, did_you_mean
 
 __all__ = ["Parser", "deep_merge", "read_yaml"]
 
@@ -89,7 +88,8 @@ class Parser:
             data.get("type", next(iter(kinds))) if isinstance(data, Mapping) else next(iter(kinds))
         )
         if not isinstance(kind, str) or kind not in kinds:  # a list or dict is unhashable
-            return self.problem(_join(path, "type"), kind, f"expected one of: {', '.join(kinds)}")
+            allowed = f"{did_you_mean(kind, kinds)}expected one of: {', '.join(kinds)}"
+            return self.problem(_join(path, "type"), kind, allowed)
         return self.dataclass(kinds[kind], data, path)
 
     # -- values ------------------------------------------------------------------------------
@@ -100,7 +100,9 @@ class Parser:
         if origin is Literal:
             if type(raw) is type(args[0]) and raw in args:  # type first: arrays can't be in
                 return raw
-            return self.problem(path, raw, f"expected one of: {', '.join(map(str, args))}")
+            choices = ", ".join(map(str, args))
+            hint = did_you_mean(raw, [str(a) for a in args])
+            return self.problem(path, raw, f"{hint}expected one of: {choices}")
         if origin is tuple:
             return self.tuple(args, raw, path, meta)
         if origin is dict:  # free-form mapping (e.g. driver arguments), checked by its user
@@ -130,7 +132,8 @@ class Parser:
             if not trial.problems:
                 return value
         allowed = " or ".join(_describe(m, meta) for m in members)
-        return self.problem(path, raw, f"expected {allowed}")
+        names = [str(a) for m in members if typing.get_origin(m) is Literal for a in m.__args__]
+        return self.problem(path, raw, f"{did_you_mean(raw, names)}expected {allowed}")
 
     def tuple(self, args: tuple[Any, ...], raw: object, path: str, meta: Mapping[str, Any]) -> Any:
         if isinstance(raw, Mapping) and len(args) == 2 and args[1] is Ellipsis:
@@ -191,8 +194,7 @@ def _join(path: str, key: object) -> str:
 
 
 def _unknown_key_hint(key: object, valid: list[str]) -> str:
-    close = difflib.get_close_matches(str(key), valid, n=1, cutoff=0.5)
-    hint = f"did you mean '{close[0]}'? " if close else ""
+    hint = did_you_mean(str(key), valid, cutoff=0.5)
     return f"unknown key; {hint}valid keys: {', '.join(sorted(valid))}"
 
 

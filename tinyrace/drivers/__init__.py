@@ -33,6 +33,7 @@ from tinyrace.drivers.base import (
 )
 from tinyrace.drivers.centerline import CenterlineDriver, Route, order_path, route_of, speed_profile
 from tinyrace.drivers.loop import DriverError, EpisodeObserver, check_action, run_episode
+from tinyrace.errors import did_you_mean, one_line
 
 __all__ = [
     "DRIVERS",
@@ -68,8 +69,14 @@ def make_driver(name: str, **kwargs: Any) -> Driver:
     """A driver by registry name; raises ValueError listing the valid names."""
     factory = DRIVERS.get(name)
     if factory is None:
-        raise ValueError(f"unknown driver {name!r}; valid drivers: {', '.join(sorted(DRIVERS))}")
+        raise ValueError(unknown_driver(name))
     return factory(**kwargs)
+
+
+def unknown_driver(name: str) -> str:
+    """The message for a driver name that is not registered: the closest name, then all."""
+    hint = did_you_mean(name, DRIVERS)
+    return f"unknown driver {name!r}; {hint}valid drivers: {', '.join(sorted(DRIVERS))}"
 
 
 class PolicyDriver:
@@ -96,9 +103,7 @@ def load_driver(spec: str, **kwargs: Any) -> Driver:
     try:
         made = factory(**kwargs)
     except Exception as exc:  # user code and user arguments: report, do not crash
-        raise DriverError(
-            f"{spec} with driver_args {kwargs} raised {type(exc).__name__}: {exc}"
-        ) from exc
+        raise DriverError(f"{spec} with driver_args {kwargs} raised {one_line(exc)}") from exc
     if hasattr(made, "act"):
         return made
     if callable(made):
@@ -110,13 +115,11 @@ def _factory(spec: str) -> DriverFactory:
     """The registry entry of a name, or the ``module:callable`` imported."""
     if ":" not in spec:
         if spec not in DRIVERS:
-            raise ValueError(
-                f"unknown driver {spec!r}; valid drivers: {', '.join(sorted(DRIVERS))}"
-            )
+            raise ValueError(unknown_driver(spec))
         return DRIVERS[spec]
     module_name, _, attribute = spec.partition(":")
     try:
         factory: Callable[..., Driver] = getattr(importlib.import_module(module_name), attribute)
         return factory
     except (ImportError, AttributeError) as exc:
-        raise ValueError(f"cannot import {spec!r} ({type(exc).__name__}: {exc})") from None
+        raise ValueError(f"cannot import {spec!r} ({one_line(exc)})") from None

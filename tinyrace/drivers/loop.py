@@ -10,6 +10,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.drivers.base import Driver
+from tinyrace.errors import one_line
 
 
 class DriverError(ValueError):
@@ -65,7 +66,7 @@ def _call(method: Callable[..., Any], what: str, *args: Any) -> Any:
     try:
         return method(*args)
     except Exception as exc:  # the driver is user code: any failure is reported as its own
-        raise DriverError(f"{what} raised {type(exc).__name__}: {exc}") from exc
+        raise DriverError(f"{what} raised {one_line(exc)}") from exc
 
 
 def check_action(action: Any, space: spaces.Space[Any], what: str = "the action") -> None:

@@ -35,8 +35,10 @@ def prepare(loaded: LoadedConfig) -> Parts:
     try:
         source = make_track_source(loaded.config, loaded.base_dir, loaded.source)
     except ConfigError as exc:
-        raise ConfigError(problems + exc.problems) from None
-    car_model = choose_car_model(loaded.config, loaded.source)  # raises the problems found
+        problems += exc.problems
+    if problems:  # each named where its value came from (the file or a keyword argument)
+        raise ConfigError(loaded.blame(problems))
+    car_model = choose_car_model(loaded.config, loaded.source)
     car = dataclasses.replace(loaded.config.car, model=car_model.name)
     config = dataclasses.replace(loaded.config, car=car)
     tracks = getattr(source, "tracks", ())  # a source's fixed tracks (none: drawn per reset)

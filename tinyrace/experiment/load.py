@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import sys
 from collections.abc import Iterator, Mapping
@@ -10,18 +11,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tinyrace.config import (
-    METRIC_KINDS,
-    TRACK_FILE,
-    EnvConfig,
-    LoadedConfig,
-    load_env_config,
-    parse_env_config,
-)
+from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, Overrides, load_env_config
 from tinyrace.config.experiment import ExperimentConfig
-from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.config.loader import Parser, read_yaml
 from tinyrace.config.paths import inside_folder
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, did_you_mean, one_of
 from tinyrace.examples import shipped_track
 
 ENV_FOLDER_KEY = "environment"  # inside ``env``: a track folder or track.yaml
@@ -34,12 +28,17 @@ class Experiment:
     config: ExperimentConfig
     source: str  # the file, for messages and the run directory's name
     env_config: EnvConfig
-    env_kwargs: dict[str, Any]  # for TinyRaceEnv(**env_kwargs)
+    env_kwargs: dict[str, Any]  # for TinyRaceEnv(**env_kwargs) or gym.make
+    loaded: LoadedConfig  # the env config, its problems named in the experiment or track file
     folder: Path = Path()  # the experiment file's folder: own drivers are imported from it
 
     @property
     def name(self) -> str:
-        return Path(self.source).stem if self.source.endswith((".yaml", ".yml")) else "experiment"
+        """The run folders' name: the experiment file's, or the track folder's."""
+        path = Path(self.source)
+        if path.name == TRACK_FILE:
+            return path.parent.name
+        return path.stem if self.source.endswith((".yaml", ".yml")) else "experiment"
 
 
 def is_experiment(raw: object) -> bool:
@@ -56,28 +55,49 @@ def load_experiment(path: str | Path) -> Experiment:
 
 
 def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment:
+    """The experiment of ``raw`` (read from ``source``); one ConfigError lists every problem
+    found: of the experiment's keys, its env's (named in the file each came from) and, when
+    there are any, also those found by building the env (its files, car, sensors)."""
     parser = Parser(source)
     config = parser.dataclass(ExperimentConfig, raw, "")
-    parser.check()
-    check_driver(config.driver, base_dir, source)
+    if not parser.parsed(config):  # not a mapping: nothing more to read
+        parser.check()
+    problems = [*parser.problems, *driver_problems(config.driver, base_dir, source)]
     sections = dict(config.env)
     track_path = sections.pop(ENV_FOLDER_KEY, None)
-    kwargs: dict[str, Any] = {}
-    if track_path is None:
-        merged = sections = _absolute_images(sections, base_dir, source)
-    else:
-        track_file = _track_file(track_path, base_dir, source)
-        load_env_config(config=track_file)  # its own problems, named in its own file
-        merged = deep_merge(read_yaml(track_file) or {}, sections)
-        kwargs["config"] = str(track_file)
-    env_config = parse_env_config(merged, source, prefix="env")
-    check_view(config, env_config, source)
-    env_kwargs = {**kwargs, **sections}
-    if track_path is None and env_config.kind in METRIC_KINDS:
-        # inline metric tracks: their files are read relative to the experiment file, and
-        # problems found when they are read name it
-        env_kwargs = {"config": LoadedConfig(env_config, source, base_dir)}
-    return Experiment(config, source, env_config, env_kwargs, base_dir)
+    try:
+        loaded, kwargs = _load_env(sections, track_path, base_dir, source)
+    except ConfigError as exc:
+        raise ConfigError(problems + exc.problems) from None
+    problems += view_problems(config, loaded.config, source)
+    if problems:  # the env may have problems of its own: report them in the same message
+        raise ConfigError(problems + build_problems(loaded))
+    return Experiment(config, source, loaded.config, kwargs, loaded, base_dir)
+
+
+def _load_env(
+    sections: dict[str, Any], track_path: object, base_dir: Path, source: str
+) -> tuple[LoadedConfig, dict[str, Any]]:
+    """The env of an experiment's ``env:`` (a track file and/or inline sections)."""
+    if track_path is None:  # inline sections: their files are read beside the experiment
+        sections = _absolute_images(sections, base_dir, source)
+        overrides = Overrides(sections, source, "env.")
+        loaded = dataclasses.replace(load_env_config(overrides=overrides), base_dir=base_dir)
+        return loaded, {"config": loaded}
+    track_file = _track_file(track_path, base_dir, source)
+    loaded = load_env_config(config=track_file, overrides=Overrides(sections, source, "env."))
+    return loaded, {"config": str(track_file), **sections}
+
+
+def build_problems(loaded: LoadedConfig) -> list[Problem]:
+    """The problems found by building the env of ``loaded`` (files, car model, sensors)."""
+    from tinyrace.env import TinyRaceEnv
+
+    try:
+        TinyRaceEnv(config=loaded).close()
+    except ConfigError as exc:
+        return exc.problems
+    return []
 
 
 _IMAGE_SENSORS = ("birdseye_camera", "perspective_camera")  # their observation is a picture
@@ -86,31 +106,47 @@ _IMAGE_SENSORS = ("birdseye_camera", "perspective_camera")  # their observation 
 def check_view(config: ExperimentConfig, env_config: EnvConfig, source: str) -> None:
     """``output.view`` is ``default``, ``sensors`` (with a ``sensors:`` list) or the id of
     one of the env's cameras (checked at validate)."""
+    problems = view_problems(config, env_config, source)
+    if problems:
+        raise ConfigError(problems)
+
+
+def view_problems(config: ExperimentConfig, env_config: EnvConfig, source: str) -> list[Problem]:
+    """The problem of ``output.view``, if any (see ``check_view``)."""
     view = config.output.view
     ids = [c.id for c in env_config.cameras]
     ids += [s.id for s in env_config.sensors if s.type in _IMAGE_SENSORS]
     views = ["default", *(["sensors"] if env_config.sensors else []), *ids]
-    if view not in views:
-        allowed = f"one of: {', '.join(views)}"
-        raise ConfigError(Problem(source, "output.view", view, allowed))
+    if view in views:
+        return []
+    allowed = f"{did_you_mean(view, views)}one of: {', '.join(views)}"
+    return [Problem(source, "output.view", view, allowed)]
 
 
 def check_driver(spec: str, folder: Path, source: str) -> None:
-    """A built-in driver name, or ``module:callable`` with the module found from ``folder``.
+    """A built-in driver name, or ``module:callable`` with the module found from ``folder``."""
+    problems = driver_problems(spec, folder, source)
+    if problems:
+        raise ConfigError(problems)
+
+
+def driver_problems(spec: str, folder: Path, source: str) -> list[Problem]:
+    """The problem of the ``driver`` key, if any: a built-in driver name, or
+    ``module:callable`` with the module found from ``folder``.
 
     The module is looked up, not run (a dotted name imports its parent package).
     """
     from tinyrace.drivers import DRIVERS
 
     if ":" not in spec:
-        if spec not in DRIVERS:
-            allowed = f"expected one of: {', '.join(sorted(DRIVERS))}, or module:callable"
-            raise ConfigError(Problem(source, "driver", spec, allowed))
-        return
+        if spec in DRIVERS:
+            return []
+        allowed = f"{one_of(spec, DRIVERS)}, or module:callable"
+        return [Problem(source, "driver", spec, allowed)]
     module, _, attribute = spec.partition(":")
     if not (all(p.isidentifier() for p in module.split(".")) and attribute.isidentifier()):
         allowed = "expected module:callable made of Python names (e.g. my_policy:make)"
-        raise ConfigError(Problem(source, "driver", spec, allowed))
+        return [Problem(source, "driver", spec, allowed)]
     with importable_from(folder):
         try:
             found = importlib.util.find_spec(module) is not None
@@ -118,7 +154,8 @@ def check_driver(spec: str, folder: Path, source: str) -> None:
             found = False
     if not found:
         allowed = f"expected module:callable with the module in {folder} or on the Python path"
-        raise ConfigError(Problem(source, "driver", spec, allowed))
+        return [Problem(source, "driver", spec, allowed)]
+    return []
 
 
 @contextmanager
@@ -151,22 +188,9 @@ def _track_file(value: object, base_dir: Path, source: str) -> Path:
     return path
 
 
-TRACK_FILE_KEYS = ("image", "file", "waypoints")  # the files a track entry names
-
-
-def _check_exists(path: Path, value: str, source: str, where: str) -> None:
-    try:
-        found = path.is_file()
-    except (OSError, ValueError):  # a name the file system cannot hold
-        found = False
-    if not found:
-        allowed = f"expected an existing file, relative to {Path(source).name}: {path} is none"
-        raise ConfigError(Problem(source, where, value, allowed))
-
-
 def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> dict[str, Any]:
-    """Inline track files (images, CSVs, map YAMLs) are relative to the experiment file (and
-    stay in its folder unless ``files.paths_outside_folder``): make them absolute."""
+    """Inline track images are relative to the experiment file (and stay in its folder unless
+    ``files.paths_outside_folder``): make them absolute."""
     files = sections.get("files")
     outside = isinstance(files, Mapping) and files.get("paths_outside_folder") is True
     for key in ("track", "tracks"):
@@ -176,13 +200,10 @@ def _absolute_images(sections: dict[str, Any], base_dir: Path, source: str) -> d
         )
         resolved = []
         for index, entry in enumerate(entries):
-            for name in TRACK_FILE_KEYS:
-                if isinstance(entry, Mapping) and isinstance(entry.get(name), str):
-                    where = f"env.{key}[{index}].{name}"
-                    found = inside_folder(entry[name], base_dir, outside, source, where)
-                    _check_exists(found, entry[name], source, where)
-                    if name == "image":  # metric files stay relative: see _metric_kwargs
-                        entry = {**entry, name: str(found)}
+            if isinstance(entry, Mapping) and isinstance(entry.get("image"), str):
+                where = f"env.{key}[{index}].image"
+                image = inside_folder(entry["image"], base_dir, outside, source, where)
+                entry = {**entry, "image": str(image)}
             resolved.append(entry)
         if entries:
             sections = {**sections, key: resolved[0] if isinstance(tracks, Mapping) else resolved}

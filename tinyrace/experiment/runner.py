@@ -18,7 +18,7 @@ import numpy as np
 
 from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, one_line
 from tinyrace.experiment.interrupt import Interrupted, StopSignals
 from tinyrace.experiment.load import Experiment, check_view, importable_from
 from tinyrace.experiment.progress import Progress
@@ -59,7 +59,7 @@ def run_experiment(
     """
     config = experiment.config
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
-    env = TinyRaceEnv(render_mode=render_mode, **experiment.env_kwargs)
+    env = TinyRaceEnv(config=experiment.loaded, render_mode=render_mode)
     try:
         check_view(experiment.config, env.config, experiment.source)
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
@@ -212,7 +212,7 @@ class _Run:
             if self.made_root and not any(self.run_dir.parent.iterdir()):
                 self.run_dir.parent.rmdir()  # made for this run only
         else:
-            self._write(None, error=f"{type(exc).__name__}: {exc}")
+            self._write(None, error=one_line(exc))
 
 
 def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
@@ -220,7 +220,7 @@ def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
     try:
         return load_driver(spec, **args)
     except ValueError as exc:  # DriverError included: the factory raised
-        raise ConfigError(Problem(source, "driver", spec, str(exc))) from None
+        raise ConfigError(Problem(source, "driver", spec, one_line(exc))) from None
 
 
 def new_run_dir(root: Path, name: str) -> Path:

@@ -6,7 +6,7 @@ Adding a type is one module plus one entry here (see ``tinyrace/sensors/base.py`
 from __future__ import annotations
 
 from tinyrace.config import CameraConfig
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.sensors import birdseye_camera
 from tinyrace.sensors.base import Sensor, SensorContext, SensorType
 from tinyrace.sensors.common import Unsupported
@@ -24,7 +24,7 @@ def sensor_type(name: object, source: str, key_path: str) -> SensorType:
     """The registered type ``name``; a ConfigError listing the valid names otherwise."""
     found = SENSOR_TYPES.get(name) if isinstance(name, str) else None
     if found is None:
-        allowed = f"expected a sensor type, one of: {', '.join(sorted(SENSOR_TYPES))}"
+        allowed = one_of(name, SENSOR_TYPES, "a sensor type, one of")
         raise ConfigError(Problem(source, key_path, name, allowed))
     return found
 

@@ -1,0 +1,99 @@
+"""``tinyrace train`` without torch: its arguments, its env, its policy, and the message that
+names the train extra. Training itself is tested in tests_train/ (CI's train stage)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+import tinyrace  # noqa: F401  (registers the ids)
+from tinyrace import cli, train
+from tinyrace.errors import ConfigError
+from tinyrace.examples import shipped_track
+
+
+@pytest.fixture
+def here(tmp_path: Path, monkeypatch) -> Path:
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+@pytest.mark.parametrize("module", ["torch", "stable_baselines3"])
+def test_without_the_extra_it_names_the_pip_command(here: Path, capsys, monkeypatch, module):
+    monkeypatch.setitem(sys.modules, module, None)  # import fails as if not installed
+    assert cli.main(["train", "--timesteps", "10"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("tinyrace: error: tinyrace train needs ")
+    assert module.replace("_", "-") in err and 'pip install "tinyrace[train]"' in err
+    assert "\n" not in err and not list(here.iterdir())  # one line, no model file
+
+
+def test_a_mistyped_env_is_refused_before_training(here: Path, capsys):
+    assert cli.main(["train", "formula_studnt"]) == 2
+    err = capsys.readouterr().err
+    assert "did you mean 'formula_student'?" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize(("out", "said"), [("model.pt", "ending in .zip"), ("taken.zip", "exists")])
+def test_out_is_checked_before_training(here: Path, capsys, out: str, said: str):
+    (here / "taken.zip").write_text("a model")
+    assert cli.main(["train", "--out", out]) == 2
+    assert said in capsys.readouterr().err
+    assert (here / "taken.zip").read_text() == "a model"
+
+
+def test_the_default_env_is_carracing_and_a_name_is_an_experiments_env():
+    assert train.train_env(None) == train.TrainEnv("tinyrace/CarRacing-v0", {}, "carracing")
+    env = train.train_env("formula_student")
+    assert env.env_id == "tinyrace/TinyRace-v0" and env.name == "formula_student"
+    assert Path(env.kwargs["config"]) == shipped_track("formula_student") / "track.yaml"
+    track = train.train_env(shipped_track("segmented"), max_episode_steps=9)
+    assert track.name == "segmented" and track.kwargs["max_episode_steps"] == 9
+
+
+def test_an_experiment_with_problems_is_one_config_error(tmp_path: Path):
+    (tmp_path / "exp.yaml").write_text("episodes: 0\nenv: {sim: {fps: fast}}\n")
+    with pytest.raises(ConfigError) as caught:
+        train.train_env(tmp_path / "exp.yaml")
+    assert [p.path for p in caught.value.problems] == ["episodes", "env.sim.fps"]
+
+
+def test_the_policy_fits_the_observation():
+    image = spaces.Box(0, 255, (96, 96, 3), np.uint8)
+    assert train.policy_for(image) == "CnnPolicy"
+    assert train.policy_for(spaces.Dict({"front": image})) == "MultiInputPolicy"
+    assert train.policy_for(spaces.Box(-1, 1, (4,), np.float32)) == "MlpPolicy"
+
+
+@pytest.mark.parametrize(("timesteps", "envs"), [(256, 2), (10, 4), (10**6, 8)])
+def test_a_short_run_gets_a_short_rollout(timesteps: int, envs: int):
+    settings = train.ppo_settings(timesteps, envs)
+    assert train.MIN_STEPS <= settings["n_steps"] <= 512
+    assert settings["n_steps"] * envs >= min(timesteps, train.MIN_STEPS * envs)
+    assert settings["batch_size"] <= settings["n_steps"] * envs
+
+
+def test_nested_dict_observations_are_flattened_per_key():
+    """The sensors experiment's ``cones`` entry is a dict: SB3 takes no nested dicts."""
+    env = train._make(**_kwargs(train.train_env("sensors")))
+    try:
+        space = env.observation_space
+        assert isinstance(space, spaces.Dict)
+        assert all(isinstance(s, spaces.Box) for s in space.spaces.values())
+        observation, _ = env.reset(seed=0)
+        assert space.contains(observation)
+        assert observation["cones"].ndim == 1 and observation["lidar"].shape == (1080,)
+    finally:
+        env.close()
+    plain = train._make(**_kwargs(train.train_env(None)))
+    assert isinstance(plain, gym.Wrapper) and not isinstance(plain, train.FlatEntries)
+    plain.close()
+
+
+def _kwargs(env: train.TrainEnv) -> dict:
+    return {"env_id": env.env_id, "kwargs": env.kwargs}
