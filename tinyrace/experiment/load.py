@@ -70,8 +70,9 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
     except ConfigError as exc:
         raise ConfigError(problems + exc.problems) from None
     problems += view_problems(config, loaded.config, source)
-    if problems:  # the env may have problems of its own: report them in the same message
-        raise ConfigError(problems + build_problems(loaded))
+    problems += build_problems(loaded)  # its files, car, sensors (a fixed track is loaded
+    if problems:  # once: the env the run makes next shares it)
+        raise ConfigError(problems)
     return Experiment(config, source, loaded.config, kwargs, loaded, base_dir)
 
 
