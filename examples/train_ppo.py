@@ -6,7 +6,7 @@ Needs the ``train`` extra (``pip install torch`` first for a CPU build, then
     python examples/train_ppo.py --timesteps 200000 --envs 4
 
 It saves ``ppo_carracing.zip`` and prints the mean return of a few evaluation
-episodes. ``train`` and ``evaluate`` are what the README's example shows.
+episodes. ``train`` and ``evaluate`` are what docs/training.md's example shows.
 """
 
 from __future__ import annotations

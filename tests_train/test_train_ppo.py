@@ -1,4 +1,4 @@
-"""The README's "Train an agent" example: a few hundred PPO steps on tinyrace/CarRacing-v0.
+"""docs/training.md's example: a few hundred PPO steps on tinyrace/CarRacing-v0.
 
 Run by .ci/run after ``pip install -e ".[train]"``; not collected by the main test run
 (testpaths is ``tests``), so that run needs no torch.
