@@ -13,11 +13,20 @@ HERE = str(Path(__file__).resolve().parent)
 if HERE not in sys.path:
     sys.path.insert(0, HERE)
 
+import os  # noqa: E402
+
 import gymnasium as gym  # noqa: E402
 import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 import tinyrace  # noqa: E402, F401  (registers the env ids)
 from tinyrace.examples import TRACKS_DIR  # noqa: E402
+
+# HYPOTHESIS_PROFILE=ci (.ci/run): every test's full number of examples (hypothesis_budget.py);
+# unset: the README's quick run, a quarter of them
+settings.register_profile("ci", print_blob=True)
+settings.register_profile("quick")
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "quick"))
 
 
 @pytest.fixture

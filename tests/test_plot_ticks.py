@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.experiment import plots
 
@@ -27,7 +28,7 @@ def tolerance(ticks: tuple[float, ...]) -> float:
 finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
 
 
-@settings(max_examples=500, deadline=None)
+@settings(max_examples=examples(500), deadline=None)
 @given(finite, st.floats(1e-6, 1e6), st.integers(3, 9))
 def test_ticks_are_round_evenly_spaced_and_cover_the_range(low: float, span: float, most: int):
     assume(span >= 1e-6 * abs(low))  # a chart's values: not a millionth apart at their size
@@ -58,7 +59,7 @@ def test_tick_labels_read_as_round_numbers(low: float, high: float, expected: li
     assert plots.tick_labels(plots.nice_ticks(low, high)) == expected
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(finite, st.floats(1e-6, 1e6))
 def test_labels_are_distinct_and_read_back_as_the_ticks(low: float, span: float):
     assume(span >= 1e-6 * abs(low))
