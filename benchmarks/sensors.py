@@ -18,7 +18,7 @@ may step over an object a cell thick); tinyrace's lidar reports where the beam e
 cell, within about half a cell. Hence the agreement is given within one and within two cells.
 
 The lidar is timed on both of its paths in the same run: ``lidar_1080`` is the env's own
-(the compiled numba kernel when numba imports, what ``pip install tinyrace[fast]`` gives;
+(the compiled numba kernel when numba imports, what a plain install gives;
 else numpy) and ``lidar_1080_numpy`` a second lidar of the same config forced onto the numpy
 path, on the same snapshots; every step also checks that both give the same ranges, bit for
 bit. numba compiles on the env's first observation (in ``reset``), before any timing;
@@ -36,7 +36,7 @@ says otherwise): with cv2's default pool a camera's warp is split over the cores
 2-core VM takes a 96x96 camera about 25% less wall time when the other core is idle.
 
 Budgets (issue 14): state, lookahead and cones add at most 20 µs each; a 1080-beam lidar
-(the path ``tinyrace[fast]`` gives) costs no more than a 96x96 bird's-eye camera; a 120x160
+(the path a plain install gives) costs no more than a 96x96 bird's-eye camera; a 120x160
 perspective camera no more than 1.5x a 120x160 bird's-eye camera.
 """
 
@@ -303,7 +303,7 @@ def measure_compile() -> dict[str, float]:
 def print_compile(result: dict[str, float]) -> None:
     """The compile times of ``measure_compile``."""
     if not result:
-        print("\nLidar kernel: numba is not installed (pip install tinyrace[fast])")
+        print("\nLidar kernel: numba did not import (pip install numba)")
         return
     print("\nLidar kernel (numba) start-up, fresh processes [s]:")
     for label in ("cold_cache", "warm_cache"):

@@ -24,9 +24,16 @@ if "TINYRACE_CACHE_DIR" not in os.environ:  # the tests' cache files go to a fol
 
 import gymnasium as gym  # noqa: E402
 import pytest  # noqa: E402
+from hypothesis import settings  # noqa: E402
 
 import tinyrace  # noqa: E402, F401  (registers the env ids)
 from tinyrace.examples import TRACKS_DIR  # noqa: E402
+
+# HYPOTHESIS_PROFILE=ci (.ci/run): every test's full number of examples (hypothesis_budget.py);
+# unset: the README's quick run, a quarter of them
+settings.register_profile("ci", print_blob=True)
+settings.register_profile("quick")
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "quick"))
 
 
 @pytest.fixture

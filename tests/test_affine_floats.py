@@ -13,6 +13,7 @@ from fractions import Fraction
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.render.chase_view import chase_affine, chase_matrix
 from tinyrace.sensors.texture import (
@@ -36,7 +37,7 @@ _ZERO = st.sampled_from([0.0, -0.0])
 _ANY = st.floats(-1e150, 1e150, allow_nan=False, allow_infinity=False)
 
 
-@settings(max_examples=1000, deadline=None)
+@settings(max_examples=examples(1000), deadline=None)
 @given(st.one_of(_FLOATS, _ANY), st.one_of(_FLOATS, _ANY), st.one_of(_FLOATS, _ANY))
 def test_fused_multiply_add_rounds_the_exact_result_once(x, y, z) -> None:
     assert fused_multiply_add(x, y, z) == float(Fraction(x) * Fraction(y) + Fraction(z))
@@ -48,7 +49,7 @@ def test_fused_multiply_add_keeps_infinities_and_nans() -> None:
     assert math.isnan(fused_multiply_add(1.0, 2.0, math.nan))
 
 
-@settings(max_examples=1000, deadline=None)
+@settings(max_examples=examples(1000), deadline=None)
 @given(
     st.tuples(*[_FLOATS] * 6),
     st.tuples(_FLOATS, _ZERO, _FLOATS, _ZERO, _FLOATS, _FLOATS),

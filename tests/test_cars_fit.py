@@ -57,8 +57,8 @@ def test_the_default_car_on_a_ros_map_is_f1tenth_sized(tmp_path):
     assert other.wheelbase == 2.5  # other metric tracks keep their default
 
 
-def test_the_readme_one_line_ros_map_config_starts_free(tmp_path):
-    assert ONE_LINE in (ROOT / "README.md").read_text()
+def test_the_docs_one_line_ros_map_config_starts_free(tmp_path):
+    assert ONE_LINE in (ROOT / "docs" / "tracks.md").read_text()
     problems, summary = validate_path(ros_folder(tmp_path, ONE_LINE))
     assert problems == []
     assert "start free: car footprint 0.33 x 0.31 m" in summary

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.sensors.cones import (
     KERNEL_VARIABLE,
@@ -50,7 +51,7 @@ def scenes(draw) -> tuple[np.ndarray, tuple[float, float, float], float]:
 FOVS = st.sampled_from([1.0, 90.0, 179.0, 180.0, 181.0, 270.0, 360.0])  # [deg]
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(scene=scenes(), y_down=st.booleans(), fov=FOVS, capacity=st.sampled_from([1, 3, 32, 500]))
 def test_both_paths_give_the_same_detections(scene, y_down, fov, capacity):
     cones, pose, max_range = scene
@@ -64,7 +65,7 @@ def test_both_paths_give_the_same_detections(scene, y_down, fov, capacity):
     assert found.shape == expected_found.shape and found.tobytes() == expected_found.tobytes()
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(scene=scenes(), y_down=st.booleans(), fov=FOVS, seed=st.integers(0, 2**32 - 1))
 def test_both_paths_draw_the_same_noise(scene, y_down, fov, seed):
     cones, pose, max_range = scene

@@ -30,6 +30,7 @@ import yaml
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
+from hypothesis_budget import examples
 
 from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.schema import EnvConfig
@@ -49,9 +50,9 @@ FUZZ = {
     "derandomize": bool(os.environ.get("CI")),
     "suppress_health_check": [HealthCheck.too_slow, HealthCheck.data_too_large],
 }
-TRACK_EXAMPLES = 600
-EXPERIMENT_EXAMPLES = 300
-YAML_TEXT_EXAMPLES = 120  # 1020 in total, ~10 s
+TRACK_EXAMPLES = examples(600)  # a quarter of these in the README's quick run
+EXPERIMENT_EXAMPLES = examples(300)
+YAML_TEXT_EXAMPLES = examples(120)  # 1020 in total on CI, ~10 s
 
 
 # -- the workspace: shrunk example tracks, broken images, experiment files -------------------

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.render import drawing
 from tinyrace.render.dashboard import BAR_STEPS, Dashboard
@@ -39,7 +40,7 @@ STEPS = st.one_of(
 )
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=examples(400), deadline=None)
 @given(
     size=st.sampled_from(SIZES),
     speed=STEPS.map(abs),
@@ -85,7 +86,7 @@ def test_a_dashboard_redrawn_step_after_step_keeps_matching():
     assert frames[0][84:].any()  # bars were drawn
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(
     shape=st.tuples(st.integers(1, 30), st.integers(1, 30)),
     corner=st.tuples(st.integers(0, 40), st.integers(0, 40)),
@@ -140,7 +141,7 @@ ENTRIES = st.one_of(
 )
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=examples(2000), deadline=None)
 @given(
     outer=st.tuples(*[ENTRIES] * 6),
     scale=st.tuples(ENTRIES, ENTRIES),

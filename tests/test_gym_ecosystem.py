@@ -135,13 +135,13 @@ def test_the_module_prefixed_id_registers_tinyrace_in_a_fresh_process():
     assert done.stdout.strip() == "(96, 96, 3)"
 
 
-def test_readme_trains_with_the_train_extra_and_ci_runs_its_test():
-    readme = (ROOT / "README.md").read_text()
-    section = readme.split("## Train an agent", 1)[1].split("\n## ", 1)[0]
-    assert 'pip install "tinyrace[train]"' in section and "tinyrace train --timesteps" in section
-    assert '"tinyrace:tinyrace/CarRacing-v0"' in section and "PPOConfig" in section
-    sb3 = next(b for b in section.split("```python")[1:] if "stable_baselines3" in b)
+def test_the_training_page_uses_the_train_extra_and_ci_runs_its_test():
+    page = (ROOT / "docs" / "training.md").read_text()
+    assert 'pip install "tinyrace[train]"' in page and "tinyrace train --timesteps" in page
+    assert '"tinyrace:tinyrace/CarRacing-v0"' in page and "PPOConfig" in page
+    sb3 = next(b for b in page.split("```python")[1:] if "stable_baselines3" in b)
     assert '\nif __name__ == "__main__":\n    envs = ' in sb3  # SubprocVecEnv under the guard
+    assert "](docs/training.md)" in (ROOT / "README.md").read_text()
     ci = (ROOT / ".ci" / "run").read_text()
     main_tests = ci.index('pip install -e ".[test]" && python -m pytest -q')
     train_stage = ci.index("torch==")

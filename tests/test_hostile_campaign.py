@@ -521,6 +521,7 @@ def check_config_outcome(outcome: dict[str, Any], folder: Path) -> None:
         assert len(text) < 2000, text  # values are quoted shortened
 
 
+@pytest.mark.slow  # over a thousand cases in worker processes: CI runs it (-m slow)
 def test_hostile_campaign(campaign: Campaign, capsys):
     restarts_before = sum(w.restarts for w in campaign.workers)
     run_yaml(campaign)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
@@ -79,7 +80,7 @@ def scans(field_numpy, field_numba, angles, max_range, y_down, origins, headings
             yield a, b
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(60), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data(), blocking=blocking_maps())
 def test_both_paths_give_the_same_ranges_bit_for_bit(data, blocking):
     to_cells, y_down = data.draw(frames(blocking.shape))
@@ -335,7 +336,7 @@ def test_beams_too_dense_for_the_numpy_tables_are_a_config_error_not_gigabytes(m
     with pytest.raises(ConfigError) as caught:
         gym.make("tinyrace/TinyRace-v0", environment=circuit, sensors=dense)
     text = str(caught.value)
-    for part in ("sensors[0]", "beams: 1080", "fov: 1.0", "MB", "tinyrace[fast]"):
+    for part in ("sensors[0]", "beams: 1080", "fov: 1.0", "MB", "compiled path (numba"):
         assert part in text
     default = [{"id": "lidar", "type": "lidar", "beams": 1080, "fov": 270.0}]
     gym.make("tinyrace/TinyRace-v0", environment=circuit, sensors=default).close()

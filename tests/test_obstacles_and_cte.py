@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 from synthetic import BGR, blank, color_mask, make_env, straight, write_track
 
 from tinyrace.config import Color
@@ -383,7 +384,7 @@ def assert_nearest(points: np.ndarray, queries, cell: float) -> None:
         assert np.any(np.all(points == (nx, ny), axis=1))  # the answer is one of the points
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(
     st.lists(st.tuples(coordinate, coordinate), min_size=1, max_size=80),
     st.lists(st.tuples(far, far), min_size=1, max_size=8),
@@ -393,7 +394,7 @@ def test_nearest_point_matches_brute_force(points, queries, cell):
     assert_nearest(np.array(points), queries, cell)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(
     st.lists(
         st.tuples(st.integers(-5, 5), st.integers(-5, 5), st.sampled_from([0, 2000, -9000])),
@@ -408,7 +409,7 @@ def test_nearest_point_on_far_apart_pixel_clusters(pixels, queries):
     assert_nearest(points, queries, 32.0)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(
     st.lists(st.tuples(st.integers(0, 200), st.integers(0, 200)), min_size=1, max_size=80),
     st.lists(st.tuples(st.integers(0, 400), st.integers(0, 400)), min_size=1, max_size=8),

@@ -90,3 +90,18 @@ def test_the_train_example_is_outside_the_main_test_run():
     config = pyproject()
     assert config["tool"]["pytest"]["ini_options"]["testpaths"] == ["tests"]
     assert "stable-baselines3" not in " ".join(config["project"]["optional-dependencies"]["test"])
+
+
+def test_a_plain_install_takes_the_compiled_path():
+    project = pyproject()["project"]
+    assert any(d.replace(" ", "").startswith("numba>=") for d in project["dependencies"])
+    assert project["optional-dependencies"]["fast"] == []  # an alias kept for old commands
+    test_extra = " ".join(project["optional-dependencies"]["test"])
+    assert "pytest-xdist" in test_extra  # the README's test command runs on every core
+
+
+def test_the_readme_is_the_package_description_and_names_no_checkout_file_to_run():
+    project = pyproject()["project"]
+    assert project["readme"] == "README.md"
+    readme = (ROOT / "README.md").read_text()
+    assert "tinyrace/data/" not in readme and "[fast]" not in readme

@@ -92,7 +92,9 @@ def test_validate_refuses_the_same_path(tmp_path: Path, outside: Path, capsys):
 def test_an_experiments_inline_image_stays_in_its_folder(tmp_path: Path, outside: Path):
     experiment = tmp_path / "exp" / "run.yaml"
     experiment.parent.mkdir()
-    env = {"cameras": [CAMERA], "track": {"image": "../elsewhere/secret.png"}}
+    # a spawn inside the 64 px picture: loading an experiment builds its env too
+    track = {"image": "../elsewhere/secret.png", "spawns": [[32.0, 32.0, 0.0]]}
+    env = {"cameras": [CAMERA], "track": track}
     experiment.write_text(yaml.safe_dump({"env": env, "episodes": 1}))
     with pytest.raises(ConfigError, match=r"env\.track\[0\]\.image"):
         load_experiment(experiment)

@@ -6,6 +6,7 @@ import dataclasses
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.config.colors import Color
 from tinyrace.config.schema import ColorObstacle, RewardConfig
@@ -16,7 +17,7 @@ weights = st.sampled_from([0.0, 0.1, 1.0, 5.0])
 obstacle_rewards = st.lists(st.sampled_from([0.0, -1.0, 2.5, "done"]), max_size=3)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(
     time=weights,
     tiles=weights,

@@ -19,6 +19,7 @@ import pymunk
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.dynamic import DynamicCar, physics_kernel
@@ -67,7 +68,7 @@ STEP = st.one_of(st.just(1 / 50), st.floats(1e-4, 0.2))  # dt [s]
 SCALES = st.sampled_from([(1.0, False), (7.5, True), (0.37, False)])
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(
     scaled=SCALES,
     state=wheel_states(1, FINITE),
@@ -86,7 +87,7 @@ def test_one_car_step_is_the_same_on_both_paths(scaled, state, motion, dt, targe
     assert same_arrays(ours, theirs)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(
     state=wheel_states(1, ANY_FLOAT),
     motion=st.tuples(FINITE, ANY_FLOAT, ANY_FLOAT, ANY_FLOAT),
@@ -105,7 +106,7 @@ def test_infinities_and_nans_go_the_same_way(state, motion, target, road):
     assert same_arrays(ours, theirs)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(
     data=st.data(),
     cars=st.integers(1, 9),
@@ -136,7 +137,7 @@ def test_many_cars_in_one_call_equal_each_car_alone(data, cars):
     assert skidding == skids == int(batch[SKID].sum())
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 @given(
     state=wheel_states(3, FINITE),
     gas=st.lists(st.floats(-1, 2), min_size=3, max_size=3),
@@ -155,7 +156,7 @@ def test_control_is_the_same_on_both_paths(state, gas, brake):
         assert same_arrays(car.wheel_state, theirs[:, row::3])
 
 
-@settings(max_examples=2000, deadline=None)
+@settings(max_examples=examples(2000), deadline=None)
 @given(x=ANY_FLOAT, y=ANY_FLOAT)
 def test_compiled_hypot_is_cpythons(x, y):
     assert same(dynamic_numba.compiled_hypot(x, y), math.hypot(x, y)), (x, y)

@@ -12,6 +12,7 @@ import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from hypothesis_budget import examples
 
 import tinyrace  # noqa: F401 (registers the ids)
 from tinyrace.config.schema import ProceduralTrackConfig
@@ -116,7 +117,7 @@ KNOBS = ("checkpoints", "radius", "half_width", "turn_rate", "detail_step", "bor
 KNOBS += ("border_min_count", "playfield")
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(25), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     knobs=st.fixed_dictionaries({}, optional={name: _bounded(name) for name in KNOBS}),
     seed=st.integers(0, 2**32 - 1),

@@ -1,4 +1,4 @@
-"""``tinyrace train`` and the README's Stable-Baselines3 script: a few hundred PPO steps.
+"""``tinyrace train`` and docs/training.md's Stable-Baselines3 script: a few hundred PPO steps.
 
 Run by .ci/run after ``pip install torch==2.13.0`` and ``pip install -e ".[train]"``; not
 collected by the main test run (testpaths is ``tests``), so that run needs no torch.
@@ -77,10 +77,10 @@ def test_python_dash_m_tinyrace_train_is_the_command(here: Path):
     assert done.returncode == 2 and "argument --timesteps" in done.stderr, done.stderr
 
 
-def test_the_readmes_script_runs_as_printed(here: Path):
-    """The README's SB3 block, saved as a file (SubprocVecEnv imports it again in its
+def test_the_training_pages_script_runs_as_printed(here: Path):
+    """docs/training.md's SB3 block, saved as a file (SubprocVecEnv imports it again in its
     workers), with a shorter run: 2 rollouts of 32 steps in each of its 4 envs."""
-    readme = (ROOT / "README.md").read_text()
+    readme = (ROOT / "docs" / "training.md").read_text()
     block = next(
         b.split("```", 1)[0]
         for b in readme.split("```python\n")[1:]

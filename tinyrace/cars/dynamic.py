@@ -370,7 +370,7 @@ class DynamicCar:
 def physics_kernel(wanted: str | None = None) -> tuple[str, Forces]:
     """The tyre model's path ``wanted`` (auto | numba | python; None: ``TINYRACE_PHYSICS``'s,
     else auto), by name, with its ``car_forces``: auto is ``numba`` when numba imports
-    (``pip install tinyrace[fast]``), else ``python``. Same results."""
+    (a dependency of tinyrace), else ``python``. Same results."""
     name, module = kernels.choose(
         PHYSICS_VARIABLE, "python", "tinyrace.cars.kernels.dynamic", wanted
     )

@@ -1,7 +1,7 @@
 """Every configuration section as a dataclass: one schema for YAML files, dicts and kwargs.
 
 Field metadata carries the documentation, the unit and the allowed range; the
-loader validates against it and the README's YAML reference is generated from it.
+loader validates against it and the YAML reference (docs/reference.md) is generated from it.
 ``None`` defaults mean "the track kind decides" (see ``resolve_defaults``).
 """
 

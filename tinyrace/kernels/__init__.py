@@ -3,7 +3,8 @@
 Each compiled kernel (the lidar's ray casting, the tyre model, the cone detector, CarRacing's
 drawing and its track's path) has a plain twin with the same results, and an environment
 variable that chooses between them for what is built afterwards: ``auto`` (or unset) takes
-the compiled module when numba imports (``pip install tinyrace[fast]``), ``numba`` requires
+the compiled module when numba imports (numba is a dependency of tinyrace; the plain twin
+serves where it does not install or import), ``numba`` requires
 it, and the plain path's name forces that.
 
 The compiled twins live in a ``kernels/`` folder of the layer whose plain twin they match
@@ -39,7 +40,7 @@ def choose(
     except ImportError as error:
         if wanted == "numba":
             raise ImportError(
-                f"{variable}=numba needs numba: pip install tinyrace[fast]"
+                f"{variable}=numba needs numba, which did not import: pip install numba"
             ) from error
         return plain, None
     return "numba", module

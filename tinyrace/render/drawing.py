@@ -1,7 +1,7 @@
 """Which path CarRacing's view draws its car and dashboard with: compiled or numpy.
 
 ``TINYRACE_DRAWING`` chooses (``tinyrace.kernels.choose``): ``auto`` (or unset) takes the
-compiled kernels of ``kernels/drawing.py`` when numba imports (``pip install tinyrace[fast]``),
+compiled kernels of ``kernels/drawing.py`` when numba imports (a dependency of tinyrace),
 ``numba`` requires them, ``numpy`` forces the numpy path. Same pixels.
 """
 

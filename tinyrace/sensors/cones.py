@@ -10,7 +10,7 @@ A track that lists its cones (a cone map) is read as it is, by class; on picture
 cones are the connected components of the cone colours (``cones_from_picture``), found once
 per track.
 
-Speed: when numba imports (``pip install tinyrace[fast]``), ``kernels/cones.py``'s compiled
+Speed: when numba imports (a dependency of tinyrace), ``kernels/cones.py``'s compiled
 passes do the detection in one call, with the numpy passes' results bit for bit;
 ``TINYRACE_CONES`` (auto | numba | numpy) chooses the path of sensors built afterwards.
 """

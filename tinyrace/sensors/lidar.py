@@ -3,7 +3,7 @@
 ``blocking_map`` draws what ``blocks`` names (off-road, walls, obstacle colours, cones) into
 a grid of cells once per track; ``tinyrace.sensors.raycast_numpy`` casts the beams on it (sample
 tables and two vectorised passes, no loop over beams), or, when numba imports
-(``pip install tinyrace[fast]``), ``tinyrace.sensors.kernels.raycast``'s compiled kernel: the
+(a dependency of tinyrace), ``tinyrace.sensors.kernels.raycast``'s compiled kernel: the
 same float32 ranges bit for bit, several times faster and without the sample tables (about
 38 MB per 1080-beam lidar). The environment variable ``TINYRACE_LIDAR`` chooses the path of
 the lidars built afterwards: ``numpy`` forces the numpy path, ``numba`` requires the compiled
@@ -413,7 +413,8 @@ def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
             f"beams: {config.beams} over fov: {config.fov} deg would need "
             f"{size / 2**20:,.0f} MB of ray-casting tables on the numpy path (at most "
             f"{TABLE_LIMIT // 2**20} MB): use fewer beams or a wider fov, or "
-            "pip install tinyrace[fast] (its compiled lidar needs no tables)"
+            "the compiled path (numba, a dependency of tinyrace; not TINYRACE_LIDAR=numpy), "
+            "whose lidar needs no tables"
         )
 
 

@@ -1,7 +1,7 @@
 """Compiled tyre model (numba): ``DynamicCar.apply_forces``'s arithmetic, bit for bit.
 
 Imported only when a dynamic car first applies its forces and numba imports
-(``pip install tinyrace[fast]``); see ``dynamic.physics_kernel``. One per-car function,
+(a dependency of tinyrace); see ``dynamic.physics_kernel``. One per-car function,
 ``_forces``, does a car's step of the tyre model: wheel spin from gas and brake, slip forces
 capped by the friction limit, the summed force and torque, the velocity update with
 Box2D's speed cap, steering toward the target and the skid flags. ``car_forces`` runs it

@@ -1,6 +1,6 @@
 """Compiled drawing of CarRacing's view (numba): the dashboard's bars and the car's blend.
 
-Imported only when numba imports (``pip install tinyrace[fast]``); see
+Imported only when numba imports (a dependency of tinyrace); see
 ``tinyrace.render.drawing.kernel``. Each function gives the numpy path's pixels, bit for bit:
 
 - ``draw_bars``: the strip of ``Dashboard`` from its instruments' values. The numpy path

@@ -1,6 +1,6 @@
 """Compiled cone detection (numba): ``cones.numpy_path``'s results, bit for bit, in one call.
 
-Imported only when a cone sensor is built and numba imports (``pip install tinyrace[fast]``);
+Imported only when a cone sensor is built and numba imports (a dependency of tinyrace);
 see ``cones.kernel``. At a few hundred cones the numpy path's cost is its dozen calls'
 fixed overhead, not their arithmetic; here the whole pass is one call: each cone moved into
 the car's frame with the same float64 operations in the same order (``cones.to_car_frame``:

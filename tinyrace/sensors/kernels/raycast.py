@@ -1,6 +1,6 @@
 """Compiled ray casting (numba): ``raycast_numpy.cast``'s ranges, bit for bit, one beam at a time.
 
-Imported only when a lidar is built and numba imports (``pip install tinyrace[fast]``); see
+Imported only when a lidar is built and numba imports (a dependency of tinyrace); see
 ``lidar.kernel``. The numpy passes find each beam's first blocked sample (its sample
 offsets tabulated by ``raycast.beam_fan``; the coarse pass only skips segments that the NEAR
 maps show hold none). This kernel finds the same sample without tables or NEAR maps: it

@@ -1,6 +1,6 @@
 """Compiled composition of a camera's affine with a texture level's (numba).
 
-Imported only when numba imports (``pip install tinyrace[fast]``); see
+Imported only when numba imports (a dependency of tinyrace); see
 ``texture.compose_kernel``. ``shift_scale_matrix`` is ``texture.shift_scale_matrix`` bit
 for bit: plain float64 products and sums (no fastmath), and in the shift column the
 fused multiply-add that numpy's ``compose`` gets from OpenBLAS, as LLVM's ``llvm.fma``

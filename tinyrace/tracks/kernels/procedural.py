@@ -1,6 +1,6 @@
 """Compiled tracing of CarRacing's track (numba): ``procedural.trace_path``, bit for bit.
 
-Imported only when numba imports (``pip install tinyrace[fast]``); see
+Imported only when numba imports (a dependency of tinyrace); see
 ``procedural_source.trace_kernel``. numba compiles ``procedural.trace_loop`` itself, the
 plain path's loop, on arrays: the C library's ``atan2``, ``cos`` and ``sin`` (which numba
 calls as CPython's ``math`` does) and float64 arithmetic without fastmath (no reordering,
