@@ -167,3 +167,39 @@ def test_every_car_observes_from_its_own_seat():
     observations, _ = env.reset(seed=0)
     assert set(observations) == {"car_0", "car_1"}
     assert not np.array_equal(observations["car_0"]["lidar"], observations["car_1"]["lidar"])
+
+
+def test_a_learner_races_opponents_driven_by_the_centreline_driver():
+    import gymnasium as gym
+
+    alone = gym.make("tinyrace/TinyRace-v0", environment="circuit")
+    env = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment="circuit",
+        opponents=[{"driver": "centerline", "speed": 0.8}, {"driver": "centerline"}],
+    )
+    assert env.observation_space == alone.observation_space
+    assert env.action_space == alone.action_space
+    observation, info = env.reset(seed=0)
+    assert info["position"] == 1 and info["cars_hit"] == []
+    core = env.unwrapped
+    start = [car.pose for car in core.snapshot().cars]
+    assert len(start) == 3
+    idle = np.zeros(env.action_space.shape, dtype=np.float32)
+    for _ in range(150):
+        observation, _, _, _, info = env.step(idle)
+        assert observation in env.observation_space
+    cars = core.snapshot().cars
+    moved = [math.dist(cars[i].pose[:2], start[i][:2]) for i in range(3)]
+    assert moved[0] < 1.0 < moved[1] < moved[2]  # the learner idled; 0.8 of the speed is slower
+    assert core.episode.progress(2) > core.episode.progress(1) > 0
+    assert info["position"] == 3  # both opponents are further on
+
+
+def test_a_bad_opponent_is_named():
+    import gymnasium as gym
+
+    with pytest.raises(ConfigError, match=r"opponents\[1\].*unknown opponent driver 'fast'"):
+        gym.make("tinyrace/TinyRace-v0", environment="circuit", opponents=[{}, {"driver": "fast"}])
+    with pytest.raises(ConfigError, match=r"opponents\[0\].*speed"):
+        gym.make("tinyrace/TinyRace-v0", environment="circuit", opponents=[{"speed": -1}])

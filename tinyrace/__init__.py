@@ -22,6 +22,6 @@ if "tinyrace/CarRacing-v0" not in registry:
     )
     register(
         id="tinyrace/TinyRace-v0",
-        entry_point="tinyrace.env:TinyRaceEnv",
+        entry_point="tinyrace.race.opponents:make_env",  # a TinyRaceEnv (with opponents: wrapped)
         vector_entry_point="tinyrace.vector:make_tinyrace_vec",
     )

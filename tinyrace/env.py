@@ -125,6 +125,7 @@ class TinyRaceEnv(gym.Env):
         self.terms = active_terms(self.config.reward_design, self.shaping)  # asked per step
         self.episode: Episode | None = None
         self.start_facts: list[StepFacts] = []  # every car's facts of the reset's step
+        self.last_facts: list[StepFacts] = []  # every car's facts of the last step
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
 
@@ -185,7 +186,8 @@ class TinyRaceEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         self.control(action)
-        return self.conclude(self._episode().step(self.dt)[0])
+        self.last_facts = self._episode().step(self.dt)
+        return self.conclude(self.last_facts[0])
 
     # The stepping protocol: a step in parts, for a vector env that moves many cars between
     # them. ``step(a)`` is ``control(a)``; ``world.apply_forces(dt)`` (or a batch sets the
@@ -206,7 +208,8 @@ class TinyRaceEnv(gym.Env):
     def advance(self) -> StepFacts:
         """The rest of a step's physics, once the cars' forces are set (``world.apply_forces``
         or a batch): the world advanced by ``dt``, the episode's rules' facts."""
-        return self._episode().advance(self.dt)[0]
+        self.last_facts = self._episode().advance(self.dt)
+        return self.last_facts[0]
 
     def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Rewards, episode end, observation and info of a step whose physics is done."""

@@ -66,6 +66,16 @@ class Episode:
                 return order  # the rule's own list, read as it grows
         return []
 
+    def progress(self, car: int) -> int:
+        """Tiles car ``car`` has visited (0 on a track without tiles)."""
+        counts = (getattr(rule, "visited_count", 0) for rule in self.rules[car])
+        return max(counts, default=0)
+
+    def position(self, car: int) -> int:
+        """Car ``car``'s place in the race by tiles visited: 1 + the cars further on."""
+        mine = self.progress(car)
+        return 1 + sum(self.progress(other) > mine for other in range(len(self.rules)))
+
     def start(self, dt: float) -> list[StepFacts]:
         """The reset's step: one physics step with no action (CarRacing), or a look at the
         spawn (the cars do not move); either way the rules judge it. Each car's facts."""

@@ -232,16 +232,9 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         info = episode.info(snapshot, car)
         info["reward_terms"] = terms
         info["car"] = car
-        info["position"] = self._position(car)
+        info["position"] = episode.position(car)
         info["cars_hit"] = [f"car_{other}" for other in episode.world.contacts[car].new_cars]
         return info
-
-    def _position(self, car: int) -> int:
-        """1 + the number of cars with more progress (tiles visited) than ``car``."""
-        episode = self.core.episode
-        assert episode is not None
-        progress = [_tiles_visited(rules) for rules in episode.rules]
-        return 1 + sum(p > progress[car] for p in progress)
 
 
 def _known_options(options: Mapping[str, Any] | None) -> dict[str, Any] | None:
@@ -253,10 +246,6 @@ def _known_options(options: Mapping[str, Any] | None) -> dict[str, Any] | None:
     if unknown:
         gym.logger.warn(f"RaceEnv.reset ignores unknown options {unknown}; known: {RESET_OPTIONS}")
     return {key: value for key, value in options.items() if key in RESET_OPTIONS}
-
-
-def _tiles_visited(rules: list[Any]) -> int:
-    return max((getattr(rule, "visited_count", 0) for rule in rules), default=0)
 
 
 def _not_racing(agent: object, env: RaceEnv) -> str:

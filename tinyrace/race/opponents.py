@@ -1,0 +1,140 @@
+"""One learner against driven opponents: a single-agent env whose other cars have drivers.
+
+``gym.make("tinyrace/TinyRace-v0", environment=..., opponents=[{"driver": "centerline",
+"speed": 0.8}, ...])`` makes the track's env with one more car per opponent on the start
+grid (``race`` knobs). Car 0 is the learner's: its observation, reward and end are the
+env's as without opponents. Before every step each opponent's driver reads its car's
+pose and speed and sets its controls; an opponent whose episode ends (out of bounds, a
+collision that ends it, its lap) is parked where it stands. ``info`` adds the learner's
+``position`` in the race and the ``cars_hit`` this step.
+
+An opponent's ``driver`` is a registered driver name (``centerline``; ``speed`` scales
+its speed profile) or any object with ``controls(pose, speed) -> (steer, gas, brake)``
+and, optionally, ``follow(route, action_space, dt)`` (called at every reset).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import gymnasium as gym
+
+from tinyrace.drivers import DRIVERS, ActionAdapter, CenterlineDriver
+from tinyrace.drivers.centerline import route_of
+from tinyrace.env import TinyRaceEnv
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.rewards import ends_episode
+
+SOURCE = "<kwargs>"
+OPPONENT_KEYS = ("driver", "speed")
+RACING_DRIVERS = ("centerline",)  # registered drivers that drive from a car's pose and speed
+
+
+def make_env(*, opponents: Sequence[Any] | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+    """``tinyrace/TinyRace-v0``'s entry point: a ``TinyRaceEnv``; with ``opponents``, one
+    with a car per opponent, each driven by its driver (see the module's docstring)."""
+    if opponents is None:
+        return TinyRaceEnv(**kwargs)
+    drivers = opponent_drivers(opponents)
+    race = dict(kwargs.pop("race", None) or {})
+    race["num_agents"] = 1 + len(drivers)
+    return Opponents(TinyRaceEnv(race=race, **kwargs), drivers)
+
+
+def opponent_drivers(opponents: object) -> list[Any]:
+    """One driver per opponent spec; a ConfigError names every bad spec (``opponents[i]``)."""
+    if isinstance(opponents, (str, bytes)) or not isinstance(opponents, Sequence):
+        allowed = "expected a list of opponents, each {driver: <name or object>, speed: 0..2}"
+        raise ConfigError(Problem(SOURCE, "opponents", opponents, allowed))
+    drivers, problems = [], []
+    for i, spec in enumerate(opponents):
+        try:
+            drivers.append(_driver(spec))
+        except ValueError as exc:
+            problems.append(Problem(SOURCE, f"opponents[{i}]", _short(spec), str(exc)))
+    if len(opponents) > 15:
+        problems.append(
+            Problem(SOURCE, "opponents", len(opponents), "at most 15 opponents (16 cars)")
+        )
+    if problems:
+        raise ConfigError(problems)
+    return drivers
+
+
+def _driver(spec: object) -> Any:
+    if not isinstance(spec, Mapping):
+        raise ValueError("expected a mapping {driver: <name or object>, speed: <factor>}")
+    unknown = [key for key in spec if key not in OPPONENT_KEYS]
+    if unknown:
+        raise ValueError(f"unknown keys {unknown}; known: {', '.join(OPPONENT_KEYS)}")
+    driver, speed = spec.get("driver", "centerline"), spec.get("speed", 1.0)
+    if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not 0 < speed <= 2:
+        raise ValueError(f"speed must be a number in (0, 2], got {speed!r}")
+    if isinstance(driver, str):
+        if driver not in RACING_DRIVERS:
+            other = " (it cannot drive a car of a race)" if driver in DRIVERS else ""
+            known = ", ".join(RACING_DRIVERS)
+            raise ValueError(f"unknown opponent driver {driver!r}{other}; drivers: {known}")
+        return _scaled_centerline(float(speed))
+    if not callable(getattr(driver, "controls", None)):
+        raise ValueError("a driver object needs a method controls(pose, speed) -> controls")
+    return driver
+
+
+def _scaled_centerline(factor: float) -> CenterlineDriver:
+    """The centreline driver with its speed profile scaled by ``factor``."""
+    base = CenterlineDriver()
+    return CenterlineDriver(
+        top_speed=base.top_speed * factor,
+        lateral_accel=base.lateral_accel * factor**2,  # speeds in curves scale by factor
+        brake_accel=base.brake_accel * factor**2,
+    )
+
+
+class Opponents(gym.Wrapper[Any, Any, Any, Any]):
+    """Drives cars 1.. of the env's world with their drivers before each learner step."""
+
+    def __init__(self, env: TinyRaceEnv, drivers: list[Any]):
+        super().__init__(env)
+        self.core = env
+        self.drivers = drivers
+        self.adapt = ActionAdapter(env.action_space, env.dt)
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        observation, info = self.env.reset(**kwargs)
+        route = None
+        for driver in self.drivers:
+            if hasattr(driver, "follow"):
+                route = route or route_of(self.core)
+                driver.follow(route, self.core.action_space, self.core.dt)
+        return observation, self._race_info(info)
+
+    def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
+        core = self.core
+        world = core.world
+        cars = core.snapshot().cars
+        for i, driver in enumerate(self.drivers, start=1):
+            if i not in world.parked:
+                controls = driver.controls(cars[i].pose, cars[i].speed)
+                world.control(core.action_spec.read(self.adapt(controls)), car=i)
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        design = core.config.reward_design
+        episode = core.episode
+        assert episode is not None
+        for i, facts in enumerate(core.last_facts[1:], start=1):
+            if i not in world.parked and ends_episode(facts, design) is not None:
+                episode.park(i)
+        return observation, reward, terminated, truncated, self._race_info(info)
+
+    def _race_info(self, info: dict[str, Any]) -> dict[str, Any]:
+        episode = self.core.episode
+        assert episode is not None
+        info["position"] = episode.position(0)
+        info["cars_hit"] = [f"car_{other}" for other in episode.world.contacts[0].new_cars]
+        return info
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
