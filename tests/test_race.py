@@ -203,3 +203,23 @@ def test_a_bad_opponent_is_named():
         gym.make("tinyrace/TinyRace-v0", environment="circuit", opponents=[{}, {"driver": "fast"}])
     with pytest.raises(ConfigError, match=r"opponents\[0\].*speed"):
         gym.make("tinyrace/TinyRace-v0", environment="circuit", opponents=[{"speed": -1}])
+
+
+def test_opponents_drive_the_single_track_car_through_its_own_actions():
+    import gymnasium as gym
+
+    env = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment="f1tenth_loop",
+        car={"model": "single_track", "preset": "f1tenth"},
+        opponents=[{"driver": "centerline"}],
+    )
+    env.reset(seed=0)
+    grid = [car.pose for car in env.unwrapped.snapshot().cars]
+    env.reset(seed=0, options={"poses": grid[::-1]})  # the opponent on the pole, ahead
+    start = env.unwrapped.snapshot().cars[1].pose
+    stay = np.array([0.0, 0.0], dtype=np.float32)  # [steering angle, speed]: the learner waits
+    for _ in range(100):
+        env.step(stay)
+    assert env.unwrapped.episode.progress(1) > 0  # the opponent drives on
+    assert math.dist(env.unwrapped.snapshot().cars[1].pose[:2], start[:2]) > 1.0

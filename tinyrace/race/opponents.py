@@ -99,7 +99,7 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         super().__init__(env)
         self.core = env
         self.drivers = drivers
-        self.adapt = ActionAdapter(env.action_space, env.dt)
+        self.adapt = ActionAdapter(env.action_space, env.dt, env.action_spec.kind)
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
         observation, info = self.env.reset(**kwargs)
@@ -107,7 +107,8 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         for driver in self.drivers:
             if hasattr(driver, "follow"):
                 route = route or route_of(self.core)
-                driver.follow(route, self.core.action_space, self.core.dt)
+                core = self.core
+                driver.follow(route, core.action_space, core.dt, core.action_spec.kind)
         return observation, self._race_info(info)
 
     def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
@@ -116,8 +117,7 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         cars = core.snapshot().cars
         for i, driver in enumerate(self.drivers, start=1):
             if i not in world.parked:
-                controls = driver.controls(cars[i].pose, cars[i].speed)
-                world.control(core.action_spec.read(self.adapt(controls)), car=i)
+                world.control(core.action_spec.read(self._action(driver, cars[i])), car=i)
         observation, reward, terminated, truncated, info = self.env.step(action)
         design = core.config.reward_design
         episode = core.episode
@@ -126,6 +126,13 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
             if i not in world.parked and ends_episode(facts, design) is not None:
                 episode.park(i)
         return observation, reward, terminated, truncated, self._race_info(info)
+
+    def _action(self, driver: Any, car: Any) -> Any:
+        """The action a driver takes for ``car`` (a CarState): a registered driver's own
+        ``act`` (it knows the car model's actions), else its controls adapted."""
+        if isinstance(driver, CenterlineDriver):
+            return driver.act(None, {"pose": car.pose, "speed": car.speed})
+        return self.adapt(driver.controls(car.pose, car.speed))
 
     def _race_info(self, info: dict[str, Any]) -> dict[str, Any]:
         episode = self.core.episode
