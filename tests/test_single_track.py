@@ -229,3 +229,29 @@ def test_cones_count_it_as_they_count_the_other_cars():
             break
     assert info["cones_hit"] == 1
     env.close()
+
+
+@pytest.mark.parametrize(
+    ("car", "mount", "axle"),
+    [
+        ({"model": "single_track", "preset": "f1tenth"}, None, "rear_axle"),  # F1TENTH's place
+        ({"model": "single_track", "preset": "vehicle2"}, None, "front_axle"),
+        ({"model": "kinematic_throttle"}, None, "front_axle"),
+        ({"model": "single_track", "preset": "f1tenth"}, "front_axle", "front_axle"),
+    ],
+)
+def test_the_f1tenth_preset_puts_the_lidar_where_f1tenth_has_it(car, mount, axle):
+    """f1tenth_gym scans from its car's rear axle (lidar_dist 0 m by default): the f1tenth
+    preset's lidar starts there unless the config names a mount."""
+    lidar = {"id": "lidar", "type": "lidar", "beams": 8, **({"mount": mount} if mount else {})}
+    env = gym.make(
+        "tinyrace/TinyRace-v0",
+        environment=str(TRACKS_DIR / "circuit"),  # room for every car
+        car=car,
+        sensors=[lidar],
+    )
+    env.reset(seed=0)
+    raw = env.unwrapped
+    snapshot = raw.snapshot()
+    sensor = raw.sensors[-1]
+    assert sensor.origin(snapshot, raw.layout) == pytest.approx(getattr(snapshot.car, axle))

@@ -154,8 +154,11 @@ def _single_track_facts(config: EnvConfig) -> CarFacts:
     lock = max(-p.steer_min, p.steer_max)
     top = max(p.v_max, -p.v_min)
     grip = p.mu * single_track_model.G
-    # the action's angle turns left (toward growing headings on the y-up metre tracks)
-    return CarFacts(p.wheelbase, p.width, top, top * math.tan(lock) / p.wheelbase, lock, -1.0, grip)
+    # the action's angle turns left (toward growing headings on the y-up metre tracks);
+    # F1TENTH's gym scans from its car's rear axle (lidar_dist 0 m ahead by default)
+    mount = "rear_axle" if config.car.preset == "f1tenth" else "front_axle"
+    yaw_rate = top * math.tan(lock) / p.wheelbase
+    return CarFacts(p.wheelbase, p.width, top, yaw_rate, lock, -1.0, grip, lidar_mount=mount)
 
 
 def _build_single_track(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:

@@ -51,6 +51,7 @@ class CarFacts:
     grip: float = math.inf  # [track units/s^2] the acceleration its tyres hold (inf: no slip)
     wheels: bool = False  # models its four wheels (wheel speeds and slip; tiles give grip)
     throttle: bool = True  # its speed follows the actions (False: a constant speed)
+    lidar_mount: str = "front_axle"  # where a lidar sits when its config names no mount
 
 
 def read_only(array: np.ndarray) -> np.ndarray:

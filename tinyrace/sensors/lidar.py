@@ -258,8 +258,10 @@ class LidarSensor:
         kernel_name: str | None = None,
         exact_only: bool = False,
         settings: cache.Settings | None = None,
+        mount: str = "front_axle",
     ):
         self.config = config
+        self.mount = config.mount or mount  # the axle the lidar's position is measured from
         self.cache = settings  # where the fields and fans of fixed tracks are shared
         self.max_range = max_range  # [track units]
         self.cell = cell  # [track units]
@@ -345,7 +347,7 @@ class LidarSensor:
         """[track units] where the beams start."""
         car = snapshot.car
         ahead, left = self.config.position
-        axle = car.rear_axle if self.config.mount == "rear_axle" else car.front_axle
+        axle = car.rear_axle if self.mount == "rear_axle" else car.front_axle
         return mount(axle, car.pose[2], track.y_down, ahead, left)
 
     def scan(self, origin: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:
@@ -435,4 +437,5 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
         cone_colors,
         exact_only=env.kind == "ros_map",
         settings=cache_settings(env),
+        mount=context.car.lidar_mount,
     )
