@@ -96,16 +96,20 @@ def model_file(name: str, force: bool) -> Path:
 
 
 def missing() -> str | None:
-    """What training lacks here (None when stable-baselines3 and torch import)."""
+    """What training lacks here (None when stable-baselines3 and torch import): every
+    missing package, named as pip knows it."""
+    lacking = []
     for module in ("torch", "stable_baselines3"):
         try:
             __import__(module)
         except ImportError:
-            return (
-                f"tinyrace train needs {module.replace('_', '-')}: {TRAIN_EXTRA} "
-                "(without a GPU, install PyTorch's CPU build first)"
-            )
-    return None
+            lacking.append(module.replace("_", "-"))
+    if not lacking:
+        return None
+    return (
+        f"tinyrace train needs {' and '.join(lacking)}: {TRAIN_EXTRA} "
+        "(without a GPU, install PyTorch's CPU build first)"
+    )
 
 
 def train_env(target: str | Path | None, max_episode_steps: int | None = None) -> TrainEnv:
