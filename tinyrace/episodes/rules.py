@@ -37,26 +37,21 @@ class Rule(Protocol):
         """Add this rule's keys to the car's info (as of the last step)."""
 
 
-class TileTouches:
-    """CarRacing's progress: road tiles are sensors; a tile a wheel touches is visited (paid
-    once); a lap ends when every tile is visited, or back on tile 0 after
-    ``lap_complete_percent`` of them. Wheels on no tile are on the grass."""
+class TileProgress:
+    """Tiles visited once each, in the order first visited, and the lap rule: a lap ends
+    when every tile is visited, or back on tile 0 after ``lap_complete_percent`` of them."""
 
-    @staticmethod
-    def furnish(world: World, track: Track) -> None:
-        world.add_tiles(_tiles(track))
-
-    def __init__(self, track: Track) -> None:
-        self.visited = np.zeros(len(_tiles(track)), bool)
+    def __init__(self, tiles: int, lap_percent: float) -> None:
+        self.visited = np.zeros(tiles, bool)
         self.visited_count = 0
         self.visit_order: list[int] = []  # tiles in the order first visited (pictures repaint)
-        self.lap_percent = track.rules.lap_complete_percent
-        self.wheels_on_grass = 0  # as of the last step
+        self.lap_percent = lap_percent
 
-    def judge(self, contacts: Contacts, car: CarState, facts: StepFacts) -> None:
+    def _visit(self, tiles: Sequence[int], facts: StepFacts) -> None:
+        """Mark ``tiles`` (reached in this order during the step) visited; the lap rule."""
         n = len(self.visited)
         facts.tiles_total = n
-        for tile in contacts.new_tile_touches:
+        for tile in tiles:
             if not self.visited[tile]:
                 self.visited[tile] = True
                 self.visited_count += 1
@@ -67,6 +62,22 @@ class TileTouches:
                 facts.lap_finished = True
         if self.visited_count == n:
             facts.lap_finished = True
+
+
+class TileTouches(TileProgress):
+    """CarRacing's progress: road tiles are sensors; a tile a wheel touches is visited (paid
+    once); laps as ``TileProgress``. Wheels on no tile are on the grass."""
+
+    @staticmethod
+    def furnish(world: World, track: Track) -> None:
+        world.add_tiles(_tiles(track))
+
+    def __init__(self, track: Track) -> None:
+        super().__init__(len(_tiles(track)), track.rules.lap_complete_percent)
+        self.wheels_on_grass = 0  # as of the last step
+
+    def judge(self, contacts: Contacts, car: CarState, facts: StepFacts) -> None:
+        self._visit(contacts.new_tile_touches, facts)
         facts.wheels_on_grass = self.wheels_on_grass = _on_grass(contacts.wheel_tiles)
 
     def info(self, info: Info) -> None:
@@ -75,10 +86,10 @@ class TileTouches:
         info["wheels_on_grass"] = self.wheels_on_grass  # contacts change only in a step
 
 
-class CentrelineProgress:
+class CentrelineProgress(TileProgress):
     """Progress along a reference line read from a file: the tiles the car's rear axle
-    passed since the last step (forward, on the road) are visited; laps as in
-    ``TileTouches``; the cross-track error is the distance to the centreline [m]."""
+    passed since the last step (forward, on the road) are visited; laps as
+    ``TileProgress``; the cross-track error is the distance to the centreline [m]."""
 
     REACH = 60.0  # [m] how far along the line the nearest point is searched from the last
 
@@ -89,37 +100,22 @@ class CentrelineProgress:
     def __init__(self, track: Track) -> None:
         circuit = track.circuit
         assert circuit is not None  # a track lists this part only with a reference line
+        super().__init__(len(circuit.tiles), track.rules.lap_complete_percent)
         self.circuit = circuit
-        self.visited = np.zeros(len(circuit.tiles), bool)
-        self.visited_count = 0
-        self.visit_order: list[int] = []  # tiles in the order first visited
-        self.lap_percent = track.rules.lap_complete_percent
         self.nearest = -1  # centreline index near the car (-1: search all)
         self.tile = -1  # the tile under the car at the last step (-1: none yet)
         self.cte: float | None = None
         self.on_road = True
 
     def judge(self, contacts: Contacts, car: CarState, facts: StepFacts) -> None:
-        facts.tiles_total = n = len(self.visited)
+        n = facts.tiles_total = len(self.visited)
         previous, (index, lateral) = self.tile, self._locate(*car.rear_axle)
         self.tile = index
         self.cte = facts.cte = abs(lateral)
         right, left = self.circuit.widths[index]
         self.on_road = bool(-right <= lateral <= left)
-        if not self.on_road:
-            return
-        passed = [index] if previous < 0 else _between(previous, index, n)
-        for tile in passed:
-            if not self.visited[tile]:
-                self.visited[tile] = True
-                self.visited_count += 1
-                self.visit_order.append(tile)
-                facts.tiles.append(tile)
-                facts.new_tiles += 1
-            if tile == 0 and self.visited_count / n > self.lap_percent:
-                facts.lap_finished = True
-        if self.visited_count == n:
-            facts.lap_finished = True
+        if self.on_road:
+            self._visit([index] if previous < 0 else _between(previous, index, n), facts)
 
     def _locate(self, x: float, y: float) -> tuple[int, float]:
         """(tile index, signed lateral offset [m], + left) of a point, searched near the last."""
