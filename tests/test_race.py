@@ -223,3 +223,22 @@ def test_opponents_drive_the_single_track_car_through_its_own_actions():
         env.step(stay)
     assert env.unwrapped.episode.progress(1) > 0  # the opponent drives on
     assert math.dist(env.unwrapped.snapshot().cars[1].pose[:2], start[:2]) > 1.0
+
+
+def test_a_lidar_sees_the_other_cars():
+    """Car 1 stands 2 m ahead of car 0's front axle: car 0's forward beam stops there, and
+    car 1's lidar (riding on car 1) does not see itself."""
+    sensors = [{"id": "lidar", "type": "lidar", "beams": 3, "fov": 2.0}]  # middle beam ahead
+    env = parallel_env(environment="circuit", num_agents=2, sensors=sensors)
+    env.reset(seed=0)
+    car = env.core.snapshot().cars[0]
+    x, y, heading = car.pose
+    ahead = car.footprint[0] + 2.0  # [m] from car 0's rear axle to car 1's
+    behind_pose = (x, y, heading)
+    front_pose = (x + ahead * math.cos(heading), y + ahead * math.sin(heading), heading)
+    observations, _ = env.reset(seed=0, options={"poses": [behind_pose, front_pose]})
+    assert observations["car_0"]["lidar"][1] == pytest.approx(2.0, abs=1e-4)
+    assert observations["car_1"]["lidar"][1] > 2.0  # nothing of car 1 in its own beams
+    alone = parallel_env(environment="circuit", num_agents=1, sensors=sensors)
+    seen, _ = alone.reset(seed=0)
+    assert seen["car_0"]["lidar"][1] > 2.0  # without car 1 the beam goes on

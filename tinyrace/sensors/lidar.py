@@ -40,6 +40,7 @@ from tinyrace.sensors.common import (
     grid,
     mount,
 )
+from tinyrace.sensors.other_cars import ranges_to_cars
 from tinyrace.sensors.raycast import (
     DistanceField,
     ExactField,
@@ -367,6 +368,11 @@ class LidarSensor:
         heading = snapshot.car.pose[2]
         origin = self.origin(snapshot, track)
         ranges = self.scan(origin, heading, track.y_down)
+        if len(snapshot.cars) > 1:  # a race: the other cars stop beams too
+            beams = directions(self.angles, heading, track.y_down)
+            ranges = np.minimum(
+                ranges, ranges_to_cars(origin, beams, snapshot.cars[1:], self.max_range)
+            )
         c = self.config
         classes = None
         if c.hit_classes:
