@@ -13,7 +13,7 @@ from typing import Any, cast
 from tinyrace.cache import Settings, default_folder
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
-from tinyrace.config.colors import Color
+from tinyrace.config.colors import Color, palette_color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.schema import (
     METRIC_KINDS,
@@ -63,10 +63,16 @@ __all__ = [
     "SimConfig",
     "TrackConfig",
     "cache_settings",
+    "car_colors",
     "load_env_config",
 ]
 
 TRACK_FILE = "track.yaml"
+
+
+def car_colors(config: EnvConfig) -> list[Color]:
+    """Each car's colour, in car order (what cameras, the overview and videos draw)."""
+    return [palette_color(car) for car in range(config.race.num_agents)]
 
 
 def cache_settings(config: EnvConfig) -> Settings:

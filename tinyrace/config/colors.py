@@ -50,3 +50,22 @@ class Color(tuple[int, int, int]):
 
     def __repr__(self) -> str:
         return "#{:02x}{:02x}{:02x}".format(*self)
+
+
+# The cars of a race, in order: car 0 keeps CarRacing's red; the others are told apart
+# at a glance (Okabe-Ito's colour-blind-safe palette, then greys).
+CAR_PALETTE: tuple[Color, ...] = (
+    Color.rgb(204, 0, 0),
+    Color.rgb(0, 114, 178),
+    Color.rgb(230, 159, 0),
+    Color.rgb(0, 158, 115),
+    Color.rgb(204, 121, 167),
+    Color.rgb(86, 180, 233),
+    Color.rgb(240, 228, 66),
+    Color.rgb(213, 94, 0),
+)
+
+
+def palette_color(car: int) -> Color:
+    """Car ``car``'s colour when its config names none (the palette, repeated)."""
+    return CAR_PALETTE[car % len(CAR_PALETTE)]
