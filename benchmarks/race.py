@@ -211,8 +211,10 @@ def main(argv: list[str] | None = None) -> int:
     at_most = [row for row in rows if row["cars"] == max(args.cars)]
     for row in at_most:
         verdict = "meets" if row["ratio"] <= TARGET else "misses"
-        print(f"{row['track']} {row['setup']}: {row['ratio']:.2f}x at N = {row['cars']}, "
-              f"{verdict} the target of {TARGET}x")
+        print(
+            f"{row['track']} {row['setup']}: {row['ratio']:.2f}x at N = {row['cars']}, "
+            f"{verdict} the target of {TARGET}x"
+        )
     if args.json:
         with open(args.json, "w") as out:
             json.dump(rows, out, indent=1)
