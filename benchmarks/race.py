@@ -40,6 +40,7 @@ from tinyrace.race import RaceEnv
 SEED = 0
 CARS = (1, 2, 4, 8)
 TARGET = 1.2  # issue 28: one N-car step / N at most this many one-car steps, at N = 8
+TARGET_CARS = 8
 TRACKS: dict[str, dict[str, Any]] = {
     "f1tenth_loop": {"environment": "f1tenth_loop"},  # a ROS map in metres, with walls
     "circuit": {"environment": "circuit"},  # a 2.2 km centreline track in metres
@@ -208,13 +209,13 @@ def main(argv: list[str] | None = None) -> int:
             print(table(rows[-len(args.cars) :]), flush=True)
     print(f"\nload average {os.getloadavg()[0]:.2f} at the end")
     print(table(rows))
-    at_most = [row for row in rows if row["cars"] == max(args.cars)]
-    for row in at_most:
-        verdict = "meets" if row["ratio"] <= TARGET else "misses"
-        print(
-            f"{row['track']} {row['setup']}: {row['ratio']:.2f}x at N = {row['cars']}, "
-            f"{verdict} the target of {TARGET}x"
-        )
+    for row in rows:
+        if row["cars"] == TARGET_CARS:
+            verdict = "meets" if row["ratio"] <= TARGET else "misses"
+            print(
+                f"{row['track']} {row['setup']}: {row['ratio']:.2f}x per car at N = "
+                f"{TARGET_CARS}, {verdict} the target of {TARGET}x"
+            )
     if args.json:
         with open(args.json, "w") as out:
             json.dump(rows, out, indent=1)
