@@ -93,3 +93,9 @@ def _state(x: float, y: float, heading: float, length: float, width: float):
     front = (x + length * math.cos(heading), y + length * math.sin(heading))
     return CarState("test", (x, y, heading), (0.0, 0.0), 0.0, 0.0, 0.0, front, (x, y),
                     (length, width))  # fmt: skip
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.tuples(coordinate, coordinate), car)
+def test_a_footprint_seen_from_the_origin_is_the_same_float64_on_both_paths(origin, car):
+    assert compiled._box(*origin, *car) == other_cars.box(*origin, *car)

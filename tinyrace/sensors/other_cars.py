@@ -7,10 +7,10 @@ wide), by the slab test in each box's own frame. numpy over the beams, one pass 
 ``add_cars`` is the lidar's call: it lowers a scan's ranges to the other cars' distances,
 its beams given by their fixed angles (``fan``) turned by the car's heading. This is the
 plain path; ``tinyrace.sensors.kernels.other_cars`` is its compiled twin (the lidar's
-``kernel``), with the same float64 arithmetic in the same order (``box`` is shared, the
-beams' turn and the slab test are written out alike), which tests only the beams within
-the angle a box spans as seen from the origin (a few of a 1080-beam fan) and gives the
-same ranges bit for bit.
+``kernel``), with the same float64 arithmetic in the same order (``box``, the beams' turn
+and the slab test written out alike; tests/test_other_cars_kernel.py), which tests only
+the beams within the angle a box spans as seen from the origin (a few of a 1080-beam fan)
+and gives the same ranges bit for bit.
 """
 
 from __future__ import annotations
