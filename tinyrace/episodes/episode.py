@@ -73,8 +73,13 @@ class Episode:
 
     def position(self, car: int) -> int:
         """Car ``car``'s place in the race by tiles visited: 1 + the cars further on."""
-        mine = self.progress(car)
-        return 1 + sum(self.progress(other) > mine for other in range(len(self.rules)))
+        return self.positions()[car]
+
+    def positions(self) -> list[int]:
+        """Every car's ``position``, each car's progress read once (a race's step asks
+        for all of them)."""
+        progress = [self.progress(car) for car in range(len(self.rules))]
+        return [1 + sum(other > mine for other in progress) for mine in progress]
 
     def start(self, dt: float) -> list[StepFacts]:
         """The reset's step: one physics step with no action (CarRacing), or a look at the

@@ -150,8 +150,9 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         snapshot = core.snapshot()
         observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
         infos = {}
+        positions = episode.positions()  # once per step, not per car
         for agent, i in self._live():
-            info = self._info(snapshot, i, terms_of[agent], facts[i])
+            info = self._info(snapshot, i, terms_of[agent], facts[i], positions)
             if reasons[agent] is not None:
                 info["termination"] = reasons[agent]
                 info["lap_finished"] = reasons[agent] == "lap_finished"
@@ -225,14 +226,19 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         return observation if core.box_camera is None else observation[core.box_camera]
 
     def _info(
-        self, snapshot: Snapshot, car: int, terms: dict[str, float], facts: StepFacts
+        self,
+        snapshot: Snapshot,
+        car: int,
+        terms: dict[str, float],
+        facts: StepFacts,
+        positions: list[int] | None = None,
     ) -> dict[str, Any]:
         episode = self.core.episode
         assert episode is not None
         info = episode.info(snapshot, car)
         info["reward_terms"] = terms
         info["car"] = car
-        info["position"] = episode.position(car)
+        info["position"] = episode.position(car) if positions is None else positions[car]
         info["cars_hit"] = [f"car_{other}" for other in episode.world.contacts[car].new_cars]
         return info
 

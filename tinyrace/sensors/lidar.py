@@ -28,7 +28,7 @@ from tinyrace import cache, kernels
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors import common, raycast, raycast_numpy
+from tinyrace.sensors import common, other_cars, raycast, raycast_numpy
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
@@ -40,7 +40,6 @@ from tinyrace.sensors.common import (
     grid,
     mount,
 )
-from tinyrace.sensors.other_cars import ranges_to_cars
 from tinyrace.sensors.raycast import (
     DistanceField,
     ExactField,
@@ -221,6 +220,10 @@ def _picture_labels(
 
 Cast = Callable[[DistanceField, Fan, tuple[float, float], float, bool], np.ndarray]
 CastExact = Callable[[np.ndarray, tuple[float, float], np.ndarray, np.ndarray, float], np.ndarray]
+AddCars = Callable[
+    [np.ndarray, tuple[float, float], float, bool, other_cars.BeamFan, np.ndarray, float],
+    np.ndarray,
+]
 
 
 def kernel(wanted: str | None = None) -> tuple[str, Cast]:
@@ -240,6 +243,15 @@ def exact_kernel(name: str) -> CastExact:
     from tinyrace.sensors.kernels import raycast as compiled  # imported: kernel() chose it
 
     return typed(CastExact, compiled.cast_exact)
+
+
+def cars_kernel(wanted: str | None = None) -> tuple[str, AddCars]:
+    """The path ``wanted`` (as ``kernel``'s, the same variable) of the other cars' ranges in
+    a race, by name, and its ``add_cars`` (``other_cars.add_cars`` or its compiled twin)."""
+    name, module = kernels.choose(
+        KERNEL_VARIABLE, "numpy", "tinyrace.sensors.kernels.other_cars", wanted
+    )
+    return name, other_cars.add_cars if module is None else typed(AddCars, module.add_cars)
 
 
 class LidarSensor:
@@ -281,6 +293,8 @@ class LidarSensor:
         self._fans: dict[tuple[Any, ...], Fan] = {}
         self.kernel, self._cast = kernel(kernel_name)
         self._cast_exact = exact_kernel(self.kernel)
+        self._beam_fan = other_cars.fan(self.angles)  # the other cars' ranges (a race's)
+        _, self._add_cars = cars_kernel(self.kernel)
         if self.kernel == "numpy" and not exact_only:  # ROS maps need no tables
             _check_tables(config, self.angles)
 
@@ -369,10 +383,9 @@ class LidarSensor:
         origin = self.origin(snapshot, track)
         ranges = self.scan(origin, heading, track.y_down)
         if len(snapshot.cars) > 1:  # a race: the other cars stop beams too
-            beams = directions(self.angles, heading, track.y_down)
-            ranges = np.minimum(
-                ranges, ranges_to_cars(origin, beams, snapshot.cars[1:], self.max_range)
-            )
+            rows = other_cars.car_rows(snapshot.cars[1:])
+            y_down, fan = track.y_down, self._beam_fan
+            ranges = self._add_cars(ranges, origin, heading, y_down, fan, rows, self.max_range)
         c = self.config
         classes = None
         if c.hit_classes:
