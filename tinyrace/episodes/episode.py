@@ -156,6 +156,14 @@ class Episode:
         """Take car ``car`` out of the race (it stays, standing, as an obstacle)."""
         self.world.park(car)
 
+    def leave(self, car: int, reason: str) -> None:
+        """Car ``car``'s episode ended for ``reason``: a car that finished its race is taken
+        off the track (it does not block the line), any other is parked as an obstacle."""
+        if reason == "lap_finished":
+            self.world.retire(car)
+        else:
+            self.world.park(car)
+
     def _judge(self) -> list[StepFacts]:
         world = self.world
         states, contacts, parked = world.states(), world.contacts, world.parked
@@ -276,14 +284,17 @@ class Course:
     def check_fixed_starts(self, tracks: Sequence[Track]) -> list[Problem]:
         """Every problem of the start grid (or the config's poses) on each fixed track, at
         each spawn: a car on another, a wall or a cone, or outside the track."""
-        if len(self.racers) == 1 or self.config.race.start == "random":
-            return []  # one car: ``start_fits``; random: drawn (and checked) at each reset
+        if len(self.racers) == 1:
+            return []  # one car: ``start_fits``
         problems: list[Problem] = []
         for index, track in enumerate(tracks):
             for spawn_index in range(len(track.spawns)):
                 draw = TrackDraw(track, index, spawn_index)
                 try:
-                    self.new_episode(draw)
+                    if self.config.race.start == "random":  # room on the line; drawn per reset
+                        self.start(draw, np.random.default_rng(0))
+                    else:
+                        self.new_episode(draw)
                 except ConfigError as exc:
                     problems += [p for p in exc.problems if p not in problems]
         return problems

@@ -1,11 +1,14 @@
 """RaceEnv: the cars of one episode as PettingZoo agents, stepped together.
 
-The env builds its parts as a ``TinyRaceEnv`` does (one config: track, car model,
-sensors, rewards) with ``race.num_agents`` cars in the world, and gives every car a seat:
-its own sensors (riding on that car: ``Snapshot.seen_from``), running score, reward terms
-and end. A car whose episode ends (a lap, out of bounds, a collision that ends it) leaves
-``agents`` and is parked where it stands: an obstacle the others still meet. The episode
-ends when every car is out or at ``sim.step_limit`` (all truncated).
+The env builds its parts as a ``TinyRaceEnv`` does (one config: track, rewards) with the
+cars of ``race`` in the world (``race.cars``: each its own id, car model, sensors), and
+gives every car a seat: its actions, its own sensors (riding on that car:
+``Snapshot.seen_from``), running score, reward terms and end. A car whose episode ends
+leaves ``agents``: after its last lap (``race.laps``) it is taken off the track (it stands
+where it finished and nothing meets it, so that it does not block the line); out of
+bounds, on an obstacle or in a collision that ends it, it is parked where it stands, an
+obstacle the others still meet. The episode ends when every car is out or at
+``sim.step_limit`` (all truncated).
 
 Rewards per car are the config's reward terms of that car's facts; with
 ``race.tile_reward: first`` a tile pays only the first car to visit it.
@@ -194,8 +197,9 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
                 info["lap_finished"] = reasons[agent] == "lap_finished"
             infos[agent] = info
         for agent in ended:
-            if not truncate:
-                episode.park(self._index[agent])
+            reason = reasons[agent]
+            if reason is not None:
+                episode.leave(self._index[agent], reason)
         self.agents = [agent for agent in self.agents if agent not in ended]
         return observations, rewards, terminations, truncations, infos
 

@@ -368,11 +368,10 @@ class LidarSensor:
         heading = snapshot.car.pose[2]
         origin = self.origin(snapshot, track)
         ranges = self.scan(origin, heading, track.y_down)
-        if len(snapshot.cars) > 1:  # a race: the other cars stop beams too
+        others = snapshot.others
+        if others:  # a race: the other cars on the track stop beams too
             beams = directions(self.angles, heading, track.y_down)
-            ranges = np.minimum(
-                ranges, ranges_to_cars(origin, beams, snapshot.cars[1:], self.max_range)
-            )
+            ranges = np.minimum(ranges, ranges_to_cars(origin, beams, others, self.max_range))
         c = self.config
         classes = None
         if c.hit_classes:
