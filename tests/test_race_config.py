@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -286,3 +288,22 @@ def test_opponents_of_their_own_model_follow_the_line():
     assert env.unwrapped.episode.progress(1) > 20  # 2 m tiles: over 40 m along the line
     assert 1 not in env.unwrapped.world.parked
     assert info["lap_times"] == [] and info["best_lap"] is None and info["position"] == 2
+
+
+def test_a_car_taken_off_the_track_is_neither_met_nor_seen():
+    """Car 1 stands 2 m ahead of car 0: car 0's forward beam stops there until car 1 is
+    taken off the track (as after its last lap); then the beam goes on, as without it."""
+    sensors = [{"id": "lidar", "type": "lidar", "beams": 3, "fov": 2.0}]
+    env = parallel_env(environment="circuit", num_agents=3, sensors=sensors)
+    env.reset(seed=0)
+    cars = env.core.snapshot().cars
+    x, y, heading = cars[0].pose
+    ahead = cars[0].footprint[0] + 2.0
+    front = (x + ahead * math.cos(heading), y + ahead * math.sin(heading), heading)
+    observations, _ = env.reset(seed=0, options={"poses": [cars[0].pose, front, cars[2].pose]})
+    assert observations["car_0"]["lidar"][1] == pytest.approx(2.0, abs=1e-4)
+    env.core.episode.leave(1, "lap_finished")
+    snapshot = env.core.snapshot()
+    assert snapshot.gone == {1} and snapshot.seen_from(2).gone == {2}
+    assert env._observe(snapshot, 0)["lidar"][1] > 2.0
+    assert env.core.world.counts[0] == 2  # its body is out of the space

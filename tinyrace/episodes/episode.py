@@ -53,6 +53,7 @@ class Start:
     source: str
     paths: list[str]  # per car: the key its pose came from
     hint: str = ""  # how to make room, said after each problem
+    value: object = None  # the value problems show (None: each car's pose)
 
 
 class Episode:
@@ -79,7 +80,13 @@ class Episode:
         if len(racers) > 1:
             names = [racer.id for racer in racers]
             problems = placement_problems(
-                draw.track, world.states(), names, start.source, start.paths, start.hint
+                draw.track,
+                world.states(),
+                names,
+                start.source,
+                start.paths,
+                start.hint,
+                start.value,
             )
             if problems:
                 raise ConfigError(problems)
@@ -129,6 +136,12 @@ class Episode:
         """[s] of sim time of each lap car ``car`` finished (``dt``: the step [s])."""
         ends = self.lap_ends[car]
         return [(end - begin) * dt for begin, end in zip([0, *ends], ends, strict=False)]
+
+    def lap_of(self, car: int) -> int:
+        """The lap (0 first) of the tiles car ``car`` visited in the last step."""
+        ends = self.lap_ends[car]
+        done = len(ends) - (1 if ends and ends[-1] == self.steps else 0)
+        return min(done, self.laps - 1)
 
     def start(self, dt: float) -> list[StepFacts]:
         """The reset's step: one physics step with no action (CarRacing), or a look at the
@@ -268,9 +281,9 @@ class Course:
         poses = grid_poses(draw.track, draw.spawn, count, size, race.grid_spacing, race.grid_offset)
         hint = (
             f" (grid places behind spawn {draw.spawn_index} of track {draw.track_index}: fewer "
-            "cars, or race.grid_spacing, race.grid_offset or race.start: random make room)"
+            "cars, a smaller race.grid_spacing or race.grid_offset make room)"
         )
-        return Start(poses, self.source, paths, hint)
+        return Start(poses, self.source, paths, hint, f"{count} cars")
 
     def _car_key(self, car: int) -> str:
         """The key that names car ``car`` in the config."""

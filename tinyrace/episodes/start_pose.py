@@ -92,10 +92,11 @@ def placement_problems(
     source: str,
     paths: Sequence[str],
     hint: str = "",
+    value: object = None,
 ) -> list[Problem]:
     """A Problem for each car that starts outside the track's bounds, on a wall or a cone,
     or on another car (footprints, as the world sees them), named by its id and by the key
-    (``paths[i]``) its pose came from."""
+    (``paths[i]``) its pose came from, showing ``value`` (None: the pose)."""
     corners = [footprint_corners(state) for state in states]
     walls = np.asarray(track.walls, np.float64)
     x0, y0, x1, y1 = track.bounds
@@ -118,7 +119,7 @@ def placement_problems(
                 f"x {width:.2f} track units at {pose}): expected a start pose clear of the "
                 f"walls, cones and the other cars, inside the track{hint}"
             )
-            problems.append(Problem(source, paths[i], pose, allowed))
+            problems.append(Problem(source, paths[i], pose if value is None else value, allowed))
     return problems
 
 

@@ -105,7 +105,7 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
             a: _copy(seat.actions.space)
             for a, seat in zip(self.possible_agents, self.seats, strict=True)
         }
-        self._claimed = np.zeros(0, bool)  # tiles paid already (tile_reward: first)
+        self._claimed = np.zeros((1, 0), bool)  # per lap: tiles paid (tile_reward: first)
 
     def _seat(self, car: int) -> Seat:
         """Car ``car``'s seat: car 0 sits in the core env's; each other car gets its own
@@ -143,7 +143,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         assert episode is not None
         self.agents = list(self.possible_agents)
         tiles = core.layout.tiles
-        self._claimed = np.zeros(0 if tiles is None else len(tiles), bool)
+        laps = core.config.race.laps
+        self._claimed = np.zeros((laps, 0 if tiles is None else len(tiles)), bool)
         facts = core.start_facts
         snapshot = core.snapshot()
         for i, seat in enumerate(self.seats):
@@ -249,9 +250,12 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         return terms, reward, ends_episode(facts, design)
 
     def _pay_first_visits(self, facts: list[StepFacts]) -> None:
-        """``tile_reward: first``: a tile first visited by several cars pays the first only."""
-        claimed = self._claimed
-        for fact in facts:
+        """``tile_reward: first``: a tile first visited in a lap by several cars pays the
+        first only."""
+        episode = self.core.episode
+        assert episode is not None
+        for car, fact in enumerate(facts):
+            claimed = self._claimed[episode.lap_of(car)]
             paid = [tile for tile in fact.tiles if not claimed[tile]]
             claimed[paid] = True
             fact.new_tiles = len(paid)
