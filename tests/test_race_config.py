@@ -232,7 +232,7 @@ def test_poses_in_the_config_must_be_one_per_car_and_only_with_start_poses():
     text = problems(
         environment="circuit", race={"cars": TWO, "start": "poses", "poses": [[0, 0, 0]]}
     )
-    assert "race.poses" in text and "no pose for blue" in text
+    assert "race.poses" in text and "one pose per car (2 cars); no pose for blue" in text
     text = problems(environment="circuit", race={"cars": TWO, "poses": [[0, 0, 0], [9, 9, 0]]})
     assert "poses are read with start: poses only" in text
 

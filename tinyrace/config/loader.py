@@ -228,6 +228,12 @@ def _describe(hint: Any, meta: Mapping[str, Any]) -> str:
         return f"{text} [{unit}]" if unit else text
     if hint is Color:
         return "a colour"
+    if hint is str:
+        return "a non-empty string"
+    members = typing.get_args(hint) if typing.get_origin(hint) in (Union, types.UnionType) else ()
+    if members and all(dataclasses.is_dataclass(m) for m in members):  # told apart by type
+        kinds = [str(f.default) for m in members for f in dataclasses.fields(m) if f.name == "type"]
+        return f"a mapping with a type ({', '.join(kinds)})"
     if dataclasses.is_dataclass(hint):
         return "a mapping with keys: " + ", ".join(f.name for f in dataclasses.fields(hint))
     return getattr(hint, "__name__", str(hint))

@@ -78,12 +78,13 @@ def lay_cars_over_car(raw: Mapping[str, Any]) -> tuple[dict[str, Any], dict[int,
     """``raw`` with each ``race.cars`` entry's ``car`` laid over the top-level ``car`` (and
     ``race.num_agents`` the number of entries when left out); the keys each entry gave."""
     race, top = raw.get("race"), raw.get("car", {})
-    if not isinstance(race, Mapping) or not isinstance(race.get("cars"), list):
+    if not isinstance(race, Mapping) or not isinstance(race.get("cars"), (list, Mapping)):
         return dict(raw), {}
     top = top if isinstance(top, Mapping) else {}
+    cars = race["cars"]
     given: dict[int, set[str]] = {}
     entries = []
-    for index, entry in enumerate(race["cars"]):
+    for index, entry in enumerate([cars] if isinstance(cars, Mapping) else cars):
         own = entry.get("car", {}) if isinstance(entry, Mapping) else None
         if isinstance(own, Mapping):
             given[index] = set(own)
@@ -143,7 +144,7 @@ def race_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
     if race.start == "poses" and len(race.poses) != len(cars):
         missing = [car.id for car in cars[len(race.poses) :]]
         which = f"; no pose for {', '.join(missing)}" if missing else ""
-        allowed = f"expected one pose per car: {len(cars)} poses for {len(cars)} cars{which}"
+        allowed = f"expected one pose per car ({len(cars)} cars){which}"
         problem("poses", [list(p) for p in race.poses], allowed)
     elif race.start != "poses" and race.poses:
         allowed = f"poses are read with start: poses only (start is {race.start})"
