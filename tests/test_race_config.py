@@ -7,7 +7,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
-from pettingzoo.test import parallel_api_test
+from pettingzoo.test import parallel_api_test, parallel_seed_test
 
 from tests.test_race import TRACKS, footprints_overlap, make
 from tinyrace.config import Color, car_colors, load_env_config, race_cars
@@ -74,10 +74,15 @@ def test_cars_of_different_models_and_sensors_race_in_one_world_with_their_own_s
 @pytest.mark.parametrize("kind", sorted(TRACKS))
 @pytest.mark.parametrize("start", ["grid", "random"])
 def test_named_cars_start_apart_on_every_track_kind(kind, start):
-    race = {"cars": [{"id": "a"}, {"id": "b"}, {"id": "c", "colour": "#123456"}], "start": start}
+    own = {"id": "c", "colour": "#123456", "sensors": [{"type": "state", "id": "s"}]}
+    race = {"cars": [{"id": "a"}, {"id": "b"}, own], "start": start}
     env = make(kind, race=race)
     observations, infos = env.reset(seed=3)
     assert list(observations) == ["a", "b", "c"] and infos["c"]["id"] == "c"
+    assert env.observation_space("c") != env.observation_space("a")  # its own sensors
+    assert "s" in env.observation_space("c").spaces
+    for agent in env.agents:
+        assert observations[agent] in env.observation_space(agent)
     assert car_colors(env.core.config)[2] == Color.rgb(0x12, 0x34, 0x56)
     cars = env.core.snapshot().cars
     assert not any(footprints_overlap(cars[i], cars[j]) for i in range(3) for j in range(i))
@@ -99,6 +104,12 @@ def test_a_random_start_is_seeded_and_places_cars_along_the_line():
     length, width = env.core.snapshot().cars[0].footprint
     for x, y, _ in first:  # the pose is the car's middle, on the road beside the line
         assert np.hypot(line[:, 0] - x, line[:, 1] - y).min() <= 0.6 * width + 0.5 * length
+
+
+@pytest.mark.filterwarnings("ignore:.*ignores unknown options")
+def test_a_race_of_named_cars_with_a_random_start_passes_pettingzoo_seed_test():
+    race = {"cars": [{"id": "a"}, {"id": "b", "car": {"model": "single_track"}}], "start": "random"}
+    parallel_seed_test(lambda: parallel_env(environment="f1tenth_loop", race=race), num_cycles=10)
 
 
 def test_poses_from_the_config_place_the_cars():
