@@ -270,7 +270,7 @@ class Course:
             return Start(list(race.poses), self.source, paths)
         if race.start == "random":
             if rng is None:
-                rng = np.random.default_rng()
+                rng = np.random.default_rng(0)  # the env passes its np_random
             try:
                 poses = random_poses(
                     draw.track, draw.spawn, count, size, race.grid_spacing, race.grid_offset, rng
