@@ -129,8 +129,10 @@ def test_poses_from_the_config_place_the_cars():
 def test_lap_times_and_the_best_lap_of_cars_driven_round_two_laps():
     """Both cars follow the centreline for two laps; the lap times are the steps between
     the tiles starting again, times dt; the first car home is first and leaves the track,
-    so the other finishes its laps behind it."""
-    env = parallel_env(environment="f1tenth_loop", num_agents=2, race={"laps": 2})
+    so the other finishes its laps behind it. With ``tile_reward: first`` the leader is paid
+    for the tiles of each lap, the follower for none of them."""
+    race = {"laps": 2, "tile_reward": "first"}
+    env = parallel_env(environment="f1tenth_loop", num_agents=2, race=race)
     _, infos = env.reset(seed=0)
     drivers = {}
     for agent, seat in zip(env.possible_agents, env.seats, strict=True):
@@ -139,11 +141,15 @@ def test_lap_times_and_the_best_lap_of_cars_driven_round_two_laps():
             route_of(env.core), seat.actions.space, env.core.dt, seat.actions.kind
         )
     steps, new_lap_at, last, final = 0, [], 0, {}
+    paid = {"car_0": [0.0, 0.0], "car_1": [0.0, 0.0]}  # tile reward per lap
     while env.agents and steps < 3000:
         actions = {agent: drivers[agent].act(None, infos[agent]) for agent in env.agents}
         _, _, terminations, _, infos = env.step(actions)
         steps += 1
         final.update(infos)
+        for agent, agent_info in infos.items():
+            lap = min(len(agent_info["lap_times"]), 1)
+            paid[agent][lap] += agent_info["reward_terms"].get("tiles", 0.0)
         info = infos.get("car_0")
         if info is None:
             continue
@@ -165,6 +171,9 @@ def test_lap_times_and_the_best_lap_of_cars_driven_round_two_laps():
     assert sum(final["car_1"]["lap_times"]) > sum(final["car_0"]["lap_times"])
     assert final["car_0"]["position"] == 1 and final["car_1"]["position"] == 2
     assert env.core.world.gone == {0, 1}  # both taken off the track at the line
+    assert paid["car_0"][0] > 900 and paid["car_0"][1] > 900  # 1000 per lap
+    # the follower: only the few tiles between its grid place and the pole's (about 5 of 245)
+    assert paid["car_1"][0] < 30 and paid["car_1"][1] < 30
 
 
 def test_the_race_ends_at_the_step_limit_for_every_car():
