@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -129,14 +130,24 @@ class TinyRaceEnv(gym.Env):
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
 
-    def make_sensors(self) -> list[Sensor]:
-        """The config's cameras and sensors, built anew (one set per car that observes)."""
+    def make_sensors(self, car: int = 0) -> list[Sensor]:
+        """Car ``car``'s cameras and sensors (the config's for car 0; a race car's own, else
+        the shared ones), built anew (one set per car that observes)."""
         context = self._sensor_context
+        at = ""
+        if car:
+            racer = self.course.racers[car]
+            config = dataclasses.replace(
+                self.config, car=racer.car.car, cameras=racer.car.cameras, sensors=racer.car.sensors
+            )
+            context = SensorContext(config, self._ground, racer.model.describe(config))
+            at = f"race.cars[{car}]." if self.config.race.cars else ""
         try:
             sensors = build_sensors(context, self._config_source)
         except ConfigError as exc:
-            raise ConfigError(self._blame(exc.problems)) from None
-        return [*_cameras(self.config, context), *sensors]
+            problems = [dataclasses.replace(p, path=f"{at}{p.path}") for p in exc.problems]
+            raise ConfigError(self._blame(problems)) from None
+        return [*_cameras(context.env, context), *sensors]
 
     def _observation_space(self) -> spaces.Space[Any]:
         if not self.sensors:
@@ -154,7 +165,7 @@ class TinyRaceEnv(gym.Env):
         options = _check_options(options, self.config.kind)
         draw = self.track_source.draw(self.np_random, options)
         poses = _check_poses(options.get("poses"), self.config.race.num_agents)
-        self.episode = episode = self.course.new_episode(draw, poses)
+        self.episode = episode = self.course.new_episode(draw, poses, self.np_random)
         self.pictures.reset(draw, episode.visit_order)
         self.layout = draw.track
         for sensor in self.sensors:

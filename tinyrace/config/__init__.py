@@ -13,9 +13,18 @@ from typing import Any, cast
 from tinyrace.cache import Settings, default_folder
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
-from tinyrace.config.colors import Color, palette_color
+from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.config.race import (
+    RaceCar,
+    inherited,
+    lay_cars_over_car,
+    race_cars,
+    race_problems,
+    resolve_race_cars,
+)
 from tinyrace.config.schema import (
+    MAX_RACE_CARS,
     METRIC_KINDS,
     CacheConfig,
     CameraConfig,
@@ -58,6 +67,7 @@ __all__ = [
     "LoadedConfig",
     "Overrides",
     "ProceduralTrackConfig",
+    "RaceCar",
     "RewardConfig",
     "RosMapTrackConfig",
     "SimConfig",
@@ -65,14 +75,16 @@ __all__ = [
     "cache_settings",
     "car_colors",
     "load_env_config",
+    "race_cars",
 ]
 
 TRACK_FILE = "track.yaml"
 
 
 def car_colors(config: EnvConfig) -> list[Color]:
-    """Each car's colour, in car order (what cameras, the overview and videos draw)."""
-    return [palette_color(car) for car in range(config.race.num_agents)]
+    """Each car's colour, in car order (what cameras, the overview and videos draw): its
+    ``race.cars[i].colour``, else the palette's colour of its index."""
+    return [car.colour for car in race_cars(config)]
 
 
 def cache_settings(config: EnvConfig) -> Settings:
@@ -247,11 +259,14 @@ def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> E
     ``prefix`` is put before key paths in messages (e.g. "env" inside an experiment file).
     """
     parser = Parser(source)
+    raw, given = lay_cars_over_car(raw)  # each race car's knobs over the car section
     config = parser.dataclass(EnvConfig, raw, prefix)
+    at = f"{prefix}." if prefix else ""
+    parser.problems = inherited(parser.problems, given, at)  # reported at car.<key> once
     if parser.parsed(config):  # also when some keys were bad: report every problem at once
-        _check_consistency(config, parser, f"{prefix}." if prefix else "")
+        _check_consistency(config, parser, at)
     parser.check()
-    return resolve_defaults(config)
+    return resolve_race_cars(resolve_defaults(config))
 
 
 def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
@@ -265,13 +280,7 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     if image and not config.cameras and not config.sensors:
         allowed = "an image track needs at least one camera (id, resolution, roi, position)"
         parser.problem(f"{at}cameras", [], allowed)
-    _check_box(config, parser, at)
-    ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
-    cameras = len(config.cameras)
-    for i, cam_id in enumerate(ids):
-        if cam_id in ids[:i]:
-            where = f"cameras[{i}].id" if i < cameras else f"sensors[{i - cameras}].id"
-            parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
+    _check_observation(config, parser, at, f"{at}observation")
     # the car model and its actions are checked by tinyrace.cars.registry
     if not image and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
@@ -283,6 +292,18 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
             _check_texture_side(track, parser, f"{at}tracks[{i}]")
         elif track.type == "image":
             _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
+    _check_race(config, parser, at, image)
+
+
+def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_at: str) -> None:
+    """One car's cameras and sensors: unique ids, ``observation: box``, pixels, intrinsics."""
+    _check_box(config, parser, observation_at)
+    ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
+    cameras = len(config.cameras)
+    for i, cam_id in enumerate(ids):
+        if cam_id in ids[:i]:
+            where = f"cameras[{i}].id" if i < cameras else f"sensors[{i - cameras}].id"
+            parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
     _check_camera_pixels(config, parser, at)
     for i, sensor in enumerate(config.sensors):
         if isinstance(sensor, PerspectiveCameraConfig):
@@ -294,6 +315,26 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
                 parser.problem(f"{at}sensors[{i}].position", list(position), allowed)
 
 
+def _check_race(config: EnvConfig, parser: Parser, at: str, image: bool) -> None:
+    """The race as a whole (count, ids, poses), and each car's own cameras and sensors."""
+    cars = config.race.cars
+    if len(cars) > MAX_RACE_CARS:
+        allowed = f"expected at most {MAX_RACE_CARS} cars (one world holds {MAX_RACE_CARS})"
+        parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
+        return
+    parser.problems += race_problems(config, at, parser.source)
+    for i, entry in enumerate(cars):
+        if entry.cameras is None and entry.sensors is None:
+            continue  # the shared ones, checked above
+        car = race_cars(config)[i]
+        own = dataclasses.replace(config, cameras=car.cameras, sensors=car.sensors)
+        car_at = f"{at}race.cars[{i}]."
+        if image and not own.cameras and not own.sensors:
+            allowed = f"car {car.id!r} on an image track needs at least one camera"
+            parser.problem(f"{car_at}cameras", [], allowed)
+        _check_observation(own, parser, car_at, f"{car_at}sensors")
+
+
 def _one_array(sensor: SensorConfig) -> bool:
     """Whether a sensor's observation is one array (a Box), not a Dict of arrays."""
     if isinstance(sensor, LidarConfig):
@@ -301,8 +342,9 @@ def _one_array(sensor: SensorConfig) -> bool:
     return not isinstance(sensor, ConesConfig)
 
 
-def _check_box(config: EnvConfig, parser: Parser, at: str) -> None:
-    """``observation: box`` is one camera's image: exactly one camera or image sensor."""
+def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:
+    """``observation: box`` is one camera's image: exactly one camera or image sensor (a
+    problem names ``where``)."""
     if config.observation != "box":
         return
     ids = [c.id for c in config.cameras] + [s.id for s in config.sensors]
@@ -315,7 +357,7 @@ def _check_box(config: EnvConfig, parser: Parser, at: str) -> None:
             "sensor whose observation is a Dict (cones; lidar with hit_classes): use dict"
         )
     if allowed:
-        parser.problem(f"{at}observation", "box", allowed)
+        parser.problem(where, "box", allowed)
 
 
 def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:

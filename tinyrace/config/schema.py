@@ -400,18 +400,78 @@ class FilesConfig:
     )
 
 
+MAX_RACE_CARS = 16  # cars one race (one world) holds
+
+
+@dataclass(frozen=True)
+class RaceCarConfig:
+    """``race.cars[i]``: one car of a race. Each key left out is the shared one: the car
+    model and knobs of the top-level ``car`` section (the entry's ``car`` keys are laid over
+    it), the top-level ``cameras`` and ``sensors``."""
+
+    id: str | None = knob(
+        None,
+        "the car's name: its PettingZoo agent and what other cars' infos call it "
+        "(null: car_<index>)",
+    )
+    car: CarConfig = knob(
+        CarConfig(), "its car model and knobs (as the car section), laid over the car section"
+    )
+    colour: Color | None = knob(
+        None,
+        "its colour in cameras, overview and videos (list BGR, #rrggbb RGB; null: the "
+        "palette's colour of its index)",
+        aliases=("color",),
+    )
+    cameras: tuple[CameraConfig, ...] | None = knob(
+        None, "its own bird's-eye cameras (null: the shared cameras)"
+    )
+    sensors: tuple[SensorConfig, ...] | None = knob(
+        None, "its own sensors (null: the shared sensors); its observation space follows them"
+    )
+
+
 @dataclass(frozen=True)
 class RaceConfig:
-    """Several cars on one track: how many, where they start, how the tiles pay them."""
+    """Several cars on one track: which cars, where they start, how the tiles pay them.
+
+    Either ``num_agents`` cars of the top-level ``car``, ``cameras`` and ``sensors``
+    sections (named ``car_0`` ..), or a ``cars`` list of one entry per car. All cars share
+    the track, ``sim`` and ``reward_design``."""
 
     num_agents: int = knob(
-        1, "cars on the track (car 0 is the one a single-agent env drives)", low=1, high=16
+        1,
+        "cars on the track (car 0 is the one a single-agent env drives); with cars: their "
+        "number, which it may leave out",
+        low=1,
+        high=MAX_RACE_CARS,
+    )
+    cars: tuple[RaceCarConfig, ...] = knob(
+        (), "one entry per car (id, car, colour, cameras, sensors); none: num_agents shared cars"
+    )
+    start: Literal["grid", "random", "poses"] = knob(
+        "grid",
+        "grid: car 0 at the spawn (pole), the others behind it along the reference line; "
+        "random: seeded places along the reference line, apart; poses: the poses listed",
+    )
+    poses: tuple[Spawn, ...] = knob(
+        (), "start: poses: one start pose [x, y, heading] per car", "track units, rad"
+    )
+    laps: int = knob(
+        1, "laps a car races: finishing the last one ends its episode", low=1, high=1000
     )
     grid_spacing: float = knob(
-        2.5, "start grid: each car this far behind the one before", "car lengths", low=1.2
+        2.5,
+        "start grid: each car this far behind the one before (random: at least this far "
+        "apart along the line)",
+        "car lengths",
+        low=1.2,
     )
     grid_offset: float = knob(
-        0.6, "start grid: cars this far left and right of the line, in turn", "car widths", low=0
+        0.6,
+        "start grid: cars this far left and right of the line, in turn (random: at most this far)",
+        "car widths",
+        low=0,
     )
     tile_reward: Literal["own", "first"] = knob(
         "own",

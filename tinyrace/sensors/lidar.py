@@ -382,8 +382,9 @@ class LidarSensor:
         heading = snapshot.car.pose[2]
         origin = self.origin(snapshot, track)
         ranges = self.scan(origin, heading, track.y_down)
-        if len(snapshot.cars) > 1:  # a race: the other cars stop beams too
-            rows = other_cars.car_rows(snapshot.cars[1:])
+        others = snapshot.others
+        if others:  # a race: the other cars on the track stop beams too
+            rows = other_cars.car_rows(others)
             y_down, fan = track.y_down, self._beam_fan
             ranges = self._add_cars(ranges, origin, heading, y_down, fan, rows, self.max_range)
         c = self.config

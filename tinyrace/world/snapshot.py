@@ -13,16 +13,24 @@ from tinyrace.cars.state import CarState
 
 @dataclass(frozen=True)
 class Snapshot:
-    """The world at time ``t``: every car's state (the controlled car first)."""
+    """The world at time ``t``: every car's state (the controlled car first), and which cars
+    are gone from the track (they finished: they stand where they stopped, met by nothing)."""
 
     t: float  # [s] since reset
     steps: int  # steps since reset
     cars: tuple[CarState, ...]
+    gone: frozenset[int] = frozenset()  # indices into ``cars`` of the cars off the track
 
     @property
     def car(self) -> CarState:
         """The controlled car."""
         return self.cars[0]
+
+    @property
+    def others(self) -> tuple[CarState, ...]:
+        """The other cars on the track (what the controlled car's sensors can meet)."""
+        gone = self.gone
+        return tuple(car for i, car in enumerate(self.cars) if i and i not in gone)
 
     def seen_from(self, car: int) -> Snapshot:
         """The same moment with car ``car`` first (the car a sensor rides on), the others
@@ -30,4 +38,5 @@ class Snapshot:
         if car == 0:
             return self
         cars = self.cars
-        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]))
+        gone = frozenset(0 if i == car else i + 1 if i < car else i for i in self.gone)
+        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]), gone)

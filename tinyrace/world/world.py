@@ -75,6 +75,7 @@ class World:
         self.cars: list[Car] = []
         self.contacts: list[Contacts] = []  # per car
         self.parked: set[int] = set()  # cars out of the race: they stand still where they are
+        self.gone: set[int] = set()  # parked cars taken off the track: nothing meets them
         self._states: tuple[CarState, ...] | None = None  # the cars' states since the last step
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
@@ -109,6 +110,19 @@ class World:
         the other cars still meet (its contacts are still reported)."""
         self.parked.add(car)
         self.cars[car].stop()
+
+    def retire(self, car: int) -> None:
+        """Take car ``car`` off the track: parked, and its body out of the space, so that
+        nothing meets it any more (a car that finished its race does not block the line)."""
+        self.park(car)
+        if car not in self.gone:
+            self.gone.add(car)
+            body = self.cars[car].body
+            self.space.remove(body, *body.shapes)
+            contacts = self.contacts[car]
+            for other in contacts.cars:
+                self.contacts[other].cars.discard(car)
+            self.contacts[car] = Contacts()
 
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
@@ -170,6 +184,7 @@ class World:
         self.contacts = []
         self.cars = []
         self.parked = set()
+        self.gone = set()
         self._states = None
 
     # -- pickling ----------------------------------------------------------------------------
@@ -256,7 +271,7 @@ class World:
 
     def snapshot(self, t: float, steps: int) -> Snapshot:
         """The world now, labelled with the episode's clock (``t`` [s], ``steps``)."""
-        return Snapshot(t, steps, self.states())
+        return Snapshot(t, steps, self.states(), frozenset(self.gone))
 
     @property
     def counts(self) -> tuple[int, int, int]:
