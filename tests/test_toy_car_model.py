@@ -88,7 +88,7 @@ def facts(config: EnvConfig) -> CarFacts:
 
 HOPPER = CarModel(
     name="hopper",
-    track_kinds=frozenset({"centerline"}),
+    track_units=frozenset({"m"}),
     default_for=frozenset(),
     action_kinds=frozenset({"continuous"}),
     build=build,
