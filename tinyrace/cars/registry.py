@@ -30,6 +30,7 @@ from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.single_track import SingleTrackCar
 from tinyrace.cars.state import CarFacts
 from tinyrace.config import CarConfig, EnvConfig
+from tinyrace.config.schema import track_types_in
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.tracks.base import Track
 
@@ -257,8 +258,8 @@ def car_model_problems(config: EnvConfig, source: str) -> list[Problem]:
     problems = []
     if unit not in model.track_units:
         allowed = (
-            f"car model {name!r} drives on tracks in {', '.join(sorted(model.track_units))}, "
-            f"not on a {config.kind} track (in {unit}); models: {_listing()}"
+            f"car model {name!r} drives on {', '.join(track_types_in(model.track_units))} "
+            f"tracks, not {config.kind!r}; models: {_listing()}"
         )
         problems.append(Problem(source, "car.model", name, allowed))
     if config.car.actions not in model.action_kinds:
@@ -285,4 +286,6 @@ def _default_name(unit: str) -> str | None:
 
 
 def _listing() -> str:
-    return "; ".join(f"{m.name} ({', '.join(sorted(m.track_units))})" for m in CAR_MODELS.values())
+    return "; ".join(
+        f"{m.name} ({', '.join(track_types_in(m.track_units))})" for m in CAR_MODELS.values()
+    )

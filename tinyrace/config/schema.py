@@ -9,9 +9,10 @@ so that code above asks the track config, never its ``type``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import dataclasses
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal, Union
+from typing import Any, ClassVar, Literal, Union, get_args
 
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS as MAX_CAMERA_PIXELS  # re-exported
 from tinyrace.config.bounds import MAX_TEXTURE_SIDE
@@ -302,6 +303,14 @@ TrackConfig = Union[  # noqa: UP007 (read at runtime)
     ConeMapTrackConfig,
     RosMapTrackConfig,
 ]
+
+
+def track_types_in(units: Iterable[str]) -> list[str]:
+    """The track types (``type:`` values) whose tracks are in one of ``units``, sorted."""
+    wanted = set(units)
+    return sorted(
+        str(dataclasses.fields(c)[0].default) for c in get_args(TrackConfig) if c.unit in wanted
+    )
 
 
 @dataclass(frozen=True)
