@@ -21,8 +21,15 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from tinyrace.config import EnvConfig
+from tinyrace.render.image_pictures import ImagePictures
+from tinyrace.render.metric_pictures import MetricPictures
+from tinyrace.render.procedural_pictures import ProceduralPictures
+from tinyrace.render.setup import make_pictures
+from tinyrace.tracks.base import PaintedGround, Track, TrackDraw
 from tinyrace.tracks.registry import TRACK_SOURCES
 
 ROOT = Path(__file__).resolve().parents[1] / "tinyrace"
@@ -222,3 +229,30 @@ def test_the_check_leaves_labels_homonyms_and_other_kinds_alone():
         ]
     )
     assert list(findings(clean)) == []
+
+
+class _ToySource:
+    """A track source of a kind nothing knows: its pictures follow what its tracks hold."""
+
+    kind = "toy"
+
+    def __init__(self, painted: PaintedGround | None = None, **holds: object):
+        self.painted = painted
+        track = Track("toy", "px", None, True, (0.0, 0.0, 8.0, 8.0), ((4.0, 4.0, 0.0),), **holds)
+        self.tracks = () if painted is not None else (track,)
+
+    def draw(self, rng: object, options: object) -> TrackDraw:
+        raise NotImplementedError
+
+
+@pytest.mark.parametrize(
+    ("source", "expected"),
+    [
+        (_ToySource(PaintedGround(50.0, 1.0)), ProceduralPictures),
+        (_ToySource(picture=np.zeros((8, 8, 4), np.uint8)), ImagePictures),
+        (_ToySource(walls=np.array([[0.0, 0.0, 1.0, 1.0]])), MetricPictures),
+    ],
+    ids=["painted ground", "picture", "drawn ground"],
+)
+def test_pictures_follow_what_the_tracks_hold_not_their_kind(source, expected):
+    assert type(make_pictures(EnvConfig(), source)) is expected

@@ -143,6 +143,8 @@ class ProceduralSource:
     def track(self, generated: ProceduralTrack) -> Track:
         """The generic view of a generated track, in CarRacing's units, y up."""
         x, y, hull_angle = generated.start_pose
+        headings = generated.headings + math.pi / 2  # beta is the hull's angle
+        headings.setflags(write=False)
         side = self.config.playfield  # [u]
         colors = self.colors
         return Track(
@@ -153,7 +155,7 @@ class ProceduralSource:
             bounds=(-side, -side, side, side),
             spawns=((x, y, hull_angle + math.pi / 2),),
             centerline=generated.centerline,
-            headings=generated.headings + math.pi / 2,  # beta is the hull's angle
+            headings=headings,
             tiles=generated.tiles,
             surfaces=(Surface("road", 1.0, generated.tiles),),
             off_road_friction=GRASS_FRICTION,
