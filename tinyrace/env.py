@@ -33,9 +33,6 @@ from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import build_sensors, sensor_type
 from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import Track
-from tinyrace.tracks.image import ImageTrack
-from tinyrace.tracks.metric import MetricTrack
-from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
@@ -162,7 +159,7 @@ class TinyRaceEnv(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         super().reset(seed=seed)
-        options = _check_options(options, self.config.kind)
+        options = _check_options(options)
         draw = self.track_source.draw(self.np_random, options)
         poses = _check_poses(options.get("poses"), self.config.race.num_agents)
         self.episode = episode = self.course.new_episode(draw, poses, self.np_random)
@@ -171,8 +168,8 @@ class TinyRaceEnv(gym.Env):
         for sensor in self.sensors:
             sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
-            attempts = getattr(draw.track.detail, "attempts", 1)
-            print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
+            attempts, tiles = draw.track.attempts, len(draw.track.tiles)
+            print(f"Track generation: {attempts} attempt(s) -> {tiles}-tiles track")
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
@@ -282,10 +279,11 @@ class TinyRaceEnv(gym.Env):
         return info
 
     @property
-    def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
-        """The current episode's track data (read-only arrays in track units)."""
-        detail: ProceduralTrack | ImageTrack | MetricTrack = self._episode("the track").track.detail
-        return detail
+    def track(self) -> Track:
+        """The current episode's ``Track`` (``tinyrace.tracks.base``): read-only arrays in
+        track units (``unit``): ``centerline``, ``headings``, ``tiles``, ``kerbs``, ``walls``,
+        ``cones``, ``picture``, ``occupancy``, ... (None or empty where it has none)."""
+        return self._episode("the track").track
 
     @property
     def car(self) -> Any:
@@ -368,7 +366,7 @@ def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
     return [cast(BirdseyeCamera, camera_type.build(entry, context)) for entry in config.cameras]
 
 
-def _check_options(options: object, kind: str) -> dict[str, Any]:
+def _check_options(options: object) -> dict[str, Any]:
     """The reset options, checked: known keys, ``randomize`` a bool, indices whole numbers.
 
     Image tracks check the index ranges when they pick; a procedural track has one track and
@@ -385,9 +383,6 @@ def _check_options(options: object, kind: str) -> dict[str, Any]:
             raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
         if key == "randomize" and not isinstance(value, (bool, np.bool_)):
             raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
-        if key in ("track", "spawn") and kind == "procedural" and not _is_zero_or_none(value):
-            allowed = f"expected 0 or None (a procedural track has one {key})"
-            raise ConfigError(Problem(RESET_SOURCE, key, value, allowed))
     return dict(options)
 
 
@@ -408,11 +403,6 @@ def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] 
 def _short(value: object) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _is_zero_or_none(value: object) -> bool:
-    whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    return value is None or (whole and value == 0)
 
 
 def _key_text(key: object) -> str:

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from tinyrace.cache import Settings, default_folder
-from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, MAX_TEXTURE_SIDE, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
@@ -25,7 +25,6 @@ from tinyrace.config.race import (
 )
 from tinyrace.config.schema import (
     MAX_RACE_CARS,
-    METRIC_KINDS,
     CacheConfig,
     CameraConfig,
     CarConfig,
@@ -34,7 +33,6 @@ from tinyrace.config.schema import (
     ConeMapTrackConfig,
     CrossTrackErrorConfig,
     EnvConfig,
-    FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
@@ -52,7 +50,7 @@ from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.examples import find_track, track_names
 
 __all__ = [
-    "METRIC_KINDS",
+    "MAX_TEXTURE_SIDE",
     "CacheConfig",
     "CameraConfig",
     "CarConfig",
@@ -276,23 +274,25 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         parser.problem(f"{at}tracks", sorted(kinds), "all tracks of one env must be of one type")
     if not config.tracks:
         parser.problem(f"{at}tracks", [], "expected at least one track")
-    image = "image" in kinds
-    if image and not config.cameras and not config.sensors:
-        allowed = "an image track needs at least one camera (id, resolution, roi, position)"
+    facts = config.facts if config.tracks else None
+    seen = facts is None or facts.default_view  # a view without cameras (96x96)
+    if not seen and not config.cameras and not config.sensors:
+        allowed = (
+            f"an {config.kind} track needs at least one camera (id, resolution, roi, position)"
+        )
         parser.problem(f"{at}cameras", [], allowed)
     _check_observation(config, parser, at, f"{at}observation")
     # the car model and its actions are checked by tinyrace.cars.registry
-    if not image and config.reward_design.color_obstacles:
+    picture = facts is not None and facts.colour_picture
+    if not picture and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
         allowed = "colour obstacles need an image track"
         parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
     _check_obstacle_colors(config.reward_design, parser, at)
     for i, track in enumerate(config.tracks):
-        if track.type == "procedural":
-            _check_texture_side(track, parser, f"{at}tracks[{i}]")
-        elif track.type == "image":
-            _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
-    _check_race(config, parser, at, image)
+        for key, value, allowed in track.problems(config.files):
+            parser.problem(f"{at}tracks[{i}].{key}", value, allowed)
+    _check_race(config, parser, at, not seen)
 
 
 def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_at: str) -> None:
@@ -315,7 +315,7 @@ def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_a
                 parser.problem(f"{at}sensors[{i}].position", list(position), allowed)
 
 
-def _check_race(config: EnvConfig, parser: Parser, at: str, image: bool) -> None:
+def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) -> None:
     """The race as a whole (count, ids, poses), and each car's own cameras and sensors."""
     cars = config.race.cars
     if len(cars) > MAX_RACE_CARS:
@@ -329,8 +329,8 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, image: bool) -> None
         car = race_cars(config)[i]
         own = dataclasses.replace(config, cameras=car.cameras, sensors=car.sensors)
         car_at = f"{at}race.cars[{i}]."
-        if image and not own.cameras and not own.sensors:
-            allowed = f"car {car.id!r} on an image track needs at least one camera"
+        if needs_camera and not own.cameras and not own.sensors:
+            allowed = f"car {car.id!r} on an {config.kind} track needs at least one camera"
             parser.problem(f"{car_at}cameras", [], allowed)
         _check_observation(own, parser, car_at, f"{car_at}sensors")
 
@@ -372,17 +372,6 @@ def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> Non
             parser.problem(f"{at}reward_design.color_obstacles[{i}].color", obstacle.color, allowed)
 
 
-def _check_image_track(
-    track: ImageTrackConfig, files: FilesConfig, parser: Parser, at: str
-) -> None:
-    if not track.spawns:
-        parser.problem(f"{at}.spawns", [], "expected at least one start pose")
-    height, width = track.plane_size
-    if track.image is None and height * width > files.max_image_pixels:
-        allowed = f"expected at most {files.max_image_pixels:,} px in all (files.max_image_pixels)"
-        parser.problem(f"{at}.plane_size", [height, width], allowed)
-
-
 def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
     """Every camera's pixels together: the ``cameras`` and the perspective ``sensors`` (whose
     pixels count PERSPECTIVE_PIXEL_WEIGHT times: each keeps a ray and its ground point)."""
@@ -402,41 +391,14 @@ def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
         parser.problem(f"{at}{where}", {k: list(r) for k, r, _ in sizes}, allowed)
 
 
-MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB
-
-
-def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -> None:
-    side = 2 * track.playfield * track.pixels_per_unit  # [px] the whole playfield, pre-drawn
-    if side > MAX_TEXTURE_SIDE:
-        allowed = (
-            f"expected 2 * playfield * pixels_per_unit (the ground texture's side, here "
-            f"{side:.0f} px) <= {MAX_TEXTURE_SIDE} px: lower pixels_per_unit or playfield"
-        )
-        parser.problem(f"{at}.pixels_per_unit", track.pixels_per_unit, allowed)
-
-
-# Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
-# a small racing car's in metres, and on ROS maps (F1TENTH's maps) F1TENTH's car: wheelbase
-# lf + lr = 0.33 m, width 0.31 m (f1tenth_gym's parameters), the shipped f1tenth_loop's top
-# speed, CarRacing's car scaled to about that wheelbase (3.24 u).
-CAR_DEFAULTS = {
-    # [px], [px], [px/s], [px/u]
-    "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0},
-    # [m], [m], [m/s], [m/u]
-    "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0},
-    "ros_map": {"wheelbase": 0.33, "track_width": 0.31, "velocity": 5.0, "pixels_per_unit": 0.1},
-}
-
-
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
-    """Fill the ``None`` knobs whose default depends on the track kind."""
-    procedural = config.kind == "procedural"
-    carracing_rules = procedural or config.kind in METRIC_KINDS  # tiles, laps, time penalty
+    """Fill the ``None`` knobs whose default depends on the track (its config's facts)."""
+    facts = config.facts
+    carracing_rules = facts.carracing_rules  # tiles, laps, time penalty
     sim = config.sim
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
-    unit = "m" if config.kind in METRIC_KINDS else "px"
-    sizes = CAR_DEFAULTS["ros_map" if config.kind == "ros_map" else unit]
+    sizes = facts.car_sizes
     car = config.car
     car = dataclasses.replace(
         car,

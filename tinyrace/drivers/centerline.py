@@ -46,15 +46,11 @@ def route_of(env: gym.Env) -> Route:
         "steer_per_rad": facts.steer_per_rad,
         "grip": facts.grip,
     }
-    centerline = getattr(track, "centerline", None)
-    if centerline is not None:
-        return Route(np.asarray(centerline, float), True, False, unit, **steering)
-    if getattr(track, "kind", None) == "ros_map":
-        raise ValueError(
-            "the centerline driver needs a line to follow, and this ros_map track has none: "
-            "give the track a waypoint or raceline CSV (track.waypoints)"
-        )
-    pixels = getattr(track, "trajectory_mask", None)
+    if track.centerline is not None:
+        return Route(np.asarray(track.centerline, float), True, False, unit, **steering)
+    if track.reference_note is not None:  # a track that says why it has no line
+        raise ValueError(f"the centerline driver needs a line to follow: {track.reference_note}")
+    pixels = track.trajectory_points
     if pixels is None or len(pixels) == 0:
         raise ValueError(
             "the centerline driver needs a line to follow: a procedural track, or an image "

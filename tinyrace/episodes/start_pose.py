@@ -67,7 +67,7 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         track = config.tracks[fit.track_index]
         spawn = getattr(track, "spawn", None)
         given = spawn is not None
-        key = "spawn" if given else ("waypoints" if track.type == "ros_map" else "file")
+        key = "spawn" if given else track.start_key  # the file whose first point it is
         where = f"tracks[{fit.track_index}].{key}"
         x, y, heading = fit.spawn
         length, width = fit.size

@@ -198,6 +198,7 @@ class _Run:
             "error": error,
             "episodes_planned": self.config.episodes,
             "track_kind": self.env.config.kind,
+            "track_unit": self.env.config.facts.unit,  # u, px or m: the report's lengths
             "dt": self.env.dt,  # [s] per step
             "tracks": self.tracks,
             "config": dataclasses.asdict(self.config),

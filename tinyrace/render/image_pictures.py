@@ -11,19 +11,18 @@ from tinyrace.config import EnvConfig
 from tinyrace.render.overview import Overview
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.texture import GroundTexture
-from tinyrace.tracks.base import TrackDraw
-from tinyrace.tracks.image import ImageSource, ImageTrack
+from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
 
 
 class ImagePictures:
     """Every track's ground texture (made once per env) and overview (when first drawn)."""
 
-    def __init__(self, config: EnvConfig, source: ImageSource):
+    def __init__(self, config: EnvConfig, tracks: Sequence[Track]):
         self.config = config
-        self.tracks: list[ImageTrack] = [layout.detail for layout in source.tracks]
+        self.tracks = tracks
         self.textures = [
-            GroundTexture.from_image(track.image, exact_colors=True) for track in self.tracks
+            GroundTexture.from_image(_picture(track), exact_colors=True) for track in tracks
         ]
         self.overviews: list[Overview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
@@ -56,3 +55,8 @@ class ImagePictures:
             overview = Overview(self.tracks[self.index], self.config.sim.overview_downscale, color)
             self.overviews[self.index] = overview
         return overview
+
+
+def _picture(track: Track) -> np.ndarray:
+    assert track.picture is not None, "image pictures are of tracks with a picture"
+    return track.picture

@@ -13,27 +13,20 @@ from tinyrace.render.metric_ground import MetricOverview, shared_ground
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.birdseye_camera import RoiCamera
 from tinyrace.sensors.texture import GroundTexture, transform_points
-from tinyrace.tracks.base import TrackDraw
-from tinyrace.tracks.metric import MetricSource, MetricTrack
+from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
 
 DEFAULT_VIEW = (96, 96)  # [px] (h, w) the observation when no camera is configured
 VIEW_SPAN = 14.0  # [wheelbases] the default view's side
 CAR_COLOR = (204, 0, 0)  # RGB, the car drawn into the default view
-DEFAULT_PIXELS_PER_METER = 20.0  # [px/m] when the track config names none
 
 
 class MetricPictures:
     """Every track's ground texture and overview, each made when first read (a camera,
     the default view or a frame); textures are shared with the other envs of the track."""
 
-    def __init__(self, config: EnvConfig, source: MetricSource):
-        self.layouts = source.tracks
-        self.tracks: list[MetricTrack] = [layout.detail for layout in source.tracks]
-        self.scales = [  # [px/m] of each track's texture
-            getattr(track_config, "pixels_per_meter", DEFAULT_PIXELS_PER_METER)
-            for track_config in config.tracks
-        ]
+    def __init__(self, config: EnvConfig, tracks: Sequence[Track]):
+        self.tracks = tracks
         self.cache = cache_settings(config)
         self.textures: list[GroundTexture | None] = [None] * len(self.tracks)
         self.overviews: list[MetricOverview | None] = [None] * len(self.tracks)
@@ -84,6 +77,6 @@ class MetricPictures:
         texture = self.textures[self.index]
         if texture is None:
             i = self.index
-            texture = shared_ground(self.layouts[i], self.tracks[i], self.scales[i], self.cache)
+            texture = shared_ground(self.tracks[i], self.cache)
             self.textures[i] = texture
         return texture

@@ -8,16 +8,15 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
+from tinyrace.config import MAX_TEXTURE_SIDE
 from tinyrace.render.car_sprite import Patches
 from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.pictures import CameraViews
 from tinyrace.render.procedural_ground import GroundPainter, repaint_tile
 from tinyrace.sensors.texture import GroundTexture
-from tinyrace.tracks.base import TrackDraw
-from tinyrace.tracks.procedural import ProceduralTrack
-from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
+from tinyrace.tracks.base import PaintedGround, Track, TrackDraw
+from tinyrace.tracks.procedural_source import GroundColors
 from tinyrace.world.snapshot import Snapshot
 
 VIDEO_PIXELS_PER_UNIT = 4.0  # [px/u] ground texture for 600x400 and 1000x800 views
@@ -29,13 +28,10 @@ RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "huma
 class ProceduralPictures:
     """CarRacing's views of the current episode; textures and views are made when first asked."""
 
-    def __init__(self, config: EnvConfig, source: ProceduralSource):
-        track_config = config.tracks[0]
-        assert isinstance(track_config, ProceduralTrackConfig)
-        self.track_config = track_config
-        self.source = source  # its colours are the current episode's
-        self.cache = RenderCache(track_config.playfield)
-        self.track: ProceduralTrack | None = None
+    def __init__(self, ground: PaintedGround):
+        self.track_config = ground  # the playfield and the cameras' pixels_per_unit
+        self.cache = RenderCache(ground.playfield)
+        self.track: Track | None = None
         self.colors: GroundColors | None = None
         self.visited: Sequence[int] = ()
         self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
@@ -43,7 +39,7 @@ class ProceduralPictures:
         self._views: dict[tuple[int, int], ChaseView] = {}
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
-        self.track, self.colors, self.visited = draw.track.detail, self.source.colors, visited
+        self.track, self.colors, self.visited = draw.track, GroundColors.of(draw.track), visited
         self._textures, self._views, self._painted = {}, {}, 0
 
     def observe(self, snapshot: Snapshot, score: float) -> np.ndarray:

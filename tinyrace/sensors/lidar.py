@@ -165,7 +165,7 @@ def occupancy_map(
     map, aligned with the pixels' edges; walls are the occupied pixels themselves, cones
     discs of their radius, off_road what lies outside the road tiles (a band around the
     waypoints)."""
-    occupancy = getattr(track.detail, "occupancy", None)
+    occupancy = track.occupancy
     if occupancy is None:
         return None
     to_cells = occupancy.to_cells()
@@ -303,7 +303,7 @@ class LidarSensor:
         (their occupied pixels) and ALL_BLOCKS elsewhere."""
         if self.config.blocks is not None:
             return tuple(self.config.blocks)
-        return ROS_BLOCKS if track.kind == "ros_map" else ALL_BLOCKS
+        return ROS_BLOCKS if track.occupancy is not None else ALL_BLOCKS
 
     @property
     def id(self) -> str:
@@ -325,7 +325,7 @@ class LidarSensor:
         exact = occupancy_map(track, blocks, self.config.hit_classes)
         if exact is not None:
             return exact
-        if track.kind == "procedural":  # a track of its own at every reset
+        if track.drawn_per_reset:  # a track of its own at every reset
             field = self._field(track, blocks)
             return field, self._fan(field, track.y_down)
         c = self.config
@@ -447,7 +447,7 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     if config.max_range is not None:
         max_range = config.max_range
     else:  # F1TENTH's lidar on its maps, else 10 car lengths
-        max_range = ROS_MAX_RANGE if env.kind == "ros_map" else 10 * length
+        max_range = ROS_MAX_RANGE if env.facts.occupancy_map else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
     return LidarSensor(
@@ -455,7 +455,7 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
         max_range,
         cell,
         cone_colors,
-        exact_only=env.kind == "ros_map",
+        exact_only=env.facts.occupancy_map,
         settings=cache_settings(env),
         mount=context.car.lidar_mount,
     )

@@ -43,7 +43,7 @@ def _register_built_in() -> None:
     from tinyrace.config import sensors as configs
     from tinyrace.sensors import cones, lidar, lookahead, perspective_camera, state
 
-    for name, config, module, kinds, doc in (
+    for name, config, module, needs, doc in (
         (
             "perspective_camera",
             configs.PerspectiveCameraConfig,
@@ -64,11 +64,11 @@ def _register_built_in() -> None:
             "cones",
             configs.ConesConfig,
             cones,
-            frozenset({"image", "cone_map"}),
+            "cones",
             "cones in range by class, padded",
         ),
     ):
-        register(SensorType(name, config, module.build, kinds, doc))
+        register(SensorType(name, config, module.build, needs, doc))
 
 
 _register_built_in()
@@ -76,14 +76,16 @@ _register_built_in()
 
 def build_sensors(context: SensorContext, source: str) -> list[Sensor]:
     """The sensors of the env config's ``sensors:`` list, in order; a ConfigError lists every
-    entry that cannot work with this config (its type, its track kind, or its knobs)."""
+    entry that cannot work with this config (its type, what its track holds, or its knobs)."""
     config = context.env
     built, problems = [], []
     for i, entry in enumerate(config.sensors):
         kind = sensor_type(entry.type, source, f"sensors[{i}].type")
-        if kind.track_kinds is not None and config.kind not in kind.track_kinds:
-            kinds = ", ".join(sorted(kind.track_kinds))
-            allowed = f"a {entry.type} sensor works on track kinds: {kinds}"
+        if kind.needs is not None and kind.needs not in config.facts.holds:
+            allowed = (
+                f"a {entry.type} sensor needs a track that holds {kind.needs}, "
+                f"not a {config.kind} track"
+            )
             problems.append(Problem(source, f"sensors[{i}].type", entry.type, allowed))
             continue
         try:
