@@ -300,3 +300,33 @@ def test_the_names_come_from_the_race_env(tmp_path: Path):
         assert experiment.agents == tuple(built.possible_agents)
     finally:
         built.close()
+
+
+IMAGE_CTE = {"cross_track_error": {"use_cte": True, "trajectory_color": [255, 255, 255]}}
+
+
+@pytest.mark.parametrize(
+    "env",
+    [
+        {},  # procedural
+        {"environment": "formula_student", "reward_design": IMAGE_CTE},  # image
+        {"environment": "autocross"},  # cone_map
+    ],
+    ids=["procedural", "image", "cone_map"],
+)
+def test_a_race_runs_on_every_track_kind(env: dict, tmp_path: Path):
+    """(centerline and ros_map: the shipped races above.)"""
+    raw = {
+        "env": {**env, "race": {"num_agents": 3}},
+        "drivers": {"car_2": "random"},
+        "episodes": 1,
+        "max_steps": 12,
+        "output": {"video": False},
+    }
+    result = run_experiment(experiment_from_dict(raw, "race.yaml", tmp_path), tmp_path, False)
+    (episode,) = result.episodes
+    assert [car.driver for car in episode.cars] == ["centerline", "centerline", "random"]
+    assert sorted(car.position for car in episode.cars) == [1, 2, 3]
+    assert all(car.steps == 12 for car in episode.cars)
+    assert (result.run_dir / "report_paths_000.png").is_file()
+    assert (result.run_dir / "report_positions_000.png").is_file()
