@@ -116,8 +116,9 @@ def _cell(result: CarResult, key: str, fmt: str) -> str:
 
 
 def car_table_rows(rows: Sequence[CarResult]) -> tuple[list[str], list[list[str]]]:
-    """The cars table's titles and cells ('-': not measured); columns no car measured
-    (walls, cones) are left out."""
+    """The cars table's titles and cells ('-': not measured), each episode's cars in their
+    finishing order; columns no car measured (walls, cones) are left out."""
+    rows = sorted(rows, key=lambda r: (r.episode, r.position))
     columns = [
         c for c in CAR_COLUMNS
         if c[0] not in ("wall_hits", "cones_hit") or any(getattr(r, c[0]) for r in rows)
