@@ -9,10 +9,15 @@ import csv
 import dataclasses
 import json
 import math
+import os
 import re
 import shutil
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
+import imageio_ffmpeg
 import numpy as np
 import pytest
 
@@ -330,3 +335,41 @@ def test_a_race_runs_on_every_track_kind(env: dict, tmp_path: Path):
     assert all(car.steps == 12 for car in episode.cars)
     assert (result.run_dir / "report_paths_000.png").is_file()
     assert (result.run_dir / "report_positions_000.png").is_file()
+
+
+def test_an_interrupted_race_keeps_its_finished_episodes(tmp_path: Path):
+    experiment = tmp_path / "long_race.yaml"
+    raw = race(
+        {},
+        driver="drivers_for_tests:slow_policy",
+        driver_args={"delay": 0.01, "size": 2},  # [s] per step of each car
+        episodes=50,
+        max_steps=30,
+        output={"video": True},
+    )
+    experiment.write_text(json.dumps(raw))
+    env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{TESTS}"}
+    command = [sys.executable, "-m", "tinyrace", "run", str(experiment), "-o", "runs"]
+    process = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path
+    )
+    try:
+        for line in process.stderr:  # one line per finished episode (not a terminal)
+            if line.startswith("episode 1/50"):
+                break
+        process.send_signal(signal.SIGINT)
+        err = process.communicate(timeout=120)[1]
+    finally:
+        process.kill()
+    assert process.returncode == 130, err
+    (run_dir,) = (tmp_path / "runs").iterdir()
+    results = json.loads((run_dir / "results.json").read_text())
+    finished = len(results["episodes"])
+    assert results["interrupted"] is True and 1 <= finished < 50
+    rows = csv_rows(run_dir / "episodes.csv")
+    assert [(int(r["episode"]), r["car"]) for r in rows] == [
+        (episode, car) for episode in range(finished) for car in ("car_0", "car_1")
+    ]
+    assert (run_dir / "report.html").is_file()
+    frames = imageio_ffmpeg.read_frames(str(run_dir / f"episode_{finished:03d}.mp4"))
+    assert next(frames)["codec"] == "h264" and 1 <= sum(1 for _ in frames) <= 31
