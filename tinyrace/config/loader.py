@@ -106,9 +106,11 @@ class Parser:
         if origin is tuple:
             return self.tuple(args, raw, path, meta)
         if origin is dict:  # free-form mapping (e.g. driver arguments), checked by its user
-            if isinstance(raw, Mapping) and all(isinstance(k, str) for k in raw):
+            numbers = int in typing.get_args(args[0]) if args else False  # dict[str | int, ...]
+            if isinstance(raw, Mapping) and all(_key_ok(k, numbers) for k in raw):
                 return dict(raw)
-            return self.problem(path, raw, "expected a mapping with string keys")
+            keys = "string or whole-number keys" if numbers else "string keys"
+            return self.problem(path, raw, f"expected a mapping with {keys}")
         if isinstance(hint, type) and dataclasses.is_dataclass(hint):
             return self.dataclass(hint, raw, path)
         if hint is Color:
@@ -198,6 +200,11 @@ def _list_of_sections(hint: Any) -> bool:
     return dataclasses.is_dataclass(item) or (
         bool(members) and all(dataclasses.is_dataclass(m) for m in members)
     )
+
+
+def _key_ok(key: object, numbers: bool) -> bool:
+    """A free-form mapping's key: a string, or (``numbers``) a whole number."""
+    return isinstance(key, str) or (numbers and type(key) is int)
 
 
 def _required(f: dataclasses.Field[Any]) -> bool:
