@@ -134,3 +134,22 @@ def test_the_pages_filters_take_a_120x160_camera_that_rllibs_defaults_do_not():
     assert logits.shape == (1, 2 * env.action_space.shape[0])  # a Gaussian: means, log stds
     assert torch.isfinite(logits).all()
     env.close()
+
+
+def test_rllibs_default_cnn_takes_float_pixels_not_tinyraces_uint8():
+    """Why FloatPixels: CarRacing-v0's 96x96 camera has a default CNN, which fails on uint8."""
+    plain = gym.make("tinyrace/CarRacing-v0", max_episode_steps=5)
+    env = make_env({"max_episode_steps": 5})
+    module = RLModuleSpec(
+        module_class=DefaultPPOTorchRLModule,
+        observation_space=env.observation_space,
+        action_space=env.action_space,
+        model_config=DefaultModelConfig(),  # RLlib's filters for 96x96
+    ).build()
+    pixels, _ = plain.reset(seed=0)
+    with pytest.raises(RuntimeError, match=r"Input type \(unsigned char\)"), torch.no_grad():
+        module.forward_inference({Columns.OBS: torch.from_numpy(pixels[None])})
+    floats, _ = env.reset(seed=0)
+    with torch.no_grad():
+        out = module.forward_inference({Columns.OBS: torch.from_numpy(floats[None])})
+    assert torch.isfinite(out[Columns.ACTION_DIST_INPUTS]).all()
