@@ -44,7 +44,7 @@ def float_space(space: spaces.Space[Any]) -> spaces.Space[Any]:
     the entries of a Dict; any other space as it is."""
     if is_pixels(space):
         assert isinstance(space, spaces.Box)
-        return spaces.Box(0.0, 1.0, space.shape, np.float32, seed=space.np_random)
+        return spaces.Box(0.0, 1.0, space.shape, np.float32)
     if isinstance(space, spaces.Dict):
         return spaces.Dict({key: float_space(sub) for key, sub in space.spaces.items()})
     return space
@@ -64,7 +64,8 @@ class FloatPixels(gym.ObservationWrapper[Any, Any, Any]):
 
     A camera's Box, or each camera of a dict observation; other entries (state, lidar)
     are left as they are. The pixels are divided by 255, nothing else: the network sees
-    the same picture, in the dtype RLlib's default CNN takes.
+    the same picture, in the dtype RLlib's default CNN takes (a ``format: classes``
+    camera's class indices too).
     """
 
     def __init__(self, env: gym.Env[Any, Any]):
