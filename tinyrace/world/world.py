@@ -57,7 +57,8 @@ class Contacts:
     cars: set[int] = field(default_factory=set)  # other cars (world indices) touching it now
     new_cars: list[int] = field(default_factory=list)  # cars it began touching this step
     crashed: bool = False  # this step ran into a wall: the car was put back and stopped
-    # (touching another car puts it back and stops it too: ``cars``/``new_cars`` say so)
+    # (running into another car puts it back and stops it too, unless it was moving straight
+    # away from every car it touches: ``cars``/``new_cars`` say whom it touched)
 
 
 class World:
@@ -241,7 +242,7 @@ class World:
             for index, (car, contacts, place) in enumerate(
                 zip(cars, self.contacts, before, strict=True)
             ):
-                if contacts.walls or contacts.cars or index in parked:
+                if contacts.walls or index in parked or _closing_in(car, place, contacts, before):
                     _crash(car, place)
                     contacts.crashed = bool(contacts.walls)
         return self.contacts
@@ -335,6 +336,22 @@ Place = tuple[tuple[float, float], float]  # a body's (position, angle)
 def _place(body: pymunk.Body) -> Place:
     x, y = body.position
     return (float(x), float(y)), float(body.angle)
+
+
+def _closing_in(car: Car, place: Place, contacts: Contacts, before: list[Place]) -> bool:
+    """Whether a car touching other cars moved this step other than straight away from each
+    of them (the one it ran into stays put back, the one it touched that was pulling away
+    drives on: two cars touching nose to tail would otherwise stand there for good)."""
+    if not contacts.cars:
+        return False
+    (x0, y0), _ = place
+    x, y = car.body.position
+    dx, dy = x - x0, y - y0
+    for other in contacts.cars:
+        (ox, oy), _ = before[other]
+        if dx * (ox - x0) + dy * (oy - y0) >= 0.0:  # towards it, or across, or not at all
+            return True
+    return False
 
 
 def _crash(car: Car, before: Place) -> None:
