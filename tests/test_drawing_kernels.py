@@ -14,10 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
-from tinyrace.render import drawing
-from tinyrace.render.dashboard import BAR_STEPS, Dashboard
-from tinyrace.render.kernels import drawing as drawing_numba
-from tinyrace.sensors import texture
+from tinyrace.sensors import drawing, texture
+from tinyrace.sensors.dashboard import BAR_STEPS, Dashboard
+from tinyrace.sensors.kernels import drawing as drawing_numba
 
 SIZES = [(96, 96, 4), (600, 400, 1), (1000, 800, 1), (150, 120, 2)]  # (w, h, supersample)
 

@@ -112,8 +112,8 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
-    from tinyrace.render.metric_pictures import MetricPictures
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
+    from tinyrace.sensors.ground import MetricGround
     from tinyrace.tracks.metric import MetricTrack
 
     if target == "procedural":
@@ -129,7 +129,7 @@ def picture(target: str, seed: int) -> Picture:
     parts = build_course(loaded)
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
     if isinstance(first.detail, MetricTrack):
-        texture = MetricPictures(parts.config, parts.source).ground_texture()  # type: ignore[arg-type]
+        texture = MetricGround(parts.config, parts.source).texture(first)  # type: ignore[arg-type]
         return Picture(metric_picture(first.detail, texture), name, inputs)
     return Picture(image_picture(parts.config, first.detail), name, inputs)
 

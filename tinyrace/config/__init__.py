@@ -387,7 +387,8 @@ CAR_DEFAULTS = {
 
 
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
-    """Fill the ``None`` knobs whose default depends on the track kind."""
+    """Fill the ``None`` knobs whose default depends on the track kind; the ``cameras``
+    join the ``sensors``."""
     procedural = config.kind == "procedural"
     carracing_rules = procedural or config.kind in METRIC_KINDS  # tiles, laps, time penalty
     sim = config.sim
@@ -412,7 +413,18 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
             reward.out_of_bounds_penalty, 100.0 if carracing_rules else 0.0
         ),
     )
-    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
+    sensors = _with_cameras(config)
+    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward, sensors=sensors)
+
+
+def _with_cameras(config: EnvConfig) -> tuple[SensorConfig, ...]:
+    """tinycarlo's ``cameras:`` as ``birdseye_camera`` sensors, first in the ``sensors`` list
+    (in their order; once: a config already resolved keeps its list). ``cameras`` stays as
+    written, for messages that name its keys."""
+    cameras, sensors = config.cameras, config.sensors
+    if sensors[: len(cameras)] == cameras:
+        return sensors
+    return (*cameras, *sensors)
 
 
 def _default(value: float | None, default: float) -> float:

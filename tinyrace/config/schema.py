@@ -14,6 +14,7 @@ from tinyrace.config.bounds import MAX_CAMERA_PIXELS as MAX_CAMERA_PIXELS  # re-
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.sensors import CameraConfig as CameraConfig  # re-exported
 from tinyrace.config.sensors import SensorConfig
 
 MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
@@ -282,35 +283,6 @@ class CarConfig:
 
 
 @dataclass(frozen=True)
-class CameraConfig:
-    """``cameras[i]``: a bird's-eye camera fixed to the car."""
-
-    id: str = knob(REQUIRED, "observation key of this camera")
-    resolution: tuple[int, int] = knob(
-        (480, 640), "[y, x] output image size", "px", low=1, high=4096
-    )
-    roi: tuple[float, float] = knob(
-        (480.0, 640.0),
-        "[y, x] size of the track window seen (ahead of the front axle)",
-        "track px (u on procedural tracks)",
-        low=1,
-    )
-    position: tuple[float, float] = knob(
-        (0.0, 0.0),
-        "[y, x] shift of the window from the front axle middle; +y ahead, +x right",
-        "track px (u on procedural tracks)",
-    )
-    yaw: float = knob(
-        0.0, "camera rotation from straight ahead; 90 right, 180 back", "deg", low=-360, high=360
-    )
-    format: Literal["rgb", "gray", "classes"] = knob(
-        "rgb",
-        "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the "
-        "track's layers, never blended (table in info['sensor_labels'])",
-    )
-
-
-@dataclass(frozen=True)
 class ColorObstacle:
     """``reward_design.color_obstacles[i]``: pixels of one colour the car must not touch."""
 
@@ -452,8 +424,9 @@ class EnvConfig:
     car: CarConfig = knob(CarConfig(), "car model")
     cameras: tuple[CameraConfig, ...] = knob(
         (),
-        "observation cameras (a mapping or a list); none on a procedural track: "
-        "CarRacing's 96x96 view as a Box",
+        "tinycarlo's bird's-eye cameras (a mapping or a list); the loader puts each first in "
+        "sensors as a birdseye_camera entry. No camera and no sensor: the track's default "
+        "view (chase_view on a procedural track, top_view on tracks in metres) as a Box",
         aliases=("camera",),
     )
     sensors: tuple[SensorConfig, ...] = knob(

@@ -23,7 +23,7 @@ def save_track_picture(
     start pose and, on procedural tracks, the lap line (two points) in track units.
     """
     episode: Any = env.episode
-    pictures: Any = env.pictures  # its colours (procedural) and ground texture
+    ground: Any = env.ground  # its colours (procedural) and ground texture
     procedural = env.config.kind == "procedural"
     key = f"seed{seed}" if procedural else f"track{episode.track_index}"
     if key in known:
@@ -31,12 +31,12 @@ def save_track_picture(
     if procedural:
         track = episode.track.detail
         playfield = cast(ProceduralTrackConfig, env.config.tracks[0]).playfield  # [u]
-        image, frame = procedural_ground(track, pictures.colors, playfield)
+        image, frame = procedural_ground(track, ground.colors, playfield)
         start = track.start_pose
         lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
     elif env.config.kind in METRIC_KINDS:
         track = episode.track.detail
-        image, frame = metric_ground(track, pictures.ground_texture())
+        image, frame = metric_ground(track, ground.texture(episode.track))
         start = track.spawn
         lap_line = None if track.circuit is None else track.tiles[0][[0, 1]].tolist()
     else:

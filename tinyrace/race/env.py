@@ -14,7 +14,7 @@ Rewards per car are the config's reward terms of that car's facts; with
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -217,10 +217,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
 
     def _observe(self, snapshot: Snapshot, car: int) -> Any:
         core = self.core
-        seen = snapshot.seen_from(car)
+        seen = replace(snapshot.seen_from(car), score=self.seats[car].score)
         sensors = self.seats[car].sensors
-        if not sensors:
-            return core.pictures.observe(seen, self.seats[car].score)
         observation = {s.id: s.observe(seen, core.layout, core.np_random) for s in sensors}
         return observation if core.box_camera is None else observation[core.box_camera]
 

@@ -10,9 +10,10 @@ from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
+from tinyrace.sensors.ground import EpisodeGround
 from tinyrace.tracks.base import TrackSource
 
-# track.type -> its pictures, built from the config and the source (its tracks, loaded)
+# track.type -> its pictures, built from the config and the episode's ground
 PICTURES: dict[str, Callable[[EnvConfig, Any], Pictures]] = {
     "procedural": ProceduralPictures,
     "image": ImagePictures,
@@ -20,9 +21,10 @@ PICTURES: dict[str, Callable[[EnvConfig, Any], Pictures]] = {
 }
 
 
-def make_pictures(config: EnvConfig, source: TrackSource) -> Pictures:
-    """The pictures of ``source``'s tracks (made once per env; ``reset`` per episode)."""
+def make_pictures(config: EnvConfig, source: TrackSource, ground: EpisodeGround) -> Pictures:
+    """The pictures of ``source``'s tracks on ``ground`` (made once per env; ``reset`` per
+    episode)."""
     build = PICTURES.get(source.kind)
     if build is None:
         raise KeyError(f"no pictures for track kind {source.kind!r}; known: {', '.join(PICTURES)}")
-    return build(config, source)
+    return build(config, ground)

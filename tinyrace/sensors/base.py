@@ -11,6 +11,7 @@ How to add a sensor type:
    ground textures). ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
    name (the entry's ``type``), config class, builder and the track kinds it supports.
+3. Add its config class to ``SensorConfig`` in ``tinyrace/config/sensors.py``.
 """
 
 from __future__ import annotations
@@ -94,3 +95,4 @@ class SensorType:
     build: SensorBuilder
     track_kinds: frozenset[str] | None = None  # None: every kind
     doc: str = ""
+    default: bool = False  # the observation of its track kinds when no sensor is configured

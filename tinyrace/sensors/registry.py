@@ -5,7 +5,7 @@ Adding a type is one module plus one entry here (see ``tinyrace/sensors/base.py`
 
 from __future__ import annotations
 
-from tinyrace.config import CameraConfig
+from tinyrace.config import METRIC_KINDS, CameraConfig
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.sensors import birdseye_camera
 from tinyrace.sensors.base import Sensor, SensorContext, SensorType
@@ -41,7 +41,15 @@ register(
 
 def _register_built_in() -> None:
     from tinyrace.config import sensors as configs
-    from tinyrace.sensors import cones, lidar, lookahead, perspective_camera, state
+    from tinyrace.sensors import (
+        chase_view,
+        cones,
+        lidar,
+        lookahead,
+        perspective_camera,
+        state,
+        top_view,
+    )
 
     for name, config, module, kinds, doc in (
         (
@@ -69,27 +77,60 @@ def _register_built_in() -> None:
         ),
     ):
         register(SensorType(name, config, module.build, kinds, doc))
+    register(
+        SensorType(
+            "chase_view",
+            configs.ChaseViewConfig,
+            chase_view.build,
+            frozenset({"procedural"}),
+            "CarRacing's 96x96 view: the car from behind and above, its dashboard below",
+            default=True,
+        )
+    )
+    register(
+        SensorType(
+            "top_view",
+            configs.TopViewConfig,
+            top_view.build,
+            frozenset(METRIC_KINDS),
+            "the road ahead from above with the car drawn in",
+            default=True,
+        )
+    )
 
 
 _register_built_in()
 
 
+def default_sensor(context: SensorContext) -> Sensor | None:
+    """The observation of an env with no sensor configured: the first default type made for
+    its track kind, under its type's name (None if no type is)."""
+    kind = context.env.kind
+    for name, found in SENSOR_TYPES.items():
+        if found.default and found.track_kinds is not None and kind in found.track_kinds:
+            return found.build(found.config(id=name), context)
+    return None
+
+
 def build_sensors(context: SensorContext, source: str) -> list[Sensor]:
-    """The sensors of the env config's ``sensors:`` list, in order; a ConfigError lists every
-    entry that cannot work with this config (its type, its track kind, or its knobs)."""
+    """The sensors of the env config's ``sensors:`` list (tinycarlo's ``cameras:`` first), in
+    order; a ConfigError lists every entry that cannot work with this config (its type, its
+    track kind, or its knobs), by the key the user wrote."""
     config = context.env
     built, problems = [], []
+    cameras = len(config.cameras)  # the loader put them first
     for i, entry in enumerate(config.sensors):
-        kind = sensor_type(entry.type, source, f"sensors[{i}].type")
+        key = f"cameras[{i}]" if i < cameras else f"sensors[{i - cameras}]"  # as written
+        kind = sensor_type(entry.type, source, f"{key}.type")
         if kind.track_kinds is not None and config.kind not in kind.track_kinds:
             kinds = ", ".join(sorted(kind.track_kinds))
             allowed = f"a {entry.type} sensor works on track kinds: {kinds}"
-            problems.append(Problem(source, f"sensors[{i}].type", entry.type, allowed))
+            problems.append(Problem(source, f"{key}.type", entry.type, allowed))
             continue
         try:
             built.append(kind.build(entry, context))
         except Unsupported as exc:
-            problems.append(Problem(source, f"sensors[{i}]", entry.type, str(exc)))
+            problems.append(Problem(source, key, entry.type, str(exc)))
     if problems:
         raise ConfigError(problems)
     return built

@@ -18,6 +18,7 @@ class Snapshot:
     t: float  # [s] since reset
     steps: int  # steps since reset
     cars: tuple[CarState, ...]
+    score: float = 0.0  # the controlled car's running reward (CarRacing's dashboard shows it)
 
     @property
     def car(self) -> CarState:
@@ -30,4 +31,4 @@ class Snapshot:
         if car == 0:
             return self
         cars = self.cars
-        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]))
+        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]), self.score)

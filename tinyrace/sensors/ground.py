@@ -1,0 +1,150 @@
+"""The ground of an env's tracks: the one place that paints and serves the track texture an
+episode's sensors and pictures sample.
+
+An ``EpisodeGround`` is made once per env (``make_ground``) and told of each new episode
+(``reset``); sensors (``SensorContext.ground``) and pictures (``tinyrace.render``) both ask it
+for ``texture(track)``. CarRacing's ground changes during an episode (a visited tile loses its
+shade): every texture of the episode is repainted before it is next served.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+from tinyrace import cache
+from tinyrace.config import METRIC_KINDS, EnvConfig, ProceduralTrackConfig, cache_settings
+from tinyrace.sensors.metric_ground import shared_ground
+from tinyrace.sensors.procedural_ground import GroundPainter, repaint_tile
+from tinyrace.sensors.texture import GroundTexture
+from tinyrace.tracks.base import Track, TrackDraw, TrackSource
+from tinyrace.tracks.image import ImageSource, ImageTrack
+from tinyrace.tracks.metric import MetricSource, MetricTrack
+from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
+
+DEFAULT_PIXELS_PER_METER = 20.0  # [px/m] a metric track's texture when its config names none
+
+
+class EpisodeGround(Protocol):
+    """The ground textures of an env's tracks, pointed at the current episode by ``reset``."""
+
+    def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
+        """A new episode on ``draw``'s track; ``visited``: its tiles in the order the rules
+        mark them (the episode's list, read as it grows)."""
+
+    def texture(self, track: Track) -> GroundTexture:
+        """The ground of ``track`` in the current episode (as the cameras sample it)."""
+        ...
+
+
+class ProceduralGround:
+    """CarRacing's ground, painted at each reset in the episode's colours, at any number of
+    resolutions (the observation's, the videos'), each made when first asked."""
+
+    def __init__(self, config: EnvConfig, source: ProceduralSource):
+        track_config = config.tracks[0]
+        assert isinstance(track_config, ProceduralTrackConfig)
+        self.pixels_per_unit = track_config.pixels_per_unit  # [px/u] of the cameras' texture
+        self.painter = GroundPainter(track_config.playfield)
+        self.source = source  # its colours are the current episode's
+        self.track: ProceduralTrack | None = None
+        self.colors: GroundColors | None = None
+        self.visited: Sequence[int] = ()
+        self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
+        self._painted = 0  # visited tiles repainted on every texture
+
+    def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
+        self.track, self.colors, self.visited = draw.track.detail, self.source.colors, visited
+        self._textures, self._painted = {}, 0
+
+    def texture(self, track: Track) -> GroundTexture:
+        """The ground at the track's pixels_per_unit, with every tile visited so far."""
+        return self.texture_at(self.pixels_per_unit)
+
+    def texture_at(self, pixels_per_unit: float) -> GroundTexture:
+        """The ground at ``pixels_per_unit``, with every tile visited so far repainted."""
+        assert self.track is not None and self.colors is not None, "reset() first"
+        if self._painted < len(self.visited):
+            self._repaint_visited()
+        texture = self._textures.get(pixels_per_unit)
+        if texture is None:
+            texture = self.painter.paint(self.track, self.colors, pixels_per_unit)
+            for tile in self.visited[: self._painted]:  # in visit order: the same pixels
+                repaint_tile(texture, self.track, tile, self.colors.road)
+            self._textures[pixels_per_unit] = texture
+        return texture
+
+    def _repaint_visited(self) -> None:
+        """Repaint the tiles visited since the last texture was served, in visit order."""
+        assert self.track is not None and self.colors is not None, "reset() first"
+        for tile in self.visited[self._painted :]:
+            for texture in self._textures.values():
+                repaint_tile(texture, self.track, tile, self.colors.road)
+        self._painted = len(self.visited)
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Leave out the textures (tens of MB): they are repainted when next asked."""
+        return {**self.__dict__, "_textures": {}, "painter": GroundPainter(self.painter.playfield)}
+
+
+class ImageGround:
+    """Every image track's picture as a texture (made once per env)."""
+
+    def __init__(self, config: EnvConfig, source: ImageSource):
+        self.layouts = source.tracks
+        self.tracks: list[ImageTrack] = [layout.detail for layout in source.tracks]
+        self.textures = [
+            GroundTexture.from_image(track.image, exact_colors=True) for track in self.tracks
+        ]
+        self.index = 0  # the current episode's track
+
+    def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
+        self.index = draw.track_index
+
+    def texture(self, track: Track) -> GroundTexture:
+        return self.textures[self.index]
+
+
+class MetricGround:
+    """Every metric track's painted (or mapped) ground, made at its first read and shared
+    with the other envs of the track (``shared_ground``)."""
+
+    def __init__(self, config: EnvConfig, source: MetricSource):
+        self.layouts = source.tracks
+        self.tracks: list[MetricTrack] = [layout.detail for layout in source.tracks]
+        self.scales = [  # [px/m] of each track's texture
+            getattr(track_config, "pixels_per_meter", DEFAULT_PIXELS_PER_METER)
+            for track_config in config.tracks
+        ]
+        self.cache: cache.Settings = cache_settings(config)
+        self.textures: list[GroundTexture | None] = [None] * len(self.tracks)
+        self.index = 0  # the current episode's track
+
+    def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
+        self.index = draw.track_index
+
+    def texture(self, track: Track) -> GroundTexture:
+        """The current track's ground (painted, or mapped, at its first read)."""
+        texture = self.textures[self.index]
+        if texture is None:
+            i = self.index
+            texture = shared_ground(self.layouts[i], self.tracks[i], self.scales[i], self.cache)
+            self.textures[i] = texture
+        return texture
+
+
+# track.type -> its ground, built from the config and the source (its tracks, loaded)
+GROUNDS: dict[str, Callable[[EnvConfig, Any], EpisodeGround]] = {
+    "procedural": ProceduralGround,
+    "image": ImageGround,
+    **dict.fromkeys(METRIC_KINDS, MetricGround),
+}
+
+
+def make_ground(config: EnvConfig, source: TrackSource) -> EpisodeGround:
+    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode)."""
+    build = GROUNDS.get(source.kind)
+    if build is None:
+        raise KeyError(f"no ground for track kind {source.kind!r}; known: {', '.join(GROUNDS)}")
+    return build(config, source)
