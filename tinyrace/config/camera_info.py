@@ -149,7 +149,7 @@ def with_camera_info(config: EnvConfig, source: str, base_dir: Path) -> EnvConfi
     for index, entry in enumerate(sensors):
         if not isinstance(entry, PerspectiveCameraConfig) or entry.camera_info is None:
             continue
-        where = f"sensors[{index}].camera_info"
+        where = f"{config.sensor_key(index)}.camera_info"
         try:
             path = inside_folder(
                 entry.camera_info, base_dir, config.files.paths_outside_folder, source, where

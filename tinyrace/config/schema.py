@@ -449,3 +449,18 @@ class EnvConfig:
     @property
     def kind(self) -> str:
         return self.tracks[0].type
+
+    @property
+    def written_sensors(self) -> tuple[SensorConfig, ...]:
+        """The ``sensors:`` entries as written: without the ``cameras`` the loader put first."""
+        return self.sensors[self._cameras_first() :]
+
+    def sensor_key(self, index: int) -> str:
+        """The key the user wrote for ``sensors[index]``: ``cameras[i]`` or ``sensors[j]``."""
+        cameras = self._cameras_first()
+        return f"cameras[{index}]" if index < cameras else f"sensors[{index - cameras}]"
+
+    def _cameras_first(self) -> int:
+        """How many of ``sensors`` are the ``cameras`` the loader put first."""
+        cameras = self.cameras
+        return len(cameras) if self.sensors[: len(cameras)] == cameras else 0

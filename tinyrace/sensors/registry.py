@@ -118,9 +118,8 @@ def build_sensors(context: SensorContext, source: str) -> list[Sensor]:
     track kind, or its knobs), by the key the user wrote."""
     config = context.env
     built, problems = [], []
-    cameras = len(config.cameras)  # the loader put them first
     for i, entry in enumerate(config.sensors):
-        key = f"cameras[{i}]" if i < cameras else f"sensors[{i - cameras}]"  # as written
+        key = config.sensor_key(i)  # as written: cameras[i] or sensors[j]
         kind = sensor_type(entry.type, source, f"{key}.type")
         if kind.track_kinds is not None and config.kind not in kind.track_kinds:
             kinds = ", ".join(sorted(kind.track_kinds))
