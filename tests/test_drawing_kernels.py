@@ -111,8 +111,9 @@ def test_the_variable_chooses_the_path_of_new_views(monkeypatch, path):
     monkeypatch.setenv(drawing.DRAWING_VARIABLE, path)
     env = gym.make("tinyrace/CarRacing-v0")
     env.reset(seed=0)
-    view = env.unwrapped.pictures.chase_view((96, 96))
-    assert (view.dashboard.drawing, view.sprite.drawing) == (path, path)
+    sensor = env.unwrapped.sensors[0]  # the chase_view sensor: the observation
+    for view in (sensor.view, env.unwrapped.pictures.chase_view((96, 96))):
+        assert (view.dashboard.drawing, view.sprite.drawing) == (path, path)
     env.close()
 
 
@@ -160,6 +161,6 @@ def test_a_texture_warps_with_the_composition_the_variable_chooses(monkeypatch):
         env = gym.make("tinyrace/CarRacing-v0")
         env.reset(seed=0)
         env.step(env.action_space.sample())
-        view = env.unwrapped.pictures.chase_view((96, 96))
-        assert view.texture.drawing == path
+        sensor = env.unwrapped.sensors[0]  # the chase_view sensor: the observation
+        assert sensor.view.texture.drawing == path
         env.close()

@@ -254,10 +254,8 @@ class TinyRaceEnv(gym.Env):
     def observe(self, snapshot: Snapshot) -> Any:
         """The observation of ``snapshot``: every sensor's reading (kept for the pictures of
         this step, which draw no view a second time)."""
-        observation = {
-            sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
-            for sensor in self.sensors
-        }
+        layout, rng = self.layout, self.np_random
+        observation = {sensor.id: sensor.observe(snapshot, layout, rng) for sensor in self.sensors}
         self._observed = (self._episode(), self.steps, observation)
         return observation if self.box_camera is None else observation[self.box_camera]
 

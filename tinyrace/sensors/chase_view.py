@@ -115,26 +115,26 @@ class ChaseViewSensor:
         self.space = spaces.Box(0, 255, (height, width, 3), np.uint8)
         self.dashboard = small_dashboard(self.size)  # kept across episodes, as its patches
         self.patches: Patches = {}
-        self._view: ChaseView | None = None  # on the current episode's ground
+        self.view: ChaseView | None = None  # on the current episode's ground
 
     @property
     def id(self) -> str:
         return self.config.id
 
     def reset(self, track: Track) -> None:
-        self._view = None  # a new episode has a new ground
+        self.view = None  # a new episode has a new ground
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         texture = self.ground.texture(track)  # asked each step: visited tiles get repainted
-        view = self._view
+        view = self.view
         if view is None or view.texture is not texture:
-            view = self._view = ChaseView(self.size, texture, self.dashboard, self.patches)
+            view = self.view = ChaseView(self.size, texture, self.dashboard, self.patches)
         return view.render(snapshot, snapshot.score)
 
     def __getstate__(self) -> dict[str, Any]:
         # the texture belongs to the episode; the cached pictures are redrawn when next asked
         fresh: dict[str, Any] = {
-            "_view": None,
+            "view": None,
             "dashboard": small_dashboard(self.size),
             "patches": {},
         }

@@ -60,7 +60,10 @@ class ProceduralGround:
 
     def texture(self, track: Track) -> GroundTexture:
         """The ground at the track's pixels_per_unit, with every tile visited so far."""
-        return self.texture_at(self.pixels_per_unit)
+        texture = self._textures.get(self.pixels_per_unit)  # the cameras' (asked every step)
+        if texture is None or self._painted < len(self.visited):
+            texture = self.texture_at(self.pixels_per_unit)
+        return texture
 
     def texture_at(self, pixels_per_unit: float) -> GroundTexture:
         """The ground at ``pixels_per_unit``, with every tile visited so far repainted."""
