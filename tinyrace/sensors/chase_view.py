@@ -113,7 +113,9 @@ class ChaseViewSensor:
         height, width = config.resolution
         self.size = (width, height)
         self.space = spaces.Box(0, 255, (height, width, 3), np.uint8)
-        self.dashboard = small_dashboard(self.size)  # kept across episodes, as its patches
+        # kept across episodes, as its patches; made at the first observation (the drawing
+        # path's choice imports numba, which gym.make does not)
+        self.dashboard: Dashboard | None = None
         self.patches: Patches = {}
         self.view: ChaseView | None = None  # on the current episode's ground
 
@@ -128,16 +130,15 @@ class ChaseViewSensor:
         texture = self.ground.texture(track)  # asked each step: visited tiles get repainted
         view = self.view
         if view is None or view.texture is not texture:
-            view = self.view = ChaseView(self.size, texture, self.dashboard, self.patches)
+            if self.dashboard is None:
+                self.dashboard = small_dashboard(self.size)
+            dashboard = self.dashboard
+            view = self.view = ChaseView(self.size, texture, dashboard, self.patches)
         return view.render(snapshot, snapshot.score)
 
     def __getstate__(self) -> dict[str, Any]:
         # the texture belongs to the episode; the cached pictures are redrawn when next asked
-        fresh: dict[str, Any] = {
-            "view": None,
-            "dashboard": small_dashboard(self.size),
-            "patches": {},
-        }
+        fresh: dict[str, Any] = {"view": None, "dashboard": None, "patches": {}}
         return {**self.__dict__, **fresh}
 
 
