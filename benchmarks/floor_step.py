@@ -92,7 +92,7 @@ class LeanStep:
         self.t += self.dt
         self.steps += 1
         self.score += reward - carried
-        snapshot = Snapshot(self.t, self.steps, (state,), self.score)
+        snapshot = Snapshot(self.t, self.steps, (state,), score=self.score)
         if parts is not None:
             started = _add(parts, "tiles, reward, the car's state", started, clock())
         frame = self.view.observe(snapshot, self.layout, self.rng)

@@ -12,7 +12,9 @@ from gymnasium import spaces
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.config import CameraConfig
+from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
+from tinyrace.race import parallel_env
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.chase_view import ChaseViewSensor
 from tinyrace.sensors.top_view import TopViewSensor
@@ -139,3 +141,52 @@ def test_a_frame_of_this_steps_views_is_the_frame_of_views_drawn_anew(kwargs):
     reused = env.render()
     inner._observed = None  # the views are drawn again for this frame
     assert np.array_equal(reused, env.render())
+
+
+def test_race_cars_see_through_sensors_their_own_cameras_first():
+    rear = {"id": "rear", "resolution": [20, 30], "roi": [10.0, 15.0], "yaw": 180.0}
+    state = {"id": "s", "type": "state"}
+    cars = [
+        {"id": "shared"},
+        {"id": "own_cameras", "cameras": [rear]},
+        {"id": "own_sensors", "sensors": [state]},
+    ]
+    env = parallel_env(
+        **CIRCUIT, sensors=[{"id": "l", "type": "lidar", "beams": 8}], race={"cars": cars}
+    )
+    keys = {
+        agent: [sensor.id for sensor in seat.sensors]
+        for agent, seat in zip(env.possible_agents, env.seats, strict=True)
+    }
+    # a car's cameras (its own, else the shared) come first, then its sensors (its own, else
+    # the shared ones); each car's cameras are birdseye_camera sensors like car 0's
+    assert keys == {
+        "shared": ["front", "l"],
+        "own_cameras": ["rear", "l"],
+        "own_sensors": ["front", "s"],
+    }
+    assert isinstance(env.seats[1].sensors[0], BirdseyeCamera)
+    for agent, ids in keys.items():
+        assert set(env.observation_space(agent).spaces) == set(ids)
+    observations, _ = env.reset(seed=0)
+    for agent in env.agents:
+        assert observations[agent] in env.observation_space(agent)
+    assert observations["own_cameras"]["rear"].shape == (20, 30, 3)
+
+
+def test_a_race_cars_bad_camera_is_named_by_the_key_written():
+    bad = {"id": "bad", "type": "chase_view"}  # a procedural view on a track in metres
+    cars = [{}, {"sensors": [bad]}]
+    with pytest.raises(ConfigError, match=r"race\.cars\[1\]\.sensors\[0\]\.type"):
+        parallel_env(**CIRCUIT, race={"cars": cars})
+
+
+def test_every_race_car_without_sensors_observes_its_default_view():
+    env = parallel_env(race={"num_agents": 2})  # CarRacing's track: chase_view for each car
+    for agent, seat in zip(env.possible_agents, env.seats, strict=True):
+        assert [type(s) for s in seat.sensors] == [ChaseViewSensor]
+        assert env.observation_space(agent) == spaces.Box(0, 255, (96, 96, 3), np.uint8)
+    observations, _ = env.reset(seed=0)
+    assert all(isinstance(o, np.ndarray) and o.shape == (96, 96, 3) for o in observations.values())
+    metric = parallel_env(**CIRCUIT, cameras=[], race={"num_agents": 2})
+    assert [type(s) for seat in metric.seats for s in seat.sensors] == [TopViewSensor] * 2

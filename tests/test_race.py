@@ -58,13 +58,14 @@ def test_the_aec_form_passes_pettingzoo_api_test():
 def test_the_grid_puts_every_car_apart_with_the_pole_at_the_spawn(kind):
     alone = make(kind, num_agents=1)
     _, infos = alone.reset(seed=4)
-    env = make(kind, num_agents=8)
+    count = 3 if kind == "image" else 8  # carolo_cup's straight grid leaves the image at 4
+    env = make(kind, num_agents=count)
     _, grid = env.reset(seed=4)
-    assert len(grid) == 8
+    assert len(grid) == count
     state = env.state()
     cars = env.core.snapshot().cars
-    for i in range(8):
-        for j in range(i + 1, 8):
+    for i in range(count):
+        for j in range(i + 1, count):
             assert not footprints_overlap(cars[i], cars[j]), (i, j, state[i], state[j])
     # the pole is the single car's spawn, moved sideways by the grid's offset only
     (x0, y0, h0), (x1, y1, h1) = infos["car_0"]["pose"], grid["car_0"]["pose"]

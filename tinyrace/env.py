@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,9 +33,6 @@ from tinyrace.sensors.ground import make_ground
 from tinyrace.sensors.registry import build_sensors, default_sensor
 from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.tracks.base import Track
-from tinyrace.tracks.image import ImageTrack
-from tinyrace.tracks.metric import MetricTrack
-from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
@@ -104,7 +102,7 @@ class TinyRaceEnv(gym.Env):
         self.track_source = parts.source
         self.course = parts.course
         self.ground = make_ground(self.config, parts.source)  # sensors' and pictures' ground
-        self.pictures: Pictures = make_pictures(self.config, parts.source, self.ground)
+        self.pictures: Pictures = make_pictures(self.config, self.ground)
         fps = self.config.sim.fps
         assert fps is not None  # resolved by the config loader
         self.dt = 1.0 / fps  # [s]
@@ -116,9 +114,7 @@ class TinyRaceEnv(gym.Env):
         self._config_source = loaded.source
         self._blame = loaded.blame
         self.sensors: list[Sensor] = self.make_sensors()
-        box = self.config.observation == "box" or not self.config.sensors  # or the default
-        box = box and len(self.sensors) == 1
-        self.box_camera = self.sensors[0].id if box else None
+        self.box_camera = self.box_sensor(self.sensors)
         self.observation_space = self._observation_space()
         self.shaping = (
             _checked_shaping(cte_shaping)
@@ -134,16 +130,34 @@ class TinyRaceEnv(gym.Env):
         # the last observation's readings by sensor id, and the episode and step they saw
         self._observed: tuple[Episode, int, dict[str, Any]] | None = None
 
-    def make_sensors(self) -> list[Sensor]:
-        """The config's sensors (its cameras among them), built anew (one set per car that
-        observes); none configured: the track's default sensor."""
+    def make_sensors(self, car: int = 0) -> list[Sensor]:
+        """Car ``car``'s sensors, its cameras among them (the config's for car 0; a race
+        car's own, else the shared ones), built anew (one set per car that observes); none
+        configured: the track's default sensor."""
         context = self._sensor_context
+        at = ""
+        if car:
+            racer = self.course.racers[car]
+            config = dataclasses.replace(
+                self.config, car=racer.car.car, cameras=racer.car.cameras, sensors=racer.car.sensors
+            )
+            context = SensorContext(config, self.ground, racer.model.describe(config))
+            at = f"race.cars[{car}]." if self.config.race.cars else ""
         try:
             sensors = build_sensors(context, self._config_source)
         except ConfigError as exc:
-            raise ConfigError(self._blame(exc.problems)) from None
+            problems = [dataclasses.replace(p, path=f"{at}{p.path}") for p in exc.problems]
+            raise ConfigError(self._blame(problems)) from None
         default = None if sensors else default_sensor(context)
         return sensors if default is None else [default]
+
+    def box_sensor(self, sensors: list[Sensor], car: int = 0) -> str | None:
+        """The id of the one sensor whose reading is car ``car``'s whole observation (a
+        Box): with ``observation: box``, or the track's default sensor when the car has no
+        sensor configured; None for a Dict observation."""
+        configured = self.config.sensors if car == 0 else self.course.racers[car].car.sensors
+        box = self.config.observation == "box" or not configured
+        return sensors[0].id if box and len(sensors) == 1 else None
 
     def _observation_space(self) -> spaces.Space[Any]:
         if self.box_camera is not None:  # ``observation: box``: the one camera's image alone
@@ -155,18 +169,18 @@ class TinyRaceEnv(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         super().reset(seed=seed)
-        options = _check_options(options, self.config.kind)
+        options = _check_options(options)
         draw = self.track_source.draw(self.np_random, options)
         poses = _check_poses(options.get("poses"), self.config.race.num_agents)
-        self.episode = episode = self.course.new_episode(draw, poses)
+        self.episode = episode = self.course.new_episode(draw, poses, self.np_random)
         self.ground.reset(draw, episode.visit_order)  # before the sensors and pictures read it
         self.pictures.reset(draw)
         self.layout = draw.track
         for sensor in self.sensors:
             sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
-            attempts = getattr(draw.track.detail, "attempts", 1)
-            print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
+            attempts, tiles = draw.track.attempts, len(draw.track.tiles)
+            print(f"Track generation: {attempts} attempt(s) -> {tiles}-tiles track")
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
@@ -274,10 +288,11 @@ class TinyRaceEnv(gym.Env):
         return info
 
     @property
-    def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
-        """The current episode's track data (read-only arrays in track units)."""
-        detail: ProceduralTrack | ImageTrack | MetricTrack = self._episode("the track").track.detail
-        return detail
+    def track(self) -> Track:
+        """The current episode's ``Track`` (``tinyrace.tracks.base``): read-only arrays in
+        track units (``unit``): ``centerline``, ``headings``, ``tiles``, ``kerbs``, ``walls``,
+        ``cones``, ``picture``, ``occupancy``, ... (None or empty where it has none)."""
+        return self._episode("the track").track
 
     @property
     def car(self) -> Any:
@@ -354,7 +369,7 @@ def _rgb(image: np.ndarray) -> np.ndarray:
     return image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
 
 
-def _check_options(options: object, kind: str) -> dict[str, Any]:
+def _check_options(options: object) -> dict[str, Any]:
     """The reset options, checked: known keys, ``randomize`` a bool, indices whole numbers.
 
     Image tracks check the index ranges when they pick; a procedural track has one track and
@@ -371,9 +386,6 @@ def _check_options(options: object, kind: str) -> dict[str, Any]:
             raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
         if key == "randomize" and not isinstance(value, (bool, np.bool_)):
             raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
-        if key in ("track", "spawn") and kind == "procedural" and not _is_zero_or_none(value):
-            allowed = f"expected 0 or None (a procedural track has one {key})"
-            raise ConfigError(Problem(RESET_SOURCE, key, value, allowed))
     return dict(options)
 
 
@@ -394,11 +406,6 @@ def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] 
 def _short(value: object) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _is_zero_or_none(value: object) -> bool:
-    whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    return value is None or (whole and value == 0)
 
 
 def _key_text(key: object) -> str:

@@ -278,3 +278,13 @@ SENSOR_CONFIGS = (
     ChaseViewConfig,
     TopViewConfig,
 )
+
+
+def cameras_first(
+    cameras: tuple[CameraConfig, ...], sensors: tuple[SensorConfig, ...]
+) -> tuple[SensorConfig, ...]:
+    """tinycarlo's ``cameras:`` as ``birdseye_camera`` sensors, first in the ``sensors``
+    list (in their order; once: a list that starts with them already is kept)."""
+    if sensors[: len(cameras)] == cameras:
+        return sensors
+    return (*cameras, *sensors)

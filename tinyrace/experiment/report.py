@@ -109,9 +109,14 @@ def _lap_caption(lap_times: Sequence[float | None]) -> str:
 
 
 def _unit(header: dict[str, Any]) -> str:
-    """The track's unit: CarRacing's u, image pixels, or metres on the metric kinds."""
-    kind = str(header.get("track_kind"))
-    return {"procedural": "u", "centerline": "m", "cone_map": "m", "ros_map": "m"}.get(kind, "px")
+    """The track's unit as the run recorded it (``track_unit``; older runs: the unit of
+    their first track picture): CarRacing's u, image pixels or metres."""
+    recorded = header.get("track_unit")
+    if isinstance(recorded, str):
+        return recorded
+    entries = list((header.get("tracks") or {}).values())
+    unit = entries[0].get("unit") if entries else None
+    return unit if isinstance(unit, str) and unit else "track units"
 
 
 def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None:

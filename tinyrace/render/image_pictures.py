@@ -1,6 +1,8 @@
-"""The pictures of an image track: the overview frame (its ground is the track's picture)."""
+"""The pictures of tracks that carry a picture: the overview frame (their ground is it)."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -9,8 +11,7 @@ from tinyrace.config import EnvConfig
 from tinyrace.render.overview import Overview
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.ground import ImageGround
-from tinyrace.tracks.base import TrackDraw
-from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
 
 
@@ -19,7 +20,7 @@ class ImagePictures:
 
     def __init__(self, config: EnvConfig, ground: ImageGround):
         self.config = config
-        self.tracks: list[ImageTrack] = ground.tracks
+        self.tracks: Sequence[Track] = ground.tracks
         self.overviews: list[Overview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
 

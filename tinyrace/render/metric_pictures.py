@@ -3,6 +3,8 @@ sensor drew one (its ground is the episode's, ``tinyrace.sensors.ground``)."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import cv2
 import numpy as np
 
@@ -13,8 +15,7 @@ from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.ground import MetricGround
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.sensors.top_view import TopView
-from tinyrace.tracks.base import TrackDraw
-from tinyrace.tracks.metric import MetricTrack
+from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
 
 _OVERVIEW_BITS = 4  # cv2 fixed-point vertices: 1/16 px
@@ -25,7 +26,7 @@ class MetricPictures:
 
     def __init__(self, config: EnvConfig, ground: MetricGround):
         self.ground = ground
-        self.tracks: list[MetricTrack] = ground.tracks
+        self.tracks: Sequence[Track] = ground.tracks
         self.overviews: list[MetricOverview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
         self.view: TopView | None = None  # the default view, when no image sensor drew one
@@ -42,7 +43,7 @@ class MetricPictures:
         windows = [corners for _, corners in cameras if corners is not None]
         overview = self.overviews[self.index]
         if overview is None:
-            texture = self.ground.texture(self.ground.layouts[self.index])
+            texture = self.ground.texture(self.tracks[self.index])
             overview = MetricOverview(self.tracks[self.index], texture)
             self.overviews[self.index] = overview
         return overview.render(footprint_corners(snapshot.car), windows, images)
@@ -50,7 +51,7 @@ class MetricPictures:
     def _default_view(self, snapshot: Snapshot) -> np.ndarray:
         """The top view a config without image sensors observes by default."""
         if self.view is None:
-            texture = self.ground.texture(self.ground.layouts[self.index])
+            texture = self.ground.texture(self.tracks[self.index])
             self.view = TopView(TopViewConfig(id="top_view"), texture)
         return self.view.render(snapshot.car)
 
@@ -58,7 +59,7 @@ class MetricPictures:
 class MetricOverview:
     """The whole track scaled to ``max_side`` px, the reference line, the car and camera views."""
 
-    def __init__(self, track: MetricTrack, texture: GroundTexture, max_side: int = 800):
+    def __init__(self, track: Track, texture: GroundTexture, max_side: int = 800):
         x0, y0, x1, y1 = track.bounds
         self.scale = max_side / max(x1 - x0, y1 - y0)  # [px/m]
         self.size = (max(round((x1 - x0) * self.scale), 1), max(round((y1 - y0) * self.scale), 1))

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.config import MAX_TEXTURE_SIDE, EnvConfig, ProceduralTrackConfig
+from tinyrace.config import MAX_TEXTURE_SIDE
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.car_sprite import Patches
 from tinyrace.sensors.chase_view import SMALL_VIEW, ChaseView, small_dashboard
@@ -24,10 +24,8 @@ RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "huma
 class ProceduralPictures:
     """CarRacing's views of the current episode; views are made when first asked."""
 
-    def __init__(self, config: EnvConfig, ground: ProceduralGround):
-        track_config = config.tracks[0]
-        assert isinstance(track_config, ProceduralTrackConfig)
-        self.track_config = track_config
+    def __init__(self, ground: ProceduralGround):
+        self.painted = ground.painted  # the playfield and the cameras' pixels_per_unit
         self.ground = ground
         self._cache: dict[tuple[int, int], tuple[Dashboard, Patches]] = {}  # across episodes
         self._views: dict[tuple[int, int], ChaseView] = {}
@@ -42,7 +40,7 @@ class ProceduralPictures:
     def chase_view(self, size: tuple[int, int]) -> ChaseView:
         """CarRacing's view at ``size`` (w, h); small views share the observation texture."""
         small = max(size) <= SMALL_VIEW
-        ppu = self.track_config.pixels_per_unit if small else self._video_pixels_per_unit()
+        ppu = self.painted.pixels_per_unit if small else self._video_pixels_per_unit()
         texture = self.ground.texture_at(ppu)  # asked each frame: visited tiles get repainted
         view = self._views.get(size)
         if view is None or view.texture is not texture:
@@ -54,7 +52,7 @@ class ProceduralPictures:
 
     def _video_pixels_per_unit(self) -> float:
         """4 px/u for videos, less on huge playfields (the texture stays <= MAX_TEXTURE_SIDE)."""
-        return min(VIDEO_PIXELS_PER_UNIT, MAX_TEXTURE_SIDE / (2 * self.track_config.playfield))
+        return min(VIDEO_PIXELS_PER_UNIT, MAX_TEXTURE_SIDE / (2 * self.painted.playfield))
 
     def __getstate__(self) -> dict[str, Any]:
         """Leave out the pictures: they are redrawn when next asked."""

@@ -9,21 +9,18 @@ shade): every texture of the episode is repainted before it is next served.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any, Protocol
 
+import numpy as np
+
 from tinyrace import cache
-from tinyrace.config import METRIC_KINDS, EnvConfig, ProceduralTrackConfig, cache_settings
+from tinyrace.config import EnvConfig, cache_settings
 from tinyrace.sensors.metric_ground import shared_ground
 from tinyrace.sensors.procedural_ground import GroundPainter, repaint_tile
 from tinyrace.sensors.texture import GroundTexture
-from tinyrace.tracks.base import Track, TrackDraw, TrackSource
-from tinyrace.tracks.image import ImageSource, ImageTrack
-from tinyrace.tracks.metric import MetricSource, MetricTrack
-from tinyrace.tracks.procedural import ProceduralTrack
-from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
-
-DEFAULT_PIXELS_PER_METER = 20.0  # [px/m] a metric track's texture when its config names none
+from tinyrace.tracks.base import PaintedGround, Track, TrackDraw, TrackSource
+from tinyrace.tracks.procedural_source import GroundColors
 
 
 class EpisodeGround(Protocol):
@@ -42,20 +39,18 @@ class ProceduralGround:
     """CarRacing's ground, painted at each reset in the episode's colours, at any number of
     resolutions (the observation's, the videos'), each made when first asked."""
 
-    def __init__(self, config: EnvConfig, source: ProceduralSource):
-        track_config = config.tracks[0]
-        assert isinstance(track_config, ProceduralTrackConfig)
-        self.pixels_per_unit = track_config.pixels_per_unit  # [px/u] of the cameras' texture
-        self.painter = GroundPainter(track_config.playfield)
-        self.source = source  # its colours are the current episode's
-        self.track: ProceduralTrack | None = None
+    def __init__(self, painted: PaintedGround):
+        self.painted = painted  # the playfield and the cameras' pixels_per_unit
+        self.pixels_per_unit = painted.pixels_per_unit  # [px/u] of the cameras' texture
+        self.painter = GroundPainter(painted.playfield)
+        self.track: Track | None = None
         self.colors: GroundColors | None = None
         self.visited: Sequence[int] = ()
         self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
         self._painted = 0  # visited tiles repainted on every texture
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
-        self.track, self.colors, self.visited = draw.track.detail, self.source.colors, visited
+        self.track, self.colors, self.visited = draw.track, GroundColors.of(draw.track), visited
         self._textures, self._painted = {}, 0
 
     def texture(self, track: Track) -> GroundTexture:
@@ -92,13 +87,12 @@ class ProceduralGround:
 
 
 class ImageGround:
-    """Every image track's picture as a texture (made once per env)."""
+    """The picture each fixed track carries, as a texture (made once per env)."""
 
-    def __init__(self, config: EnvConfig, source: ImageSource):
-        self.layouts = source.tracks
-        self.tracks: list[ImageTrack] = [layout.detail for layout in source.tracks]
+    def __init__(self, tracks: Sequence[Track]):
+        self.tracks = tracks
         self.textures = [
-            GroundTexture.from_image(track.image, exact_colors=True) for track in self.tracks
+            GroundTexture.from_image(_picture(track), exact_colors=True) for track in tracks
         ]
         self.index = 0  # the current episode's track
 
@@ -110,16 +104,12 @@ class ImageGround:
 
 
 class MetricGround:
-    """Every metric track's painted (or mapped) ground, made at its first read and shared
-    with the other envs of the track (``shared_ground``)."""
+    """Every fixed track's ground drawn from what it holds (road, cones, a map's cells) at
+    its ``ground_pixels_per_unit``, made at its first read and shared with the other envs of
+    the track (``shared_ground``)."""
 
-    def __init__(self, config: EnvConfig, source: MetricSource):
-        self.layouts = source.tracks
-        self.tracks: list[MetricTrack] = [layout.detail for layout in source.tracks]
-        self.scales = [  # [px/m] of each track's texture
-            getattr(track_config, "pixels_per_meter", DEFAULT_PIXELS_PER_METER)
-            for track_config in config.tracks
-        ]
+    def __init__(self, config: EnvConfig, tracks: Sequence[Track]):
+        self.tracks = tracks
         self.cache: cache.Settings = cache_settings(config)
         self.textures: list[GroundTexture | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
@@ -128,26 +118,27 @@ class MetricGround:
         self.index = draw.track_index
 
     def texture(self, track: Track) -> GroundTexture:
-        """The current track's ground (painted, or mapped, at its first read)."""
+        """The current track's ground (drawn, or mapped, at its first read)."""
         texture = self.textures[self.index]
         if texture is None:
-            i = self.index
-            texture = shared_ground(self.layouts[i], self.tracks[i], self.scales[i], self.cache)
-            self.textures[i] = texture
+            texture = shared_ground(self.tracks[self.index], self.cache)
+            self.textures[self.index] = texture
         return texture
 
 
-# track.type -> its ground, built from the config and the source (its tracks, loaded)
-GROUNDS: dict[str, Callable[[EnvConfig, Any], EpisodeGround]] = {
-    "procedural": ProceduralGround,
-    "image": ImageGround,
-    **dict.fromkeys(METRIC_KINDS, MetricGround),
-}
-
-
 def make_ground(config: EnvConfig, source: TrackSource) -> EpisodeGround:
-    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode)."""
-    build = GROUNDS.get(source.kind)
-    if build is None:
-        raise KeyError(f"no ground for track kind {source.kind!r}; known: {', '.join(GROUNDS)}")
-    return build(config, source)
+    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode), chosen
+    by what the tracks hold, never by their kind: a ground painted anew for each track from
+    its tiles and kerbs (``source.painted``), the picture each fixed track carries
+    (``Track.picture``), or else a ground drawn once per track from what it holds (road,
+    cones, a map's cells)."""
+    if source.painted is not None:
+        return ProceduralGround(source.painted)
+    if source.tracks and all(track.picture is not None for track in source.tracks):
+        return ImageGround(source.tracks)
+    return MetricGround(config, source.tracks)
+
+
+def _picture(track: Track) -> np.ndarray:
+    assert track.picture is not None, "an image ground is of tracks with a picture"
+    return track.picture

@@ -17,9 +17,9 @@ from tinyrace.cache.codec import DataclassCodec
 from tinyrace.sensors import texture
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
-from tinyrace.tracks.metric import MetricTrack
 
 MAX_SIDE = 8192  # [px] the texture's longest side
+GROUND_PIXELS_PER_METER = 20.0  # [px/m] when the track names no resolution
 ROAD = (102, 102, 102)  # RGB, CarRacing's road
 GRASS = (102, 204, 102)  # RGB, CarRacing's background
 START_LINE = (255, 255, 255)
@@ -35,17 +35,16 @@ _BITS = 4  # cv2 fixed-point vertices: 1/16 px
 TEXTURES = DataclassCodec(GroundTexture, GroundTexture.complete)  # stored with every level
 
 
-def shared_ground(
-    layout: Track, track: MetricTrack, pixels_per_meter: float, settings: cache.Settings
-) -> GroundTexture:
-    """``paint_ground(track, pixels_per_meter)``, one read-only texture for every env of
-    this track (``layout``: its ``Track``); in the cache folder of ``settings``."""
-    key = ("metric ground", cache.content(layout), pixels_per_meter,
+def shared_ground(track: Track, settings: cache.Settings) -> GroundTexture:
+    """``paint_ground`` of ``track`` at its ``ground_pixels_per_unit``, one read-only texture
+    for every env of this track; in the cache folder of ``settings``."""
+    pixels_per_meter = track.ground_pixels_per_unit or GROUND_PIXELS_PER_METER
+    key = ("metric ground", cache.content(track), pixels_per_meter,
            cache.code(__file__, texture.__file__))  # fmt: skip
     return cache.shared(key, lambda: paint_ground(track, pixels_per_meter), settings, TEXTURES)
 
 
-def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
+def paint_ground(track: Track, pixels_per_meter: float) -> GroundTexture:
     """The whole track (its bounds) at up to ``pixels_per_meter``, as a ground texture."""
     x0, y0, x1, y1 = track.bounds
     ppm = min(pixels_per_meter, MAX_SIDE / max(x1 - x0, y1 - y0))
@@ -55,7 +54,7 @@ def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
     image[:] = (*GRASS, 255)
     if track.occupancy is not None:
         _paint_map(image, to_pixels, track)
-    else:
+    elif track.tiles is not None:
         _fill(image, to_pixels, track.tiles, ROAD)
     if track.circuit is not None and track.occupancy is None:
         _fill(image, to_pixels, _start_line(track), START_LINE)
@@ -67,7 +66,7 @@ def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
     return GroundTexture.from_image(image, to_pixels, border=GRASS)
 
 
-def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: MetricTrack) -> None:
+def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: Track) -> None:
     """The ROS map's cells, warped from map pixels into the texture."""
     occupancy = track.occupancy
     assert occupancy is not None
@@ -91,7 +90,7 @@ def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: MetricTrack) -> 
     )
 
 
-def _start_line(track: MetricTrack) -> np.ndarray:
+def _start_line(track: Track) -> np.ndarray:
     """A 1 m band across the road at point 0."""
     circuit = track.circuit
     assert circuit is not None

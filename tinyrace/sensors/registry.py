@@ -5,7 +5,7 @@ Adding a type is one module plus one entry here (see ``tinyrace/sensors/base.py`
 
 from __future__ import annotations
 
-from tinyrace.config import METRIC_KINDS, CameraConfig
+from tinyrace.config import CameraConfig
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.sensors import birdseye_camera
 from tinyrace.sensors.base import Sensor, SensorContext, SensorType
@@ -51,7 +51,7 @@ def _register_built_in() -> None:
         top_view,
     )
 
-    for name, config, module, kinds, doc in (
+    for name, config, module, needs, doc in (
         (
             "perspective_camera",
             configs.PerspectiveCameraConfig,
@@ -72,17 +72,17 @@ def _register_built_in() -> None:
             "cones",
             configs.ConesConfig,
             cones,
-            frozenset({"image", "cone_map"}),
+            "cones",
             "cones in range by class, padded",
         ),
     ):
-        register(SensorType(name, config, module.build, kinds, doc))
+        register(SensorType(name, config, module.build, needs, doc))
     register(
         SensorType(
             "chase_view",
             configs.ChaseViewConfig,
             chase_view.build,
-            frozenset({"procedural"}),
+            "painted ground",  # CarRacing's tiles and kerbs, painted per track
             "CarRacing's 96x96 view: the car from behind and above, its dashboard below",
             default=True,
         )
@@ -92,7 +92,7 @@ def _register_built_in() -> None:
             "top_view",
             configs.TopViewConfig,
             top_view.build,
-            frozenset(METRIC_KINDS),
+            "metric ground",  # a ground in metres, drawn from the track
             "the road ahead from above with the car drawn in",
             default=True,
         )
@@ -103,27 +103,33 @@ _register_built_in()
 
 
 def default_sensor(context: SensorContext) -> Sensor | None:
-    """The observation of an env with no sensor configured: the first default type made for
-    its track kind, under its type's name (None if no type is)."""
-    kind = context.env.kind
+    """The observation of an env with no sensor configured: the first default type whose
+    needs its track holds (chase_view on a painted ground, top_view on a ground in metres),
+    under its type's name; None where the track is seen through cameras only
+    (``TrackFacts.default_view``)."""
+    facts = context.env.facts
+    if not facts.default_view:
+        return None
     for name, found in SENSOR_TYPES.items():
-        if found.default and found.track_kinds is not None and kind in found.track_kinds:
+        if found.default and (found.needs is None or found.needs in facts.holds):
             return found.build(found.config(id=name), context)
     return None
 
 
 def build_sensors(context: SensorContext, source: str) -> list[Sensor]:
     """The sensors of the env config's ``sensors:`` list (tinycarlo's ``cameras:`` first), in
-    order; a ConfigError lists every entry that cannot work with this config (its type, its
-    track kind, or its knobs), by the key the user wrote."""
+    order; a ConfigError lists every entry that cannot work with this config (its type, what
+    its track holds, or its knobs), by the key the user wrote."""
     config = context.env
     built, problems = [], []
     for i, entry in enumerate(config.sensors):
         key = config.sensor_key(i)  # as written: cameras[i] or sensors[j]
         kind = sensor_type(entry.type, source, f"{key}.type")
-        if kind.track_kinds is not None and config.kind not in kind.track_kinds:
-            kinds = ", ".join(sorted(kind.track_kinds))
-            allowed = f"a {entry.type} sensor works on track kinds: {kinds}"
+        if kind.needs is not None and kind.needs not in config.facts.holds:
+            allowed = (
+                f"a {entry.type} sensor needs a track that holds {kind.needs}, "
+                f"not a {config.kind} track"
+            )
             problems.append(Problem(source, f"{key}.type", entry.type, allowed))
             continue
         try:
