@@ -150,8 +150,11 @@ def _spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[st
 def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
     """Whether the value at ``path`` (``cameras[0].roi``) came from ``keys``: mappings merge
     key by key, anything else an override gives replaces the file's value whole."""
+    tokens = re.findall(r"\[\d+\]|[^.\[\]]+", path)
+    if not tokens:  # a top-level key of brackets and dots alone (``[``): itself or not
+        return path in keys
     node: Any = keys
-    for token in re.findall(r"\[\d+\]|[^.\[\]]+", path):
+    for token in tokens:
         if not isinstance(node, Mapping):
             return True  # inside a list or value the override replaced
         if token.startswith("["):
