@@ -11,6 +11,7 @@ How to add a sensor type:
    ground textures). ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
    name (the entry's ``type``), config class, builder and what its tracks must hold.
+3. Add its config class to ``SensorConfig`` in ``tinyrace/config/sensors.py``.
 """
 
 from __future__ import annotations
@@ -94,3 +95,4 @@ class SensorType:
     build: SensorBuilder
     needs: str | None = None  # what its tracks must hold (a ``TrackFacts.holds`` entry); None: any
     doc: str = ""
+    default: bool = False  # the observation of the tracks holding its needs when none is configured
