@@ -29,6 +29,7 @@ from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
 from tinyrace.render.setup import make_pictures
+from tinyrace.sensors.ground import ImageGround, MetricGround, ProceduralGround, make_ground
 from tinyrace.tracks.base import PaintedGround, Track, TrackDraw
 from tinyrace.tracks.registry import TRACK_SOURCES
 
@@ -246,13 +247,15 @@ class _ToySource:
 
 
 @pytest.mark.parametrize(
-    ("source", "expected"),
+    ("source", "ground", "pictures"),
     [
-        (_ToySource(PaintedGround(50.0, 1.0)), ProceduralPictures),
-        (_ToySource(picture=np.zeros((8, 8, 4), np.uint8)), ImagePictures),
-        (_ToySource(walls=np.array([[0.0, 0.0, 1.0, 1.0]])), MetricPictures),
+        (_ToySource(PaintedGround(50.0, 1.0)), ProceduralGround, ProceduralPictures),
+        (_ToySource(picture=np.zeros((8, 8, 4), np.uint8)), ImageGround, ImagePictures),
+        (_ToySource(walls=np.array([[0.0, 0.0, 1.0, 1.0]])), MetricGround, MetricPictures),
     ],
     ids=["painted ground", "picture", "drawn ground"],
 )
-def test_pictures_follow_what_the_tracks_hold_not_their_kind(source, expected):
-    assert type(make_pictures(EnvConfig(), source)) is expected
+def test_ground_and_pictures_follow_what_the_tracks_hold_not_their_kind(source, ground, pictures):
+    made = make_ground(EnvConfig(), source)  # the one ground of the sensors and the pictures
+    assert type(made) is ground
+    assert type(make_pictures(EnvConfig(), made)) is pictures

@@ -271,16 +271,6 @@ def test_a_bad_knob_or_model_of_one_car_is_named_at_its_entry():
     assert "race.cars[1].sensors[0].type" in text
 
 
-def test_actions_for_missing_or_extra_cars_name_them_by_id():
-    env = parallel_env(environment="circuit", race={"cars": TWO})
-    env.reset(seed=0)
-    gas = np.array([0.0, 1.0], dtype=np.float32)
-    with pytest.raises(ConfigError, match=r"<step actions>: blue: .*no action for this car"):
-        env.step({"red": gas})
-    with pytest.raises(ConfigError, match=r"car_1: .*no such car; the agents are red, blue"):
-        env.step({"red": gas, "blue": gas, "car_1": gas})
-
-
 def test_an_unknown_opponent_driver_is_named_by_its_index():
     with pytest.raises(ConfigError, match=r"opponents\[2\]: .*unknown opponent driver 'nobody'"):
         gym.make(

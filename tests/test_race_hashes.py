@@ -19,8 +19,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
+from golden.record import array_bytes, plain
 
 from tinyrace.drivers import CenterlineDriver
 from tinyrace.drivers.centerline import route_of
@@ -49,19 +49,6 @@ CASES: dict[str, dict[str, Any]] = {
 RECORDED_DIR = Path(__file__).resolve().parent / "golden" / "race"
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"not JSON: {value!r}")
-
-
-def _bytes(value: Any) -> bytes:
-    array = np.ascontiguousarray(value)
-    return f"{array.dtype}{array.shape}".encode() + array.tobytes()
-
-
 def race_hashes(case: dict[str, Any], steps: int = STEPS) -> dict[str, str]:
     """sha256 per car and stream of a race driven by centreline drivers."""
     env = parallel_env(**case)
@@ -88,11 +75,11 @@ def race_hashes(case: dict[str, Any], steps: int = STEPS) -> dict[str, str]:
         for agent, observation in observations.items():
             if isinstance(observation, dict):
                 for key in sorted(observation):
-                    add(agent, f"obs:{key}", _bytes(observation[key]))
+                    add(agent, f"obs:{key}", array_bytes(observation[key]))
             else:
-                add(agent, "obs", _bytes(observation))
+                add(agent, "obs", array_bytes(observation))
         for agent, info in infos.items():
-            add(agent, "infos", json.dumps(info, sort_keys=True, default=_plain).encode())
+            add(agent, "infos", json.dumps(info, sort_keys=True, default=plain).encode())
 
     observe(observations, infos)
     for _ in range(steps):

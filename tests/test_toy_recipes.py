@@ -20,18 +20,22 @@ from typing import Any, ClassVar, Literal
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium import spaces
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
-from tinyrace.config.knobs import knob
+from tinyrace.config.knobs import REQUIRED, knob
 from tinyrace.config.schema import METRE_CAR, TrackFacts
 from tinyrace.drivers.centerline import CenterlineDriver
 from tinyrace.episodes.rules import RULES, Info
 from tinyrace.errors import ConfigError
+from tinyrace.sensors import registry as sensor_registry
+from tinyrace.sensors.base import SensorContext, SensorType
 from tinyrace.tracks import registry as track_registry
 from tinyrace.tracks.base import Track, TrackDraw, TrackRules, pick_index
 from tinyrace.world.facts import StepFacts
+from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import Contacts, World
 
 # -- a track source: its config dataclass and its source ------------------------------------
@@ -112,7 +116,47 @@ class FinishGate:
         info["gate_passed"] = self.passed_at is not None
 
 
+# -- a sensor type: its config dataclass and its sensor ------------------------------------
+
+
+@dataclass(frozen=True)
+class CompassConfig:
+    """``sensors[i]`` of ``type: compass``: the car's heading as a unit vector."""
+
+    id: str = knob(REQUIRED, "observation key of this sensor")
+    type: Literal["compass"] = knob("compass", "sensor type")
+    noise: float = knob(0.0, "std of Gaussian noise on each component", low=0.0, high=1.0)
+
+
+class Compass:
+    """(cos, sin) of the car's heading [rad from +x, counter-clockwise], noise from ``rng``."""
+
+    def __init__(self, config: CompassConfig):
+        self.id, self.noise = config.id, config.noise
+        self.space = spaces.Box(-2.0, 2.0, (2,), np.float32)
+
+    def reset(self, track: Track) -> None:
+        pass
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        heading = snapshot.car.pose[2]
+        clean = np.array([math.cos(heading), math.sin(heading)])
+        noisy = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
+        return np.clip(noisy, -2.0, 2.0).astype(np.float32)
+
+
+def build_compass(entry: CompassConfig, context: SensorContext) -> Compass:
+    return Compass(entry)
+
+
 # -- the recipes, done from here -----------------------------------------------------------
+
+
+@pytest.fixture
+def compass() -> Iterator[None]:
+    sensor_registry.register(SensorType("compass", CompassConfig, build_compass, doc="heading"))
+    yield
+    sensor_registry.unregister("compass")
 
 
 @pytest.fixture
@@ -160,8 +204,40 @@ def test_a_registered_track_type_is_checked_like_a_built_in_one(ring):
     assert "did you mean 'ring'" in str(caught.value)
 
 
+def test_a_sensor_type_added_from_a_test_file_observes_through_gym_make(compass, ring):
+    env = _ring_env(sensors=[{"id": "north", "type": "compass"}])
+    assert env.observation_space["north"] == spaces.Box(-2.0, 2.0, (2,), np.float32)
+    driver = CenterlineDriver()
+    observation, info = env.reset(seed=1)
+    driver.reset(env)
+    for _ in range(40):
+        heading = env.unwrapped.car.pose[2]
+        expected = np.array([math.cos(heading), math.sin(heading)], np.float32)
+        np.testing.assert_array_equal(observation["north"], expected)
+        observation, *_, info = env.step(driver.act(observation, info))
+    assert observation["north"][0] < -0.05  # turned left round the ring: now heading -x a bit
+    env.close()
+
+
+def test_a_registered_sensor_type_is_checked_like_a_built_in_one(compass):
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass", "noise": 3}])
+    assert "sensors[0].noise" in str(caught.value) and "<= 1" in str(caught.value)
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compas"}])
+    assert "did you mean 'compass'" in str(caught.value)
+    noisy = gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass", "noise": 0.1}])
+    first, again = noisy.reset(seed=3)[0]["c"], noisy.reset(seed=3)[0]["c"]
+    np.testing.assert_array_equal(first, again)  # noise from the env's generator only
+    assert abs(np.hypot(*first) - 1.0) > 1e-6  # and there is noise
+    noisy.close()
+
+
 def test_a_toy_type_is_gone_when_its_test_ends():
     with pytest.raises(ConfigError) as caught:
         _ring_env()
     assert "tracks[0].type" in str(caught.value) and "'ring'" in str(caught.value)
     assert "finish_gate" not in RULES
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass"}])
+    assert "sensors[0].type" in str(caught.value)

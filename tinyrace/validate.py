@@ -112,8 +112,8 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
-    from tinyrace.render.metric_pictures import MetricPictures
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
+    from tinyrace.sensors.ground import MetricGround
 
     if target == "procedural":  # the CLI's name for CarRacing's track
         image = procedural_picture(load_env_config().config, seed)
@@ -129,7 +129,7 @@ def picture(target: str, seed: int) -> Picture:
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
     if first.picture is not None:
         return Picture(image_picture(parts.config, first), name, inputs)
-    texture = MetricPictures(parts.config, parts.source.tracks).ground_texture()
+    texture = MetricGround(parts.config, parts.source.tracks).texture(first)
     return Picture(metric_picture(first, texture), name, inputs)
 
 

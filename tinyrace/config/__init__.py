@@ -45,6 +45,7 @@ from tinyrace.config.sensors import (
     LidarConfig,
     PerspectiveCameraConfig,
     SensorConfig,
+    cameras_first,
 )
 from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.examples import find_track, track_names
@@ -149,8 +150,11 @@ def _spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[st
 def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
     """Whether the value at ``path`` (``cameras[0].roi``) came from ``keys``: mappings merge
     key by key, anything else an override gives replaces the file's value whole."""
+    tokens = re.findall(r"\[\d+\]|[^.\[\]]+", path)
+    if not tokens:  # a top-level key of brackets and dots alone (``[``): itself or not
+        return path in keys
     node: Any = keys
-    for token in re.findall(r"\[\d+\]|[^.\[\]]+", path):
+    for token in tokens:
         if not isinstance(node, Mapping):
             return True  # inside a list or value the override replaced
         if token.startswith("["):
@@ -327,7 +331,7 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         if entry.cameras is None and entry.sensors is None:
             continue  # the shared ones, checked above
         car = race_cars(config)[i]
-        own = dataclasses.replace(config, cameras=car.cameras, sensors=car.sensors)
+        own = dataclasses.replace(config, cameras=car.cameras, sensors=car.written_sensors)
         car_at = f"{at}race.cars[{i}]."
         if needs_camera and not own.cameras and not own.sensors:
             allowed = f"car {car.id!r} on an {config.kind} track needs at least one camera"
@@ -392,7 +396,8 @@ def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
 
 
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
-    """Fill the ``None`` knobs whose default depends on the track (its config's facts)."""
+    """Fill the ``None`` knobs whose default depends on the track (its config's facts); the
+    ``cameras`` join the ``sensors``."""
     facts = config.facts
     carracing_rules = facts.carracing_rules  # tiles, laps, time penalty
     sim = config.sim
@@ -416,7 +421,16 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
             reward.out_of_bounds_penalty, 100.0 if carracing_rules else 0.0
         ),
     )
-    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
+    sensors = _with_cameras(config)
+    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward, sensors=sensors)
+
+
+def _with_cameras(config: EnvConfig) -> tuple[SensorConfig, ...]:
+    """tinycarlo's ``cameras:`` as ``birdseye_camera`` sensors, first in the ``sensors`` list
+    (in their order; once: a config already resolved keeps its list). ``cameras`` stays as
+    written, for messages that name its keys; each race car's are put first in its sensors
+    by ``race_cars``."""
+    return cameras_first(config.cameras, config.sensors)
 
 
 def _default(value: float | None, default: float) -> float:

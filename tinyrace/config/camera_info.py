@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -145,12 +146,15 @@ def with_camera_info(config: EnvConfig, source: str, base_dir: Path) -> EnvConfi
     """``config`` with every camera_info file read into its entry's intrinsics and
     distortion (scaled to the entry's resolution): the shared sensors' and each race car's."""
     problems: list[Problem] = []
-    sensors = _read_infos(config, config.sensors, "", source, base_dir, problems)
+    sensors = _read_infos(config, config.sensors, config.sensor_key, source, base_dir, problems)
     cars = []
     for index, car in enumerate(config.race.cars):
-        if car.sensors is not None:
-            at = f"race.cars[{index}]."
-            own = _read_infos(config, car.sensors, at, source, base_dir, problems)
+        if car.sensors is not None:  # as written (no cameras)
+
+            def key(i: int, at: str = f"race.cars[{index}].") -> str:
+                return f"{at}sensors[{i}]"
+
+            own = _read_infos(config, car.sensors, key, source, base_dir, problems)
             car = dataclasses.replace(car, sensors=own)
         cars.append(car)
     if problems:
@@ -162,16 +166,17 @@ def with_camera_info(config: EnvConfig, source: str, base_dir: Path) -> EnvConfi
 def _read_infos(
     config: EnvConfig,
     entries: tuple[SensorConfig, ...],
-    at: str,
+    key: Callable[[int], str],
     source: str,
     base_dir: Path,
     problems: list[Problem],
 ) -> tuple[SensorConfig, ...]:
+    """``entries`` with their camera_info files read; ``key(i)``: entry i's key as written."""
     sensors = list(entries)
     for index, entry in enumerate(sensors):
         if not isinstance(entry, PerspectiveCameraConfig) or entry.camera_info is None:
             continue
-        where = f"{at}sensors[{index}].camera_info"
+        where = f"{key(index)}.camera_info"
         try:
             path = inside_folder(
                 entry.camera_info, base_dir, config.files.paths_outside_folder, source, where

@@ -17,7 +17,7 @@ from typing import Any
 from tinyrace.config.colors import Color, palette_color
 from tinyrace.config.loader import deep_merge
 from tinyrace.config.schema import MAX_RACE_CARS, CameraConfig, CarConfig, EnvConfig
-from tinyrace.config.sensors import SensorConfig
+from tinyrace.config.sensors import SensorConfig, cameras_first
 from tinyrace.errors import Problem
 
 CAR_KNOBS = ("wheelbase", "track_width", "velocity", "pixels_per_unit")  # null: by track kind
@@ -32,8 +32,13 @@ class RaceCar:
     car: CarConfig
     colour: Color
     cameras: tuple[CameraConfig, ...]
-    sensors: tuple[SensorConfig, ...]
+    sensors: tuple[SensorConfig, ...]  # its cameras first, as the loader lists the shared ones
     own_car: bool  # its car comes from a ``race.cars`` entry (problems name that entry)
+
+    @property
+    def written_sensors(self) -> tuple[SensorConfig, ...]:
+        """Its ``sensors:`` entries as written (its own, or the shared ones): no cameras."""
+        return self.sensors[len(self.cameras) :]
 
 
 def default_id(index: int) -> str:
@@ -45,6 +50,7 @@ def race_cars(config: EnvConfig) -> list[RaceCar]:
     """Every car of ``config``'s race, in order (car 0 first, the pole of the grid)."""
     race = config.race
     entries = race.cars or (None,) * race.num_agents
+    shared = cameras_first(config.cameras, config.sensors)  # the loader's list, once resolved
     cars = []
     for index, entry in enumerate(entries):
         if entry is None:
@@ -55,19 +61,21 @@ def race_cars(config: EnvConfig) -> list[RaceCar]:
                     config.car,
                     palette_color(index),
                     config.cameras,
-                    config.sensors,
+                    shared,
                     False,
                 )
             )
             continue
+        cameras = entry.cameras if entry.cameras is not None else config.cameras
+        sensors = entry.sensors if entry.sensors is not None else config.written_sensors
         cars.append(
             RaceCar(
                 index,
                 entry.id if entry.id is not None else default_id(index),
                 entry.car,
                 entry.colour if entry.colour is not None else palette_color(index),
-                entry.cameras if entry.cameras is not None else config.cameras,
-                entry.sensors if entry.sensors is not None else config.sensors,
+                cameras,
+                cameras_first(cameras, sensors),  # its cameras are sensors too
                 True,
             )
         )

@@ -39,23 +39,30 @@ START = (
 )
 END = "<!-- yaml-reference:end -->"
 
-SECTIONS = (
-    ("track.yaml", EnvConfig, ""),
-    ("sim", SimConfig, "sim"),
-    *((f"track: type {name}", c, "tracks[i]") for name, c in track_configs().items()),
-    ("car", CarConfig, "car"),
-    ("cameras[i]", CameraConfig, "cameras[i]"),
-    *((f"sensors[i]: type {name}", c, "sensors[i]") for name, c in sensor_configs().items()),
-    ("reward_design", RewardConfig, "reward_design"),
-    ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
-    ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
-    ("files", FilesConfig, "files"),
-    ("race", RaceConfig, "race"),
-    ("race.cars[i]", RaceCarConfig, "race.cars[i]"),
-    ("cache", CacheConfig, "cache"),
-    ("experiment file", ExperimentConfig, ""),
-    ("experiment output", OutputConfig, "output"),
-)
+
+def sections() -> list[tuple[str, type, str]]:
+    """The page's sections: (title, dataclass, key path), every family member known now."""
+    return [
+        ("track.yaml", EnvConfig, ""),
+        ("sim", SimConfig, "sim"),
+        *((f"track: type {name}", c, "tracks[i]") for name, c in track_configs().items()),
+        ("car", CarConfig, "car"),
+        ("cameras[i]", CameraConfig, "cameras[i]"),
+        *((f"sensors[i]: type {name}", c, "sensors[i]") for name, c in sensor_configs().items()),
+        ("reward_design", RewardConfig, "reward_design"),
+        ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
+        (
+            "reward_design.cross_track_error",
+            CrossTrackErrorConfig,
+            "reward_design.cross_track_error",
+        ),
+        ("files", FilesConfig, "files"),
+        ("race", RaceConfig, "race"),
+        ("race.cars[i]", RaceCarConfig, "race.cars[i]"),
+        ("cache", CacheConfig, "cache"),
+        ("experiment file", ExperimentConfig, ""),
+        ("experiment output", OutputConfig, "output"),
+    ]
 
 
 def type_name(hint: Any) -> str:
@@ -147,7 +154,7 @@ def bounds_section() -> str:
 
 def markdown() -> str:
     """The whole reference as Markdown."""
-    return "\n\n".join([*(section(*s) for s in SECTIONS), bounds_section()])
+    return "\n\n".join([*(section(*s) for s in sections()), bounds_section()])
 
 
 def embed(readme: str) -> str:

@@ -19,6 +19,7 @@ from tinyrace.config.bounds import MAX_TEXTURE_SIDE
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.sensors import CameraConfig as CameraConfig  # re-exported
 from tinyrace.config.sensors import SensorConfig
 
 MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
@@ -70,8 +71,10 @@ class TrackFacts:
     carracing_rules: ClassVar[bool] = True  # tiles, laps, time penalty: 50 fps, CarRacing's pay
     car_sizes: ClassVar[Mapping[str, float]] = PIXEL_CAR  # the defaults of the null car knobs
     colour_picture: ClassVar[bool] = False  # a picture whose colours mean things (obstacles)
-    default_view: ClassVar[bool] = True  # seen without cameras (a 96x96 view)
-    holds: ClassVar[frozenset[str]] = frozenset()  # what its tracks may hold, e.g. "cones"
+    default_view: ClassVar[bool] = True  # seen without cameras: by the default sensor, 96x96
+    # what its tracks may hold, e.g. "cones", and their ground: "painted ground" (tiles and
+    # kerbs painted per track: chase_view), "metric ground" (drawn in metres: top_view)
+    holds: ClassVar[frozenset[str]] = frozenset()
     occupancy_map: ClassVar[bool] = False  # a map of occupied cells (F1TENTH's lidar on it)
     start_key: ClassVar[str] = "spawns"  # the key the start pose comes from, when not spawn
 
@@ -94,6 +97,7 @@ class ProceduralTrackConfig(TrackFacts):
     """A ``track`` of ``type: procedural``: CarRacing-v3's generated track."""
 
     unit = "u"
+    holds = frozenset({"painted ground"})
 
     type: Literal["procedural"] = knob("procedural", "track kind")
     checkpoints: int = knob(12, "number of checkpoints the track passes", low=3, high=64)
@@ -217,6 +221,7 @@ class MetreTrackFacts(TrackFacts):
     unit = "m"
     car_sizes = METRE_CAR
     start_key = "file"
+    holds = frozenset({"metric ground"})
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -245,7 +250,7 @@ class ConeMapTrackConfig(MetreTrackFacts):
 
     Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right."""
 
-    holds = frozenset({"cones"})
+    holds = frozenset({"cones", "metric ground"})
 
     type: Literal["cone_map"] = knob("cone_map", "track kind")
     file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
@@ -397,35 +402,6 @@ class CarConfig:
         "px/u or m/u",
         low=0.001,
         high=1000,
-    )
-
-
-@dataclass(frozen=True)
-class CameraConfig:
-    """``cameras[i]``: a bird's-eye camera fixed to the car."""
-
-    id: str = knob(REQUIRED, "observation key of this camera")
-    resolution: tuple[int, int] = knob(
-        (480, 640), "[y, x] output image size", "px", low=1, high=4096
-    )
-    roi: tuple[float, float] = knob(
-        (480.0, 640.0),
-        "[y, x] size of the track window seen (ahead of the front axle)",
-        "track px (u on procedural tracks)",
-        low=1,
-    )
-    position: tuple[float, float] = knob(
-        (0.0, 0.0),
-        "[y, x] shift of the window from the front axle middle; +y ahead, +x right",
-        "track px (u on procedural tracks)",
-    )
-    yaw: float = knob(
-        0.0, "camera rotation from straight ahead; 90 right, 180 back", "deg", low=-360, high=360
-    )
-    format: Literal["rgb", "gray", "classes"] = knob(
-        "rgb",
-        "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the "
-        "track's layers, never blended (table in info['sensor_labels'])",
     )
 
 
@@ -631,8 +607,9 @@ class EnvConfig:
     car: CarConfig = knob(CarConfig(), "car model")
     cameras: tuple[CameraConfig, ...] = knob(
         (),
-        "observation cameras (a mapping or a list); none on a procedural track: "
-        "CarRacing's 96x96 view as a Box",
+        "tinycarlo's bird's-eye cameras (a mapping or a list); the loader puts each first in "
+        "sensors as a birdseye_camera entry. No camera and no sensor: the track's default "
+        "view (chase_view on a procedural track, top_view on tracks in metres) as a Box",
         aliases=("camera",),
     )
     sensors: tuple[SensorConfig, ...] = knob(
@@ -661,3 +638,18 @@ class EnvConfig:
     def facts(self) -> TrackFacts:
         """What the tracks' config class says of them (one type for all tracks)."""
         return self.tracks[0]
+
+    @property
+    def written_sensors(self) -> tuple[SensorConfig, ...]:
+        """The ``sensors:`` entries as written: without the ``cameras`` the loader put first."""
+        return self.sensors[self._cameras_first() :]
+
+    def sensor_key(self, index: int) -> str:
+        """The key the user wrote for ``sensors[index]``: ``cameras[i]`` or ``sensors[j]``."""
+        cameras = self._cameras_first()
+        return f"cameras[{index}]" if index < cameras else f"sensors[{index - cameras}]"
+
+    def _cameras_first(self) -> int:
+        """How many of ``sensors`` are the ``cameras`` the loader put first."""
+        cameras = self.cameras
+        return len(cameras) if self.sensors[: len(cameras)] == cameras else 0

@@ -163,8 +163,9 @@ def view_problems(config: ExperimentConfig, env_config: EnvConfig, source: str) 
     """The problem of ``output.view``, if any (see ``check_view``)."""
     view = config.output.view
     ids = [c.id for c in env_config.cameras]
-    ids += [s.id for s in env_config.sensors if s.type in _IMAGE_SENSORS]
-    views = ["default", *(["sensors"] if env_config.sensors else []), *ids]
+    written = env_config.written_sensors  # its cameras are listed above
+    ids += [s.id for s in written if s.type in _IMAGE_SENSORS]
+    views = ["default", *(["sensors"] if written else []), *ids]
     if view in views:
         return []
     allowed = f"{did_you_mean(view, views)}one of: {', '.join(views)}"

@@ -11,7 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from tinyrace.experiment.plots import LAP_LINE
+from tinyrace.experiment.plots import track_axes, track_axes_done
 
 
 @dataclass
@@ -35,12 +35,7 @@ def car_paths(
 ) -> Figure:
     """The track picture (RGB, spanning ``extent`` = left, right, bottom, top [track units])
     with each car's path in its colour, its start and (a crash) its end marked."""
-    height, width = background.shape[:2]
-    figure = Figure(figsize=(size, size * height / width), layout="constrained")
-    ax = figure.add_subplot()
-    ax.imshow(background, extent=extent, interpolation="antialiased")
-    if lap_line is not None:
-        ax.plot(*np.asarray(lap_line).T, color=LAP_LINE, lw=3, label="lap line")
+    figure, ax = track_axes(background, extent, lap_line, "lap line", size)
     for line in lines:
         ok = np.isfinite(line.x) & np.isfinite(line.y)
         if not ok.any():
@@ -51,10 +46,7 @@ def car_paths(
         ax.plot(x[0], y[0], "o", ms=8, mfc=line.color, mec="black")
         if line.crashed:
             ax.plot(x[-1], y[-1], "X", ms=11, color=line.color, mec="black")
-    ax.set_xlim(extent[0], extent[1])
-    ax.set_ylim(extent[2], extent[3])
-    ax.set_xlabel(f"x [{unit}]")
-    ax.set_ylabel(f"y [{unit}]")
+    track_axes_done(ax, extent, unit)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), title="car (o start, X crash)")
     return figure
 

@@ -22,14 +22,16 @@ from tinyrace.experiment.report import (  # the page's parts, shared with one ca
     REPORT_FILE,
     STYLE,
     Picture,
-    _background,
-    _extent,
-    _figure,
-    _near,
-    _table,
-    _unit,
+    figures_html,
+    length_unit,
+    picture_extent,
+    report_inputs,
+    save_pictures,
+    state_html,
+    table_html,
+    trace_points,
+    track_background,
 )
-from tinyrace.experiment.results import EPISODES_FILE, RESULTS_FILE
 from tinyrace.experiment.run_folder import check_outputs, read_trace
 
 CRASHES = ("out_of_bounds", "obstacle", "collision")
@@ -40,34 +42,20 @@ def write_race_report(run_dir: Path, header: dict[str, Any], rows: Sequence[CarR
     """Draw the charts, save them as PNG and write report.html; returns its path.
 
     Refused (a ConfigError) when one of the files to write is one the report reads."""
-    from tinyrace.experiment.plots import png
-
     episodes = sorted({r.episode for r in rows})
     outputs = [REPORT_FILE]
     outputs += [f"report_{what}_{e:03d}.png" for e in episodes for what in ("paths", "positions")]
-    check_outputs(run_dir, outputs, _inputs(header, rows))
+    check_outputs(run_dir, outputs, report_inputs(header, rows))
     colors = {car["id"]: car["color"] for car in header.get("cars") or []}
     traces = {(r.episode, r.car): _trace(run_dir, r) for r in rows}
     pictures: list[Picture] = []
     for episode in episodes:
         mine = [r for r in rows if r.episode == episode]
         pictures += _episode_pictures(run_dir, header, episode, mine, traces, colors)
-    blobs = []
-    for picture in pictures:
-        data = png(picture.figure)
-        (run_dir / picture.name).write_bytes(data)
-        blobs.append((picture, data))
+    blobs = save_pictures(run_dir, pictures)
     path = run_dir / REPORT_FILE
     path.write_text(_html(header, rows, blobs), encoding="utf-8")
     return path
-
-
-def _inputs(header: dict[str, Any], rows: Sequence[CarResult]) -> dict[str, str]:
-    """The run files the report reads, each with the file that names it."""
-    names = {RESULTS_FILE: RESULTS_FILE, EPISODES_FILE: EPISODES_FILE}
-    names |= {name: EPISODES_FILE for r in rows for name in (r.trace, r.video) if name}
-    tracks = (header.get("tracks") or {}).values()
-    return names | {entry["image"]: RESULTS_FILE for entry in tracks}
 
 
 def _trace(run_dir: Path, result: CarResult) -> Trace | None:
@@ -93,12 +81,12 @@ def _episode_pictures(
     traced = [(r, t) for r in rows if (t := traces[(episode, r.car)]) is not None]
     key = rows[0].track
     entry = (header.get("tracks") or {}).get(key)
-    background = _background(run_dir, key, entry["image"]) if entry else None
+    background = track_background(run_dir, key, entry["image"]) if entry else None
     if entry is not None and background is not None:
-        extent = _extent(entry["frame"], background.shape)
+        extent = picture_extent(entry["frame"], background.shape)
         lines = []
         for row, trace in traced:
-            points = _near(np.stack([trace["x"], trace["y"]], axis=-1), extent)
+            points = trace_points(trace, extent)
             color = colors.get(row.car, "#808080")
             crashed = row.end in CRASHES
             x, y = points[:, 0], points[:, 1]
@@ -126,24 +114,14 @@ def _html(
     header: dict[str, Any], rows: Sequence[CarResult], blobs: list[tuple[Picture, bytes]]
 ) -> str:
     title = f"tinyrace race {header.get('started', '')}"
-    state = []
-    if header.get("interrupted"):
-        state.append(f"<p class=warn>Interrupted by {html.escape(str(header.get('signal')))}.</p>")
-    if header.get("error"):
-        state.append(f"<p class=warn>Stopped by an error: {html.escape(header['error'])}</p>")
     cars = [str(car["id"]) for car in header.get("cars") or []]
     episodes = len({r.episode for r in rows})
     planned = header.get("episodes_planned", episodes)
-    unit = _unit(header)
+    unit = length_unit(header)
     head, cells = car_table_rows(rows)
     text = [k for k, title in enumerate(head) if title in ("car", "driver", "end")]
     stats_head, stats = car_summary_rows(header.get("summary") or {})
-    sections: dict[str, list[str]] = {}
-    for picture, data in blobs:
-        sections.setdefault(picture.section, []).append(_figure(picture, data))
-    figures = "\n".join(
-        f"<h3>{html.escape(name)}</h3>\n" + "\n".join(parts) for name, parts in sections.items()
-    )
+    figures = figures_html(blobs, {})
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>{STYLE}</style></head><body>
@@ -151,14 +129,14 @@ def _html(
 <p>Experiment: {html.escape(str(header.get("experiment", "")))};
 {episodes} of {planned} episode(s) finished; {len(cars)} cars: {html.escape(", ".join(cars))};
 track kind: {html.escape(str(header.get("track_kind", "?")))}; lengths in {html.escape(unit)}.</p>
-{"".join(state)}
+{state_html(header)}
 <h2>Cars</h2>
 <p>One row per car and episode, in finishing order: position (laps, then the earlier
 finish, then progress), return, laps, best lap, contacts with other cars, walls and cones,
 how its race ended.</p>
-{_table(head, cells, text=text)}
+{table_html(head, cells, text=text)}
 <h2>Summary per car</h2>
-{_table(stats_head, stats, text=[0])}
+{table_html(stats_head, stats, text=[0])}
 <h2>Charts</h2>
 {figures}
 </body></html>

@@ -8,9 +8,6 @@ its cars' rows, its ``summary`` is per car; episodes.csv has one row per car and
 
 from __future__ import annotations
 
-import csv
-import json
-import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from dataclasses import fields as fields_of
@@ -18,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from tinyrace.experiment.record import TRACE_COLUMNS
-from tinyrace.experiment.results import EPISODES_FILE, RESULTS_FILE
+from tinyrace.experiment.results import fixed_width, mean_std, write_results
 
 LIST_SEPARATOR = " "  # lists (lap times, cars touched) in one CSV cell
 RACE_TRACE_COLUMNS = (  # a car's trace in a race
@@ -128,12 +125,7 @@ def car_table_rows(rows: Sequence[CarResult]) -> tuple[list[str], list[list[str]
 
 def car_table(rows: Sequence[CarResult]) -> str:
     """A fixed-width table, one row per car and episode."""
-    titles, cells = car_table_rows(rows)
-    lines = [titles, *cells]
-    widths = [max(len(line[i]) for line in lines) for i in range(len(titles))]
-    text = ["  ".join(c.rjust(w) for c, w in zip(line, widths, strict=True)) for line in lines]
-    text.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(text)
+    return fixed_width(*car_table_rows(rows))
 
 
 def car_summary(rows: Sequence[CarResult]) -> dict[str, dict[str, dict[str, float]]]:
@@ -146,9 +138,7 @@ def car_summary(rows: Sequence[CarResult]) -> dict[str, dict[str, dict[str, floa
         for key, _ in CAR_SUMMARIZED:
             values = [getattr(r, key) for r in mine if getattr(r, key) is not None]
             if values:
-                mean = sum(values) / len(values)
-                std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
-                stats[car][key] = {"mean": mean, "std": std}
+                stats[car][key] = mean_std(values)
         wins = float(sum(r.position == 1 for r in mine))
         stats[car]["wins"] = {"mean": wins, "std": 0.0}
     return stats
@@ -169,12 +159,7 @@ def car_summary_rows(
 
 
 def summary_text(stats: dict[str, dict[str, dict[str, float]]]) -> str:
-    titles, rows = car_summary_rows(stats)
-    lines = [titles, *rows]
-    widths = [max(len(line[i]) for line in lines) for i in range(len(titles))]
-    return "\n".join(
-        "  ".join(c.rjust(w) for c, w in zip(line, widths, strict=True)) for line in lines
-    )
+    return fixed_width(*car_summary_rows(stats), rule=False)
 
 
 def csv_row(result: CarResult) -> dict[str, Any]:
@@ -197,10 +182,6 @@ def write_race_files(
         "episodes": [{**asdict(e), "winner": e.winner} for e in episodes],
         "summary": car_summary(rows),
     }
-    (run_dir / RESULTS_FILE).write_text(json.dumps(payload, indent=2, default=str) + "\n")
     names = [f.name for f in fields_of(CarResult)]
-    with (run_dir / EPISODES_FILE).open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=names)
-        writer.writeheader()
-        writer.writerows(csv_row(r) for r in rows)
+    write_results(run_dir, payload, names, (csv_row(r) for r in rows))
     return payload

@@ -29,8 +29,7 @@ from tinyrace.experiment.race_results import (
     car_summary,
     write_race_files,
 )
-from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop, new_run_dir
-from tinyrace.experiment.video import open_video
+from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop
 from tinyrace.race import RaceEnv
 from tinyrace.race.drive import CarDriverError, drive_race
 
@@ -62,12 +61,12 @@ class RaceRun(RunLoop[RaceEpisode]):
         experiment: Experiment,
         race: RaceEnv,
         drivers: dict[str, tuple[CarDriver, Driver]],
-        run_dir: Path,
+        out_root: Path | None,
         progress: Progress,
     ):
         config = experiment.config
         limit = config.max_steps or race.core.config.sim.step_limit or DEFAULT_MAX_STEPS
-        super().__init__(experiment, run_dir, progress, limit)
+        super().__init__(experiment, out_root, progress, limit)
         self.race = race
         self.specs = {agent: spec for agent, (spec, _) in drivers.items()}
         self.drivers = {agent: driver for agent, (_, driver) in drivers.items()}
@@ -135,12 +134,7 @@ class RaceRun(RunLoop[RaceEpisode]):
         )
 
     def _recorder(self, episode: int, stop: StopSignals) -> RaceRecorder:
-        out = self.config.output
-        filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
-        video = None
-        if filmed:
-            fps = out.fps or 1.0 / self.race.core.dt  # [Hz] default: real time
-            video = open_video(self.run_dir / f"episode_{episode:03d}", fps)
+        video = self.episode_video(episode, self.race.core.dt)
 
         def on_step(recorder: RaceRecorder) -> None:
             self.progress.update(recorder.leader)
@@ -211,10 +205,7 @@ def run_race(
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             drivers = {d.agent: (d, _load(d, experiment.source)) for d in specs}
         progress = progress or Progress(config.episodes, enabled=show_progress)
-        root = Path(out_root or config.output.dir)
-        made_root = not root.exists()
-        run = RaceRun(experiment, race, drivers, new_run_dir(root, experiment.name), progress)
-        run.made_root = made_root
+        run = RaceRun(experiment, race, drivers, out_root, progress)
         return RaceRunResult(run.run_dir, run.results, run.all())
     finally:
         race.close()

@@ -14,6 +14,7 @@ from tinyrace.experiment.interrupt import Interrupted, StopSignals
 from tinyrace.experiment.load import Experiment
 from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.tracks import save_track_picture
+from tinyrace.experiment.video import VideoWriter, open_video
 
 R = TypeVar("R")  # what a run keeps of each episode
 DEFAULT_MAX_STEPS = 1000  # when neither the experiment nor the env sets a limit (CarRacing's)
@@ -23,13 +24,18 @@ class RunLoop(Generic[R]):
     """A run's episode loop: each episode's result kept, the files written at the end, after
     a signal (the finished episodes) or an error (none finished: no run folder is left)."""
 
-    def __init__(self, experiment: Experiment, run_dir: Path, progress: Progress, limit: int):
+    def __init__(
+        self, experiment: Experiment, out_root: Path | None, progress: Progress, limit: int
+    ):
+        """Claims a new run folder under ``out_root`` (default: ``output.dir``, relative to
+        the cwd), made with its parents where missing."""
         self.experiment, self.config = experiment, experiment.config
-        self.run_dir, self.progress = run_dir, progress
+        root = Path(out_root or self.config.output.dir)
+        self.made_root = not root.exists()  # the parent folder was made for this run
+        self.run_dir, self.progress = new_run_dir(root, experiment.name), progress
         self.limit = limit  # [steps] per episode at most
         self.results: list[R] = []
         self.tracks: dict[str, dict[str, Any]] = {}
-        self.made_root = False  # the parent folder was made for this run
         progress.limit = progress.limit or self.limit
 
     def all(self) -> int | None:
@@ -76,6 +82,16 @@ class RunLoop(Generic[R]):
             "tracks": self.tracks,
             "config": dataclasses.asdict(self.config),
         }
+
+    def episode_video(self, episode: int, dt: float) -> VideoWriter | None:
+        """The episode's video (``episode_NNN``), when ``output`` films it; ``dt`` [s] per
+        step gives the frame rate unless ``output.fps`` does."""
+        out = self.config.output
+        filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
+        if not filmed:
+            return None
+        fps = out.fps or 1.0 / dt  # [Hz] default: real time
+        return open_video(self.run_dir / f"episode_{episode:03d}", fps)
 
     def track_picture(self, env: TinyRaceEnv, seed: int) -> str:
         key, entry = save_track_picture(env, seed, self.run_dir, self.tracks)

@@ -22,8 +22,7 @@ from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
 from tinyrace.experiment.route import route_watch
-from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop, new_run_dir
-from tinyrace.experiment.video import open_video
+from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop
 from tinyrace.sensors.view import sensor_view
 
 if TYPE_CHECKING:
@@ -68,10 +67,7 @@ def run_experiment(
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
-        root = Path(out_root or config.output.dir)
-        made_root = not root.exists()
-        run = _Run(experiment, env, driver, new_run_dir(root, experiment.name), progress)
-        run.made_root = made_root
+        run = _Run(experiment, env, driver, out_root, progress)
         return RunResult(run.run_dir, run.results, run.all())
     finally:
         env.close()
@@ -85,12 +81,12 @@ class _Run(RunLoop[EpisodeResult]):
         experiment: Experiment,
         env: TinyRaceEnv,
         driver: Driver,
-        run_dir: Path,
+        out_root: Path | None,
         progress: Progress,
     ):
         config = experiment.config
         limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
-        super().__init__(experiment, run_dir, progress, limit)
+        super().__init__(experiment, out_root, progress, limit)
         self.env, self.driver = env, driver
 
     def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
@@ -129,12 +125,7 @@ class _Run(RunLoop[EpisodeResult]):
         return result
 
     def _recorder(self, episode: int, stop: StopSignals) -> EpisodeRecorder:
-        out = self.config.output
-        filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
-        video = None
-        if filmed:
-            fps = out.fps or 1.0 / self.env.dt  # [Hz] default: real time
-            video = open_video(self.run_dir / f"episode_{episode:03d}", fps)
+        video = self.episode_video(episode, self.env.dt)
 
         def on_step(recorder: EpisodeRecorder) -> None:
             self.progress.update(recorder)

@@ -28,7 +28,7 @@ def save_track_picture(
     key = f"seed{seed}" if track.drawn_per_reset else f"track{episode.track_index}"
     if key in known:
         return key, known[key]
-    image, frame = ground_picture(env.config, track, env.pictures.ground_texture)
+    image, frame = ground_picture(env.config, track, lambda: env.ground.texture(track))
     start = track.spawns[episode.spawn_index]
     tiles = track.tiles
     lap_line = None if tiles is None or not len(tiles) else tiles[0][:2].tolist()

@@ -17,7 +17,7 @@ Rewards per car are the config's reward terms of that car's facts; with
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +30,6 @@ from tinyrace.actions import ActionSpec
 from tinyrace.env import CARRIED, CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
 from tinyrace.episodes.episode import Episode
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
 from tinyrace.rewards import ends_episode, reward_terms
 from tinyrace.sensors.base import Sensor
 from tinyrace.world.facts import StepFacts
@@ -114,14 +113,10 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         if car == 0:
             return Seat(core.action_spec, core.sensors, core.observation_space, core.box_camera)
         racer = core.course.racers[car]
-        sensors = core.make_sensors(car)
-        box = core.config.observation == "box" and len(sensors) == 1
-        box_camera = sensors[0].id if box else None
+        sensors = core.make_sensors(car)  # none configured: the track's default sensor
+        box_camera = core.box_sensor(sensors, car)
         space: spaces.Space[Any]
-        if not sensors:
-            width, height = OBSERVATION_SIZE  # the default view, as the core env's
-            space = spaces.Box(0, 255, (height, width, 3), np.uint8)
-        elif box_camera is not None:
+        if box_camera is not None:
             space = sensors[0].space
         else:
             space = spaces.Dict({sensor.id: sensor.space for sensor in sensors})
@@ -263,10 +258,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
 
     def _observe(self, snapshot: Snapshot, car: int) -> Any:
         core = self.core
-        seen = snapshot.seen_from(car)
+        seen = replace(snapshot.seen_from(car), score=self.seats[car].score)
         sensors = self.seats[car].sensors
-        if not sensors:
-            return core.pictures.observe(seen, self.seats[car].score)
         observation = {s.id: s.observe(seen, core.layout, core.np_random) for s in sensors}
         box_camera = self.seats[car].box_camera
         return observation if box_camera is None else observation[box_camera]

@@ -1,4 +1,6 @@
-"""The pictures of an env's tracks, chosen by what the tracks hold, never by their kind."""
+"""The pictures of an env's tracks, drawn on the episode's ground: chosen by that ground,
+which ``tinyrace.sensors.ground.make_ground`` chose by what the tracks hold, never by their
+kind."""
 
 from __future__ import annotations
 
@@ -7,16 +9,18 @@ from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
-from tinyrace.tracks.base import TrackSource
+from tinyrace.sensors.ground import EpisodeGround, ImageGround, MetricGround, ProceduralGround
 
 
-def make_pictures(config: EnvConfig, source: TrackSource) -> Pictures:
-    """The pictures of ``source``'s tracks (made once per env; ``reset`` per episode): a
-    ground painted anew for each track from its tiles and kerbs (``source.painted``), the
-    picture each fixed track carries (``Track.picture``), or else a ground drawn once per
-    track from what it holds (road, cones, a map's cells)."""
-    if source.painted is not None:
-        return ProceduralPictures(source.painted)
-    if source.tracks and all(track.picture is not None for track in source.tracks):
-        return ImagePictures(config, source.tracks)
-    return MetricPictures(config, source.tracks)
+def make_pictures(config: EnvConfig, ground: EpisodeGround) -> Pictures:
+    """The pictures of the tracks whose ground is ``ground`` (made once per env; ``reset``
+    per episode): CarRacing's chase views on a ground painted anew for each track, the
+    overview of tracks that carry a picture, or the overview (and default top view) of a
+    ground drawn once per track from what it holds."""
+    if isinstance(ground, ProceduralGround):
+        return ProceduralPictures(ground)
+    if isinstance(ground, ImageGround):
+        return ImagePictures(config, ground)
+    if isinstance(ground, MetricGround):
+        return MetricPictures(config, ground)
+    raise TypeError(f"no pictures for a ground of type {type(ground).__name__}")

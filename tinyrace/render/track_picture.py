@@ -12,7 +12,7 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
-from tinyrace.render.procedural_ground import GroundPainter
+from tinyrace.sensors.procedural_ground import GroundPainter
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource

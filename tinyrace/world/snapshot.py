@@ -20,6 +20,7 @@ class Snapshot:
     steps: int  # steps since reset
     cars: tuple[CarState, ...]
     gone: frozenset[int] = frozenset()  # indices into ``cars`` of the cars off the track
+    score: float = 0.0  # the controlled car's running reward (CarRacing's dashboard shows it)
 
     @property
     def car(self) -> CarState:
@@ -39,4 +40,5 @@ class Snapshot:
             return self
         cars = self.cars
         gone = frozenset(0 if i == car else i + 1 if i < car else i for i in self.gone)
-        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]), gone)
+        order = (cars[car], *cars[:car], *cars[car + 1 :])
+        return Snapshot(self.t, self.steps, order, gone=gone, score=self.score)

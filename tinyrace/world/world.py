@@ -270,9 +270,10 @@ class World:
             self._states = tuple(car.state() for car in self.cars)
         return self._states
 
-    def snapshot(self, t: float, steps: int) -> Snapshot:
-        """The world now, labelled with the episode's clock (``t`` [s], ``steps``)."""
-        return Snapshot(t, steps, self.states(), frozenset(self.gone))
+    def snapshot(self, t: float, steps: int, score: float = 0.0) -> Snapshot:
+        """The world now, labelled with the episode's clock (``t`` [s], ``steps``) and the
+        controlled car's running reward (``score``)."""
+        return Snapshot(t, steps, self.states(), gone=frozenset(self.gone), score=score)
 
     @property
     def counts(self) -> tuple[int, int, int]:

@@ -1,4 +1,4 @@
-"""The ground of a track in metres, drawn once per track, and its overview picture.
+"""The ground of a track in metres, drawn once per track.
 
 The road (tiles), a start line, the cones by class and a ROS map's cells are drawn
 into one RGBx texture with y up (north at the top of the picture); cameras sample it
@@ -107,50 +107,3 @@ def _fill(
         return
     pixels = np.round(transform_points(matrix, polygons) * (1 << _BITS)).astype(np.int32)
     cv2.fillPoly(image, list(pixels), (*color, 255), lineType=cv2.LINE_AA, shift=_BITS)
-
-
-class MetricOverview:
-    """The whole track scaled to ``max_side`` px, the reference line, the car and camera views."""
-
-    def __init__(self, track: Track, texture: GroundTexture, max_side: int = 800):
-        x0, y0, x1, y1 = track.bounds
-        self.scale = max_side / max(x1 - x0, y1 - y0)  # [px/m]
-        self.size = (max(round((x1 - x0) * self.scale), 1), max(round((y1 - y0) * self.scale), 1))
-        self.matrix = np.array(
-            [[self.scale, 0.0, -x0 * self.scale], [0.0, -self.scale, y1 * self.scale]]
-        )
-        self.background = texture.warp(self.matrix, self.size)
-        if track.centerline is not None:
-            line = self._pixels(np.vstack((track.centerline, track.centerline[:1])))
-            cv2.polylines(self.background, [line], False, (255, 255, 255), 1, cv2.LINE_AA, _BITS)
-
-    def render(
-        self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
-    ) -> np.ndarray:
-        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``."""
-        frame = self.background.copy()
-        for corners in windows:
-            cv2.polylines(
-                frame, [self._pixels(corners)], True, (255, 200, 0), 1, cv2.LINE_AA, _BITS
-            )
-        centre = footprint.mean(axis=0)
-        grown = centre + (footprint - centre) * max(1.0, 6.0 / (self.scale * _span(footprint)))
-        cv2.fillConvexPoly(frame, self._pixels(grown), (204, 0, 0), cv2.LINE_AA, _BITS)
-        x = 4
-        for image in images:  # camera insets along the top
-            h, w = image.shape[:2]
-            factor = min(self.size[0] / 4 / w, self.size[1] / 3 / h, 1.0)
-            small = cv2.resize(image, (max(int(w * factor), 1), max(int(h * factor), 1)))
-            sh, sw = small.shape[:2]
-            if x + sw > frame.shape[1] or sh + 4 > frame.shape[0]:
-                break
-            frame[4 : 4 + sh, x : x + sw] = small
-            x += sw + 6
-        return np.asarray(frame)
-
-    def _pixels(self, points: np.ndarray) -> np.ndarray:
-        return np.round(transform_points(self.matrix, points) * (1 << _BITS)).astype(np.int32)
-
-
-def _span(points: np.ndarray) -> float:
-    return float(np.ptp(points, axis=0).max()) or 1.0
