@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-import typing
 from pathlib import Path
 
 import gymnasium as gym
@@ -12,7 +10,7 @@ import yaml
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.cars.registry import CAR_MODELS
-from tinyrace.config import TrackConfig
+from tinyrace.config.schema import track_configs
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.tracks.registry import TRACK_SOURCES
@@ -44,7 +42,7 @@ def test_discrete_actions_need_a_model_that_takes_them():
     assert [p.path for p in caught.value.problems] == ["car.actions"]
 
 
-CONFIGS = {dataclasses.fields(c)[0].default: c for c in typing.get_args(TrackConfig)}
+CONFIGS = track_configs()
 
 
 @pytest.mark.parametrize("kind", sorted(TRACK_SOURCES))

@@ -4,10 +4,8 @@ and the vector envs."""
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import pickle
-import typing
 
 import gymnasium as gym
 import numpy as np
@@ -15,7 +13,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import tinyrace  # noqa: F401  (registers the env ids)
-from tinyrace.config import TrackConfig
+from tinyrace.config.schema import track_configs
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.sensors.registry import SENSOR_TYPES
@@ -46,7 +44,7 @@ CLASSES = {
 }
 
 
-HOLDS = {dataclasses.fields(c)[0].default: c.holds for c in typing.get_args(TrackConfig)}
+HOLDS = {name: c.holds for name, c in track_configs().items()}
 
 
 def supported(sensor: str, kind: str) -> bool:

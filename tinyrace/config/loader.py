@@ -14,6 +14,7 @@ import typing
 from collections.abc import Mapping
 from typing import Any, Literal, Union
 
+from tinyrace.config import families
 from tinyrace.config.colors import Color
 from tinyrace.config.yaml_file import read_yaml  # re-exported: the one way to read YAML
 from tinyrace.errors import ConfigError, Problem, did_you_mean
@@ -94,6 +95,11 @@ class Parser:
 
     # -- values ------------------------------------------------------------------------------
     def value(self, hint: Any, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
+        family = families.members(hint)
+        if family is not None:  # an open union: told apart by type
+            if raw is None:
+                return self.problem(path, raw, f"expected {_describe(hint, meta)}")
+            return self.union_of_dataclasses(tuple(family.values()), raw, path)
         origin, args = typing.get_origin(hint), typing.get_args(hint)
         if origin in (Union, types.UnionType):
             return self.union(args, raw, path, meta)
@@ -196,6 +202,8 @@ def _list_of_sections(hint: Any) -> bool:
     if typing.get_origin(hint) is not tuple or len(args) != 2 or args[1] is not Ellipsis:
         return False
     item = args[0]
+    if families.members(item) is not None:
+        return True
     members = typing.get_args(item) if typing.get_origin(item) in (Union, types.UnionType) else ()
     return dataclasses.is_dataclass(item) or (
         bool(members) and all(dataclasses.is_dataclass(m) for m in members)
@@ -237,6 +245,9 @@ def _describe(hint: Any, meta: Mapping[str, Any]) -> str:
         return "a colour"
     if hint is str:
         return "a non-empty string"
+    family = families.members(hint)
+    if family is not None:
+        return f"a mapping with a type ({', '.join(family)})"
     members = typing.get_args(hint) if typing.get_origin(hint) in (Union, types.UnionType) else ()
     if members and all(dataclasses.is_dataclass(m) for m in members):  # told apart by type
         kinds = [str(f.default) for m in members for f in dataclasses.fields(m) if f.name == "type"]

@@ -21,21 +21,17 @@ from tinyrace.config.schema import (
     CacheConfig,
     CameraConfig,
     CarConfig,
-    CenterlineTrackConfig,
     ColorObstacle,
-    ConeMapTrackConfig,
     CrossTrackErrorConfig,
     EnvConfig,
     FilesConfig,
-    ImageTrackConfig,
-    ProceduralTrackConfig,
     RaceCarConfig,
     RaceConfig,
     RewardConfig,
-    RosMapTrackConfig,
     SimConfig,
+    track_configs,
 )
-from tinyrace.config.sensors import SENSOR_CONFIGS
+from tinyrace.config.sensors import sensor_configs
 
 START = (
     "<!-- yaml-reference:start "
@@ -43,30 +39,30 @@ START = (
 )
 END = "<!-- yaml-reference:end -->"
 
-SECTIONS = (
-    ("track.yaml", EnvConfig, ""),
-    ("sim", SimConfig, "sim"),
-    ("track: type procedural", ProceduralTrackConfig, "tracks[i]"),
-    ("track: type image", ImageTrackConfig, "tracks[i]"),
-    ("track: type centerline", CenterlineTrackConfig, "tracks[i]"),
-    ("track: type cone_map", ConeMapTrackConfig, "tracks[i]"),
-    ("track: type ros_map", RosMapTrackConfig, "tracks[i]"),
-    ("car", CarConfig, "car"),
-    ("cameras[i]", CameraConfig, "cameras[i]"),
-    *(
-        (f"sensors[i]: type {c.__dataclass_fields__['type'].default}", c, "sensors[i]")
-        for c in SENSOR_CONFIGS
-    ),
-    ("reward_design", RewardConfig, "reward_design"),
-    ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
-    ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
-    ("files", FilesConfig, "files"),
-    ("race", RaceConfig, "race"),
-    ("race.cars[i]", RaceCarConfig, "race.cars[i]"),
-    ("cache", CacheConfig, "cache"),
-    ("experiment file", ExperimentConfig, ""),
-    ("experiment output", OutputConfig, "output"),
-)
+
+def sections() -> list[tuple[str, type, str]]:
+    """The page's sections: (title, dataclass, key path), every family member known now."""
+    return [
+        ("track.yaml", EnvConfig, ""),
+        ("sim", SimConfig, "sim"),
+        *((f"track: type {name}", c, "tracks[i]") for name, c in track_configs().items()),
+        ("car", CarConfig, "car"),
+        ("cameras[i]", CameraConfig, "cameras[i]"),
+        *((f"sensors[i]: type {name}", c, "sensors[i]") for name, c in sensor_configs().items()),
+        ("reward_design", RewardConfig, "reward_design"),
+        ("reward_design.color_obstacles[i]", ColorObstacle, "reward_design.color_obstacles[i]"),
+        (
+            "reward_design.cross_track_error",
+            CrossTrackErrorConfig,
+            "reward_design.cross_track_error",
+        ),
+        ("files", FilesConfig, "files"),
+        ("race", RaceConfig, "race"),
+        ("race.cars[i]", RaceCarConfig, "race.cars[i]"),
+        ("cache", CacheConfig, "cache"),
+        ("experiment file", ExperimentConfig, ""),
+        ("experiment output", OutputConfig, "output"),
+    ]
 
 
 def type_name(hint: Any) -> str:
@@ -158,7 +154,7 @@ def bounds_section() -> str:
 
 def markdown() -> str:
     """The whole reference as Markdown."""
-    return "\n\n".join([*(section(*s) for s in SECTIONS), bounds_section()])
+    return "\n\n".join([*(section(*s) for s in sections()), bounds_section()])
 
 
 def embed(readme: str) -> str:

@@ -9,11 +9,11 @@ so that code above asks the track config, never its ``type``.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, Literal, Union, get_args
+from typing import Any, ClassVar, Literal
 
+from tinyrace.config import families
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS as MAX_CAMERA_PIXELS  # re-exported
 from tinyrace.config.bounds import MAX_TEXTURE_SIDE
 from tinyrace.config.colors import Color
@@ -65,6 +65,7 @@ class TrackFacts:
     """What a track config class says about its tracks, for the code above the tracks: each
     ``*TrackConfig`` sets these, so nothing needs to compare its ``type``."""
 
+    type: str  # the entry's ``type`` (each member's dataclass field)
     unit: ClassVar[str]  # its tracks' unit: "u" (CarRacing), "px" or "m"
     y_down: ClassVar[bool] = False  # x right, y down, headings clockwise (pictures)
     carracing_rules: ClassVar[bool] = True  # tiles, laps, time penalty: 50 fps, CarRacing's pay
@@ -300,22 +301,29 @@ class RosMapTrackConfig(MetreTrackFacts):
         return None if self.waypoints is not None else "expected track.waypoints on a ros_map track"
 
 
-# A track entry without ``type`` is an image track (tinycarlo files have none): listed first.
-TrackConfig = Union[  # noqa: UP007 (read at runtime)
+# The family of track configs (``tracks:`` entries, told apart by ``type``): a track source
+# adds its own (``tinyrace.tracks.registry.register``). An entry without ``type`` is an
+# image track (tinycarlo files have none): added first.
+TrackConfig = TrackFacts
+for _config in (
     ImageTrackConfig,
     ProceduralTrackConfig,
     CenterlineTrackConfig,
     ConeMapTrackConfig,
     RosMapTrackConfig,
-]
+):
+    families.add(TrackFacts, _config)
+
+
+def track_configs() -> dict[str, type]:
+    """Every track type's config class by type name (built-in and registered)."""
+    return families.members(TrackFacts) or {}
 
 
 def track_types_in(units: Iterable[str]) -> list[str]:
     """The track types (``type:`` values) whose tracks are in one of ``units``, sorted."""
     wanted = set(units)
-    return sorted(
-        str(dataclasses.fields(c)[0].default) for c in get_args(TrackConfig) if c.unit in wanted
-    )
+    return sorted(name for name, c in track_configs().items() if getattr(c, "unit", None) in wanted)
 
 
 @dataclass(frozen=True)

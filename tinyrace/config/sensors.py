@@ -9,8 +9,9 @@ are positive to the left (counter-clockwise seen from above).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Literal, Union
+from typing import Any, Literal, Protocol
 
+from tinyrace.config import families
 from tinyrace.config.colors import Color
 from tinyrace.config.knobs import REQUIRED, knob
 
@@ -258,7 +259,18 @@ class TopViewConfig:
     )
 
 
-SensorConfig = Union[  # noqa: UP007 (read at runtime)
+class SensorConfig(Protocol):
+    """A ``sensors:`` entry: the dataclass its ``type`` names (the family of sensor configs:
+    a sensor type's registry entry adds its config, see ``tinyrace.sensors.registry``)."""
+
+    @property
+    def id(self) -> str: ...
+
+    @property
+    def type(self) -> str: ...
+
+
+for _config in (
     PerspectiveCameraConfig,
     LidarConfig,
     StateConfig,
@@ -267,17 +279,13 @@ SensorConfig = Union[  # noqa: UP007 (read at runtime)
     CameraConfig,
     ChaseViewConfig,
     TopViewConfig,
-]
-SENSOR_CONFIGS = (
-    PerspectiveCameraConfig,
-    LidarConfig,
-    StateConfig,
-    LookaheadConfig,
-    ConesConfig,
-    CameraConfig,
-    ChaseViewConfig,
-    TopViewConfig,
-)
+):
+    families.add(SensorConfig, _config)
+
+
+def sensor_configs() -> dict[str, type]:
+    """Every sensor type's config class by type name (built-in and registered)."""
+    return families.members(SensorConfig) or {}
 
 
 def cameras_first(

@@ -5,13 +5,15 @@ A sensor reads a ``Snapshot`` (``tinyrace.world.snapshot``) and the episode's ``
 dropouts) comes from the ``rng`` it is given: the env's ``np_random``.
 
 How to add a sensor type:
-1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor`` and a builder
-   ``build(entry, context) -> Sensor`` taking its own config entry (a dataclass with
-   ``knob()`` fields: units, bounds, docs) and a ``SensorContext`` (the env config, the
-   ground textures). ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
+1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor``, a builder
+   ``build(entry, context) -> Sensor`` and its config entry: a dataclass of ``knob()``
+   fields (units, bounds, docs) with ``id`` and ``type: Literal["<type>"]``. The
+   ``SensorContext`` gives the env config, the ground and the car's facts.
+   ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
-   name (the entry's ``type``), config class, builder and what its tracks must hold.
-3. Add its config class to ``SensorConfig`` in ``tinyrace/config/sensors.py``.
+   name (the entry's ``type``), config class, builder and what its tracks must hold; the
+   loader then parses ``type: <type>`` entries into its config class.
+``tests/test_toy_recipes.py`` does both from a test file alone.
 """
 
 from __future__ import annotations

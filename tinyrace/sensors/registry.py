@@ -1,11 +1,13 @@
 """The sensor types by name (the ``type`` of a ``sensors:`` entry).
 
-Adding a type is one module plus one entry here (see ``tinyrace/sensors/base.py``).
+Adding a type is one module plus one ``register`` call (see ``tinyrace/sensors/base.py``):
+its config class then parses as a ``sensors:`` entry too.
 """
 
 from __future__ import annotations
 
-from tinyrace.config import CameraConfig
+from tinyrace.config import CameraConfig, families
+from tinyrace.config.sensors import SensorConfig
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.sensors import birdseye_camera
 from tinyrace.sensors.base import Sensor, SensorContext, SensorType
@@ -15,9 +17,20 @@ SENSOR_TYPES: dict[str, SensorType] = {}
 
 
 def register(sensor_type: SensorType) -> SensorType:
-    """Add a type to the registry (the built-in types are added below)."""
+    """Add a type to the registry (the built-in types are added below); its config class
+    joins the ``sensors:`` entries the loader parses (its ``type`` field names it)."""
+    if families.type_of(sensor_type.config) != sensor_type.name:
+        named = families.type_of(sensor_type.config)
+        raise ValueError(f"sensor type {sensor_type.name!r}: its config's type is {named!r}")
     SENSOR_TYPES[sensor_type.name] = sensor_type
+    families.add(SensorConfig, sensor_type.config)
     return sensor_type
+
+
+def unregister(name: str) -> None:
+    """Take sensor type ``name`` away again (a test's toy, when the test ends)."""
+    SENSOR_TYPES.pop(name, None)
+    families.remove(SensorConfig, name)
 
 
 def sensor_type(name: object, source: str, key_path: str) -> SensorType:

@@ -7,7 +7,15 @@ from pathlib import Path
 
 from tinyrace.cache import shared
 from tinyrace.cache.digest import digest
-from tinyrace.config import EnvConfig
+from tinyrace.config import EnvConfig, families
+from tinyrace.config.schema import (
+    CenterlineTrackConfig,
+    ConeMapTrackConfig,
+    ImageTrackConfig,
+    ProceduralTrackConfig,
+    RosMapTrackConfig,
+    TrackFacts,
+)
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
 from tinyrace.tracks.image import ImageSource
@@ -16,13 +24,30 @@ from tinyrace.tracks.procedural_source import ProceduralSource
 
 SourceBuilder = Callable[[EnvConfig, Path, str], TrackSource]
 
-TRACK_SOURCES: dict[str, SourceBuilder] = {
-    "procedural": ProceduralSource,
-    "image": ImageSource,
-    "centerline": MetricSource,
-    "cone_map": MetricSource,
-    "ros_map": MetricSource,
-}
+TRACK_SOURCES: dict[str, SourceBuilder] = {}
+
+
+def register(config: type[TrackFacts], source: SourceBuilder) -> None:
+    """Add a track type: its config dataclass (a ``TrackFacts`` whose ``type`` field names
+    it; the loader then parses ``type: <name>`` entries into it) and its source."""
+    TRACK_SOURCES[families.type_of(config)] = source
+    families.add(TrackFacts, config)
+
+
+def unregister(name: str) -> None:
+    """Take track type ``name`` away again (a test's toy, when the test ends)."""
+    TRACK_SOURCES.pop(name, None)
+    families.remove(TrackFacts, name)
+
+
+for _config, _source in (
+    (ImageTrackConfig, ImageSource),
+    (ProceduralTrackConfig, ProceduralSource),
+    (CenterlineTrackConfig, MetricSource),
+    (ConeMapTrackConfig, MetricSource),
+    (RosMapTrackConfig, MetricSource),
+):
+    register(_config, _source)
 
 
 def make_track_source(config: EnvConfig, base_dir: Path, source: str) -> TrackSource:

@@ -1,0 +1,243 @@
+"""The recipes of docs/ARCHITECTURE.md, each done once from this file alone: a track source
+(its config and its source, one ``register`` call), a rule part (one ``RULES`` entry) and
+a sensor type (its config and its builder, one ``register`` call). Each toy drives through
+``gym.make``, a sensor and the centreline driver, and is taken away when its test ends.
+
+The toys: a ``ring`` track (a circle of road in metres with a wall box in its middle),
+whose rule parts are the playfield and a ``finish_gate`` (the lap ends when the rear
+axle passes a gate a quarter of the way round), and a ``compass`` sensor (the car's
+heading as a unit vector).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar, Literal
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium import spaces
+
+import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.cars.state import CarState
+from tinyrace.config import EnvConfig
+from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.schema import METRE_CAR, TrackFacts
+from tinyrace.drivers.centerline import CenterlineDriver
+from tinyrace.episodes.rules import RULES, Info
+from tinyrace.errors import ConfigError
+from tinyrace.sensors import registry as sensor_registry
+from tinyrace.sensors.base import SensorContext, SensorType
+from tinyrace.tracks import registry as track_registry
+from tinyrace.tracks.base import Track, TrackDraw, TrackRules, pick_index
+from tinyrace.world.facts import StepFacts
+from tinyrace.world.snapshot import Snapshot
+from tinyrace.world.world import Contacts, World
+
+# -- a track source: its config dataclass and its source ------------------------------------
+
+
+@dataclass(frozen=True)
+class RingTrackConfig(TrackFacts):
+    """A ``track`` of ``type: ring``: a circle of road, in metres."""
+
+    unit: ClassVar[str] = "m"
+    car_sizes: ClassVar[Mapping[str, float]] = METRE_CAR
+    carracing_rules: ClassVar[bool] = False
+    start_key: ClassVar[str] = "radius"
+
+    type: Literal["ring"] = knob("ring", "track kind")
+    radius: float = knob(30.0, "radius of the road's middle", "m", low=10.0, high=500.0)
+    width: float = knob(8.0, "road width", "m", low=2.0, high=20.0)
+
+
+class RingSource:
+    """One ring per config track; the start on its right-hand side, driving left round."""
+
+    kind = "ring"
+    painted = None
+
+    def __init__(self, config: EnvConfig, base_dir: Path, source: str):
+        self.tracks = tuple(_ring(c) for c in config.tracks if isinstance(c, RingTrackConfig))
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
+        index = pick_index(options, "track", len(self.tracks), rng)
+        return TrackDraw(self.tracks[index], index, 0)
+
+
+def _ring(config: RingTrackConfig) -> Track:
+    angles = np.linspace(0.0, 2 * math.pi, 360, endpoint=False)
+    line = config.radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)  # [m]
+    line.flags.writeable = False
+    edge = config.radius + config.width
+    return Track(
+        kind="ring",
+        unit="m",
+        metres_per_unit=1.0,
+        y_down=False,
+        bounds=(-edge, -edge, edge, edge),
+        spawns=((config.radius, 0.0, math.pi / 2),),  # heading +y: counter-clockwise
+        centerline=line,
+        walls=np.array([[-3.0, -3.0, 3.0, 3.0]]),  # a box in the middle, far from the road
+        rules=TrackRules(("playfield", "finish_gate")),
+        ground_pixels_per_unit=4.0,
+    )
+
+
+# -- a rule part ---------------------------------------------------------------------------
+
+
+class FinishGate:
+    """The lap ends when the car's rear axle passes the gate: the ray from the ring's
+    middle through its centreline point a quarter of the way round."""
+
+    @staticmethod
+    def furnish(world: World, track: Track) -> None:
+        pass  # nothing of its own in the world: it reads the car's state only
+
+    def __init__(self, track: Track) -> None:
+        assert track.centerline is not None
+        gate = track.centerline[len(track.centerline) // 4]
+        self.gate_angle = math.atan2(gate[1], gate[0])  # [rad]
+        self.passed_at: float | None = None  # [rad] where the rear axle was when it passed
+
+    def judge(self, contacts: Contacts, car: CarState, facts: StepFacts) -> None:
+        x, y = car.rear_axle
+        angle = math.atan2(y, x)
+        if self.passed_at is None and angle >= self.gate_angle:
+            self.passed_at = angle
+        facts.lap_finished = self.passed_at is not None
+
+    def info(self, info: Info) -> None:
+        info["gate_passed"] = self.passed_at is not None
+
+
+# -- a sensor type: its config dataclass and its sensor ------------------------------------
+
+
+@dataclass(frozen=True)
+class CompassConfig:
+    """``sensors[i]`` of ``type: compass``: the car's heading as a unit vector."""
+
+    id: str = knob(REQUIRED, "observation key of this sensor")
+    type: Literal["compass"] = knob("compass", "sensor type")
+    noise: float = knob(0.0, "std of Gaussian noise on each component", low=0.0, high=1.0)
+
+
+class Compass:
+    """(cos, sin) of the car's heading [rad from +x, counter-clockwise], noise from ``rng``."""
+
+    def __init__(self, config: CompassConfig):
+        self.id, self.noise = config.id, config.noise
+        self.space = spaces.Box(-2.0, 2.0, (2,), np.float32)
+
+    def reset(self, track: Track) -> None:
+        pass
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        heading = snapshot.car.pose[2]
+        clean = np.array([math.cos(heading), math.sin(heading)])
+        noisy = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
+        return np.clip(noisy, -2.0, 2.0).astype(np.float32)
+
+
+def build_compass(entry: CompassConfig, context: SensorContext) -> Compass:
+    return Compass(entry)
+
+
+# -- the recipes, done from here -----------------------------------------------------------
+
+
+@pytest.fixture
+def compass() -> Iterator[None]:
+    sensor_registry.register(SensorType("compass", CompassConfig, build_compass, doc="heading"))
+    yield
+    sensor_registry.unregister("compass")
+
+
+@pytest.fixture
+def ring() -> Iterator[None]:
+    track_registry.register(RingTrackConfig, RingSource)
+    RULES["finish_gate"] = FinishGate
+    yield
+    track_registry.unregister("ring")
+    del RULES["finish_gate"]
+
+
+def _ring_env(**kwargs: Any) -> gym.Env[Any, Any]:
+    kwargs.setdefault("tracks", [{"type": "ring", "radius": 30.0}])
+    sensors = [{"id": "state", "type": "state"}, *kwargs.pop("sensors", [])]
+    return gym.make("tinyrace/TinyRace-v0", sensors=sensors, **kwargs)
+
+
+def test_a_track_source_and_a_rule_part_added_from_a_test_file_drive_through_gym_make(ring):
+    env = _ring_env()
+    driver = CenterlineDriver()
+    observation, info = env.reset(seed=1)
+    driver.reset(env)
+    assert env.unwrapped.track.kind == "ring" and env.unwrapped.config.facts.unit == "m"
+    assert info["gate_passed"] is False
+    start = env.unwrapped.car.pose
+    steps, terminated, truncated = 0, False, False
+    while not (terminated or truncated) and steps < 2000:
+        observation, _, terminated, truncated, info = env.step(driver.act(observation, info))
+        steps += 1
+    assert terminated and info["gate_passed"] is True and not truncated
+    x, y, _ = env.unwrapped.car.pose
+    along = math.atan2(y, x) - math.atan2(start[1], start[0])  # [rad] driven round the ring
+    assert math.pi / 2 <= along < math.pi / 2 + 0.3  # it ended at the gate, not long after
+    assert abs(math.hypot(x, y) - 30.0) < 4.0  # on the road the driver followed
+    assert steps > 50  # a quarter of 188 m is some driving, not a spawn inside the gate
+    env.close()
+
+
+def test_a_registered_track_type_is_checked_like_a_built_in_one(ring):
+    with pytest.raises(ConfigError) as caught:
+        _ring_env(tracks=[{"type": "ring", "radius": 3.0}])
+    assert "tracks[0].radius" in str(caught.value) and ">= 10" in str(caught.value)
+    with pytest.raises(ConfigError) as caught:
+        _ring_env(tracks=[{"type": "rung"}])
+    assert "did you mean 'ring'" in str(caught.value)
+
+
+def test_a_sensor_type_added_from_a_test_file_observes_through_gym_make(compass, ring):
+    env = _ring_env(sensors=[{"id": "north", "type": "compass"}])
+    assert env.observation_space["north"] == spaces.Box(-2.0, 2.0, (2,), np.float32)
+    driver = CenterlineDriver()
+    observation, info = env.reset(seed=1)
+    driver.reset(env)
+    for _ in range(40):
+        heading = env.unwrapped.car.pose[2]
+        expected = np.array([math.cos(heading), math.sin(heading)], np.float32)
+        np.testing.assert_array_equal(observation["north"], expected)
+        observation, *_, info = env.step(driver.act(observation, info))
+    assert observation["north"][0] < -0.05  # turned left round the ring: now heading -x a bit
+    env.close()
+
+
+def test_a_registered_sensor_type_is_checked_like_a_built_in_one(compass):
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass", "noise": 3}])
+    assert "sensors[0].noise" in str(caught.value) and "<= 1" in str(caught.value)
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compas"}])
+    assert "did you mean 'compass'" in str(caught.value)
+    noisy = gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass", "noise": 0.1}])
+    first, again = noisy.reset(seed=3)[0]["c"], noisy.reset(seed=3)[0]["c"]
+    np.testing.assert_array_equal(first, again)  # noise from the env's generator only
+    assert abs(np.hypot(*first) - 1.0) > 1e-6  # and there is noise
+    noisy.close()
+
+
+def test_a_toy_type_is_gone_when_its_test_ends():
+    with pytest.raises(ConfigError) as caught:
+        _ring_env()
+    assert "tracks[0].type" in str(caught.value) and "'ring'" in str(caught.value)
+    assert "finish_gate" not in RULES
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass"}])
+    assert "sensors[0].type" in str(caught.value)
