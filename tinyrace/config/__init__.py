@@ -64,6 +64,7 @@ __all__ = [
     "TrackConfig",
     "cache_settings",
     "car_colors",
+    "car_names",
     "load_env_config",
 ]
 
@@ -80,6 +81,12 @@ def cache_settings(config: EnvConfig) -> Settings:
     cache = config.cache
     folder = Path(cache.dir).expanduser() if cache.dir is not None else default_folder()
     return Settings(folder, int(cache.max_size * 2**20))
+
+
+def car_names(config: EnvConfig) -> list[str]:
+    """Each car's name, in car order: its agent name in a race (``car_0``, ``car_1``, ...),
+    the label the overview and videos write beside it."""
+    return [f"car_{car}" for car in range(config.race.num_agents)]
 
 
 KWARGS = "<kwargs>"  # the source named by problems of ``gym.make``'s keyword arguments

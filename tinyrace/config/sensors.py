@@ -194,7 +194,34 @@ class ConesConfig:
     )
 
 
+@dataclass(frozen=True)
+class OpponentsConfig:
+    """``sensors[i]`` of ``type: opponents``: the nearest other cars of a race, car frame,
+    nearest first; float32 rows (present, x, y, vx, vy, heading), zeros past the last car."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["opponents"] = _type("opponents")
+    count: int = knob(
+        3, "rows: how many of the nearest other cars are reported (K)", low=1, high=15
+    )
+    max_range: float | None = knob(
+        None,
+        "cars farther than this (the middle of their footprint from the front axle's middle) "
+        "are not reported (null: 10 car lengths)",
+        LENGTH,
+        low=0,
+        low_open=True,
+    )
+
+
 SensorConfig = Union[  # noqa: UP007 (read at runtime)
-    PerspectiveCameraConfig, LidarConfig, StateConfig, LookaheadConfig, ConesConfig
+    PerspectiveCameraConfig, LidarConfig, StateConfig, LookaheadConfig, ConesConfig, OpponentsConfig
 ]
-SENSOR_CONFIGS = (PerspectiveCameraConfig, LidarConfig, StateConfig, LookaheadConfig, ConesConfig)
+SENSOR_CONFIGS = (
+    PerspectiveCameraConfig,
+    LidarConfig,
+    StateConfig,
+    LookaheadConfig,
+    ConesConfig,
+    OpponentsConfig,
+)

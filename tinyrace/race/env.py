@@ -23,6 +23,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from tinyrace.config import car_names
 from tinyrace.env import CARRIED, CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.rewards import ends_episode, reward_terms
@@ -80,7 +81,7 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         self.core = core = TinyRaceEnv(config, environment, render_mode=render_mode, **overrides)
         self.render_mode = render_mode
         count = core.config.race.num_agents
-        self.possible_agents = [f"car_{i}" for i in range(count)]
+        self.possible_agents = car_names(core.config)  # what pictures write beside the cars
         self.agents: list[str] = []
         self._index = {agent: i for i, agent in enumerate(self.possible_agents)}
         self.seats = [Seat(core.sensors)] + [Seat(core.make_sensors()) for _ in range(1, count)]

@@ -13,7 +13,8 @@ import numpy as np
 
 from tinyrace.render.car_sprite import CarSprite, Patches
 from tinyrace.render.dashboard import Dashboard
-from tinyrace.sensors.texture import Affine, GroundTexture
+from tinyrace.sensors.draw_cars import CarLooks, draw_names, fill_footprints
+from tinyrace.sensors.texture import Affine, GroundTexture, as_matrix
 from tinyrace.world.snapshot import Snapshot
 
 WINDOW = (1000, 800)  # [px] the reference's layout size (w, h)
@@ -58,9 +59,13 @@ class ChaseView:
         texture: GroundTexture,
         dashboard: Dashboard,
         patches: Patches,
+        looks: CarLooks | None = None,
     ):
-        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes."""
+        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes;
+        ``looks``: the colours and names of a race's cars (the others drawn on the ground,
+        named in views larger than the observation)."""
         self.size = size  # (w, h)
+        self.looks = looks
         self.texture = texture
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
         self.sprite = CarSprite(supersample=small, patches=patches)
@@ -83,8 +88,13 @@ class ChaseView:
         frame = np.empty((size[1], size[0], 3), np.uint8)
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
+        looks = self.looks if len(snapshot.cars) > 1 else None  # a race's
+        if looks is not None:  # the other cars on the ground (sensors/draw_cars.py)
+            fill_footprints(frame[:top], as_matrix(world_to_out), snapshot, looks.colors)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
         self.sprite.draw(frame, car, world_to_out, self.skid_width, cache_key=zoom)
+        if looks is not None and self.skid_width:  # a video's view: every car's name
+            draw_names(frame[:top], as_matrix(world_to_out), snapshot, looks)
         self.dashboard.draw(frame, car, score)
         return frame

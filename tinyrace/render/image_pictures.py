@@ -10,6 +10,7 @@ from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
 from tinyrace.render.overview import Overview
 from tinyrace.render.pictures import CameraViews
+from tinyrace.sensors.draw_cars import CarLooks
 from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.image import ImageSource, ImageTrack
@@ -27,6 +28,7 @@ class ImagePictures:
         ]
         self.overviews: list[Overview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
+        self.looks = CarLooks.of(config)  # the colours and names of a race's cars
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
         self.index = draw.track_index
@@ -42,7 +44,8 @@ class ImagePictures:
             return cameras[0][0]
         images = [image for image, _ in cameras]
         windows = [corners for _, corners in cameras]
-        return self.overview().render(footprint_corners(snapshot.car), windows, images)
+        race = (snapshot, self.looks)
+        return self.overview().render(footprint_corners(snapshot.car), windows, images, race)
 
     def ground_texture(self) -> GroundTexture:
         """The track picture the cameras see."""

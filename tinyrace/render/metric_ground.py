@@ -15,9 +15,11 @@ import numpy as np
 from tinyrace import cache
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.sensors import texture
+from tinyrace.sensors.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.metric import MetricTrack
+from tinyrace.world.snapshot import Snapshot
 
 MAX_SIDE = 8192  # [px] the texture's longest side
 ROAD = (102, 102, 102)  # RGB, CarRacing's road
@@ -126,9 +128,14 @@ class MetricOverview:
             cv2.polylines(self.background, [line], False, (255, 255, 255), 1, cv2.LINE_AA, _BITS)
 
     def render(
-        self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
+        self,
+        footprint: np.ndarray,
+        windows: list[np.ndarray],
+        images: list[np.ndarray],
+        race: tuple[Snapshot, CarLooks] | None = None,
     ) -> np.ndarray:
-        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``."""
+        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``;
+        ``race``: a snapshot of several cars, the others drawn and every car named."""
         frame = self.background.copy()
         for corners in windows:
             cv2.polylines(
@@ -137,6 +144,8 @@ class MetricOverview:
         centre = footprint.mean(axis=0)
         grown = centre + (footprint - centre) * max(1.0, 6.0 / (self.scale * _span(footprint)))
         cv2.fillConvexPoly(frame, self._pixels(grown), (204, 0, 0), cv2.LINE_AA, _BITS)
+        if race is not None and len(race[0].cars) > 1:
+            draw_race(frame, self.matrix, *race, min_size=6.0)
         x = 4
         for image in images:  # camera insets along the top
             h, w = image.shape[:2]

@@ -12,6 +12,7 @@ from tinyrace.config import CameraConfig, EnvConfig, cache_settings
 from tinyrace.render.metric_ground import MetricOverview, shared_ground
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.birdseye_camera import RoiCamera
+from tinyrace.sensors.draw_cars import CarLooks, fill_footprints
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.metric import MetricSource, MetricTrack
@@ -39,6 +40,7 @@ class MetricPictures:
         self.overviews: list[MetricOverview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
         self.view: RoiCamera | None = None  # the default view, made at the first observation
+        self.looks = CarLooks.of(config)  # the colours and names of a race's cars
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
         self.index, self.view = draw.track_index, None
@@ -50,6 +52,8 @@ class MetricPictures:
         front, heading = car.front_axle, car.pose[2]
         image = view.render(front, heading)
         matrix = view.matrix(front, heading)
+        if len(snapshot.cars) > 1:  # a race: the other cars in their colours
+            fill_footprints(image, matrix, snapshot, self.looks.colors)
         corners = transform_points(matrix, footprint_corners(car))
         cv2.fillConvexPoly(
             image, np.round(corners * 16).astype(np.int32), CAR_COLOR, cv2.LINE_AA, 4
@@ -77,7 +81,8 @@ class MetricPictures:
         if overview is None:
             overview = MetricOverview(self.tracks[self.index], self.ground_texture())
             self.overviews[self.index] = overview
-        return overview.render(footprint_corners(snapshot.car), windows, images)
+        race = (snapshot, self.looks)
+        return overview.render(footprint_corners(snapshot.car), windows, images, race)
 
     def ground_texture(self) -> GroundTexture:
         """The track picture the cameras see (painted, or mapped, at its first read)."""

@@ -14,6 +14,7 @@ from tinyrace.render.chase_view import ChaseView
 from tinyrace.render.dashboard import Dashboard
 from tinyrace.render.pictures import CameraViews
 from tinyrace.render.procedural_ground import GroundPainter, repaint_tile
+from tinyrace.sensors.draw_cars import CarLooks
 from tinyrace.sensors.texture import GroundTexture
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.tracks.procedural import ProceduralTrack
@@ -41,6 +42,7 @@ class ProceduralPictures:
         self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
         self._painted = 0  # visited tiles repainted on every texture
         self._views: dict[tuple[int, int], ChaseView] = {}
+        self.looks = CarLooks.of(config)  # the colours and names of a race's cars
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
         self.track, self.colors, self.visited = draw.track.detail, self.source.colors, visited
@@ -69,7 +71,8 @@ class ProceduralPictures:
             small = max(size) <= SMALL_VIEW
             ppu = self.track_config.pixels_per_unit if small else self._video_pixels_per_unit()
             dashboard, patches = self.cache.for_view(size)
-            view = self._views[size] = ChaseView(size, self.texture(ppu), dashboard, patches)
+            texture = self.texture(ppu)
+            view = self._views[size] = ChaseView(size, texture, dashboard, patches, self.looks)
         return view
 
     def _video_pixels_per_unit(self) -> float:

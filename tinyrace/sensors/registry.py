@@ -41,7 +41,7 @@ register(
 
 def _register_built_in() -> None:
     from tinyrace.config import sensors as configs
-    from tinyrace.sensors import cones, lidar, lookahead, perspective_camera, state
+    from tinyrace.sensors import cones, lidar, lookahead, opponents, perspective_camera, state
 
     for name, config, module, kinds, doc in (
         (
@@ -66,6 +66,13 @@ def _register_built_in() -> None:
             cones,
             frozenset({"image", "cone_map"}),
             "cones in range by class, padded",
+        ),
+        (
+            "opponents",
+            configs.OpponentsConfig,
+            opponents,
+            None,
+            "the nearest other cars of a race: position, relative velocity, heading, padded",
         ),
     ):
         register(SensorType(name, config, module.build, kinds, doc))

@@ -18,6 +18,9 @@ class Snapshot:
     t: float  # [s] since reset
     steps: int  # steps since reset
     cars: tuple[CarState, ...]
+    # each car's index in the world (its colour, its name), in the order of ``cars``; ()
+    # when the order is the world's own
+    order: tuple[int, ...] = ()
 
     @property
     def car(self) -> CarState:
@@ -30,4 +33,10 @@ class Snapshot:
         if car == 0:
             return self
         cars = self.cars
-        return Snapshot(self.t, self.steps, (cars[car], *cars[:car], *cars[car + 1 :]))
+        seen = (cars[car], *cars[:car], *cars[car + 1 :])
+        order = self.order or tuple(range(len(cars)))
+        return Snapshot(self.t, self.steps, seen, (order[car], *order[:car], *order[car + 1 :]))
+
+    def index(self, k: int) -> int:
+        """The world's index of ``cars[k]`` (what its colour and name are looked up by)."""
+        return self.order[k] if self.order else k
