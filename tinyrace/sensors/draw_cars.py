@@ -14,13 +14,15 @@ the videos also write each car's name beside it (``draw_names``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
-from tinyrace.cars.state import footprint_corners
+from tinyrace.cars.state import CarState, footprint_corners
 from tinyrace.config import EnvConfig, car_colors, car_names
 from tinyrace.config.colors import palette_color
 from tinyrace.sensors.pinhole import Pinhole
@@ -64,6 +66,41 @@ def _paint(paints: Sequence[Paint], index: int) -> Paint:
     return paints[index] if index < len(paints) else palette_color(index)
 
 
+class _Geometry(NamedTuple):
+    """A car's footprint in track units, worked out once per step for every camera."""
+
+    car: CarState  # the state it is of (kept: its id is the cache's key)
+    x: float  # the middle of the footprint
+    y: float
+    radius: float  # of the circle around the footprint
+    corners: list[tuple[float, float]]  # footprint_corners(car), in plain floats
+
+
+_GEOMETRY: dict[int, _Geometry] = {}  # by id of the CarState: every seat's cameras share it
+_GEOMETRY_SIZE = 64  # entries kept (16 cars, a few steps)
+
+
+def _geometry(car: CarState) -> _Geometry:
+    """The footprint of ``car`` (one computation per car and step, then looked up)."""
+    found = _GEOMETRY.get(id(car))
+    if found is not None and found.car is car:
+        return found
+    x, y = car.rear_axle
+    heading = car.pose[2]
+    length, width = car.footprint
+    fx, fy = math.cos(heading), math.sin(heading)
+    rx, ry = -fy * width / 2, fx * width / 2
+    ax, ay = length * fx, length * fy
+    corners = [(x - rx, y - ry), (x + rx, y + ry), (x + rx + ax, y + ry + ay)]
+    corners.append((x - rx + ax, y - ry + ay))
+    radius = math.hypot(length, width) / 2
+    found = _Geometry(car, x + ax / 2, y + ay / 2, radius, corners)
+    if len(_GEOMETRY) >= _GEOMETRY_SIZE:
+        _GEOMETRY.clear()
+    _GEOMETRY[id(car)] = found
+    return found
+
+
 def fill_footprints(
     image: np.ndarray,
     world_to_pixels: np.ndarray,
@@ -74,23 +111,32 @@ def fill_footprints(
 ) -> None:
     """Every car of ``snapshot`` but the first, its footprint filled with its paint, through
     ``world_to_pixels`` (2x3: track -> pixel centres of ``image``); footprints smaller
-    than ``min_size`` [px] grown about their centre to it (an overview of a long track)."""
-    cars = snapshot.cars
-    if len(cars) < 2:
+    than ``min_size`` [px] grown about their centre to it (an overview of a long track).
+    A car out of the picture costs a few float operations."""
+    if len(snapshot.cars) < 2:
         return
-    corners = np.stack([footprint_corners(car) for car in cars[1:]])
-    pixels = transform_points(world_to_pixels, corners)  # (K, 4, 2)
+    (a, b, c), (d, e, f) = world_to_pixels.tolist()
+    scale = math.sqrt(abs(a * e - b * d))  # [px per track unit]
+    height, width = image.shape[:2]
+    seen = []
+    for k, car in enumerate(snapshot.cars[1:], start=1):
+        _, x, y, radius, _ = _geometry(car)
+        u, v = a * x + b * y + c, d * x + e * y + f
+        reach = radius * scale + min_size + 2  # [px]
+        if -reach <= u <= width + reach and -reach <= v <= height + reach:
+            seen.append(k)
+    if not seen:
+        return
+    corners = np.array([_geometry(snapshot.cars[k]).corners for k in seen])  # (K, 4, 2)
+    pixels = corners @ world_to_pixels[:, :2].T + world_to_pixels[:, 2]
     if min_size > 0:
         centre = pixels.mean(axis=1, keepdims=True)
         span = np.ptp(pixels, axis=1).max(axis=1)[:, None, None]
         pixels = centre + (pixels - centre) * np.maximum(1.0, min_size / np.maximum(span, 1e-9))
-    height, width = image.shape[:2]
-    low, high = pixels.min(axis=1), pixels.max(axis=1)
-    inside = (high[:, 0] >= -1) & (low[:, 0] <= width) & (high[:, 1] >= -1) & (low[:, 1] <= height)
     line = cv2.LINE_AA if antialias else cv2.LINE_8
     fixed = np.round(np.clip(pixels, -_LIMIT, _LIMIT) * (1 << _BITS)).astype(np.int32)
-    for k in np.flatnonzero(inside).tolist():
-        cv2.fillConvexPoly(image, fixed[k], _paint(paints, snapshot.index(k + 1)), line, _BITS)
+    for k, polygon in zip(seen, fixed, strict=True):
+        cv2.fillConvexPoly(image, polygon, _paint(paints, snapshot.index(k)), line, _BITS)
 
 
 def fill_footprints_seen(
@@ -104,40 +150,53 @@ def fill_footprints_seen(
     """``fill_footprints`` for a pinhole ``camera`` (``image``: its whole picture) on the
     car placed by ``world_to_car`` (3x3: track -> car frame ahead, right): each footprint
     on the ground projected (cut at the camera's plane), or, through a distorting lens,
-    the pixels whose ground point lies in it. The caller paints the sky over it after."""
-    cars = snapshot.cars
-    if len(cars) < 2:
+    the pixels whose ground point lies in it. The caller paints the sky over it after.
+    A car behind the camera or beyond its ``max_range`` costs a few float operations."""
+    if len(snapshot.cars) < 2:
         return
-    corners = np.stack([footprint_corners(car) for car in cars[1:]])  # (K, 4, 2)
-    flat = np.concatenate([corners.reshape(-1, 2), np.ones((corners.size // 2, 1))], axis=1)
-    local = (flat @ world_to_car[:2].T).reshape(-1, 4, 2)  # ahead, right
+    seen = _in_front(camera, world_to_car, snapshot)
+    if not seen:
+        return
+    corners = np.array([_geometry(snapshot.cars[k]).corners for k in seen])  # (K, 4, 2)
+    local = corners @ world_to_car[:2, :2].T + world_to_car[:2, 2]  # ahead, right
     if camera.distorted:
-        _fill_by_ground_points(image, camera, local, snapshot, paints)
+        _fill_by_ground_points(image, camera, local, seen, snapshot, paints)
         return
+    ground = np.zeros((len(seen), 4, 3))
+    ground[:, :, :2] = local
+    in_camera = (ground - np.asarray(camera.position)) @ camera.axes.T  # x right, y down, z
     line = cv2.LINE_AA if antialias else cv2.LINE_8
     height, width = image.shape[:2]
-    for k, quad in enumerate(local):
-        polygon = _project(camera, quad)
-        if polygon is None:
+    for k, quad in zip(seen, in_camera, strict=True):
+        kept = _clip_near(quad)
+        if len(kept) < 3:
             continue
+        homogeneous = kept @ camera.intrinsics.T
+        polygon = homogeneous[:, :2] / homogeneous[:, 2:3]
         low, high = polygon.min(axis=0), polygon.max(axis=0)
         if high[0] < -1 or low[0] > width or high[1] < -1 or low[1] > height:
             continue
         fixed = np.round(np.clip(polygon, -_LIMIT, _LIMIT) * (1 << _BITS)).astype(np.int32)
-        cv2.fillConvexPoly(image, fixed, _paint(paints, snapshot.index(k + 1)), line, _BITS)
+        cv2.fillConvexPoly(image, fixed, _paint(paints, snapshot.index(k)), line, _BITS)
 
 
-def _project(camera: Pinhole, quad: np.ndarray) -> np.ndarray | None:
-    """(M, 2) pixels of a ground quad ((4, 2) ahead, right) in front of ``camera``: the part
-    behind its plane cut off (None: all of it is behind)."""
-    ground = np.concatenate([quad, np.zeros((4, 1))], axis=1) - np.asarray(camera.position)
-    seen = ground @ camera.axes.T  # x right, y down, z along the optical axis
-    kept = _clip_near(seen)
-    if len(kept) < 3:
-        return None
-    pixels = kept @ camera.intrinsics.T
-    projected: np.ndarray = pixels[:, :2] / pixels[:, 2:3]
-    return projected
+def _in_front(camera: Pinhole, world_to_car: np.ndarray, snapshot: Snapshot) -> list[int]:
+    """The cars (indices in ``snapshot``) whose footprint may show in ``camera``'s
+    picture: not wholly behind its image plane, nor beyond its ``max_range``."""
+    (a, b, c), (d, e, f) = world_to_car[:2].tolist()
+    px, py, pz = camera.position
+    ox, oy, oz = camera.axes[2].tolist()  # the optical axis in the car frame
+    reach = camera.max_range
+    seen = []
+    for k, car in enumerate(snapshot.cars[1:], start=1):
+        _, x, y, radius, _ = _geometry(car)
+        ahead, right = a * x + b * y + c - px, d * x + e * y + f - py
+        if ox * ahead + oy * right - oz * pz < -radius:
+            continue  # behind the camera
+        if reach is not None and math.hypot(ahead, right) - radius > reach:
+            continue
+        seen.append(k)
+    return seen
 
 
 def _clip_near(points: np.ndarray) -> np.ndarray:
@@ -160,15 +219,17 @@ def _fill_by_ground_points(
     image: np.ndarray,
     camera: Pinhole,
     local: np.ndarray,
+    seen: list[int],
     snapshot: Snapshot,
     paints: Sequence[Paint],
 ) -> None:
     """Through a distorting lens: every pixel below the sky rows whose ground point
-    (``Pinhole.ground_points``) lies inside a footprint ((K, 4, 2) in the car frame)."""
+    (``Pinhole.ground_points``) lies inside a footprint ((K, 4, 2) in the car frame, of
+    the cars ``seen``)."""
     rows = camera.sky_rows
     ahead, right = camera.ground_points[:, rows:]
     below = image[rows:]
-    for k, quad in enumerate(local):
+    for k, quad in zip(seen, local, strict=True):
         origin, along, across = quad[0], quad[3] - quad[0], quad[1] - quad[0]
         length, width = float(np.hypot(*along)), float(np.hypot(*across))
         if length == 0 or width == 0:
@@ -177,7 +238,7 @@ def _fill_by_ground_points(
         u = (da * np.float32(along[0]) + dr * np.float32(along[1])) / np.float32(length**2)
         v = (da * np.float32(across[0]) + dr * np.float32(across[1])) / np.float32(width**2)
         inside = (u >= 0) & (u <= 1) & (v >= 0) & (v <= 1)
-        below[inside] = _paint(paints, snapshot.index(k + 1))
+        below[inside] = _paint(paints, snapshot.index(k))
 
 
 def draw_names(
