@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -97,6 +98,17 @@ def test_the_pinhole_cameras_see_the_car_ahead_on_the_ground():
     assert infos["car_0"]["sensor_labels"]["labels"][CAR_LABEL] == "car"
     # behind the camera: nothing
     assert not (observations["car_1"]["labels"] == CAR_LABEL).any()
+
+
+def test_a_gray_pinhole_camera_paints_the_car_in_its_colours_gray():
+    gray = {**PINHOLE, "id": "gray", "format": "gray"}
+    env = parallel_env(environment="circuit", num_agents=2, sensors=[PINHOLE, gray])
+    observations, _, _ = placed(env, 2.0)
+    blue = car_colors(env.core.config)[1]
+    level = cv2.cvtColor(np.array([[blue]], np.uint8), cv2.COLOR_RGB2GRAY)[0, 0]
+    where = is_color(observations["car_0"]["pinhole"], blue)
+    assert where.sum() > 20
+    assert (observations["car_0"]["gray"][where] == level).all()
 
 
 def test_a_distorting_lens_sees_the_car_where_its_pixels_meet_the_ground():

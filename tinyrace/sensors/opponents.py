@@ -92,7 +92,7 @@ class OpponentsSensor:
         order = np.argsort(distance, kind="stable")
         near = order[distance[order] <= self.max_range][: self.config.count]
         found = np.clip(rows[near], self.space.low[0], self.space.high[0])
-        out[: len(found)] = found
+        out[: len(found)] = found + 0.0  # no -0.0
         return out
 
 
