@@ -100,6 +100,20 @@ def test_the_pinhole_cameras_see_the_car_ahead_on_the_ground():
     assert not (observations["car_1"]["labels"] == CAR_LABEL).any()
 
 
+def test_a_car_alongside_is_cut_at_the_cameras_plane_and_seen_on_its_side():
+    env = race(2)
+    env.reset(seed=0)
+    first = env.core.snapshot().cars[0]
+    x, y, heading = first.pose
+    left = (x - 1.8 * math.sin(heading), y + 1.8 * math.cos(heading), heading)  # 1.8 m left
+    ahead = ahead_of(left, 2.0)  # its front axle 2 m past car 0's, where the camera sits
+    observations, _ = env.reset(seed=0, options={"poses": [first.pose, ahead]})
+    blue = is_color(observations["car_0"]["pinhole"], car_colors(env.core.config)[1])
+    columns = np.flatnonzero(blue.any(axis=0))
+    assert blue.sum() > 10 and columns.max() < 40  # in the left half of the 80 px image
+    assert blue[:, 0].any()  # out past the left edge: the part beside and behind the camera
+
+
 def test_a_gray_pinhole_camera_paints_the_car_in_its_colours_gray():
     gray = {**PINHOLE, "id": "gray", "format": "gray"}
     env = parallel_env(environment="circuit", num_agents=2, sensors=[PINHOLE, gray])

@@ -32,6 +32,7 @@ from tinyrace.world.snapshot import Snapshot
 CAR_LABEL = 254  # the ``classes`` label of another car's footprint
 Paint = tuple[int, ...]  # a pixel value in an image's own format: RGB, gray, or a label
 _BITS = 4  # cv2 fixed-point vertices: 1/16 px
+_SCALE = 1 << _BITS
 _LIMIT = float(1 << 20)  # [px] vertices are kept within this (cv2's int32 fixed point)
 _NEAR = 1e-3  # [track units] footprint parts nearer to a camera's plane than this are cut
 
@@ -112,31 +113,32 @@ def fill_footprints(
     """Every car of ``snapshot`` but the first, its footprint filled with its paint, through
     ``world_to_pixels`` (2x3: track -> pixel centres of ``image``); footprints smaller
     than ``min_size`` [px] grown about their centre to it (an overview of a long track).
-    A car out of the picture costs a few float operations."""
+    Plain float arithmetic up to one cv2 fill per car in the picture (a numpy call costs
+    more than the few corners it would carry)."""
     if len(snapshot.cars) < 2:
         return
     (a, b, c), (d, e, f) = world_to_pixels.tolist()
     scale = math.sqrt(abs(a * e - b * d))  # [px per track unit]
     height, width = image.shape[:2]
-    seen = []
+    line = cv2.LINE_AA if antialias else cv2.LINE_8
     for k, car in enumerate(snapshot.cars[1:], start=1):
-        _, x, y, radius, _ = _geometry(car)
+        _, x, y, radius, corners = _geometry(car)
         u, v = a * x + b * y + c, d * x + e * y + f
         reach = radius * scale + min_size + 2  # [px]
-        if -reach <= u <= width + reach and -reach <= v <= height + reach:
-            seen.append(k)
-    if not seen:
-        return
-    corners = np.array([_geometry(snapshot.cars[k]).corners for k in seen])  # (K, 4, 2)
-    pixels = corners @ world_to_pixels[:, :2].T + world_to_pixels[:, 2]
-    if min_size > 0:
-        centre = pixels.mean(axis=1, keepdims=True)
-        span = np.ptp(pixels, axis=1).max(axis=1)[:, None, None]
-        pixels = centre + (pixels - centre) * np.maximum(1.0, min_size / np.maximum(span, 1e-9))
-    line = cv2.LINE_AA if antialias else cv2.LINE_8
-    fixed = np.round(np.clip(pixels, -_LIMIT, _LIMIT) * (1 << _BITS)).astype(np.int32)
-    for k, polygon in zip(seen, fixed, strict=True):
-        cv2.fillConvexPoly(image, polygon, _paint(paints, snapshot.index(k)), line, _BITS)
+        if not (-reach <= u <= width + reach and -reach <= v <= height + reach):
+            continue
+        grow = max(1.0, min_size / (2 * radius * scale)) if min_size > 0 else 1.0
+        points = [
+            (u + (a * px + b * py + c - u) * grow, v + (d * px + e * py + f - v) * grow)
+            for px, py in corners
+        ]
+        _fill(image, points, _paint(paints, snapshot.index(k)), line)
+
+
+def _fill(image: np.ndarray, points: list[tuple[float, float]], paint: Paint, line: int) -> None:
+    """One convex polygon (pixel centres, plain floats) filled at 1/16 px."""
+    fixed = np.array([(round(x * _SCALE), round(y * _SCALE)) for x, y in points], np.int32)
+    cv2.fillConvexPoly(image, fixed, paint, line, _BITS)
 
 
 def fill_footprints_seen(
@@ -157,27 +159,39 @@ def fill_footprints_seen(
     seen = _in_front(camera, world_to_car, snapshot)
     if not seen:
         return
-    corners = np.array([_geometry(snapshot.cars[k]).corners for k in seen])  # (K, 4, 2)
-    local = corners @ world_to_car[:2, :2].T + world_to_car[:2, 2]  # ahead, right
+    to_car = world_to_car[:2].tolist()
+    local = [[_apply(to_car, p) for p in _geometry(snapshot.cars[k]).corners] for k in seen]
     if camera.distorted:
-        _fill_by_ground_points(image, camera, local, seen, snapshot, paints)
+        _fill_by_ground_points(image, camera, np.array(local), seen, snapshot, paints)
         return
-    ground = np.zeros((len(seen), 4, 3))
-    ground[:, :, :2] = local
-    in_camera = (ground - np.asarray(camera.position)) @ camera.axes.T  # x right, y down, z
+    px, py, pz = camera.position
+    axes = camera.axes.tolist()  # rows: x right, y down, z along the optical axis
+    fx, _, cx = camera.intrinsics[0].tolist()
+    _, fy, cy = camera.intrinsics[1].tolist()
     line = cv2.LINE_AA if antialias else cv2.LINE_8
     height, width = image.shape[:2]
-    for k, quad in zip(seen, in_camera, strict=True):
-        kept = _clip_near(quad)
+    for k, quad in zip(seen, local, strict=True):
+        in_camera = [
+            tuple(r[0] * (ahead - px) + r[1] * (right - py) - r[2] * pz for r in axes)
+            for ahead, right in quad
+        ]
+        kept = _clip_near(in_camera)
         if len(kept) < 3:
             continue
-        homogeneous = kept @ camera.intrinsics.T
-        polygon = homogeneous[:, :2] / homogeneous[:, 2:3]
-        low, high = polygon.min(axis=0), polygon.max(axis=0)
-        if high[0] < -1 or low[0] > width or high[1] < -1 or low[1] > height:
+        polygon = [
+            (min(max(fx * x / z + cx, -_LIMIT), _LIMIT), min(max(fy * y / z + cy, -_LIMIT), _LIMIT))
+            for x, y, z in kept
+        ]
+        us, vs = [p[0] for p in polygon], [p[1] for p in polygon]
+        if max(us) < -1 or min(us) > width or max(vs) < -1 or min(vs) > height:
             continue
-        fixed = np.round(np.clip(polygon, -_LIMIT, _LIMIT) * (1 << _BITS)).astype(np.int32)
-        cv2.fillConvexPoly(image, fixed, _paint(paints, snapshot.index(k)), line, _BITS)
+        _fill(image, polygon, _paint(paints, snapshot.index(k)), line)
+
+
+def _apply(affine: list[list[float]], point: tuple[float, float]) -> tuple[float, float]:
+    (a, b, c), (d, e, f) = affine
+    x, y = point
+    return a * x + b * y + c, d * x + e * y + f
 
 
 def _in_front(camera: Pinhole, world_to_car: np.ndarray, snapshot: Snapshot) -> list[int]:
@@ -199,20 +213,20 @@ def _in_front(camera: Pinhole, world_to_car: np.ndarray, snapshot: Snapshot) -> 
     return seen
 
 
-def _clip_near(points: np.ndarray) -> np.ndarray:
-    """The convex polygon ``points`` ((N, 3) camera frame) where z >= _NEAR (one
+def _clip_near(points: list[tuple[float, ...]]) -> list[tuple[float, ...]]:
+    """The convex polygon ``points`` ((x, y, z) in the camera frame) where z >= _NEAR (one
     Sutherland-Hodgman pass)."""
-    if (points[:, 2] >= _NEAR).all():
+    if all(p[2] >= _NEAR for p in points):
         return points
-    kept = []
-    for a, b in zip(points, np.roll(points, -1, axis=0), strict=True):
+    kept: list[tuple[float, ...]] = []
+    for a, b in zip(points, points[1:] + points[:1], strict=True):
         a_in, b_in = a[2] >= _NEAR, b[2] >= _NEAR
         if a_in:
             kept.append(a)
         if a_in != b_in:
             t = (_NEAR - a[2]) / (b[2] - a[2])
-            kept.append(a + t * (b - a))
-    return np.array(kept).reshape(-1, 3)
+            kept.append(tuple(pa + t * (pb - pa) for pa, pb in zip(a, b, strict=True)))
+    return kept
 
 
 def _fill_by_ground_points(
