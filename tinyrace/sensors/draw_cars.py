@@ -113,26 +113,32 @@ def fill_footprints(
     """Every car of ``snapshot`` but the first, its footprint filled with its paint, through
     ``world_to_pixels`` (2x3: track -> pixel centres of ``image``); footprints smaller
     than ``min_size`` [px] grown about their centre to it (an overview of a long track).
-    Plain float arithmetic up to one cv2 fill per car in the picture (a numpy call costs
-    more than the few corners it would carry)."""
+    Cars out of the picture cost a few float operations; those in it, a few numpy calls
+    together and one cv2 fill each."""
     if len(snapshot.cars) < 2:
         return
     (a, b, c), (d, e, f) = world_to_pixels.tolist()
     scale = math.sqrt(abs(a * e - b * d))  # [px per track unit]
     height, width = image.shape[:2]
-    line = cv2.LINE_AA if antialias else cv2.LINE_8
+    seen, grown = [], []
     for k, car in enumerate(snapshot.cars[1:], start=1):
-        _, x, y, radius, corners = _geometry(car)
+        _, x, y, radius, _ = _geometry(car)
         u, v = a * x + b * y + c, d * x + e * y + f
         reach = radius * scale + min_size + 2  # [px]
-        if not (-reach <= u <= width + reach and -reach <= v <= height + reach):
-            continue
-        grow = max(1.0, min_size / (2 * radius * scale)) if min_size > 0 else 1.0
-        points = [
-            (u + (a * px + b * py + c - u) * grow, v + (d * px + e * py + f - v) * grow)
-            for px, py in corners
-        ]
-        _fill(image, points, _paint(paints, snapshot.index(k)), line)
+        if -reach <= u <= width + reach and -reach <= v <= height + reach:
+            seen.append(k)
+            grown.append(max(1.0, min_size / (2 * radius * scale)) if min_size > 0 else 1.0)
+    if not seen:
+        return
+    corners = np.array([_geometry(snapshot.cars[k]).corners for k in seen])  # (M, 4, 2)
+    pixels = corners @ world_to_pixels[:, :2].T + world_to_pixels[:, 2]
+    if min_size > 0:
+        middle = pixels.mean(axis=1, keepdims=True)
+        pixels = middle + (pixels - middle) * np.array(grown)[:, None, None]
+    fixed = np.rint(pixels * _SCALE).astype(np.int32)
+    line = cv2.LINE_AA if antialias else cv2.LINE_8
+    for k, polygon in zip(seen, fixed, strict=True):
+        cv2.fillConvexPoly(image, polygon, _paint(paints, snapshot.index(k)), line, _BITS)
 
 
 def _fill(image: np.ndarray, points: list[tuple[float, float]], paint: Paint, line: int) -> None:
@@ -159,39 +165,52 @@ def fill_footprints_seen(
     seen = _in_front(camera, world_to_car, snapshot)
     if not seen:
         return
-    to_car = world_to_car[:2].tolist()
-    local = [[_apply(to_car, p) for p in _geometry(snapshot.cars[k]).corners] for k in seen]
+    to_car = world_to_car[:2]
+    corners = np.array([_geometry(snapshot.cars[k]).corners for k in seen])  # (M, 4, 2)
     if camera.distorted:
-        _fill_by_ground_points(image, camera, np.array(local), seen, snapshot, paints)
+        local = corners @ to_car[:, :2].T + to_car[:, 2]  # ahead, right
+        _fill_by_ground_points(image, camera, local, seen, snapshot, paints)
         return
-    px, py, pz = camera.position
-    axes = camera.axes.tolist()  # rows: x right, y down, z along the optical axis
-    fx, _, cx = camera.intrinsics[0].tolist()
-    _, fy, cy = camera.intrinsics[1].tolist()
-    line = cv2.LINE_AA if antialias else cv2.LINE_8
+    # track -> camera frame (x right, y down, z along the optical axis): one affine
+    axes = camera.axes[:, :2]
+    shift = axes @ (to_car[:, 2] - camera.position[:2]) - camera.axes[:, 2] * camera.position[2]
+    in_camera = corners @ (axes @ to_car[:, :2]).T + shift  # (M, 4, 3)
+    in_front = (in_camera[..., 2] >= _NEAR).all(axis=1)
+    homogeneous = in_camera @ camera.intrinsics.T
+    depth = np.where(in_front[:, None], homogeneous[..., 2], 1.0)  # cut quads: _fill_cut's
+    pixels = np.clip(homogeneous[..., :2] / depth[..., None], -_LIMIT, _LIMIT)
     height, width = image.shape[:2]
-    for k, quad in zip(seen, local, strict=True):
-        in_camera = [
-            tuple(r[0] * (ahead - px) + r[1] * (right - py) - r[2] * pz for r in axes)
-            for ahead, right in quad
-        ]
-        kept = _clip_near(in_camera)
-        if len(kept) < 3:
-            continue
-        polygon = [
-            (min(max(fx * x / z + cx, -_LIMIT), _LIMIT), min(max(fy * y / z + cy, -_LIMIT), _LIMIT))
-            for x, y, z in kept
-        ]
-        us, vs = [p[0] for p in polygon], [p[1] for p in polygon]
-        if max(us) < -1 or min(us) > width or max(vs) < -1 or min(vs) > height:
-            continue
-        _fill(image, polygon, _paint(paints, snapshot.index(k)), line)
+    low, high = pixels.min(axis=1), pixels.max(axis=1)
+    inside = (high[:, 0] >= -1) & (low[:, 0] <= width) & (high[:, 1] >= -1) & (low[:, 1] <= height)
+    fixed = np.rint(pixels * _SCALE).astype(np.int32)
+    line = cv2.LINE_AA if antialias else cv2.LINE_8
+    for i, k in enumerate(seen):
+        paint = _paint(paints, snapshot.index(k))
+        if in_front[i]:
+            if inside[i]:
+                cv2.fillConvexPoly(image, fixed[i], paint, line, _BITS)
+        else:  # cut at the camera's plane
+            _fill_cut(image, camera, in_camera[i].tolist(), paint, line)
 
 
-def _apply(affine: list[list[float]], point: tuple[float, float]) -> tuple[float, float]:
-    (a, b, c), (d, e, f) = affine
-    x, y = point
-    return a * x + b * y + c, d * x + e * y + f
+def _fill_cut(
+    image: np.ndarray, camera: Pinhole, quad: list[list[float]], paint: Paint, line: int
+) -> None:
+    """A quad ((x, y, z) corners in the camera frame) partly behind ``camera``: its part in
+    front projected and filled."""
+    kept = _clip_near([tuple(corner) for corner in quad])
+    if len(kept) < 3:
+        return
+    (fx, _, cx), (_, fy, cy) = camera.intrinsics[:2].tolist()
+    polygon = [
+        (min(max(fx * x / z + cx, -_LIMIT), _LIMIT), min(max(fy * y / z + cy, -_LIMIT), _LIMIT))
+        for x, y, z in kept
+    ]
+    height, width = image.shape[:2]
+    us, vs = [p[0] for p in polygon], [p[1] for p in polygon]
+    if max(us) < -1 or min(us) > width or max(vs) < -1 or min(vs) > height:
+        return
+    _fill(image, polygon, paint, line)
 
 
 def _in_front(camera: Pinhole, world_to_car: np.ndarray, snapshot: Snapshot) -> list[int]:
