@@ -54,7 +54,8 @@ class LeanStep:
         core: Any = env.unwrapped
         episode = core.episode
         world = episode.world
-        self.car, self.pictures = world.cars[0], core.pictures
+        self.car, self.view = world.cars[0], core.sensors[0]  # the chase_view sensor
+        self.layout, self.rng = core.layout, core.np_random
         self.progress = episode.rules[0][0]  # CarRacing's tile_touches rule of the car
         self.world, self.space = world, world.space._space
         contacts = world.contacts[0]
@@ -91,10 +92,10 @@ class LeanStep:
         self.t += self.dt
         self.steps += 1
         self.score += reward - carried
-        snapshot = Snapshot(self.t, self.steps, (state,))
+        snapshot = Snapshot(self.t, self.steps, (state,), score=self.score)
         if parts is not None:
             started = _add(parts, "tiles, reward, the car's state", started, clock())
-        frame = self.pictures.chase_view(OBSERVATION).render(snapshot, self.score)
+        frame = self.view.observe(snapshot, self.layout, self.rng)
         if parts is not None:
             started = _add(parts, "the chase view's render", started, clock())
         info = {"pose": state.pose, "speed": state.speed, "tiles_visited": progress.visited_count}

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
-from tinyrace.render.chase_view import chase_affine, chase_matrix
+from tinyrace.sensors.chase_view import chase_affine, chase_matrix
 from tinyrace.sensors.texture import (
     GroundTexture,
     compose,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import typing
 from pathlib import Path
 
 import gymnasium as gym
@@ -10,6 +12,7 @@ import yaml
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.cars.registry import CAR_MODELS
+from tinyrace.config import TrackConfig
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.tracks.registry import TRACK_SOURCES
@@ -41,11 +44,15 @@ def test_discrete_actions_need_a_model_that_takes_them():
     assert [p.path for p in caught.value.problems] == ["car.actions"]
 
 
+CONFIGS = {dataclasses.fields(c)[0].default: c for c in typing.get_args(TrackConfig)}
+
+
 @pytest.mark.parametrize("kind", sorted(TRACK_SOURCES))
 def test_every_track_kind_has_exactly_one_default_model(kind):
-    defaults = [m.name for m in CAR_MODELS.values() if kind in m.default_for]
+    unit = CONFIGS[kind].unit  # a car model drives in the track's unit
+    defaults = [m.name for m in CAR_MODELS.values() if unit in m.default_for]
     assert len(defaults) == 1
-    assert kind in CAR_MODELS[defaults[0]].track_kinds
+    assert unit in CAR_MODELS[defaults[0]].track_units
 
 
 @pytest.mark.parametrize(

@@ -32,6 +32,7 @@ from hypothesis import strategies as st
 from hypothesis.control import currently_in_test_context
 from hypothesis_budget import examples
 
+from tinyrace.config import load_env_config
 from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.schema import EnvConfig
 from tinyrace.env import TinyRaceEnv
@@ -700,3 +701,15 @@ def test_experiment_with_an_overlong_environment_name_is_a_config_error(tmp_path
 def test_experiment_with_a_nul_in_an_image_name_is_a_config_error(tmp_path):
     with pytest.raises(ConfigError):
         experiment_from_dict({"env": {"track": {"image": "a\x00b"}}}, "<e>", tmp_path)
+
+
+@pytest.mark.parametrize("key", ["[", "]", ".", "[]."])
+def test_a_key_of_brackets_alone_is_named_in_the_dict_that_holds_it(key):
+    """Found by the mutation test above: a top-level key with no name in it was blamed on
+    the keyword arguments, which gave none."""
+    with pytest.raises(ConfigError) as caught:
+        load_env_config({key: None})
+    assert [(p.source, p.path) for p in caught.value.problems] == [("<dict>", key)]
+    with pytest.raises(ConfigError) as caught:
+        load_env_config(None, overrides={key: None})
+    assert [(p.source, p.path) for p in caught.value.problems] == [("<kwargs>", key)]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tinyrace.cars.state import CarState, WheelState
-from tinyrace.render.dashboard import Dashboard
+from tinyrace.sensors.dashboard import Dashboard
 
 
 def _car(rng: np.random.Generator) -> CarState:

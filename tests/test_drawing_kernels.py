@@ -14,10 +14,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
-from tinyrace.render import drawing
-from tinyrace.render.dashboard import BAR_STEPS, Dashboard
-from tinyrace.render.kernels import drawing as drawing_numba
-from tinyrace.sensors import texture
+from tinyrace.sensors import drawing, texture
+from tinyrace.sensors.dashboard import BAR_STEPS, Dashboard
+from tinyrace.sensors.kernels import drawing as drawing_numba
 
 SIZES = [(96, 96, 4), (600, 400, 1), (1000, 800, 1), (150, 120, 2)]  # (w, h, supersample)
 
@@ -112,8 +111,9 @@ def test_the_variable_chooses_the_path_of_new_views(monkeypatch, path):
     monkeypatch.setenv(drawing.DRAWING_VARIABLE, path)
     env = gym.make("tinyrace/CarRacing-v0")
     env.reset(seed=0)
-    view = env.unwrapped.pictures.chase_view((96, 96))
-    assert (view.dashboard.drawing, view.sprite.drawing) == (path, path)
+    sensor = env.unwrapped.sensors[0]  # the chase_view sensor: the observation
+    for view in (sensor.view, env.unwrapped.pictures.chase_view((96, 96))):
+        assert (view.dashboard.drawing, view.sprite.drawing) == (path, path)
     env.close()
 
 
@@ -161,6 +161,6 @@ def test_a_texture_warps_with_the_composition_the_variable_chooses(monkeypatch):
         env = gym.make("tinyrace/CarRacing-v0")
         env.reset(seed=0)
         env.step(env.action_space.sample())
-        view = env.unwrapped.pictures.chase_view((96, 96))
-        assert view.texture.drawing == path
+        sensor = env.unwrapped.sensors[0]  # the chase_view sensor: the observation
+        assert sensor.view.texture.drawing == path
         env.close()

@@ -138,12 +138,12 @@ def test_the_module_prefixed_id_registers_tinyrace_in_a_fresh_process():
 def test_the_training_page_uses_the_train_extra_and_ci_runs_its_test():
     page = (ROOT / "docs" / "training.md").read_text()
     assert 'pip install "tinyrace[train]"' in page and "tinyrace train --timesteps" in page
-    assert '"tinyrace:tinyrace/CarRacing-v0"' in page and "PPOConfig" in page
+    assert "from tinyrace.rllib import make_env" in page and "PPOConfig" in page
     sb3 = next(b for b in page.split("```python")[1:] if "stable_baselines3" in b)
     assert '\nif __name__ == "__main__":\n    envs = ' in sb3  # SubprocVecEnv under the guard
     assert "](docs/training.md)" in (ROOT / "README.md").read_text()
     ci = (ROOT / ".ci" / "run").read_text()
     main_tests = ci.index('pip install -e ".[test]" && python -m pytest -q')
     train_stage = ci.index("torch==")
-    assert main_tests < train_stage < ci.index('".[train]"') < ci.index("tests_train")
+    assert main_tests < train_stage < ci.index('".[train,rllib]"') < ci.index("tests_train")
     assert ci.index("tinyrace train --timesteps") > train_stage  # the command, as installed

@@ -87,7 +87,7 @@ def test_a_map_saver_pgm_with_its_creator_comment_loads(tmp_path):
     (folder / "map.yaml").write_text(yaml.safe_dump({**info, "image": "map.pgm"}))
     from_pgm = TinyRaceEnv(environment=str(folder))
     from_png = TinyRaceEnv(environment=str(copy_track("f1tenth_loop", tmp_path / "png")))
-    occupancy = [env.track_source.tracks[0].detail.occupancy for env in (from_pgm, from_png)]
+    occupancy = [env.track_source.tracks[0].occupancy for env in (from_pgm, from_png)]
     assert (occupancy[0].free == occupancy[1].free).all()
     from_pgm.reset(seed=0)
     from_pgm.close(), from_png.close()

@@ -79,7 +79,7 @@ def test_formula_student_folder_loads_its_track_yaml(monkeypatch):
     bgr = cv2.imread(str(EXAMPLES / "formula_student" / raw["tracks"][0]["image"]))
     expected = np.where(bgr > 100, 255, 0).astype(np.uint8)[..., ::-1]
     expected[np.all(expected == 255, axis=-1)] = 0  # the white trajectory
-    np.testing.assert_array_equal(env.unwrapped.track.image[..., :3], expected)
+    np.testing.assert_array_equal(env.unwrapped.track.picture[..., :3], expected)
 
 
 # tinycarlo 1.1's defaults, by key path (colours as written in YAML: BGR)
@@ -177,7 +177,7 @@ def test_folder_without_tracks_is_tinycarlos_black_plane(tmp_path):
     assert env.unwrapped.config.kind == "image"
     observation, info = env.reset(seed=0)
     assert info["pose"] == (500, 500, 0)
-    assert env.unwrapped.track.size == (1000, 1000)
+    assert env.unwrapped.track.picture_size == (1000, 1000)
     assert not observation["cam"].any()
 
 

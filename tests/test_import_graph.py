@@ -34,6 +34,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "validate",
         "play",
         "train",
+        "rllib",
         "cli",
         "__main__",
         "__init__",

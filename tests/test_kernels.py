@@ -11,15 +11,20 @@ import pytest
 import tinyrace
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.dynamic import physics_kernel
-from tinyrace.render import drawing
-from tinyrace.sensors import cones, lidar, raycast_numpy, texture
+from tinyrace.sensors import cones, drawing, lidar, other_cars, raycast_numpy, texture
 from tinyrace.tracks import procedural, procedural_source
 
 KERNELS = {  # name: (compiled module, chooser, plain path's name, plain path)
     "lidar": ("tinyrace.sensors.kernels.raycast", lidar.kernel, "numpy", raycast_numpy.cast),
+    "other_cars": (
+        "tinyrace.sensors.kernels.other_cars",
+        lidar.cars_kernel,
+        "numpy",
+        other_cars.add_cars,
+    ),
     "tyres": ("tinyrace.cars.kernels.dynamic", physics_kernel, "python", dynamic_python.car_forces),
     "cones": ("tinyrace.sensors.kernels.cones", cones.kernel, "numpy", cones.NUMPY_PATH),
-    "drawing": ("tinyrace.render.kernels.drawing", drawing.kernel, "numpy", None),
+    "drawing": ("tinyrace.sensors.kernels.drawing", drawing.kernel, "numpy", None),
     "trace": (
         "tinyrace.tracks.kernels.procedural",
         procedural_source.trace_kernel,

@@ -38,8 +38,11 @@ def edge_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.hypot(*(a + t * (b - a) - point)))
 
 
-def exact(origin: np.ndarray, beam: np.ndarray, corners: np.ndarray, far: float) -> float:
-    """The nearest crossing of the ray with the quad's four edges (0 inside), else ``far``."""
+def exact(
+    origin: np.ndarray, beam: np.ndarray, corners: np.ndarray, far: float, grazing: float = 1e-12
+) -> float:
+    """The nearest crossing of the ray with the quad's four edges (0 inside), else ``far``;
+    a ray within ``grazing`` of an edge's end counts as crossing it (a negative value: not)."""
     best = far
     for k in range(4):
         a, b = corners[k], corners[(k + 1) % 4]
@@ -50,7 +53,7 @@ def exact(origin: np.ndarray, beam: np.ndarray, corners: np.ndarray, far: float)
         diff = a - origin
         t = (diff[0] * edge[1] - diff[1] * edge[0]) / denominator
         u = (diff[0] * beam[1] - diff[1] * beam[0]) / denominator
-        if t >= 0 and -1e-12 <= u <= 1 + 1e-12:
+        if t >= 0 and -grazing <= u <= 1 + grazing:
             best = min(best, t)
     return best
 
@@ -71,5 +74,6 @@ def test_ranges_to_a_car_equal_the_exact_crossing(x, y, heading, length, width):
     beams = np.stack([np.cos(angles), np.sin(angles)], axis=1)
     got = ranges_to_cars((0.0, 0.0), beams, [car], 30.0)
     for beam, value in zip(beams, got, strict=True):
-        want = 0.0 if inside else exact(origin, beam, corners, 30.0)
-        assert abs(value - want) <= 1e-4 * max(1.0, want), (beam, value, want)
+        # a beam that grazes a corner (within rounding) may hit or miss: either is right
+        wants = [0.0] if inside else [exact(origin, beam, corners, 30.0, g) for g in (1e-9, -1e-9)]
+        assert any(abs(value - want) <= 1e-4 * max(1.0, want) for want in wants), (beam, value)

@@ -12,7 +12,7 @@ import pytest
 from tinyrace.cars.state import CarState, footprint_corners
 from tinyrace.config import car_colors
 from tinyrace.race import parallel_env
-from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, draw_names
+from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, draw_names, draw_race
 from tinyrace.sensors.pinhole import world_to_car
 from tinyrace.sensors.texture import transform_points
 from tinyrace.world.snapshot import Snapshot
@@ -172,9 +172,12 @@ def test_carracing_view_shows_the_car_ahead_in_its_colour():
     assert is_color(env.render(), blue).sum() > 200  # and in the 600x400 video frame
 
 
-@pytest.mark.parametrize("environment", ["carolo_cup", "circuit", "f1tenth_loop"])
-def test_the_overview_draws_every_car_in_its_colour(environment):
-    env = parallel_env(environment=environment, num_agents=4, render_mode="rgb_array")
+# carolo_cup's grid holds 3 cars behind its spawn (a 4th would start off the picture)
+@pytest.mark.parametrize(
+    ("environment", "cars"), [("carolo_cup", 3), ("circuit", 4), ("f1tenth_loop", 4)]
+)
+def test_the_overview_draws_every_car_in_its_colour(environment, cars):
+    env = parallel_env(environment=environment, num_agents=cars, render_mode="rgb_array")
     env.reset(seed=0)
     frame = env.render()
     colors = car_colors(env.core.config)
@@ -223,3 +226,22 @@ def test_seen_from_keeps_each_cars_index_in_the_world():
     again = seen.seen_from(3)  # the fourth of ``seen``: the world's car 3
     assert [again.index(k) for k in range(4)] == [3, 2, 0, 1]
     assert [snapshot.index(k) for k in range(4)] == [0, 1, 2, 3]
+
+
+def test_a_car_gone_from_the_track_is_neither_drawn_nor_named():
+    def parked(x: float) -> CarState:
+        return CarState("test", (x, 10.0, 0.0), (0.0, 0.0), 0.0, 0.0, 0.0, (x + 4.0, 10.0),
+                        (x, 10.0), (4.0, 2.0))  # fmt: skip
+
+    looks = CarLooks(((204, 0, 0), (0, 114, 178)), ("car_0", "rival"))
+    to_pixels = np.array([[5.0, 0, 0], [0, 5.0, 0]])
+    racing = Snapshot(0.0, 0, (parked(2.0), parked(30.0)))
+    drawn = np.zeros((200, 300, 3), np.uint8)
+    draw_race(drawn, to_pixels, racing, looks)
+    assert is_color(drawn, looks.colors[1]).sum() > 100  # its footprint, 20 x 10 px
+    finished = Snapshot(0.0, 0, racing.cars, gone=frozenset({1}))
+    frame = np.zeros((200, 300, 3), np.uint8)
+    draw_race(frame, to_pixels, finished, looks)
+    blue = frame[..., 2].astype(int) > frame[..., 0].astype(int) + 40
+    assert not blue.any()  # no footprint, no name in its colour
+    assert (frame[..., 0] > 60).any()  # car 0's name is still written

@@ -20,7 +20,7 @@ from tinyrace.env import TinyRaceEnv
 from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 from tinyrace.experiment import experiment_from_dict, load_experiment, run_experiment
 from tinyrace.experiment.record import read_trace
-from tinyrace.experiment.report import CTE_LEFT_OUT, REPORT_FILE, _extent
+from tinyrace.experiment.report import CTE_LEFT_OUT, REPORT_FILE, picture_extent
 from tinyrace.render.track_picture import PictureFrame, procedural_picture
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -188,7 +188,7 @@ def test_tinyrace_report_rebuilds_it(tmp_path: Path):
 def test_the_picture_extent_puts_each_pixel_at_its_track_point():
     frame = PictureFrame(sx=3.2, ox=410.0, sy=-3.2, oy=390.0)  # procedural: y up
     shape = (780, 820, 3)
-    left, right, bottom, top = _extent((frame.sx, frame.ox, frame.sy, frame.oy), shape)
+    left, right, bottom, top = picture_extent((frame.sx, frame.ox, frame.sy, frame.oy), shape)
     points = np.array([[-50.0, 20.0], [100.0, -90.0], [0.0, 0.0]])
     px = frame.pixels(points)
     # imshow puts pixel column c's centre at left + (c + 0.5) * (right - left) / width

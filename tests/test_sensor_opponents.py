@@ -148,3 +148,16 @@ def test_a_learner_sees_its_opponents():
 def test_a_bad_count_is_a_config_error_naming_the_key():
     with pytest.raises(ConfigError, match=r"sensors\[0\]\.count"):
         gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "o", "type": "opponents", "count": 0}])
+
+
+def test_a_car_gone_from_the_track_is_not_reported():
+    config = OpponentsConfig(id="opponents", count=3, max_range=50.0)
+    sensor = OpponentsSensor(config, 50.0, top_speed=40.0, y_down=False)
+    cars = (car(0, 0, 0, 0, 0), car(5, 0, 0, 0, 0), car(10, 0, 0, 0, 0))
+    rng = np.random.default_rng(0)
+    both = sensor.observe(Snapshot(0.0, 0, cars), None, rng)  # type: ignore[arg-type]
+    assert both[:, 0].tolist() == [1.0, 1.0, 0.0]
+    # the nearer car finished its race: only the farther one is left, first
+    seen = sensor.observe(Snapshot(0.0, 0, cars, gone=frozenset({1})), None, rng)  # type: ignore[arg-type]
+    assert seen[:, 0].tolist() == [1.0, 0.0, 0.0]
+    assert seen[0].tolist() == both[1].tolist()

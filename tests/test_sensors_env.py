@@ -4,8 +4,10 @@ and the vector envs."""
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import pickle
+import typing
 
 import gymnasium as gym
 import numpy as np
@@ -13,6 +15,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tinyrace.config import TrackConfig
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.sensors.registry import SENSOR_TYPES
@@ -33,6 +36,8 @@ ENTRIES = {  # small and noisy: noise must come from the env's seed
     "lookahead": {"points": 5},
     "cones": {"max_cones": 8, "position_std": 0.5, "miss_probability": 0.2, "false_positives": 1},
     "opponents": {"count": 2},
+    "chase_view": {"resolution": [64, 80]},
+    "top_view": {"resolution": [48, 40], "span": 10.0},
 }
 CLASSES = {
     "id": "labels",
@@ -42,9 +47,12 @@ CLASSES = {
 }
 
 
+HOLDS = {dataclasses.fields(c)[0].default: c.holds for c in typing.get_args(TrackConfig)}
+
+
 def supported(sensor: str, kind: str) -> bool:
-    kinds = SENSOR_TYPES[sensor].track_kinds
-    return kinds is None or kind in kinds
+    needs = SENSOR_TYPES[sensor].needs  # what the track must hold, e.g. cones
+    return needs is None or needs in HOLDS[kind]
 
 
 def entries(sensor: str) -> list[dict]:

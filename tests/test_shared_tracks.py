@@ -53,7 +53,7 @@ def shared_parts(env: gym.Env) -> list[object]:
     """What an env on a fixed track shares with the others: track source, texture, lidar."""
     inner = env.unwrapped
     lidar = next(s for s in inner.sensors if s.id == "lidar")
-    return [inner.track_source, inner.pictures.ground_texture(), lidar.field, lidar.fan]
+    return [inner.track_source, inner.ground.texture(inner.layout), lidar.field, lidar.fan]
 
 
 def test_envs_of_one_track_share_its_data_read_only():
@@ -76,10 +76,10 @@ def test_a_picture_nobody_reads_is_not_built():
     env.reset(seed=0)
     for _ in range(3):
         env.step(env.action_space.sample())
-    assert env.unwrapped.pictures.textures == [None]
+    assert env.unwrapped.ground.textures == [None]
     camera = make("circuit")
     camera.reset(seed=0)
-    assert camera.unwrapped.pictures.textures[0] is not None  # its camera read it
+    assert camera.unwrapped.ground.textures[0] is not None  # its camera read it
 
 
 def run(env: gym.Env, seed: int, actions: list[np.ndarray]) -> list[object]:
@@ -139,7 +139,8 @@ def test_per_episode_data_stays_with_its_env():
     a.reset(seed=0)
     b.reset(seed=0)
     assert a.unwrapped.track_source is not b.unwrapped.track_source
-    assert a.unwrapped.pictures.ground_texture() is not b.unwrapped.pictures.ground_texture()
+    ground_a, ground_b = a.unwrapped.ground, b.unwrapped.ground
+    assert ground_a.texture(a.unwrapped.layout) is not ground_b.texture(b.unwrapped.layout)
     assert a.unwrapped.layout is not b.unwrapped.layout
 
 

@@ -88,7 +88,7 @@ def facts(config: EnvConfig) -> CarFacts:
 
 HOPPER = CarModel(
     name="hopper",
-    track_kinds=frozenset({"centerline"}),
+    track_units=frozenset({"m"}),
     default_for=frozenset(),
     action_kinds=frozenset({"continuous"}),
     build=build,
@@ -136,5 +136,6 @@ def test_a_toy_model_drives_through_make_a_sensor_and_the_centreline_driver(hopp
 
 def test_a_model_that_does_not_drive_there_is_refused(hopper):
     with pytest.raises(ConfigError, match="hopper"):
-        gym.make("tinyrace/TinyRace-v0", environment=str(TRACKS_DIR / "autocross"),
+        # it drives in metres, the image track is in pixels
+        gym.make("tinyrace/TinyRace-v0", environment=str(TRACKS_DIR / "formula_student"),
                  car={"model": "hopper"})  # fmt: skip

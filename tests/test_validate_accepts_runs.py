@@ -152,3 +152,14 @@ def test_validate_refuses_a_view_that_is_no_camera(tmp_path: Path):
     problems, _ = validate_path(experiment)
     assert folder == tmp_path and len(problems) == 1
     assert "output.view" in problems[0] and "front" in problems[0]
+
+
+def test_a_sensors_view_needs_a_sensors_list_not_only_cameras(tmp_path: Path):
+    _folder(tmp_path)  # a track with cameras: only, which the loader lists as sensors
+    experiment = tmp_path / "exp.yaml"
+    experiment.write_text(
+        yaml.safe_dump({"env": {"environment": "."}, "output": {"view": "sensors"}, "episodes": 1})
+    )
+    problems, _ = validate_path(experiment)
+    assert len(problems) == 1 and "output.view" in problems[0]
+    assert "one of: default, front" in problems[0]  # each camera once, no sensors view

@@ -135,6 +135,32 @@ def test_four_cars_driven_into_each_other_collide_and_each_reports_whom_it_touch
     assert len(world.contacts) == 4 and world.contacts[2].cars == set()
 
 
+def test_of_two_cars_nose_to_tail_the_one_pulling_away_drives_on():
+    """A quick car 1 catches a slow car 0 from behind and keeps pushing: the car pulling
+    away drives on at its own pace, the one running into it is put back at every touch
+    (both stood there for good before: each was put back whenever they touched)."""
+    world = World()
+    slow = KinematicThrottleCar.build(
+        world.space, (0.0, 0.0, 0.0), (2.0, 1.0), (4.0, 2.0, 5.0), (30.0, None)
+    )
+    world.add_car(slow)
+    quick = KinematicThrottleCar.build(
+        world.space, (-2.5, 0.0, 0.0), (2.0, 1.0), (10.0, 20.0, 5.0), (30.0, None)
+    )
+    world.add_car(quick)
+    gas = (0.0, 1.0)
+    touches = 0
+    for _ in range(150):  # 3 s: car 0 alone would reach 4 m/s and 8 m
+        contacts = world.step(DT, [gas, gas])
+        touches += bool(contacts[1].new_cars)
+        assert not contacts[0].crashed and not contacts[1].crashed  # cars are no walls
+    states = world.states()
+    assert touches >= 2  # car 1 caught up more than once
+    assert states[0].pose[0] > 7.0 and states[0].speed > 3.5  # car 0 drove on, unhindered
+    assert states[1].pose[0] + 2.0 <= states[0].pose[0] + 1e-9  # car 1 never went through it
+    assert states[1].pose[0] > 3.0  # and it follows, stopping only at each touch
+
+
 def test_a_world_holds_at_most_sixteen_cars():
     world = World()
     for i in range(16):

@@ -16,6 +16,7 @@ from tinyrace.examples import find_example
 
 if TYPE_CHECKING:
     from tinyrace.experiment import Experiment, RunResult
+    from tinyrace.experiment.race_runner import RaceRunResult
 
 
 class UsageError(Exception):
@@ -221,6 +222,8 @@ def _run(args: argparse.Namespace) -> int:
     config = experiment.config
     if not (args.quiet or args.json):
         what = f"{config.episodes} episodes, driver {config.driver}"
+        if experiment.is_race:
+            what = f"{config.episodes} episodes, a race of {len(experiment.agents)} cars"
         kind = "the track " if track else ""
         print(f"tinyrace: running {kind}{experiment.source} ({what})")
     result = run_experiment(experiment, out, show_progress=not args.quiet)
@@ -279,7 +282,7 @@ def _short(text: str, limit: int = 80) -> str:
     return text if len(text) <= limit else text[:half] + "..." + text[-half:]
 
 
-def _json_summary(result: RunResult) -> dict[str, Any]:
+def _json_summary(result: RunResult | RaceRunResult) -> dict[str, Any]:
     from dataclasses import asdict
 
     return {

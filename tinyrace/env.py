@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NamedTuple, cast
+from typing import Any, NamedTuple
 
 import gymnasium as gym
 import numpy as np
@@ -16,8 +17,7 @@ from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.episode import Episode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem, did_you_mean
-from tinyrace.render.pictures import Pictures
-from tinyrace.render.procedural_pictures import OBSERVATION_SIZE
+from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
 from tinyrace.rewards import (
@@ -29,12 +29,10 @@ from tinyrace.rewards import (
 )
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
-from tinyrace.sensors.registry import build_sensors, sensor_type
-from tinyrace.sensors.texture import GroundTexture
+from tinyrace.sensors.ground import make_ground
+from tinyrace.sensors.registry import build_sensors, default_sensor
+from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.tracks.base import Track
-from tinyrace.tracks.image import ImageTrack
-from tinyrace.tracks.metric import MetricTrack
-from tinyrace.tracks.procedural import ProceduralTrack
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
@@ -60,9 +58,11 @@ class TinyRaceEnv(gym.Env):
     right), or CarRacing's Discrete(5). Kinematic car: Box(-1, 1, (1,)) steering.
 
     ## Observation Space
-    With no cameras configured on a procedural track: CarRacing's 96x96x3 RGB
-    view. Otherwise a Dict of uint8 RGB images keyed by camera id, or with
-    ``observation: box`` and one camera, that camera's image as a plain Box.
+    Every observation is a sensor's (``tinyrace.sensors``; tinycarlo's ``cameras:`` are
+    ``birdseye_camera`` sensors). With none configured, the track's default sensor alone as
+    a plain Box: on a procedural track ``chase_view``, CarRacing's 96x96x3 RGB view.
+    Otherwise a Dict keyed by sensor id, or with ``observation: box`` and one sensor, its
+    observation as a plain Box.
 
     ## Rewards
     Named terms from ``reward_design`` (see ``tinyrace.rewards``), reported in
@@ -101,21 +101,20 @@ class TinyRaceEnv(gym.Env):
         self.verbose = verbose
         self.track_source = parts.source
         self.course = parts.course
-        self.pictures: Pictures = make_pictures(self.config, parts.source)
+        self.ground = make_ground(self.config, parts.source)  # sensors' and pictures' ground
+        self.pictures: Pictures = make_pictures(self.config, self.ground)
         fps = self.config.sim.fps
         assert fps is not None  # resolved by the config loader
         self.dt = 1.0 / fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(fps)}
         self.action_spec = parts.car_model.actions(self.config.car)  # reads and checks actions
         self.action_space = self.action_spec.space
-        self._ground = EpisodeGround(self.pictures)
         self.car_facts = parts.car_model.describe(self.config)
-        self._sensor_context = SensorContext(self.config, self._ground, self.car_facts)
+        self._sensor_context = SensorContext(self.config, self.ground, self.car_facts)
         self._config_source = loaded.source
         self._blame = loaded.blame
         self.sensors: list[Sensor] = self.make_sensors()
-        box = self.config.observation == "box" and len(self.sensors) == 1
-        self.box_camera = self.sensors[0].id if box else None
+        self.box_camera = self.box_sensor(self.sensors)
         self.observation_space = self._observation_space()
         self.shaping = (
             _checked_shaping(cte_shaping)
@@ -128,20 +127,39 @@ class TinyRaceEnv(gym.Env):
         self.last_facts: list[StepFacts] = []  # every car's facts of the last step
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
+        # the last observation's readings by sensor id, and the episode and step they saw
+        self._observed: tuple[Episode, int, dict[str, Any]] | None = None
 
-    def make_sensors(self) -> list[Sensor]:
-        """The config's cameras and sensors, built anew (one set per car that observes)."""
+    def make_sensors(self, car: int = 0) -> list[Sensor]:
+        """Car ``car``'s sensors, its cameras among them (the config's for car 0; a race
+        car's own, else the shared ones), built anew (one set per car that observes); none
+        configured: the track's default sensor."""
         context = self._sensor_context
+        at = ""
+        if car:
+            racer = self.course.racers[car]
+            config = dataclasses.replace(
+                self.config, car=racer.car.car, cameras=racer.car.cameras, sensors=racer.car.sensors
+            )
+            context = SensorContext(config, self.ground, racer.model.describe(config))
+            at = f"race.cars[{car}]." if self.config.race.cars else ""
         try:
             sensors = build_sensors(context, self._config_source)
         except ConfigError as exc:
-            raise ConfigError(self._blame(exc.problems)) from None
-        return [*_cameras(self.config, context), *sensors]
+            problems = [dataclasses.replace(p, path=f"{at}{p.path}") for p in exc.problems]
+            raise ConfigError(self._blame(problems)) from None
+        default = None if sensors else default_sensor(context)
+        return sensors if default is None else [default]
+
+    def box_sensor(self, sensors: list[Sensor], car: int = 0) -> str | None:
+        """The id of the one sensor whose reading is car ``car``'s whole observation (a
+        Box): with ``observation: box``, or the track's default sensor when the car has no
+        sensor configured; None for a Dict observation."""
+        configured = self.config.sensors if car == 0 else self.course.racers[car].car.sensors
+        box = self.config.observation == "box" or not configured
+        return sensors[0].id if box and len(sensors) == 1 else None
 
     def _observation_space(self) -> spaces.Space[Any]:
-        if not self.sensors:
-            w, h = OBSERVATION_SIZE
-            return spaces.Box(0, 255, (h, w, 3), np.uint8)
         if self.box_camera is not None:  # ``observation: box``: the one camera's image alone
             return self.sensors[0].space
         return spaces.Dict({sensor.id: sensor.space for sensor in self.sensors})
@@ -151,17 +169,18 @@ class TinyRaceEnv(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[Any, dict[str, Any]]:
         super().reset(seed=seed)
-        options = _check_options(options, self.config.kind)
+        options = _check_options(options)
         draw = self.track_source.draw(self.np_random, options)
         poses = _check_poses(options.get("poses"), self.config.race.num_agents)
-        self.episode = episode = self.course.new_episode(draw, poses)
-        self.pictures.reset(draw, episode.visit_order)
+        self.episode = episode = self.course.new_episode(draw, poses, self.np_random)
+        self.ground.reset(draw, episode.visit_order)  # before the sensors and pictures read it
+        self.pictures.reset(draw)
         self.layout = draw.track
         for sensor in self.sensors:
             sensor.reset(draw.track)
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
-            attempts = getattr(draw.track.detail, "attempts", 1)
-            print(f"Track generation: {attempts} attempt(s) -> {len(draw.track.tiles)}-tiles track")
+            attempts, tiles = draw.track.attempts, len(draw.track.tiles)
+            print(f"Track generation: {attempts} attempt(s) -> {tiles}-tiles track")
         self.t = 0.0  # [s] since reset
         self.steps = 0
         self.score = 0.0  # running reward, shown on CarRacing's dashboard
@@ -247,18 +266,16 @@ class TinyRaceEnv(gym.Env):
         return observation, verdict.reward, reason is not None, verdict.truncated, info
 
     def observe(self, snapshot: Snapshot) -> Any:
-        """The observation of ``snapshot``: every sensor's reading (or CarRacing's view)."""
-        if not self.sensors:  # CarRacing's view, or a top view on tracks in metres
-            return self.pictures.observe(snapshot, self.score)
-        observation = {
-            sensor.id: sensor.observe(snapshot, self.layout, self.np_random)
-            for sensor in self.sensors
-        }
+        """The observation of ``snapshot``: every sensor's reading (kept for the pictures of
+        this step, which draw no view a second time)."""
+        layout, rng = self.layout, self.np_random
+        observation = {sensor.id: sensor.observe(snapshot, layout, rng) for sensor in self.sensors}
+        self._observed = (self._episode(), self.steps, observation)
         return observation if self.box_camera is None else observation[self.box_camera]
 
     def snapshot(self) -> Snapshot:
         """A copy of the world's state now (what sensors and pictures read)."""
-        return self._episode().world.snapshot(self.t, self.steps)
+        return self._episode().world.snapshot(self.t, self.steps, self.score)
 
     def _episode(self, reading: str = "a snapshot") -> Episode:
         if self.episode is None:
@@ -271,10 +288,11 @@ class TinyRaceEnv(gym.Env):
         return info
 
     @property
-    def track(self) -> ProceduralTrack | ImageTrack | MetricTrack:
-        """The current episode's track data (read-only arrays in track units)."""
-        detail: ProceduralTrack | ImageTrack | MetricTrack = self._episode("the track").track.detail
-        return detail
+    def track(self) -> Track:
+        """The current episode's ``Track`` (``tinyrace.tracks.base``): read-only arrays in
+        track units (``unit``): ``centerline``, ``headings``, ``tiles``, ``kerbs``, ``walls``,
+        ``cones``, ``picture``, ``occupancy``, ... (None or empty where it has none)."""
+        return self._episode("the track").track
 
     @property
     def car(self) -> Any:
@@ -291,8 +309,9 @@ class TinyRaceEnv(gym.Env):
             return None
         if self.episode is None:
             raise ResetNeeded("call reset() before render()")
+        snapshot = self.snapshot()
         frame: np.ndarray = self.pictures.frame(
-            self.render_mode, self.snapshot(), self.score, self._camera_views()
+            self.render_mode, snapshot, self._camera_views(snapshot)
         )
         if self.render_mode != "human":
             return frame
@@ -301,18 +320,26 @@ class TinyRaceEnv(gym.Env):
         self._window.show(frame, realtime=self.config.sim.render_realtime)
         return None
 
-    def _camera_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Each camera's image and track window now, for the overview picture."""
-        cameras = [s for s in self.sensors if isinstance(s, BirdseyeCamera)]
-        if not cameras:
+    def _camera_views(self, snapshot: Snapshot) -> CameraViews:
+        """Each top-down image sensor's image now (this step's, when it has observed) and
+        its track window (None for a view without one), for the overview picture."""
+        views = [s for s in self.sensors if isinstance(s, (BirdseyeCamera, TopViewSensor))]
+        if not views:
             return []
-        snapshot = self.snapshot()
+        observed = self._observed
+        if observed is None or observed[0] is not self.episode or observed[1] != self.steps:
+            observed = (self._episode(), self.steps, {})
+        images = observed[2]
         return [
             (
-                _rgb(camera.observe(snapshot, self.layout, self.np_random)),
-                camera.window(snapshot, self.layout),
+                _rgb(
+                    images[view.id]
+                    if view.id in images
+                    else view.observe(snapshot, self.layout, self.np_random)
+                ),
+                view.window(snapshot, self.layout) if isinstance(view, BirdseyeCamera) else None,
             )
-            for camera in cameras
+            for view in views
         ]
 
     def close(self) -> None:
@@ -323,6 +350,7 @@ class TinyRaceEnv(gym.Env):
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_window"] = None  # a window belongs to this process
+        state["_observed"] = None  # the last step's readings: not worth the bytes
         return state
 
 
@@ -336,28 +364,12 @@ class Verdict(NamedTuple):
     truncated: bool
 
 
-class EpisodeGround:
-    """The cameras' ground: the current episode's texture (CarRacing repaints visited tiles)."""
-
-    def __init__(self, pictures: Pictures) -> None:
-        self.pictures = pictures
-
-    def texture(self, track: Track) -> GroundTexture:
-        return self.pictures.ground_texture()
-
-
 def _rgb(image: np.ndarray) -> np.ndarray:
     """Gray and class-label images as RGB, for pictures."""
     return image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
 
 
-def _cameras(config: EnvConfig, context: SensorContext) -> list[BirdseyeCamera]:
-    """tinycarlo's ``cameras:`` list, each entry a ``birdseye_camera`` sensor."""
-    camera_type = sensor_type("birdseye_camera", "<registry>", "cameras")
-    return [cast(BirdseyeCamera, camera_type.build(entry, context)) for entry in config.cameras]
-
-
-def _check_options(options: object, kind: str) -> dict[str, Any]:
+def _check_options(options: object) -> dict[str, Any]:
     """The reset options, checked: known keys, ``randomize`` a bool, indices whole numbers.
 
     Image tracks check the index ranges when they pick; a procedural track has one track and
@@ -374,9 +386,6 @@ def _check_options(options: object, kind: str) -> dict[str, Any]:
             raise ConfigError(Problem(RESET_SOURCE, _key_text(key), value, allowed))
         if key == "randomize" and not isinstance(value, (bool, np.bool_)):
             raise ConfigError(Problem(RESET_SOURCE, key, value, "expected true or false"))
-        if key in ("track", "spawn") and kind == "procedural" and not _is_zero_or_none(value):
-            allowed = f"expected 0 or None (a procedural track has one {key})"
-            raise ConfigError(Problem(RESET_SOURCE, key, value, allowed))
     return dict(options)
 
 
@@ -397,11 +406,6 @@ def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] 
 def _short(value: object) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
-
-
-def _is_zero_or_none(value: object) -> bool:
-    whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-    return value is None or (whole and value == 0)
 
 
 def _key_text(key: object) -> str:

@@ -112,11 +112,10 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
-    from tinyrace.render.metric_pictures import MetricPictures
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
-    from tinyrace.tracks.metric import MetricTrack
+    from tinyrace.sensors.ground import MetricGround
 
-    if target == "procedural":
+    if target == "procedural":  # the CLI's name for CarRacing's track
         image = procedural_picture(load_env_config().config, seed)
         return Picture(image, f"procedural-seed{seed}", ())
     path = Path(target)
@@ -124,14 +123,14 @@ def picture(target: str, seed: int) -> Picture:
     named = (path if path.is_dir() or path.name != TRACK_FILE else path.parent).resolve()
     name = named.name if named.is_dir() else named.stem  # `show .` names the folder
     inputs = input_files(path, loaded)
-    if loaded.config.kind == "procedural":
-        return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     parts = build_course(loaded)
+    if parts.source.painted is not None:  # a new track per seed, painted from its tiles
+        return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
-    if isinstance(first.detail, MetricTrack):
-        texture = MetricPictures(parts.config, parts.source).ground_texture()  # type: ignore[arg-type]
-        return Picture(metric_picture(first.detail, texture), name, inputs)
-    return Picture(image_picture(parts.config, first.detail), name, inputs)
+    if first.picture is not None:
+        return Picture(image_picture(parts.config, first), name, inputs)
+    texture = MetricGround(parts.config, parts.source.tracks).texture(first)
+    return Picture(metric_picture(first, texture), name, inputs)
 
 
 def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:
@@ -144,8 +143,9 @@ def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:
             name = getattr(track, key, None)
             if isinstance(name, str):
                 files.append(loaded.base_dir / name)
-        if track.type == "ros_map":  # the map YAML names its picture
-            files += _map_image(loaded.base_dir / track.file)
+        file = getattr(track, "file", None)
+        if track.occupancy_map and isinstance(file, str):  # the map YAML names its picture
+            files += _map_image(loaded.base_dir / file)
     return tuple(dict.fromkeys(f.resolve() for f in files))
 
 

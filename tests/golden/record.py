@@ -71,8 +71,8 @@ def _sample(space: gym.Space, rng: np.random.Generator) -> Any:
     return rng.uniform(space.low, space.high).astype(space.dtype)
 
 
-def _plain(value: Any) -> Any:
-    """numpy scalars and arrays as Python values, for json."""
+def plain(value: Any) -> Any:
+    """numpy scalars and arrays as Python values, for json (also the race hashes')."""
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, np.ndarray):
@@ -85,7 +85,12 @@ def _observation_bytes(observation: Any) -> bytes:
         return b"".join(
             key.encode() + _observation_bytes(observation[key]) for key in sorted(observation)
         )
-    array = np.ascontiguousarray(observation)
+    return array_bytes(observation)
+
+
+def array_bytes(value: Any) -> bytes:
+    """An array's dtype, shape and bytes: what is hashed of it (also in the race hashes)."""
+    array = np.ascontiguousarray(value)
     return f"{array.dtype}{array.shape}".encode() + array.tobytes()
 
 
@@ -96,7 +101,7 @@ def run(make: Callable[[], gym.Env], steps: int = STEPS) -> dict[str, Any]:
     rng = np.random.default_rng(ACTION_SEED)
     observation, info = env.reset(seed=RESET_SEED)
     hashes["observations"].update(_observation_bytes(observation))
-    hashes["infos"].update(json.dumps(info, sort_keys=True, default=_plain).encode())
+    hashes["infos"].update(json.dumps(info, sort_keys=True, default=plain).encode())
     episodes, total = 1, 0.0
     for step in range(steps):
         observation, reward, terminated, truncated, info = env.step(_sample(env.action_space, rng))
@@ -104,14 +109,14 @@ def run(make: Callable[[], gym.Env], steps: int = STEPS) -> dict[str, Any]:
         hashes["rewards"].update(repr(reward).encode() + b";")
         hashes["terminated"].update(repr(terminated).encode() + b";")
         hashes["truncated"].update(repr(truncated).encode() + b";")
-        hashes["infos"].update(json.dumps(info, sort_keys=True, default=_plain).encode())
+        hashes["infos"].update(json.dumps(info, sort_keys=True, default=plain).encode())
         total += float(reward)
         if step in FRAME_STEPS:
             hashes["frames"].update(_observation_bytes(env.render()))
         if terminated or truncated:
             observation, info = env.reset()
             hashes["observations"].update(_observation_bytes(observation))
-            hashes["infos"].update(json.dumps(info, sort_keys=True, default=_plain).encode())
+            hashes["infos"].update(json.dumps(info, sort_keys=True, default=plain).encode())
             episodes += 1
     env.close()
     return {

@@ -1,7 +1,8 @@
 """The car models by name: the one place that decides which car a config gets, and the one
 place that knows each model's facts.
 
-Each ``CarModel`` says which track kinds it drives on, which it is the default for
+Each ``CarModel`` says which track units it drives in (``u``, ``px``, ``m``: compared with
+the track config's ``unit``), which it is the default for
 (``car.model: null``), which ``car.actions`` it accepts, how to build it, its action space,
 its size and limits for a config (``CarFacts``) and what it can do (wheels, throttle).
 Everything above the cars layer asks the entry (``model_of(config)``); nothing compares
@@ -28,11 +29,13 @@ from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.single_track import SingleTrackCar
 from tinyrace.cars.state import CarFacts
-from tinyrace.config import METRIC_KINDS, CarConfig, EnvConfig
+from tinyrace.config import CarConfig, EnvConfig
+from tinyrace.config.schema import track_types_in
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.tracks.base import Track
 
 CarBuilder = Callable[[pymunk.Space, Pose, CarConfig, Track], Car]
+CARRACING_UNIT = "u"  # CarRacing's world unit: its car needs no scale there
 
 
 @dataclass(frozen=True)
@@ -40,8 +43,8 @@ class CarModel:
     """One registered car model."""
 
     name: str
-    track_kinds: frozenset[str]  # the ``track.type`` values it can drive on
-    default_for: frozenset[str]  # track kinds where ``car.model: null`` means this model
+    track_units: frozenset[str]  # the track units it drives in: u (CarRacing's), px, m
+    default_for: frozenset[str]  # track units where ``car.model: null`` means this model
     action_kinds: frozenset[str]  # accepted ``car.actions`` values
     build: CarBuilder  # adds the car to a space at a pose
     actions: Callable[[CarConfig], ActionSpec]  # its action space and how to read actions
@@ -65,7 +68,7 @@ def _known(value: float | None) -> float:
 
 
 def _build_dynamic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
-    if track.kind == "procedural":  # CarRacing's own frame and units
+    if track.unit == CARRACING_UNIT:  # CarRacing's own frame and units
         return DynamicCar.build(space, pose)
     return DynamicCar.build(space, pose, scale=_known(config.pixels_per_unit), y_down=track.y_down)
 
@@ -111,7 +114,7 @@ def _kinematic_actions(config: CarConfig) -> ActionSpec:
 
 def _dynamic_scale(config: EnvConfig) -> float:
     """[track units per CarRacing unit] of the dynamic car on this config's track."""
-    return 1.0 if config.kind == "procedural" else _known(config.car.pixels_per_unit)
+    return 1.0 if config.facts.unit == CARRACING_UNIT else _known(config.car.pixels_per_unit)
 
 
 def _dynamic_facts(config: EnvConfig) -> CarFacts:
@@ -177,8 +180,8 @@ def register(model: CarModel) -> None:
 register(
     CarModel(
         name="dynamic",
-        track_kinds=frozenset({"procedural", "image", *METRIC_KINDS}),
-        default_for=frozenset({"procedural"}),
+        track_units=frozenset({"u", "px", "m"}),
+        default_for=frozenset({"u"}),
         action_kinds=frozenset({"continuous", "discrete"}),
         build=_build_dynamic,
         actions=_dynamic_actions,
@@ -192,8 +195,8 @@ register(
 register(
     CarModel(
         name="kinematic",
-        track_kinds=frozenset({"image"}),
-        default_for=frozenset({"image"}),
+        track_units=frozenset({"px"}),
+        default_for=frozenset({"px"}),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic,
         actions=_kinematic_actions,
@@ -207,8 +210,8 @@ register(
 register(
     CarModel(
         name="kinematic_throttle",
-        track_kinds=frozenset(METRIC_KINDS),
-        default_for=frozenset(METRIC_KINDS),
+        track_units=frozenset({"m"}),
+        default_for=frozenset({"m"}),
         action_kinds=frozenset({"continuous"}),
         build=_build_kinematic_throttle,
         actions=_kinematic_throttle_actions,
@@ -222,7 +225,7 @@ register(
 register(
     CarModel(
         name="single_track",
-        track_kinds=frozenset(METRIC_KINDS),  # its parameters are in metres
+        track_units=frozenset({"m"}),  # its parameters are in metres
         default_for=frozenset(),
         action_kinds=frozenset({"continuous", "raw"}),
         build=_build_single_track,
@@ -243,20 +246,20 @@ def model_of(config: EnvConfig) -> CarModel:
 
 
 def car_model_problems(config: EnvConfig, source: str) -> list[Problem]:
-    """Every problem of the config's car choice: unknown model, track kind, actions."""
-    kind = config.kind
-    name = config.car.model or _default_name(kind)
+    """Every problem of the config's car choice: unknown model, track unit, actions."""
+    unit = config.facts.unit
+    name = config.car.model or _default_name(unit)
     if name is None:
-        allowed = f"expected a car model for track kind {kind!r}; models: {_listing()}"
+        allowed = f"expected a car model for tracks in {unit!r}; models: {_listing()}"
         return [Problem(source, "car.model", config.car.model, allowed)]
     model = CAR_MODELS.get(name)
     if model is None:
         return [Problem(source, "car.model", name, one_of(name, CAR_MODELS))]
     problems = []
-    if kind not in model.track_kinds:
+    if unit not in model.track_units:
         allowed = (
-            f"car model {name!r} drives on track kinds {', '.join(sorted(model.track_kinds))}, "
-            f"not {kind!r}; models: {_listing()}"
+            f"car model {name!r} drives on {', '.join(track_types_in(model.track_units))} "
+            f"tracks, not {config.kind!r}; models: {_listing()}"
         )
         problems.append(Problem(source, "car.model", name, allowed))
     if config.car.actions not in model.action_kinds:
@@ -266,21 +269,23 @@ def car_model_problems(config: EnvConfig, source: str) -> list[Problem]:
 
 
 def choose_car_model(config: EnvConfig, source: str) -> CarModel:
-    """The car model of a config (its ``car.model`` or the track kind's default).
+    """The car model of a config (its ``car.model`` or the default for the track's unit).
 
-    Raises ConfigError naming the file, ``car.model``, the value and the supported kinds.
+    Raises ConfigError naming the file, ``car.model``, the value and the supported units.
     """
     problems = car_model_problems(config, source)
     if problems:
         raise ConfigError(problems)
-    name = config.car.model or _default_name(config.kind)
+    name = config.car.model or _default_name(config.facts.unit)
     assert name is not None  # car_model_problems found none
     return CAR_MODELS[name]
 
 
-def _default_name(kind: str) -> str | None:
-    return next((m.name for m in CAR_MODELS.values() if kind in m.default_for), None)
+def _default_name(unit: str) -> str | None:
+    return next((m.name for m in CAR_MODELS.values() if unit in m.default_for), None)
 
 
 def _listing() -> str:
-    return "; ".join(f"{m.name} ({', '.join(sorted(m.track_kinds))})" for m in CAR_MODELS.values())
+    return "; ".join(
+        f"{m.name} ({', '.join(track_types_in(m.track_units))})" for m in CAR_MODELS.values()
+    )

@@ -11,12 +11,20 @@ from pathlib import Path
 from typing import Any, cast
 
 from tinyrace.cache import Settings, default_folder
-from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, MAX_TEXTURE_SIDE, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
-from tinyrace.config.colors import Color, palette_color
+from tinyrace.config.colors import Color
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.config.race import (
+    RaceCar,
+    inherited,
+    lay_cars_over_car,
+    race_cars,
+    race_problems,
+    resolve_race_cars,
+)
 from tinyrace.config.schema import (
-    METRIC_KINDS,
+    MAX_RACE_CARS,
     CacheConfig,
     CameraConfig,
     CarConfig,
@@ -25,7 +33,6 @@ from tinyrace.config.schema import (
     ConeMapTrackConfig,
     CrossTrackErrorConfig,
     EnvConfig,
-    FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
     RewardConfig,
@@ -38,12 +45,13 @@ from tinyrace.config.sensors import (
     LidarConfig,
     PerspectiveCameraConfig,
     SensorConfig,
+    cameras_first,
 )
 from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.examples import find_track, track_names
 
 __all__ = [
-    "METRIC_KINDS",
+    "MAX_TEXTURE_SIDE",
     "CacheConfig",
     "CameraConfig",
     "CarConfig",
@@ -58,6 +66,7 @@ __all__ = [
     "LoadedConfig",
     "Overrides",
     "ProceduralTrackConfig",
+    "RaceCar",
     "RewardConfig",
     "RosMapTrackConfig",
     "SimConfig",
@@ -66,14 +75,16 @@ __all__ = [
     "car_colors",
     "car_names",
     "load_env_config",
+    "race_cars",
 ]
 
 TRACK_FILE = "track.yaml"
 
 
 def car_colors(config: EnvConfig) -> list[Color]:
-    """Each car's colour, in car order (what cameras, the overview and videos draw)."""
-    return [palette_color(car) for car in range(config.race.num_agents)]
+    """Each car's colour, in car order (what cameras, the overview and videos draw): its
+    ``race.cars[i].colour``, else the palette's colour of its index."""
+    return [car.colour for car in race_cars(config)]
 
 
 def cache_settings(config: EnvConfig) -> Settings:
@@ -84,9 +95,9 @@ def cache_settings(config: EnvConfig) -> Settings:
 
 
 def car_names(config: EnvConfig) -> list[str]:
-    """Each car's name, in car order: its agent name in a race (``car_0``, ``car_1``, ...),
-    the label the overview and videos write beside it."""
-    return [f"car_{car}" for car in range(config.race.num_agents)]
+    """Each car's name, in car order: its agent name in a race (its ``race.cars[i].id``, else
+    ``car_<i>``), the label the overview and videos write beside it."""
+    return [car.id for car in race_cars(config)]
 
 
 KWARGS = "<kwargs>"  # the source named by problems of ``gym.make``'s keyword arguments
@@ -146,8 +157,11 @@ def _spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[st
 def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
     """Whether the value at ``path`` (``cameras[0].roi``) came from ``keys``: mappings merge
     key by key, anything else an override gives replaces the file's value whole."""
+    tokens = re.findall(r"\[\d+\]|[^.\[\]]+", path)
+    if not tokens:  # a top-level key of brackets and dots alone (``[``): itself or not
+        return path in keys
     node: Any = keys
-    for token in re.findall(r"\[\d+\]|[^.\[\]]+", path):
+    for token in tokens:
         if not isinstance(node, Mapping):
             return True  # inside a list or value the override replaced
         if token.startswith("["):
@@ -254,11 +268,14 @@ def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> E
     ``prefix`` is put before key paths in messages (e.g. "env" inside an experiment file).
     """
     parser = Parser(source)
+    raw, given = lay_cars_over_car(raw)  # each race car's knobs over the car section
     config = parser.dataclass(EnvConfig, raw, prefix)
+    at = f"{prefix}." if prefix else ""
+    parser.problems = inherited(parser.problems, given, at)  # reported at car.<key> once
     if parser.parsed(config):  # also when some keys were bad: report every problem at once
-        _check_consistency(config, parser, f"{prefix}." if prefix else "")
+        _check_consistency(config, parser, at)
     parser.check()
-    return resolve_defaults(config)
+    return resolve_race_cars(resolve_defaults(config))
 
 
 def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
@@ -268,28 +285,36 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         parser.problem(f"{at}tracks", sorted(kinds), "all tracks of one env must be of one type")
     if not config.tracks:
         parser.problem(f"{at}tracks", [], "expected at least one track")
-    image = "image" in kinds
-    if image and not config.cameras and not config.sensors:
-        allowed = "an image track needs at least one camera (id, resolution, roi, position)"
+    facts = config.facts if config.tracks else None
+    seen = facts is None or facts.default_view  # a view without cameras (96x96)
+    if not seen and not config.cameras and not config.sensors:
+        allowed = (
+            f"an {config.kind} track needs at least one camera (id, resolution, roi, position)"
+        )
         parser.problem(f"{at}cameras", [], allowed)
-    _check_box(config, parser, at)
+    _check_observation(config, parser, at, f"{at}observation")
+    # the car model and its actions are checked by tinyrace.cars.registry
+    picture = facts is not None and facts.colour_picture
+    if not picture and config.reward_design.color_obstacles:
+        obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
+        allowed = "colour obstacles need an image track"
+        parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
+    _check_obstacle_colors(config.reward_design, parser, at)
+    for i, track in enumerate(config.tracks):
+        for key, value, allowed in track.problems(config.files):
+            parser.problem(f"{at}tracks[{i}].{key}", value, allowed)
+    _check_race(config, parser, at, not seen)
+
+
+def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_at: str) -> None:
+    """One car's cameras and sensors: unique ids, ``observation: box``, pixels, intrinsics."""
+    _check_box(config, parser, observation_at)
     ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
     cameras = len(config.cameras)
     for i, cam_id in enumerate(ids):
         if cam_id in ids[:i]:
             where = f"cameras[{i}].id" if i < cameras else f"sensors[{i - cameras}].id"
             parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
-    # the car model and its actions are checked by tinyrace.cars.registry
-    if not image and config.reward_design.color_obstacles:
-        obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
-        allowed = "colour obstacles need an image track"
-        parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
-    _check_obstacle_colors(config.reward_design, parser, at)
-    for i, track in enumerate(config.tracks):
-        if track.type == "procedural":
-            _check_texture_side(track, parser, f"{at}tracks[{i}]")
-        elif track.type == "image":
-            _check_image_track(track, config.files, parser, f"{at}tracks[{i}]")
     _check_camera_pixels(config, parser, at)
     for i, sensor in enumerate(config.sensors):
         if isinstance(sensor, PerspectiveCameraConfig):
@@ -301,6 +326,26 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
                 parser.problem(f"{at}sensors[{i}].position", list(position), allowed)
 
 
+def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) -> None:
+    """The race as a whole (count, ids, poses), and each car's own cameras and sensors."""
+    cars = config.race.cars
+    if len(cars) > MAX_RACE_CARS:
+        allowed = f"expected at most {MAX_RACE_CARS} cars (one world holds {MAX_RACE_CARS})"
+        parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
+        return
+    parser.problems += race_problems(config, at, parser.source)
+    for i, entry in enumerate(cars):
+        if entry.cameras is None and entry.sensors is None:
+            continue  # the shared ones, checked above
+        car = race_cars(config)[i]
+        own = dataclasses.replace(config, cameras=car.cameras, sensors=car.written_sensors)
+        car_at = f"{at}race.cars[{i}]."
+        if needs_camera and not own.cameras and not own.sensors:
+            allowed = f"car {car.id!r} on an {config.kind} track needs at least one camera"
+            parser.problem(f"{car_at}cameras", [], allowed)
+        _check_observation(own, parser, car_at, f"{car_at}sensors")
+
+
 def _one_array(sensor: SensorConfig) -> bool:
     """Whether a sensor's observation is one array (a Box), not a Dict of arrays."""
     if isinstance(sensor, LidarConfig):
@@ -308,8 +353,9 @@ def _one_array(sensor: SensorConfig) -> bool:
     return not isinstance(sensor, ConesConfig)
 
 
-def _check_box(config: EnvConfig, parser: Parser, at: str) -> None:
-    """``observation: box`` is one camera's image: exactly one camera or image sensor."""
+def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:
+    """``observation: box`` is one camera's image: exactly one camera or image sensor (a
+    problem names ``where``)."""
     if config.observation != "box":
         return
     ids = [c.id for c in config.cameras] + [s.id for s in config.sensors]
@@ -322,7 +368,7 @@ def _check_box(config: EnvConfig, parser: Parser, at: str) -> None:
             "sensor whose observation is a Dict (cones; lidar with hit_classes): use dict"
         )
     if allowed:
-        parser.problem(f"{at}observation", "box", allowed)
+        parser.problem(where, "box", allowed)
 
 
 def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:
@@ -335,17 +381,6 @@ def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> Non
                 "pixels are taken out of the picture, so this obstacle could never be hit)"
             )
             parser.problem(f"{at}reward_design.color_obstacles[{i}].color", obstacle.color, allowed)
-
-
-def _check_image_track(
-    track: ImageTrackConfig, files: FilesConfig, parser: Parser, at: str
-) -> None:
-    if not track.spawns:
-        parser.problem(f"{at}.spawns", [], "expected at least one start pose")
-    height, width = track.plane_size
-    if track.image is None and height * width > files.max_image_pixels:
-        allowed = f"expected at most {files.max_image_pixels:,} px in all (files.max_image_pixels)"
-        parser.problem(f"{at}.plane_size", [height, width], allowed)
 
 
 def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
@@ -367,41 +402,15 @@ def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
         parser.problem(f"{at}{where}", {k: list(r) for k, r, _ in sizes}, allowed)
 
 
-MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB
-
-
-def _check_texture_side(track: ProceduralTrackConfig, parser: Parser, at: str) -> None:
-    side = 2 * track.playfield * track.pixels_per_unit  # [px] the whole playfield, pre-drawn
-    if side > MAX_TEXTURE_SIDE:
-        allowed = (
-            f"expected 2 * playfield * pixels_per_unit (the ground texture's side, here "
-            f"{side:.0f} px) <= {MAX_TEXTURE_SIDE} px: lower pixels_per_unit or playfield"
-        )
-        parser.problem(f"{at}.pixels_per_unit", track.pixels_per_unit, allowed)
-
-
-# Car sizes and speeds by unit, when the config leaves them null: tinycarlo 1.1's in pixels,
-# a small racing car's in metres, and on ROS maps (F1TENTH's maps) F1TENTH's car: wheelbase
-# lf + lr = 0.33 m, width 0.31 m (f1tenth_gym's parameters), the shipped f1tenth_loop's top
-# speed, CarRacing's car scaled to about that wheelbase (3.24 u).
-CAR_DEFAULTS = {
-    # [px], [px], [px/s], [px/u]
-    "px": {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0},
-    # [m], [m], [m/s], [m/u]
-    "m": {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0},
-    "ros_map": {"wheelbase": 0.33, "track_width": 0.31, "velocity": 5.0, "pixels_per_unit": 0.1},
-}
-
-
 def resolve_defaults(config: EnvConfig) -> EnvConfig:
-    """Fill the ``None`` knobs whose default depends on the track kind."""
-    procedural = config.kind == "procedural"
-    carracing_rules = procedural or config.kind in METRIC_KINDS  # tiles, laps, time penalty
+    """Fill the ``None`` knobs whose default depends on the track (its config's facts); the
+    ``cameras`` join the ``sensors``."""
+    facts = config.facts
+    carracing_rules = facts.carracing_rules  # tiles, laps, time penalty
     sim = config.sim
     if sim.fps is None:
         sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
-    unit = "m" if config.kind in METRIC_KINDS else "px"
-    sizes = CAR_DEFAULTS["ros_map" if config.kind == "ros_map" else unit]
+    sizes = facts.car_sizes
     car = config.car
     car = dataclasses.replace(
         car,
@@ -419,7 +428,16 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
             reward.out_of_bounds_penalty, 100.0 if carracing_rules else 0.0
         ),
     )
-    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward)
+    sensors = _with_cameras(config)
+    return dataclasses.replace(config, sim=sim, car=car, reward_design=reward, sensors=sensors)
+
+
+def _with_cameras(config: EnvConfig) -> tuple[SensorConfig, ...]:
+    """tinycarlo's ``cameras:`` as ``birdseye_camera`` sensors, first in the ``sensors`` list
+    (in their order; once: a config already resolved keeps its list). ``cameras`` stays as
+    written, for messages that name its keys; each race car's are put first in its sensors
+    by ``race_cars``."""
+    return cameras_first(config.cameras, config.sensors)
 
 
 def _default(value: float | None, default: float) -> float:

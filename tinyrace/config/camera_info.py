@@ -15,12 +15,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import EnvConfig
-from tinyrace.config.sensors import PerspectiveCameraConfig
+from tinyrace.config.sensors import PerspectiveCameraConfig, SensorConfig
 from tinyrace.config.yaml_file import parse_yaml
 from tinyrace.errors import ConfigError, Problem
 
@@ -143,13 +144,39 @@ def scaled(
 
 def with_camera_info(config: EnvConfig, source: str, base_dir: Path) -> EnvConfig:
     """``config`` with every camera_info file read into its entry's intrinsics and
-    distortion (scaled to the entry's resolution)."""
-    sensors = list(config.sensors)
+    distortion (scaled to the entry's resolution): the shared sensors' and each race car's."""
     problems: list[Problem] = []
+    sensors = _read_infos(config, config.sensors, config.sensor_key, source, base_dir, problems)
+    cars = []
+    for index, car in enumerate(config.race.cars):
+        if car.sensors is not None:  # as written (no cameras)
+
+            def key(i: int, at: str = f"race.cars[{index}].") -> str:
+                return f"{at}sensors[{i}]"
+
+            own = _read_infos(config, car.sensors, key, source, base_dir, problems)
+            car = dataclasses.replace(car, sensors=own)
+        cars.append(car)
+    if problems:
+        raise ConfigError(problems)
+    race = dataclasses.replace(config.race, cars=tuple(cars))
+    return dataclasses.replace(config, sensors=sensors, race=race)
+
+
+def _read_infos(
+    config: EnvConfig,
+    entries: tuple[SensorConfig, ...],
+    key: Callable[[int], str],
+    source: str,
+    base_dir: Path,
+    problems: list[Problem],
+) -> tuple[SensorConfig, ...]:
+    """``entries`` with their camera_info files read; ``key(i)``: entry i's key as written."""
+    sensors = list(entries)
     for index, entry in enumerate(sensors):
         if not isinstance(entry, PerspectiveCameraConfig) or entry.camera_info is None:
             continue
-        where = f"sensors[{index}].camera_info"
+        where = f"{key(index)}.camera_info"
         try:
             path = inside_folder(
                 entry.camera_info, base_dir, config.files.paths_outside_folder, source, where
@@ -161,6 +188,4 @@ def with_camera_info(config: EnvConfig, source: str, base_dir: Path) -> EnvConfi
         height, width = entry.resolution
         intrinsics = scaled(intrinsics, size, (width, height))
         sensors[index] = dataclasses.replace(entry, intrinsics=intrinsics, distortion=distortion)
-    if problems:
-        raise ConfigError(problems)
-    return dataclasses.replace(config, sensors=tuple(sensors))
+    return tuple(sensors)

@@ -5,6 +5,7 @@ env:                        # a track folder or track.yaml, plus overrides of an
   environment: ../example_tracks/formula_student    # relative to this file; omit: procedural
   sim: {step_limit: 600}
 driver: centerline          # random | constant | centerline | module:callable
+drivers: {car_1: random}    # races (race.num_agents > 1): a driver per car; the rest: driver
 episodes: 5
 seed: 0
 output: {dir: runs, video: true, view: overview}
@@ -53,6 +54,11 @@ class ExperimentConfig:
         "centerline", "random, constant, centerline, or module:callable (your own policy)"
     )
     driver_args: dict[str, Any] = knob(MappingProxyType({}), "keyword arguments for the driver")
+    drivers: dict[str | int, Any] = knob(
+        MappingProxyType({}),
+        "races: a driver per car, by car name (car_1) or index (1): a driver as in 'driver', "
+        "or {driver: ..., driver_args: {...}}; cars not listed drive 'driver'",
+    )
     episodes: int = knob(5, "how many episodes", low=1, high=MAX_EPISODES)
     seed: int = knob(0, "episode i is reset with seed + i", low=0)
     max_steps: int | None = knob(

@@ -106,9 +106,11 @@ class Parser:
         if origin is tuple:
             return self.tuple(args, raw, path, meta)
         if origin is dict:  # free-form mapping (e.g. driver arguments), checked by its user
-            if isinstance(raw, Mapping) and all(isinstance(k, str) for k in raw):
+            numbers = int in typing.get_args(args[0]) if args else False  # dict[str | int, ...]
+            if isinstance(raw, Mapping) and all(_key_ok(k, numbers) for k in raw):
                 return dict(raw)
-            return self.problem(path, raw, "expected a mapping with string keys")
+            keys = "string or whole-number keys" if numbers else "string keys"
+            return self.problem(path, raw, f"expected a mapping with {keys}")
         if isinstance(hint, type) and dataclasses.is_dataclass(hint):
             return self.dataclass(hint, raw, path)
         if hint is Color:
@@ -126,6 +128,8 @@ class Parser:
             return self.problem(path, raw, f"expected {_describe(members[0], meta)}")
         if all(dataclasses.is_dataclass(m) for m in members):
             return self.union_of_dataclasses(tuple(members), raw, path)
+        if len(members) == 1 and _list_of_sections(members[0]):  # each entry's own problems
+            return self.value(members[0], raw, path, meta)
         for member in members:  # try each member quietly, keep the first that fits
             trial = Parser(self.source)
             value = trial.value(member, raw, path, meta)
@@ -185,6 +189,24 @@ class Parser:
         return hint(raw)
 
 
+def _list_of_sections(hint: Any) -> bool:
+    """Whether ``hint`` is a list of mappings (``tuple[SomeConfig, ...]``, also of a union of
+    them): a bad entry is told by its own keys, not as a whole."""
+    args = typing.get_args(hint)
+    if typing.get_origin(hint) is not tuple or len(args) != 2 or args[1] is not Ellipsis:
+        return False
+    item = args[0]
+    members = typing.get_args(item) if typing.get_origin(item) in (Union, types.UnionType) else ()
+    return dataclasses.is_dataclass(item) or (
+        bool(members) and all(dataclasses.is_dataclass(m) for m in members)
+    )
+
+
+def _key_ok(key: object, numbers: bool) -> bool:
+    """A free-form mapping's key: a string, or (``numbers``) a whole number."""
+    return isinstance(key, str) or (numbers and type(key) is int)
+
+
 def _required(f: dataclasses.Field[Any]) -> bool:
     return f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
 
@@ -213,6 +235,12 @@ def _describe(hint: Any, meta: Mapping[str, Any]) -> str:
         return f"{text} [{unit}]" if unit else text
     if hint is Color:
         return "a colour"
+    if hint is str:
+        return "a non-empty string"
+    members = typing.get_args(hint) if typing.get_origin(hint) in (Union, types.UnionType) else ()
+    if members and all(dataclasses.is_dataclass(m) for m in members):  # told apart by type
+        kinds = [str(f.default) for m in members for f in dataclasses.fields(m) if f.name == "type"]
+        return f"a mapping with a type ({', '.join(kinds)})"
     if dataclasses.is_dataclass(hint):
         return "a mapping with keys: " + ", ".join(f.name for f in dataclasses.fields(hint))
     return getattr(hint, "__name__", str(hint))

@@ -29,6 +29,7 @@ from tinyrace.config.schema import (
     FilesConfig,
     ImageTrackConfig,
     ProceduralTrackConfig,
+    RaceCarConfig,
     RaceConfig,
     RewardConfig,
     RosMapTrackConfig,
@@ -61,6 +62,7 @@ SECTIONS = (
     ("reward_design.cross_track_error", CrossTrackErrorConfig, "reward_design.cross_track_error"),
     ("files", FilesConfig, "files"),
     ("race", RaceConfig, "race"),
+    ("race.cars[i]", RaceCarConfig, "race.cars[i]"),
     ("cache", CacheConfig, "cache"),
     ("experiment file", ExperimentConfig, ""),
     ("experiment output", OutputConfig, "output"),
@@ -103,7 +105,8 @@ def default_text(f: dataclasses.Field[Any]) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
     if isinstance(value, tuple) and value and dataclasses.is_dataclass(value[0]):
-        return "procedural" if isinstance(value[0], ProceduralTrackConfig) else "see below"
+        named = getattr(value[0], "type", None)  # a default track: its type
+        return named if isinstance(named, str) else "see below"
     if isinstance(value, (tuple, dict)) and not value:
         return "none" if isinstance(value, tuple) else "{}"
     return f"{value!r}" if not isinstance(value, Color) else f"{list(value.bgr)} (BGR)"

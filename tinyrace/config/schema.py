@@ -2,18 +2,24 @@
 
 Field metadata carries the documentation, the unit and the allowed range; the
 loader validates against it and the YAML reference (docs/reference.md) is generated from it.
-``None`` defaults mean "the track kind decides" (see ``resolve_defaults``).
+``None`` defaults mean "the track kind decides" (see ``resolve_defaults``): each track
+config class states its facts (``TrackFacts``: unit, default car, which rules' defaults),
+so that code above asks the track config, never its ``type``.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, Union
+from typing import Any, ClassVar, Literal, Union, get_args
 
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS as MAX_CAMERA_PIXELS  # re-exported
+from tinyrace.config.bounds import MAX_TEXTURE_SIDE
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.sensors import CameraConfig as CameraConfig  # re-exported
 from tinyrace.config.sensors import SensorConfig
 
 MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
@@ -43,9 +49,54 @@ class SimConfig:
     )
 
 
+# Car sizes and speeds when the config leaves them null: tinycarlo 1.1's in pixels, a small
+# racing car's in metres, and on ROS maps (F1TENTH's maps) F1TENTH's car: wheelbase
+# lf + lr = 0.33 m, width 0.31 m (f1tenth_gym's parameters), the shipped f1tenth_loop's top
+# speed, CarRacing's car scaled to about that wheelbase (3.24 u).
+# wheelbase, track_width [px or m], velocity [px/s or m/s], pixels_per_unit [px/u or m/u]
+PIXEL_CAR = {"wheelbase": 160.0, "track_width": 100.0, "velocity": 500.0, "pixels_per_unit": 20.0}
+METRE_CAR = {"wheelbase": 2.5, "track_width": 1.6, "velocity": 20.0, "pixels_per_unit": 1.0}
+F1TENTH_CAR = {"wheelbase": 0.33, "track_width": 0.31, "velocity": 5.0, "pixels_per_unit": 0.1}
+
+Problems = list[tuple[str, object, str]]  # (key below the track, value, what is allowed)
+
+
+class TrackFacts:
+    """What a track config class says about its tracks, for the code above the tracks: each
+    ``*TrackConfig`` sets these, so nothing needs to compare its ``type``."""
+
+    unit: ClassVar[str]  # its tracks' unit: "u" (CarRacing), "px" or "m"
+    y_down: ClassVar[bool] = False  # x right, y down, headings clockwise (pictures)
+    carracing_rules: ClassVar[bool] = True  # tiles, laps, time penalty: 50 fps, CarRacing's pay
+    car_sizes: ClassVar[Mapping[str, float]] = PIXEL_CAR  # the defaults of the null car knobs
+    colour_picture: ClassVar[bool] = False  # a picture whose colours mean things (obstacles)
+    default_view: ClassVar[bool] = True  # seen without cameras: by the default sensor, 96x96
+    # what its tracks may hold, e.g. "cones", and their ground: "painted ground" (tiles and
+    # kerbs painted per track: chase_view), "metric ground" (drawn in metres: top_view)
+    holds: ClassVar[frozenset[str]] = frozenset()
+    occupancy_map: ClassVar[bool] = False  # a map of occupied cells (F1TENTH's lidar on it)
+    start_key: ClassVar[str] = "spawns"  # the key the start pose comes from, when not spawn
+
+    def problems(self, files: FilesConfig) -> Problems:
+        """What is wrong in this section that its fields alone cannot say."""
+        return []
+
+    def pose_extent(self) -> float | None:
+        """[track units] the largest |x| and |y| of the car before its episode ends, when
+        known from the config alone."""
+        return None
+
+    def reference_problem(self, reward: RewardConfig) -> str | None:
+        """What the track needs for a reference line (None: it has one)."""
+        return None
+
+
 @dataclass(frozen=True)
-class ProceduralTrackConfig:
+class ProceduralTrackConfig(TrackFacts):
     """A ``track`` of ``type: procedural``: CarRacing-v3's generated track."""
+
+    unit = "u"
+    holds = frozenset({"painted ground"})
 
     type: Literal["procedural"] = knob("procedural", "track kind")
     checkpoints: int = knob(12, "number of checkpoints the track passes", low=3, high=64)
@@ -73,13 +124,33 @@ class ProceduralTrackConfig:
         high=16,
     )
 
+    def problems(self, files: FilesConfig) -> Problems:
+        side = 2 * self.playfield * self.pixels_per_unit  # [px] the playfield, pre-drawn
+        if side <= MAX_TEXTURE_SIDE:
+            return []
+        allowed = (
+            f"expected 2 * playfield * pixels_per_unit (the ground texture's side, here "
+            f"{side:.0f} px) <= {MAX_TEXTURE_SIDE} px: lower pixels_per_unit or playfield"
+        )
+        return [("pixels_per_unit", self.pixels_per_unit, allowed)]
+
+    def pose_extent(self) -> float | None:
+        return self.playfield
+
 
 Spawn = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
-class ImageTrackConfig:
+class ImageTrackConfig(TrackFacts):
     """A ``track`` of ``type: image`` (the default for tinycarlo files): a picture of the track."""
+
+    unit = "px"
+    y_down = True
+    carracing_rules = False
+    colour_picture = True
+    default_view = False
+    holds = frozenset({"cones"})  # blobs of the cone colours
 
     type: Literal["image"] = knob("image", "track kind")
     image: str | None = knob(
@@ -106,6 +177,26 @@ class ImageTrackConfig:
         low_open=True,
     )
 
+    def problems(self, files: FilesConfig) -> Problems:
+        found: Problems = []
+        if not self.spawns:
+            found.append(("spawns", [], "expected at least one start pose"))
+        height, width = self.plane_size
+        if self.image is None and height * width > files.max_image_pixels:
+            allowed = (
+                f"expected at most {files.max_image_pixels:,} px in all (files.max_image_pixels)"
+            )
+            found.append(("plane_size", [height, width], allowed))
+        return found
+
+    def reference_problem(self, reward: RewardConfig) -> str | None:
+        if reward.cross_track_error.use_cte:
+            return None
+        return (
+            "expected reward_design.cross_track_error.use_cte: true (with its "
+            "trajectory_color) on an image track"
+        )
+
 
 def _lap_percent() -> Any:
     return knob(
@@ -123,8 +214,17 @@ def _ground_resolution() -> Any:
     )
 
 
+class MetreTrackFacts(TrackFacts):
+    """Tracks in metres read from files (the start pose is a file's first point)."""
+
+    unit = "m"
+    car_sizes = METRE_CAR
+    start_key = "file"
+    holds = frozenset({"metric ground"})
+
+
 @dataclass(frozen=True, kw_only=True)
-class CenterlineTrackConfig:
+class CenterlineTrackConfig(MetreTrackFacts):
     """A ``track`` of ``type: centerline``: a racetrack-database centreline CSV, in metres.
 
     Rows ``x_m,y_m,w_tr_right_m,w_tr_left_m`` of one closed loop in driving order."""
@@ -144,10 +244,12 @@ class CenterlineTrackConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class ConeMapTrackConfig:
+class ConeMapTrackConfig(MetreTrackFacts):
     """A ``track`` of ``type: cone_map``: a Formula Student Driverless cone map CSV, in metres.
 
     Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right."""
+
+    holds = frozenset({"cones", "metric ground"})
 
     type: Literal["cone_map"] = knob("cone_map", "track kind")
     file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
@@ -171,10 +273,14 @@ class ConeMapTrackConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class RosMapTrackConfig:
+class RosMapTrackConfig(MetreTrackFacts):
     """A ``track`` of ``type: ros_map``: a ROS map_server map with a raceline, in metres.
 
     The map YAML and its picture (F1TENTH's maps), and optionally a waypoint CSV."""
+
+    car_sizes = F1TENTH_CAR
+    occupancy_map = True
+    start_key = "waypoints"
 
     type: Literal["ros_map"] = knob("ros_map", "track kind")
     file: str = knob(REQUIRED, "the map YAML, relative to the config's folder")
@@ -190,6 +296,9 @@ class RosMapTrackConfig:
     wall_hit_ends_episode: bool = knob(False, "touching an occupied cell ends the episode")
     lap_complete_percent: float = _lap_percent()
 
+    def reference_problem(self, reward: RewardConfig) -> str | None:
+        return None if self.waypoints is not None else "expected track.waypoints on a ros_map track"
+
 
 # A track entry without ``type`` is an image track (tinycarlo files have none): listed first.
 TrackConfig = Union[  # noqa: UP007 (read at runtime)
@@ -199,7 +308,14 @@ TrackConfig = Union[  # noqa: UP007 (read at runtime)
     ConeMapTrackConfig,
     RosMapTrackConfig,
 ]
-METRIC_KINDS = ("centerline", "cone_map", "ros_map")  # track kinds in metres
+
+
+def track_types_in(units: Iterable[str]) -> list[str]:
+    """The track types (``type:`` values) whose tracks are in one of ``units``, sorted."""
+    wanted = set(units)
+    return sorted(
+        str(dataclasses.fields(c)[0].default) for c in get_args(TrackConfig) if c.unit in wanted
+    )
 
 
 @dataclass(frozen=True)
@@ -278,35 +394,6 @@ class CarConfig:
         "px/u or m/u",
         low=0.001,
         high=1000,
-    )
-
-
-@dataclass(frozen=True)
-class CameraConfig:
-    """``cameras[i]``: a bird's-eye camera fixed to the car."""
-
-    id: str = knob(REQUIRED, "observation key of this camera")
-    resolution: tuple[int, int] = knob(
-        (480, 640), "[y, x] output image size", "px", low=1, high=4096
-    )
-    roi: tuple[float, float] = knob(
-        (480.0, 640.0),
-        "[y, x] size of the track window seen (ahead of the front axle)",
-        "track px (u on procedural tracks)",
-        low=1,
-    )
-    position: tuple[float, float] = knob(
-        (0.0, 0.0),
-        "[y, x] shift of the window from the front axle middle; +y ahead, +x right",
-        "track px (u on procedural tracks)",
-    )
-    yaw: float = knob(
-        0.0, "camera rotation from straight ahead; 90 right, 180 back", "deg", low=-360, high=360
-    )
-    format: Literal["rgb", "gray", "classes"] = knob(
-        "rgb",
-        "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the "
-        "track's layers, never blended (table in info['sensor_labels'])",
     )
 
 
@@ -400,18 +487,78 @@ class FilesConfig:
     )
 
 
+MAX_RACE_CARS = 16  # cars one race (one world) holds
+
+
+@dataclass(frozen=True)
+class RaceCarConfig:
+    """``race.cars[i]``: one car of a race. Each key left out is the shared one: the car
+    model and knobs of the top-level ``car`` section (the entry's ``car`` keys are laid over
+    it), the top-level ``cameras`` and ``sensors``."""
+
+    id: str | None = knob(
+        None,
+        "the car's name: its PettingZoo agent and what other cars' infos call it "
+        "(null: car_<index>)",
+    )
+    car: CarConfig = knob(
+        CarConfig(), "its car model and knobs (as the car section), laid over the car section"
+    )
+    colour: Color | None = knob(
+        None,
+        "its colour in cameras, overview and videos (list BGR, #rrggbb RGB; null: the "
+        "palette's colour of its index)",
+        aliases=("color",),
+    )
+    cameras: tuple[CameraConfig, ...] | None = knob(
+        None, "its own bird's-eye cameras (null: the shared cameras)"
+    )
+    sensors: tuple[SensorConfig, ...] | None = knob(
+        None, "its own sensors (null: the shared sensors); its observation space follows them"
+    )
+
+
 @dataclass(frozen=True)
 class RaceConfig:
-    """Several cars on one track: how many, where they start, how the tiles pay them."""
+    """Several cars on one track: which cars, where they start, how the tiles pay them.
+
+    Either ``num_agents`` cars of the top-level ``car``, ``cameras`` and ``sensors``
+    sections (named ``car_0`` ..), or a ``cars`` list of one entry per car. All cars share
+    the track, ``sim`` and ``reward_design``."""
 
     num_agents: int = knob(
-        1, "cars on the track (car 0 is the one a single-agent env drives)", low=1, high=16
+        1,
+        "cars on the track (car 0 is the one a single-agent env drives); with cars: their "
+        "number, which it may leave out",
+        low=1,
+        high=MAX_RACE_CARS,
+    )
+    cars: tuple[RaceCarConfig, ...] = knob(
+        (), "one entry per car (id, car, colour, cameras, sensors); none: num_agents shared cars"
+    )
+    start: Literal["grid", "random", "poses"] = knob(
+        "grid",
+        "grid: car 0 at the spawn (pole), the others behind it along the reference line; "
+        "random: seeded places along the reference line, apart; poses: the poses listed",
+    )
+    poses: tuple[Spawn, ...] = knob(
+        (), "start: poses: one start pose [x, y, heading] per car", "track units, rad"
+    )
+    laps: int = knob(
+        1, "laps a car races: finishing the last one ends its episode", low=1, high=1000
     )
     grid_spacing: float = knob(
-        2.5, "start grid: each car this far behind the one before", "car lengths", low=1.2
+        2.5,
+        "start grid: each car this far behind the one before (random: at least this far "
+        "apart along the line)",
+        "car lengths",
+        low=1.2,
     )
     grid_offset: float = knob(
-        0.6, "start grid: cars this far left and right of the line, in turn", "car widths", low=0
+        0.6,
+        "start grid: cars this far left and right of the line, in turn (random: at most this far)",
+        "car widths",
+        low=0,
     )
     tile_reward: Literal["own", "first"] = knob(
         "own",
@@ -452,8 +599,9 @@ class EnvConfig:
     car: CarConfig = knob(CarConfig(), "car model")
     cameras: tuple[CameraConfig, ...] = knob(
         (),
-        "observation cameras (a mapping or a list); none on a procedural track: "
-        "CarRacing's 96x96 view as a Box",
+        "tinycarlo's bird's-eye cameras (a mapping or a list); the loader puts each first in "
+        "sensors as a birdseye_camera entry. No camera and no sensor: the track's default "
+        "view (chase_view on a procedural track, top_view on tracks in metres) as a Box",
         aliases=("camera",),
     )
     sensors: tuple[SensorConfig, ...] = knob(
@@ -475,4 +623,25 @@ class EnvConfig:
 
     @property
     def kind(self) -> str:
+        """The tracks' ``type`` (a label for messages and results; ask ``track`` for facts)."""
         return self.tracks[0].type
+
+    @property
+    def facts(self) -> TrackFacts:
+        """What the tracks' config class says of them (one type for all tracks)."""
+        return self.tracks[0]
+
+    @property
+    def written_sensors(self) -> tuple[SensorConfig, ...]:
+        """The ``sensors:`` entries as written: without the ``cameras`` the loader put first."""
+        return self.sensors[self._cameras_first() :]
+
+    def sensor_key(self, index: int) -> str:
+        """The key the user wrote for ``sensors[index]``: ``cameras[i]`` or ``sensors[j]``."""
+        cameras = self._cameras_first()
+        return f"cameras[{index}]" if index < cameras else f"sensors[{index - cameras}]"
+
+    def _cameras_first(self) -> int:
+        """How many of ``sensors`` are the ``cameras`` the loader put first."""
+        cameras = self.cameras
+        return len(cameras) if self.sensors[: len(cameras)] == cameras else 0

@@ -195,6 +195,70 @@ class ConesConfig:
 
 
 @dataclass(frozen=True)
+class CameraConfig:
+    """``cameras[i]`` (or ``sensors[i]`` of ``type: birdseye_camera``): a bird's-eye camera
+    fixed to the car."""
+
+    id: str = knob(REQUIRED, "observation key of this camera")
+    type: Literal["birdseye_camera"] = _type("birdseye_camera")
+    resolution: tuple[int, int] = knob(
+        (480, 640), "[y, x] output image size", "px", low=1, high=4096
+    )
+    roi: tuple[float, float] = knob(
+        (480.0, 640.0),
+        "[y, x] size of the track window seen (ahead of the front axle)",
+        "track px (u on procedural tracks)",
+        low=1,
+    )
+    position: tuple[float, float] = knob(
+        (0.0, 0.0),
+        "[y, x] shift of the window from the front axle middle; +y ahead, +x right",
+        "track px (u on procedural tracks)",
+    )
+    yaw: float = knob(
+        0.0, "camera rotation from straight ahead; 90 right, 180 back", "deg", low=-360, high=360
+    )
+    format: Literal["rgb", "gray", "classes"] = knob(
+        "rgb",
+        "rgb: (H, W, 3) uint8; gray: (H, W) uint8; classes: (H, W) uint8 labels of the "
+        "track's layers, never blended (table in info['sensor_labels'])",
+    )
+
+
+@dataclass(frozen=True)
+class ChaseViewConfig:
+    """``sensors[i]`` of ``type: chase_view``: CarRacing's view (procedural tracks), uint8 RGB.
+
+    The camera follows the car and turns with it (the car near the bottom, nose up), zooms
+    in during the first second, and the dashboard (speed, ABS, steering, gyro, score) is
+    drawn along the bottom. The default observation of a procedural track.
+    """
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["chase_view"] = _type("chase_view")
+    resolution: tuple[int, int] = knob(
+        (96, 96), "[y, x] output image size (CarRacing's: 96 x 96)", "px", low=1, high=160
+    )
+
+
+@dataclass(frozen=True)
+class TopViewConfig:
+    """``sensors[i]`` of ``type: top_view``: the road ahead from above with the car drawn in,
+    uint8 RGB (tracks in metres; their default observation)."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["top_view"] = _type("top_view")
+    resolution: tuple[int, int] = knob((96, 96), "[y, x] output image size", "px", low=1, high=4096)
+    span: float = knob(
+        14.0,
+        "side of the square window seen; a quarter of it behind the car",
+        "wheelbases",
+        low=0,
+        low_open=True,
+    )
+
+
+@dataclass(frozen=True)
 class OpponentsConfig:
     """``sensors[i]`` of ``type: opponents``: the nearest other cars of a race, car frame,
     nearest first; float32 rows (present, x, y, vx, vy, heading), zeros past the last car."""
@@ -215,7 +279,15 @@ class OpponentsConfig:
 
 
 SensorConfig = Union[  # noqa: UP007 (read at runtime)
-    PerspectiveCameraConfig, LidarConfig, StateConfig, LookaheadConfig, ConesConfig, OpponentsConfig
+    PerspectiveCameraConfig,
+    LidarConfig,
+    StateConfig,
+    LookaheadConfig,
+    ConesConfig,
+    OpponentsConfig,
+    CameraConfig,
+    ChaseViewConfig,
+    TopViewConfig,
 ]
 SENSOR_CONFIGS = (
     PerspectiveCameraConfig,
@@ -224,4 +296,17 @@ SENSOR_CONFIGS = (
     LookaheadConfig,
     ConesConfig,
     OpponentsConfig,
+    CameraConfig,
+    ChaseViewConfig,
+    TopViewConfig,
 )
+
+
+def cameras_first(
+    cameras: tuple[CameraConfig, ...], sensors: tuple[SensorConfig, ...]
+) -> tuple[SensorConfig, ...]:
+    """tinycarlo's ``cameras:`` as ``birdseye_camera`` sensors, first in the ``sensors``
+    list (in their order; once: a list that starts with them already is kept)."""
+    if sensors[: len(cameras)] == cameras:
+        return sensors
+    return (*cameras, *sensors)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -46,15 +47,11 @@ def route_of(env: gym.Env) -> Route:
         "steer_per_rad": facts.steer_per_rad,
         "grip": facts.grip,
     }
-    centerline = getattr(track, "centerline", None)
-    if centerline is not None:
-        return Route(np.asarray(centerline, float), True, False, unit, **steering)
-    if getattr(track, "kind", None) == "ros_map":
-        raise ValueError(
-            "the centerline driver needs a line to follow, and this ros_map track has none: "
-            "give the track a waypoint or raceline CSV (track.waypoints)"
-        )
-    pixels = getattr(track, "trajectory_mask", None)
+    if track.centerline is not None:
+        return Route(np.asarray(track.centerline, float), True, False, unit, **steering)
+    if track.reference_note is not None:  # a track that says why it has no line
+        raise ValueError(f"the centerline driver needs a line to follow: {track.reference_note}")
+    pixels = track.trajectory_points
     if pixels is None or len(pixels) == 0:
         raise ValueError(
             "the centerline driver needs a line to follow: a procedural track, or an image "
@@ -126,7 +123,9 @@ class CenterlineDriver:
     car's wheelbase on image tracks. The kinematic car's speed is fixed: there the
     driver only steers. A car with a tyre model (``grip``) keeps the profile's lateral and
     braking accelerations under ``grip_share`` of its grip; a car whose actions are a steering
-    angle and a speed (the single-track car) is given the profile's speed.
+    angle and a speed (the single-track car) is given the profile's speed. ``offset`` [track
+    units] moves the line followed to the left (negative: right) of the route: cars of a race
+    on lanes of their own.
     """
 
     def __init__(
@@ -140,8 +139,10 @@ class CenterlineDriver:
         gas_gain: float = 0.2,  # [s/u] gas per u/s below the target speed
         corner_gas_cut: float = 0.7,  # fraction of gas taken away at full lock
         grip_share: float = 0.35,  # of the tyres' grip the speed profile plans with
+        offset: float = 0.0,  # [track units] follow a line this far left of the route (- right)
     ):
         self.grip_share = grip_share
+        self.offset = offset
         self.lookahead = lookahead
         self.lookahead_per_speed = lookahead_per_speed
         self.top_speed = top_speed
@@ -167,6 +168,8 @@ class CenterlineDriver:
     ) -> None:
         """Start on ``route`` (what ``reset`` does with the env's route); ``dt`` [s] per step;
         ``kind`` the actions' (``ActionSpec.kind``; None: read from the space's shape)."""
+        if self.offset:
+            route = dataclasses.replace(route, points=offset_line(route, self.offset))
         self.route = route
         steps = np.linalg.norm(np.diff(route.points, axis=0), axis=1)
         self._spacing = float(steps.mean()) if len(steps) else 1.0
@@ -234,6 +237,23 @@ class CenterlineDriver:
         best = int(candidates[np.argmin(np.einsum("ij,ij->i", offsets, offsets))])
         self._nearest = best
         return best
+
+
+def offset_line(route: Route, offset: float) -> np.ndarray:
+    """The route's points moved ``offset`` [track units] to the driver's left (negative: to
+    the right), across the direction of travel at each point: a lane beside the line."""
+    points = np.asarray(route.points, float)
+    if len(points) < 2:
+        return points
+    ahead = np.roll(points, -1, axis=0) if route.closed else np.vstack((points[1:], points[-1:]))
+    behind = np.roll(points, 1, axis=0) if route.closed else np.vstack((points[:1], points[:-1]))
+    direction = ahead - behind
+    direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-12)
+    left = np.column_stack((-direction[:, 1], direction[:, 0]))  # y up: turned +90 deg
+    if route.y_down:  # image tracks: y grows downwards, the driver's left is the other way
+        left = -left
+    moved: np.ndarray = points + offset * left
+    return moved
 
 
 def speed_profile(

@@ -9,33 +9,65 @@ the kind of track.
 
 from __future__ import annotations
 
+import math
 import weakref
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from tinyrace.cars.registry import CarModel
-from tinyrace.config import EnvConfig
+from tinyrace.config import EnvConfig, RaceCar
 from tinyrace.episodes.rules import Rule, rule_type
-from tinyrace.episodes.start import grid_poses
+from tinyrace.episodes.start import grid_poses, random_poses
+from tinyrace.episodes.start_pose import placement_problems
+from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Pose, Track, TrackDraw
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
 
 GRASS_PARTS = ("tile_touches", "grass")  # parts whose tiles are also the wheels' road
+RESET_SOURCE = "<reset options>"
+RANDOM_ATTEMPTS = 50  # random starts drawn before a race is refused for want of room
+
+
+@dataclass(frozen=True)
+class Racer:
+    """One car of the race: its config (id, car, colour, sensors) and its car model."""
+
+    car: RaceCar
+    model: CarModel
+
+    @property
+    def id(self) -> str:
+        return self.car.id
+
+
+@dataclass(frozen=True)
+class Start:
+    """Where the cars of an episode start, and the keys problems with them name."""
+
+    poses: list[Pose]
+    source: str
+    paths: list[str]  # per car: the key its pose came from
+    hint: str = ""  # how to make room, said after each problem
+    value: object = None  # the value problems show (None: each car's pose)
 
 
 class Episode:
-    """One reset: the drawn track, its world with the cars in it, each car's rule parts."""
+    """One reset: the drawn track, its world with the cars in it, each car's rule parts,
+    laps and lap times."""
 
     def __init__(
         self,
         config: EnvConfig,
         draw: TrackDraw,
         world: World,
-        car_model: CarModel,
-        parts: tuple[str, ...],
-        poses: Sequence[Pose],
+        racers: Sequence[Racer],
+        parts: Sequence[tuple[str, ...]],
+        start: Start,
     ):
         self.config = config
         self.draw = draw
@@ -43,12 +75,23 @@ class Episode:
         self.track_index, self.spawn_index = draw.track_index, draw.spawn_index
         self.world = world
         world.remove_cars()  # the last episode's cars; the track's static shapes stay
-        for pose in poses:
-            world.add_car(car_model.build(world.space, pose, config.car, draw.track))
+        for racer, pose in zip(racers, start.poses, strict=True):
+            world.add_car(racer.model.build(world.space, pose, racer.car.car, draw.track))
+        if len(racers) > 1:
+            names = [racer.id for racer in racers]
+            problems = placement_problems(
+                draw.track,
+                world.states(),
+                names,
+                start.source,
+                start.paths,
+                start.hint,
+                start.value,
+            )
+            if problems:
+                raise ConfigError(problems)
         rules = self.track.rules
-        self.rules: list[list[Rule]] = [
-            [rule_type(name)(self.track) for name in parts] for _ in world.cars
-        ]
+        self.rules: list[list[Rule]] = [[rule_type(name)(self.track) for name in p] for p in parts]
         self._reset_step = rules.reset_step
         self._labels = {
             "track": self.track_index,
@@ -56,6 +99,9 @@ class Episode:
             "unit": self.track.unit,
         }
         self._info_labels = rules.info_labels
+        self.laps = config.race.laps
+        self.steps = 0  # steps since the reset (the reset's own not counted)
+        self.lap_ends: list[list[int]] = [[] for _ in racers]  # per car: the step of each lap
 
     @property
     def visit_order(self) -> list[int]:
@@ -67,20 +113,48 @@ class Episode:
         return []
 
     def progress(self, car: int) -> int:
-        """Tiles car ``car`` has visited (0 on a track without tiles)."""
-        counts = (getattr(rule, "visited_count", 0) for rule in self.rules[car])
-        return max(counts, default=0)
+        """Tiles car ``car`` has visited, every finished lap counting all of them (0 on a
+        track without tiles)."""
+        rules = self.rules[car]
+        visited = max((getattr(rule, "visited_count", 0) for rule in rules), default=0)
+        total = max((len(getattr(rule, "visited", ())) for rule in rules), default=0)
+        laps = len(self.lap_ends[car])
+        return laps * total + (visited if laps < self.laps else 0)
 
     def position(self, car: int) -> int:
-        """Car ``car``'s place in the race by tiles visited: 1 + the cars further on."""
-        mine = self.progress(car)
-        return 1 + sum(self.progress(other) > mine for other in range(len(self.rules)))
+        """Car ``car``'s place in the race: 1 + the cars further on (more tiles visited, or
+        as many and the race finished earlier)."""
+        return self.positions()[car]
+
+    def positions(self) -> list[int]:
+        """Every car's ``position``, each car's standing read once (a race's step asks for
+        all of them)."""
+        standings = [self._standing(car) for car in range(len(self.rules))]
+        return [1 + sum(other > mine for other in standings) for mine in standings]
+
+    def _standing(self, car: int) -> tuple[int, float]:
+        ends = self.lap_ends[car]
+        finished = len(ends) >= self.laps
+        return self.progress(car), -float(ends[-1]) if finished else -math.inf
+
+    def lap_times(self, car: int, dt: float) -> list[float]:
+        """[s] of sim time of each lap car ``car`` finished (``dt``: the step [s])."""
+        ends = self.lap_ends[car]
+        return [(end - begin) * dt for begin, end in zip([0, *ends], ends, strict=False)]
+
+    def lap_of(self, car: int) -> int:
+        """The lap (0 first) of the tiles car ``car`` visited in the last step."""
+        ends = self.lap_ends[car]
+        done = len(ends) - (1 if ends and ends[-1] == self.steps else 0)
+        return min(done, self.laps - 1)
 
     def start(self, dt: float) -> list[StepFacts]:
         """The reset's step: one physics step with no action (CarRacing), or a look at the
         spawn (the cars do not move); either way the rules judge it. Each car's facts."""
         if self._reset_step:
-            return self.step(dt)
+            facts = self.step(dt)
+            self.steps = 0
+            return facts
         self.world.look(dt)
         return self._judge()
 
@@ -93,11 +167,20 @@ class Episode:
         """The rest of a step whose forces are set: the world advanced, each car's facts
         (a parked car's rules judge no more: its facts stay empty)."""
         self.world.advance(dt)
+        self.steps += 1
         return self._judge()
 
     def park(self, car: int) -> None:
         """Take car ``car`` out of the race (it stays, standing, as an obstacle)."""
         self.world.park(car)
+
+    def leave(self, car: int, reason: str) -> None:
+        """Car ``car``'s episode ended for ``reason``: a car that finished its race is taken
+        off the track (it does not block the line), any other is parked as an obstacle."""
+        if reason == "lap_finished":
+            self.world.retire(car)
+        else:
+            self.world.park(car)
 
     def _judge(self) -> list[StepFacts]:
         world = self.world
@@ -108,7 +191,23 @@ class Episode:
                 continue
             for rule in rules:
                 rule.judge(contacts[car], states[car], facts[car])
+            if facts[car].lap_finished:
+                self._lap(car, facts[car])
         return facts
+
+    def _lap(self, car: int, facts: StepFacts) -> None:
+        """Car ``car`` finished a lap: its time is kept; before its last lap the episode goes
+        on with every tile to visit again."""
+        ends = self.lap_ends[car]
+        if len(ends) >= self.laps:
+            return  # finished already (a car that is not parked, in a single-agent env)
+        ends.append(self.steps)
+        if len(ends) < self.laps:
+            facts.lap_finished = False
+            for rule in self.rules[car]:
+                new_lap = getattr(rule, "new_lap", None)
+                if new_lap is not None:
+                    new_lap()
 
     def info(self, snapshot: Snapshot, car: int = 0) -> dict[str, Any]:
         """Car ``car``'s info (``snapshot.cars[car]`` is that car): its pose and speed, the
@@ -126,39 +225,109 @@ class Course:
     """What lasts across resets: one world per track, furnished once with what the track's
     rule parts need (a new track, as CarRacing draws every reset, gets a new world)."""
 
-    def __init__(self, config: EnvConfig, car_model: CarModel):
+    def __init__(self, config: EnvConfig, racers: Sequence[Racer], source: str = "<config>"):
         self.config = config
-        self.car_model = car_model
-        self.wheels = car_model.wheels  # its wheels feel the road's tiles (grip, grass)
+        self.racers = tuple(racers)
+        self.source = source  # where the config came from (problems with its start poses)
+        self.car_model = racers[0].model
+        # a car's wheels feel the road's tiles (grip, grass)
+        self.wheels = any(racer.model.wheels for racer in racers)
         self._worlds: weakref.WeakKeyDictionary[Track, World] = weakref.WeakKeyDictionary()
 
-    def new_episode(self, draw: TrackDraw, poses: Sequence[Pose] | None = None) -> Episode:
-        """An episode on ``draw``'s track with a car at each of ``poses`` (by default the
-        race's start grid: the spawn for one car)."""
+    def new_episode(
+        self,
+        draw: TrackDraw,
+        poses: Sequence[Pose] | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> Episode:
+        """An episode on ``draw``'s track with a car at each of ``poses`` (a reset's option),
+        else where ``race.start`` puts them (the spawn for one car); ``rng`` draws a random
+        start. A ConfigError names a car that would start on another, a wall or a cone."""
         track = draw.track
         world = self._worlds.get(track)
         if world is None:
             world = self._worlds[track] = self.furnish(track)
-        if poses is None:
-            poses = self.grid(draw)
-        return Episode(self.config, draw, world, self.car_model, self.parts(track), poses)
+        parts = [self.parts(track, racer) for racer in self.racers]
+        if poses is not None:
+            paths = [f"poses[{i}]" for i in range(len(poses))]
+            start = Start(list(poses), RESET_SOURCE, paths)
+            return Episode(self.config, draw, world, self.racers, parts, start)
+        if self.config.race.start != "random":
+            return Episode(self.config, draw, world, self.racers, parts, self.start(draw))
+        for attempt in range(RANDOM_ATTEMPTS):  # until every car is clear of walls and cones
+            try:
+                start = self.start(draw, rng)
+                return Episode(self.config, draw, world, self.racers, parts, start)
+            except ConfigError:
+                if attempt == RANDOM_ATTEMPTS - 1:
+                    raise
+        raise AssertionError("unreachable")
 
-    def grid(self, draw: TrackDraw) -> list[Pose]:
-        """The start grid behind ``draw``'s spawn (``race`` knobs; in car lengths and widths)."""
-        race = self.config.race
-        if race.num_agents == 1:
-            return [draw.spawn]
+    def start(self, draw: TrackDraw, rng: np.random.Generator | None = None) -> Start:
+        """The cars' start poses on ``draw``'s track by ``race.start`` (``race`` knobs)."""
+        race, count = self.config.race, len(self.racers)
+        paths = [self._car_key(i) for i in range(count)]
+        if count == 1 and race.start != "poses":
+            return Start([draw.spawn], self.source, paths)
         size = self.car_size(draw)
-        return grid_poses(
-            draw.track, draw.spawn, race.num_agents, size, race.grid_spacing, race.grid_offset
+        if race.start == "poses":
+            paths = [f"race.poses[{i}]" for i in range(count)]
+            return Start(list(race.poses), self.source, paths)
+        if race.start == "random":
+            if rng is None:
+                rng = np.random.default_rng(0)  # the env passes its np_random
+            try:
+                poses = random_poses(
+                    draw.track, draw.spawn, count, size, race.grid_spacing, race.grid_offset, rng
+                )
+            except ValueError as exc:
+                raise ConfigError(self._no_room(str(exc))) from None
+            return Start(poses, self.source, paths)
+        poses = grid_poses(draw.track, draw.spawn, count, size, race.grid_spacing, race.grid_offset)
+        hint = (
+            f" (grid places behind spawn {draw.spawn_index} of track {draw.track_index}: fewer "
+            "cars, a smaller race.grid_spacing or race.grid_offset make room)"
         )
+        return Start(poses, self.source, paths, hint, f"{count} cars")
+
+    def _car_key(self, car: int) -> str:
+        """The key that names car ``car`` in the config."""
+        return f"race.cars[{car}]" if self.config.race.cars else "race.num_agents"
+
+    def _no_room(self, why: str) -> Problem:
+        race = self.config.race
+        allowed = f"expected fewer cars or a smaller race.grid_spacing: {why}"
+        return Problem(self.source, self._car_key(len(self.racers) - 1), race.num_agents, allowed)
+
+    def check_fixed_starts(self, tracks: Sequence[Track]) -> list[Problem]:
+        """Every problem of the start grid (or the config's poses) on each fixed track, at
+        each spawn: a car on another, a wall or a cone, or outside the track."""
+        if len(self.racers) == 1:
+            return []  # one car: ``start_fits``
+        problems: list[Problem] = []
+        for index, track in enumerate(tracks):
+            for spawn_index in range(len(track.spawns)):
+                draw = TrackDraw(track, index, spawn_index)
+                try:
+                    if self.config.race.start == "random":  # room on the line; drawn per reset
+                        self.start(draw, np.random.default_rng(0))
+                    else:
+                        self.new_episode(draw)
+                except ConfigError as exc:
+                    problems += [p for p in exc.problems if p not in problems]
+        return problems
 
     def car_size(self, draw: TrackDraw) -> tuple[float, float]:
-        """(length, width) [track units] of the car model on ``draw``'s track: one built in a
-        scratch world and read."""
+        """(length, width) [track units] of the largest car on ``draw``'s track: each model
+        built in a scratch world and read."""
         scratch = World()
-        car = self.car_model.build(scratch.space, draw.spawn, self.config.car, draw.track)
-        return car.state().footprint
+        sizes = [
+            racer.model.build(scratch.space, draw.spawn, racer.car.car, draw.track)
+            .state()
+            .footprint
+            for racer in self.racers
+        ]
+        return max(size[0] for size in sizes), max(size[1] for size in sizes)
 
     def __getstate__(self) -> dict[str, Any]:
         return {**self.__dict__, "_worlds": list(self._worlds.items())}  # weak refs don't pickle
@@ -168,9 +337,11 @@ class Course:
         self.__dict__.update(state)
         self._worlds = weakref.WeakKeyDictionary(worlds)
 
-    def parts(self, track: Track) -> tuple[str, ...]:
-        """The track's rule parts that apply to this car (grass only under wheels)."""
-        return tuple(name for name in track.rules.parts if name != "grass" or self.wheels)
+    def parts(self, track: Track, racer: Racer | None = None) -> tuple[str, ...]:
+        """The track's rule parts that apply to ``racer``'s car (grass only under wheels;
+        without a racer: to any car of the race)."""
+        wheels = self.wheels if racer is None else racer.model.wheels
+        return tuple(name for name in track.rules.parts if name != "grass" or wheels)
 
     def furnish(self, track: Track) -> World:
         """A world holding what the track's rule parts need (tiles, cells, walls, cones)."""

@@ -47,6 +47,11 @@ class TileProgress:
         self.visit_order: list[int] = []  # tiles in the order first visited (pictures repaint)
         self.lap_percent = lap_percent
 
+    def new_lap(self) -> None:
+        """Every tile to visit again (a race of several laps goes on after a lap)."""
+        self.visited[:] = False
+        self.visited_count = 0
+
     def _visit(self, tiles: Sequence[int], facts: StepFacts) -> None:
         """Mark ``tiles`` (reached in this order during the step) visited; the lap rule."""
         n = len(self.visited)

@@ -33,14 +33,59 @@ def grid_poses(
     length, width = size
     distances = [k * spacing * length for k in range(count)]  # [track units] behind the pole
     sides = [offset * width * (1.0 if k % 2 == 0 else -1.0) for k in range(count)]
-    if track.centerline is not None and len(track.centerline) >= 3:
-        behind = _along_line(track.centerline, spawn, distances)
+    if has_line(track):
+        assert track.centerline is not None
+        behind = [spawn, *_along_line(track.centerline, spawn, distances)[1:]]  # pole at spawn
     else:
         x, y, heading = spawn
         behind = [
             (x - d * math.cos(heading), y - d * math.sin(heading), heading) for d in distances
         ]
     return [_sideways(pose, side) for pose, side in zip(behind, sides, strict=True)]
+
+
+def random_poses(
+    track: Track,
+    spawn: Pose,
+    count: int,
+    size: tuple[float, float],
+    gap: float,
+    offset: float,
+    rng: np.random.Generator,
+) -> list[Pose]:
+    """``count`` start poses at random places along the track's reference line, each at
+    least ``gap`` car lengths from the next along the line and up to ``offset`` car widths
+    to either side; on a track without a line, the grid's places in a random order.
+    Raises ValueError when the line is too short for ``count`` cars so far apart."""
+    if not has_line(track):
+        places = grid_poses(track, spawn, count, size, gap, offset)
+        return [places[i] for i in rng.permutation(count)]
+    assert track.centerline is not None
+    length, width = size
+    loop = line_length(track.centerline)
+    room = loop - count * gap * length  # [track units] free of the gaps between the cars
+    if room < 0:
+        raise ValueError(
+            f"{count} cars {gap:g} car lengths apart need {count * gap * length:.1f} track "
+            f"units of the reference line; it is {loop:.1f} long"
+        )
+    starts = np.sort(rng.uniform(0.0, room, count)) + gap * length * np.arange(count)
+    distances = (starts + rng.uniform(0.0, loop)) % loop  # [track units] behind the spawn
+    sides = rng.uniform(-offset * width, offset * width, count)
+    poses = _along_line(track.centerline, spawn, distances.tolist())
+    return [_sideways(pose, float(side)) for pose, side in zip(poses, sides, strict=True)]
+
+
+def has_line(track: Track) -> bool:
+    """Whether the track has a reference line to place cars along."""
+    return track.centerline is not None and len(track.centerline) >= 3
+
+
+def line_length(points: np.ndarray) -> float:
+    """[track units] round the closed polyline ``points``."""
+    loop = np.asarray(points, dtype=np.float64)
+    steps = np.diff(np.concatenate([loop, loop[:1]]), axis=0)
+    return float(np.hypot(steps[:, 0], steps[:, 1]).sum())
 
 
 def _along_line(points: np.ndarray, spawn: Pose, distances: Sequence[float]) -> list[Pose]:
@@ -64,7 +109,7 @@ def _along_line(points: np.ndarray, spawn: Pose, distances: Sequence[float]) -> 
         px, py = order[i] + t * steps[i]
         back = math.atan2(steps[i][1], steps[i][0])  # the walk's direction: against travel
         poses.append((float(px), float(py), back + math.pi))
-    return [spawn, *poses[1:]]  # the pole exactly at the spawn
+    return poses
 
 
 def _sideways(pose: Pose, side: float) -> Pose:

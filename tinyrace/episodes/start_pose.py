@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tinyrace.cars.registry import CarModel
-from tinyrace.cars.state import footprint_corners
+from tinyrace.cars.state import CarState, footprint_corners
 from tinyrace.config import EnvConfig
 from tinyrace.errors import Problem
 from tinyrace.tracks.base import Track
@@ -67,7 +67,7 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         track = config.tracks[fit.track_index]
         spawn = getattr(track, "spawn", None)
         given = spawn is not None
-        key = "spawn" if given else ("waypoints" if track.type == "ros_map" else "file")
+        key = "spawn" if given else track.start_key  # the file whose first point it is
         where = f"tracks[{fit.track_index}].{key}"
         x, y, heading = fit.spawn
         length, width = fit.size
@@ -83,6 +83,60 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         value = list(spawn) if spawn is not None else getattr(track, key)
         problems.append(Problem(source, where, value, allowed))
     return problems
+
+
+def placement_problems(
+    track: Track,
+    states: Sequence[CarState],
+    names: Sequence[str],
+    source: str,
+    paths: Sequence[str],
+    hint: str = "",
+    value: object = None,
+) -> list[Problem]:
+    """A Problem for each car that starts outside the track's bounds, on a wall or a cone,
+    or on another car (footprints, as the world sees them), named by its id and by the key
+    (``paths[i]``) its pose came from, showing ``value`` (None: the pose)."""
+    corners = [footprint_corners(state) for state in states]
+    walls = np.asarray(track.walls, np.float64)
+    x0, y0, x1, y1 = track.bounds
+    problems = []
+    for i, (state, quad) in enumerate(zip(states, corners, strict=True)):
+        where = []
+        x, y = state.rear_axle if track.rules.bounds_point == "rear_axle" else state.pose[:2]
+        if not (x0 <= x <= x1 and y0 <= y <= y1):
+            where.append(f"outside the track's bounds {list(track.bounds)}")
+        if _box_clearance(quad, walls) <= 0:
+            where.append("on a wall")
+        if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) <= 0:
+            where.append("on a cone")
+        where += [f"on car {names[j]!r}" for j in range(i) if _quads_overlap(quad, corners[j])]
+        if where:
+            pose = [round(v, 4) for v in state.pose]
+            length, width = state.footprint
+            allowed = (
+                f"car {names[i]!r} would start {' and '.join(where)} (its footprint {length:.2f} "
+                f"x {width:.2f} track units at {pose}): expected a start pose clear of the "
+                f"walls, cones and the other cars, inside the track{hint}"
+            )
+            problems.append(Problem(source, paths[i], pose if value is None else value, allowed))
+    return problems
+
+
+def _quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two convex quads overlap by more than a touch (no separating axis among their
+    edges' normals)."""
+    for quad in (a, b):
+        edges = np.roll(quad, -1, axis=0) - quad
+        normals = np.column_stack((-edges[:, 1], edges[:, 0]))
+        along_a, along_b = a @ normals.T, b @ normals.T  # (4, 4): corner by axis
+        scale = np.hypot(normals[:, 0], normals[:, 1]) * 1e-9
+        apart = (along_a.max(0) <= along_b.min(0) + scale) | (
+            along_b.max(0) <= along_a.min(0) + scale
+        )
+        if apart.any():
+            return False
+    return True
 
 
 def _box_clearance(corners: np.ndarray, boxes: np.ndarray) -> float:

@@ -7,7 +7,8 @@ from tinyrace.experiment.load import (
     is_experiment,
     load_experiment,
 )
-from tinyrace.experiment.report import rebuild_report, write_report
+from tinyrace.experiment.rebuild import rebuild_report
+from tinyrace.experiment.report import write_report
 from tinyrace.experiment.runner import RunResult, print_report, run_experiment
 
 __all__ = [

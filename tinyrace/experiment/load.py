@@ -9,7 +9,7 @@ from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, Overrides, load_env_config
 from tinyrace.config.experiment import ExperimentConfig
@@ -31,6 +31,12 @@ class Experiment:
     env_kwargs: dict[str, Any]  # for TinyRaceEnv(**env_kwargs) or gym.make
     loaded: LoadedConfig  # the env config, its problems named in the experiment or track file
     folder: Path = Path()  # the experiment file's folder: own drivers are imported from it
+    agents: tuple[str, ...] = ("car_0",)  # the env's cars (RaceEnv.possible_agents)
+
+    @property
+    def is_race(self) -> bool:
+        """Several cars, each with its driver (run by ``race_runner``)."""
+        return len(self.agents) > 1
 
     @property
     def name(self) -> str:
@@ -43,7 +49,7 @@ class Experiment:
 
 def is_experiment(raw: object) -> bool:
     """An experiment file has experiment keys; a track.yaml has track sections."""
-    keys = {"env", "driver", "episodes", "output", "driver_args", "max_steps"}
+    keys = {"env", "driver", "drivers", "episodes", "output", "driver_args", "max_steps"}
     return isinstance(raw, Mapping) and bool(keys & set(raw))
 
 
@@ -69,11 +75,15 @@ def experiment_from_dict(raw: object, source: str, base_dir: Path) -> Experiment
         loaded, kwargs = _load_env(sections, track_path, base_dir, source)
     except ConfigError as exc:
         raise ConfigError(problems + exc.problems) from None
-    problems += view_problems(config, loaded.config, source)
-    problems += build_problems(loaded)  # its files, car, sensors (a fixed track is loaded
-    if problems:  # once: the env the run makes next shares it)
+    # its files, car, sensors (a fixed track is loaded once: the run's env shares it)
+    built, agents = _build(loaded)
+    if len(agents) <= 1:
+        problems += view_problems(config, loaded.config, source)
+    problems += built
+    problems += race_problems(config, agents, base_dir, source)
+    if problems:
         raise ConfigError(problems)
-    return Experiment(config, source, loaded.config, kwargs, loaded, base_dir)
+    return Experiment(config, source, loaded.config, kwargs, loaded, base_dir, agents)
 
 
 def _load_env(
@@ -92,13 +102,50 @@ def _load_env(
 
 def build_problems(loaded: LoadedConfig) -> list[Problem]:
     """The problems found by building the env of ``loaded`` (files, car model, sensors)."""
-    from tinyrace.env import TinyRaceEnv
+    return _build(loaded)[0]
 
+
+def _build(loaded: LoadedConfig) -> tuple[list[Problem], tuple[str, ...]]:
+    """``build_problems``, and the names of the env's cars (a race's: RaceEnv's agents)."""
+    from tinyrace.env import TinyRaceEnv
+    from tinyrace.race import RaceEnv
+
+    several = (
+        loaded.config.race.num_agents > 1 or len(getattr(loaded.config, "cars", None) or ()) > 1
+    )
     try:
-        TinyRaceEnv(config=loaded).close()
+        if not several:
+            TinyRaceEnv(config=loaded).close()
+            return [], ("car_0",)
+        race = RaceEnv(config=cast(Any, loaded))  # a LoadedConfig, as TinyRaceEnv takes it
+        race.close()
     except ConfigError as exc:
-        return exc.problems
-    return []
+        return exc.problems, ()
+    return [], tuple(race.possible_agents)
+
+
+def race_problems(
+    config: ExperimentConfig, agents: tuple[str, ...], folder: Path, source: str
+) -> list[Problem]:
+    """The problems of ``drivers`` (a driver per car of a race) and, in a race, of
+    ``output.view`` (its one video shows every car: the overview)."""
+    from tinyrace.experiment.race_drivers import car_drivers
+
+    if not agents:  # the env was not built: its problems are reported
+        return []
+    if len(agents) == 1:
+        if not config.drivers:
+            return []
+        allowed = "expected no per-car drivers for one car (race.num_agents 1): set 'driver'"
+        return [Problem(source, "drivers", dict(config.drivers), allowed)]
+    drivers, problems = car_drivers(config, agents, source)
+    for driver in drivers:
+        if driver.key != "driver":  # the default driver is checked once, as 'driver'
+            problems += driver_problems(driver.spec, folder, source, driver.key, driver.agent)
+    if config.output.view != "default":
+        allowed = "expected default: a race's video is the overview of every car"
+        problems.append(Problem(source, "output.view", config.output.view, allowed))
+    return problems
 
 
 _IMAGE_SENSORS = ("birdseye_camera", "perspective_camera")  # their observation is a picture
@@ -116,8 +163,9 @@ def view_problems(config: ExperimentConfig, env_config: EnvConfig, source: str) 
     """The problem of ``output.view``, if any (see ``check_view``)."""
     view = config.output.view
     ids = [c.id for c in env_config.cameras]
-    ids += [s.id for s in env_config.sensors if s.type in _IMAGE_SENSORS]
-    views = ["default", *(["sensors"] if env_config.sensors else []), *ids]
+    written = env_config.written_sensors  # its cameras are listed above
+    ids += [s.id for s in written if s.type in _IMAGE_SENSORS]
+    views = ["default", *(["sensors"] if written else []), *ids]
     if view in views:
         return []
     allowed = f"{did_you_mean(view, views)}one of: {', '.join(views)}"
@@ -131,31 +179,35 @@ def check_driver(spec: str, folder: Path, source: str) -> None:
         raise ConfigError(problems)
 
 
-def driver_problems(spec: str, folder: Path, source: str) -> list[Problem]:
-    """The problem of the ``driver`` key, if any: a built-in driver name, or
-    ``module:callable`` with the module found from ``folder``.
+def driver_problems(
+    spec: str, folder: Path, source: str, key: str = "driver", car: str | None = None
+) -> list[Problem]:
+    """The problem of the ``driver`` key (or ``key``, the driver of ``car`` in a race), if
+    any: a built-in driver name, or ``module:callable`` with the module found from ``folder``.
 
     The module is looked up, not run (a dotted name imports its parent package).
     """
     from tinyrace.drivers import DRIVERS
 
+    whose = f"car {car}'s driver: " if car is not None else ""
     if ":" not in spec:
         if spec in DRIVERS:
             return []
-        allowed = f"{one_of(spec, DRIVERS)}, or module:callable"
-        return [Problem(source, "driver", spec, allowed)]
+        allowed = f"{whose}{one_of(spec, DRIVERS)}, or module:callable"
+        return [Problem(source, key, spec, allowed)]
     module, _, attribute = spec.partition(":")
     if not (all(p.isidentifier() for p in module.split(".")) and attribute.isidentifier()):
-        allowed = "expected module:callable made of Python names (e.g. my_policy:make)"
-        return [Problem(source, "driver", spec, allowed)]
+        allowed = f"{whose}expected module:callable made of Python names (e.g. my_policy:make)"
+        return [Problem(source, key, spec, allowed)]
     with importable_from(folder):
         try:
             found = importlib.util.find_spec(module) is not None
         except (ImportError, ValueError):
             found = False
     if not found:
-        allowed = f"expected module:callable with the module in {folder} or on the Python path"
-        return [Problem(source, "driver", spec, allowed)]
+        where = f"in {folder} or on the Python path"
+        allowed = f"{whose}expected module:callable with the module {where}"
+        return [Problem(source, key, spec, allowed)]
     return []
 
 

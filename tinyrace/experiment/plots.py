@@ -59,27 +59,47 @@ def trajectories(
     """The track picture (RGB, spanning ``extent`` = left, right, bottom, top [track units])
     with each path coloured by speed; start, lap line, crashes and obstacle hits marked and
     named in the legend only where drawn. ``size`` [in]: the figure's width."""
-    height, width = background.shape[:2]
-    figure = Figure(figsize=(size, size * height / width), layout="constrained")
-    ax = figure.add_subplot()
-    ax.imshow(background, extent=extent, interpolation="antialiased")
+    figure, ax = track_axes(background, extent, lap_line, "lap line (start/finish)", size)
     finite = [p.speed[np.isfinite(p.speed)] for p in paths]
     top = max([float(s.max()) for s in finite if len(s)] + [1e-9])
     norm = Normalize(0.0, top)
-    if lap_line is not None:  # under the paths and the start marks
-        ax.plot(*np.asarray(lap_line).T, color=LAP_LINE, lw=3, label="lap line (start/finish)")
     lines = None
     for k, path in enumerate(paths):
         lines = _draw_path(ax, path, norm, first=k == 0) or lines
     _start_labels(ax, paths, 0.02 * abs(extent[1] - extent[0]))
     if lines is not None:  # a colour scale as tall as the picture
         figure.colorbar(lines, cax=ax.inset_axes((1.02, 0.0, 0.03, 1.0)), label=f"speed [{unit}/s]")
+    track_axes_done(ax, extent, unit)
+    _legend(figure, ax)
+    return figure
+
+
+def track_axes(
+    background: np.ndarray,
+    extent: tuple[float, float, float, float],
+    lap_line: np.ndarray | None,
+    lap_label: str,
+    size: float,
+) -> tuple[Figure, Axes]:
+    """A figure ``size`` [in] wide of the track picture (RGB) spanning ``extent``, with the
+    lap line (labelled ``lap_label``) drawn first: under whatever is drawn next. One car's
+    trajectories and a race's paths alike."""
+    height, width = background.shape[:2]
+    figure = Figure(figsize=(size, size * height / width), layout="constrained")
+    ax = figure.add_subplot()
+    ax.imshow(background, extent=extent, interpolation="antialiased")
+    if lap_line is not None:
+        ax.plot(*np.asarray(lap_line).T, color=LAP_LINE, lw=3, label=lap_label)
+    return figure, ax
+
+
+def track_axes_done(ax: Axes, extent: tuple[float, float, float, float], unit: str) -> None:
+    """The track picture's axes titled in ``unit`` and limited to the picture (paths that
+    leave it are cut at its edge)."""
     ax.set_xlabel(f"x [{unit}]")
     ax.set_ylabel(f"y [{unit}]")
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
-    _legend(figure, ax)
-    return figure
 
 
 def _legend(figure: Figure, ax: Axes) -> None:

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import base64
 import html
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -55,10 +55,20 @@ def rebuild_report(run_dir: Path) -> Path:
     return write_report(run_dir, header, read_episodes(run_dir))
 
 
-def _inputs(header: dict[str, Any], results: Sequence[EpisodeResult]) -> dict[str, str]:
-    """The run files the report reads, each with the file that names it."""
+class RowFiles(Protocol):
+    """What a row of episodes.csv names in the run folder (one car's episode or a car's)."""
+
+    @property
+    def trace(self) -> str | None: ...
+
+    @property
+    def video(self) -> str | None: ...
+
+
+def report_inputs(header: dict[str, Any], rows: Sequence[RowFiles]) -> dict[str, str]:
+    """The run files a report reads, each with the file that names it."""
     names = {RESULTS_FILE: RESULTS_FILE, EPISODES_FILE: EPISODES_FILE}
-    names |= {name: EPISODES_FILE for r in results for name in (r.trace, r.video) if name}
+    names |= {name: EPISODES_FILE for r in rows for name in (r.trace, r.video) if name}
     tracks = (header.get("tracks") or {}).values()
     return names | {entry["image"]: RESULTS_FILE for entry in tracks}
 
@@ -72,8 +82,8 @@ def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[Episod
     outputs = [REPORT_FILE, "report_returns.png", "report_lap_times.png"]
     outputs += ["report_time_series.png"]
     outputs += [f"report_track_{key}.png" for key in header.get("tracks") or {}]
-    check_outputs(run_dir, outputs, _inputs(header, results))
-    unit = _unit(header)
+    check_outputs(run_dir, outputs, report_inputs(header, results))
+    unit = length_unit(header)
     traces = {r.episode: _trace(run_dir, r) for r in results}
     pictures = _track_pictures(run_dir, header, results, traces)
     labels = [str(r.episode) for r in results]
@@ -90,14 +100,22 @@ def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[Episod
             caption, notes = "Speed and steering over each episode.", [CTE_LEFT_OUT]
         figure = plots.time_series(series, panels)
         pictures.append(Picture("report_time_series.png", caption, figure, True, "Over time"))
-    blobs = []
-    for picture in pictures:
-        data = plots.png(picture.figure)
-        (run_dir / picture.name).write_bytes(data)
-        blobs.append((picture, data))
+    blobs = save_pictures(run_dir, pictures)
     path = run_dir / REPORT_FILE
     path.write_text(_html(header, results, blobs, notes, unit), encoding="utf-8")
     return path
+
+
+def save_pictures(run_dir: Path, pictures: Sequence[Picture]) -> list[tuple[Picture, bytes]]:
+    """Each picture saved as PNG beside the report; with its bytes (inlined in the page)."""
+    from tinyrace.experiment.plots import png
+
+    blobs = []
+    for picture in pictures:
+        data = png(picture.figure)
+        (run_dir / picture.name).write_bytes(data)
+        blobs.append((picture, data))
+    return blobs
 
 
 def _lap_caption(lap_times: Sequence[float | None]) -> str:
@@ -108,10 +126,15 @@ def _lap_caption(lap_times: Sequence[float | None]) -> str:
     return f"Time from the reset to the end of the first lap: {finished} episode(s){missing}."
 
 
-def _unit(header: dict[str, Any]) -> str:
-    """The track's unit: CarRacing's u, image pixels, or metres on the metric kinds."""
-    kind = str(header.get("track_kind"))
-    return {"procedural": "u", "centerline": "m", "cone_map": "m", "ros_map": "m"}.get(kind, "px")
+def length_unit(header: dict[str, Any]) -> str:
+    """The track's unit as the run recorded it (``track_unit``; older runs: the unit of
+    their first track picture): CarRacing's u, image pixels or metres."""
+    recorded = header.get("track_unit")
+    if isinstance(recorded, str):
+        return recorded
+    entries = list((header.get("tracks") or {}).values())
+    unit = entries[0].get("unit") if entries else None
+    return unit if isinstance(unit, str) and unit else "track units"
 
 
 def _trace(run_dir: Path, result: EpisodeResult) -> dict[str, np.ndarray] | None:
@@ -154,15 +177,15 @@ def _track_pictures(
     pictures = []
     tracks: dict[str, Any] = header.get("tracks") or {}
     for key, entry in tracks.items():
-        background = _background(run_dir, key, entry["image"])
+        background = track_background(run_dir, key, entry["image"])
         if background is None:
             continue
-        extent = _extent(entry["frame"], background.shape)
+        extent = picture_extent(entry["frame"], background.shape)
         paths = []
         for result in (r for r in results if r.track == key):
             trace = traces[result.episode]
             if trace is not None:
-                points = _near(np.stack([trace["x"], trace["y"]], axis=-1), extent)
+                points = trace_points(trace, extent)
                 hits, crashed = trace["obstacle_hit"] > 0, result.end in CRASHES
                 paths.append(
                     plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
@@ -182,13 +205,20 @@ def _track_pictures(
     return pictures
 
 
-def _background(run_dir: Path, key: str, name: str) -> np.ndarray | None:
+def track_background(run_dir: Path, key: str, name: str) -> np.ndarray | None:
     """A track picture of the run folder (None when missing), read within the pixel cap."""
     path = run_dir / name
     if not path.is_file():
         return None
     where = f"tracks.{key}.image"
     return read_image_bgr(path, DEFAULT_MAX_IMAGE_PIXELS, str(run_dir / RESULTS_FILE), where)
+
+
+def trace_points(
+    trace: dict[str, np.ndarray], extent: tuple[float, float, float, float]
+) -> np.ndarray:
+    """A trace's (x, y) [track units] as (N, 2) points, kept near the picture's extent."""
+    return _near(np.stack([trace["x"], trace["y"]], axis=-1), extent)
 
 
 def _near(points: np.ndarray, extent: tuple[float, float, float, float]) -> np.ndarray:
@@ -202,7 +232,9 @@ def _near(points: np.ndarray, extent: tuple[float, float, float, float]) -> np.n
         return np.asarray(np.clip(points, low, high), np.float64)
 
 
-def _extent(frame: Sequence[float], shape: tuple[int, ...]) -> tuple[float, float, float, float]:
+def picture_extent(
+    frame: Sequence[float], shape: tuple[int, ...]
+) -> tuple[float, float, float, float]:
     """(left, right, bottom, top) [track units] of a picture's outer pixel edges."""
     sx, ox, sy, oy = frame
     height, width = shape[:2]
@@ -214,7 +246,7 @@ def _extent(frame: Sequence[float], shape: tuple[int, ...]) -> tuple[float, floa
     )
 
 
-def _table(head: Sequence[str], rows: Sequence[Sequence[str]], text: Sequence[int]) -> str:
+def table_html(head: Sequence[str], rows: Sequence[Sequence[str]], text: Sequence[int]) -> str:
     """An HTML table; the columns but ``text`` hold numbers (right-aligned)."""
     cells = "".join(f"<th scope=col>{html.escape(h)}</th>" for h in head)
     body = "\n".join(
@@ -260,24 +292,10 @@ def _html(
     unit: str,
 ) -> str:
     title = f"tinyrace run {header.get('started', '')}"
-    state = []
-    if header.get("interrupted"):
-        state.append(f"<p class=warn>Interrupted by {html.escape(str(header.get('signal')))}.</p>")
-    if header.get("error"):
-        state.append(f"<p class=warn>Stopped by an error: {html.escape(header['error'])}</p>")
     planned = header.get("episodes_planned", len(results))
     head, rows = table_rows(results, unit)
     stats_head, stats = summary_rows(header.get("summary") or {}, unit)
-    sections: dict[str, list[str]] = {}
-    for picture, data in blobs:
-        sections.setdefault(picture.section, []).append(_figure(picture, data))
-    if notes:
-        sections.setdefault("Over time", []).extend(
-            f"<p class=note>{html.escape(n)}</p>" for n in notes
-        )
-    figures = "\n".join(
-        f"<h3>{html.escape(name)}</h3>\n" + "\n".join(parts) for name, parts in sections.items()
-    )
+    figures = figures_html(blobs, {"Over time": notes} if notes else {})
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>{STYLE}</style></head><body>
@@ -285,12 +303,37 @@ def _html(
 <p>Experiment: {html.escape(str(header.get("experiment", "")))};
 {len(results)} of {planned} episode(s) finished; track kind:
 {html.escape(str(header.get("track_kind", "?")))}; lengths in {html.escape(unit)}.</p>
-{"".join(state)}
+{state_html(header)}
 <h2>Episodes</h2>
-{_table(head, rows, text=[len(head) - 1])}
+{table_html(head, rows, text=[len(head) - 1])}
 <h2>Summary</h2>
-{_table(stats_head, stats, text=[0])}
+{table_html(stats_head, stats, text=[0])}
 <h2>Charts</h2>
 {figures}
 </body></html>
 """
+
+
+def state_html(header: dict[str, Any]) -> str:
+    """The page's warnings: the run was interrupted, or stopped by an error."""
+    state = []
+    if header.get("interrupted"):
+        state.append(f"<p class=warn>Interrupted by {html.escape(str(header.get('signal')))}.</p>")
+    if header.get("error"):
+        state.append(f"<p class=warn>Stopped by an error: {html.escape(header['error'])}</p>")
+    return "".join(state)
+
+
+def figures_html(blobs: Sequence[tuple[Picture, bytes]], notes: Mapping[str, Sequence[str]]) -> str:
+    """The pictures inline under a heading per section (in first-seen order), each
+    section's ``notes`` after its pictures."""
+    sections: dict[str, list[str]] = {}
+    for picture, data in blobs:
+        sections.setdefault(picture.section, []).append(_figure(picture, data))
+    for section, texts in notes.items():
+        sections.setdefault(section, []).extend(
+            f"<p class=note>{html.escape(n)}</p>" for n in texts
+        )
+    return "\n".join(
+        f"<h3>{html.escape(name)}</h3>\n" + "\n".join(parts) for name, parts in sections.items()
+    )

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from dataclasses import fields as fields_of
 from pathlib import Path
@@ -90,10 +90,17 @@ def _measured(results: Sequence[EpisodeResult], key: str) -> bool:
 def table(results: Sequence[EpisodeResult]) -> str:
     """A fixed-width table, one row per episode."""
     titles, cells = table_rows(results)
+    return fixed_width(titles, cells)
+
+
+def fixed_width(titles: Sequence[str], cells: Sequence[Sequence[str]], rule: bool = True) -> str:
+    """Titles and cells as right-aligned columns two spaces apart; ``rule``: a line of dashes
+    under the titles. Shared by one car's and a race's printed tables."""
     rows = [titles, *cells]
     widths = [max(len(row[i]) for row in rows) for i in range(len(titles))]
     lines = ["  ".join(cell.rjust(w) for cell, w in zip(row, widths, strict=True)) for row in rows]
-    lines.insert(1, "  ".join("-" * w for w in widths))
+    if rule:
+        lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
 
 
@@ -103,10 +110,15 @@ def summary(results: Sequence[EpisodeResult]) -> dict[str, dict[str, float]]:
     for key, _ in SUMMARIZED:
         values = [getattr(r, key) for r in results if getattr(r, key) is not None]
         if values:
-            mean = sum(values) / len(values)
-            std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
-            stats[key] = {"mean": mean, "std": std}
+            stats[key] = mean_std(values)
     return stats
+
+
+def mean_std(values: Sequence[float]) -> dict[str, float]:
+    """``{"mean": ..., "std": ...}`` of ``values`` (not empty; the population std)."""
+    mean = sum(values) / len(values)
+    std = math.sqrt(sum((v - mean) ** 2 for v in values) / len(values))
+    return {"mean": mean, "std": std}
 
 
 def summary_rows(
@@ -135,10 +147,17 @@ def write_files(
     """results.json (everything) and episodes.csv (one row per episode); returns the payload."""
     rows = [asdict(r) for r in results]
     payload = {**header, "episodes": rows, "summary": summary(results)}
+    write_results(run_dir, payload, [f.name for f in fields_of(EpisodeResult)], rows)
+    return payload
+
+
+def write_results(
+    run_dir: Path, payload: dict[str, Any], columns: Sequence[str], rows: Iterable[dict[str, Any]]
+) -> None:
+    """results.json (``payload``) and episodes.csv (``rows`` under ``columns``) into
+    ``run_dir``: one car's runs and races alike."""
     (run_dir / RESULTS_FILE).write_text(json.dumps(payload, indent=2, default=str) + "\n")
-    fields = [f.name for f in fields_of(EpisodeResult)]
     with (run_dir / EPISODES_FILE).open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=fields)
+        writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
         writer.writerows(rows)
-    return payload

@@ -30,6 +30,7 @@ class RouteWatch:
         self._edges = ends - self._starts
         self._nearest = -1  # unknown: search the whole line once
         self._progress = 0  # [route points] driven forward since the start, net
+        self._start = 0  # [route points] where the car started, from point 0 (- behind it)
 
     def distance(self, x: float, y: float) -> float:
         """[track units] from (x, y) to the nearest point of the line."""
@@ -41,6 +42,12 @@ class RouteWatch:
         along = np.clip(along, 0.0, 1.0)  # the nearest point of each segment
         gaps = offsets - along[:, None] * self._edges
         return float(np.sqrt(np.einsum("ij,ij->i", gaps, gaps).min()))
+
+    @property
+    def along(self) -> int:
+        """[route points] from point 0 (the start line) to the car, counted round the line
+        since the start (negative behind it); as of the last ``laps``."""
+        return self._start + self._progress
 
     def laps(self, x: float, y: float) -> int:
         """Laps finished once the car is at (x, y): whole rounds of net forward progress."""
@@ -55,6 +62,8 @@ class RouteWatch:
         nearest = int(candidates[np.argmin(np.einsum("ij,ij->i", offsets, offsets))])
         if self._nearest >= 0:
             self._progress += (nearest - self._nearest + n // 2) % n - n // 2
+        else:
+            self._start = (nearest + n // 2) % n - n // 2
         self._nearest = nearest
         return max(self._progress, 0) // n
 

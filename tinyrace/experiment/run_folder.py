@@ -22,6 +22,7 @@ import numpy as np
 from tinyrace.config.bounds import MAX_CSV_FIELD, MAX_RUN_FILE_BYTES
 from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.experiment.race_results import CarResult
 from tinyrace.experiment.record import TRACE_COLUMNS
 from tinyrace.experiment.results import EPISODES_FILE, RESULTS_FILE, EpisodeResult
 
@@ -55,22 +56,58 @@ def read_header(run_dir: Path) -> dict[str, Any]:
     for field, kinds, what in _HEADER_FIELDS:
         if field in header and not isinstance(header[field], kinds):
             raise _problem(path, field, header[field], f"expected {what}")
-    _check_summary(path, header.get("summary"))
+    if "cars" in header:  # a race: its cars, and a summary per car
+        names = _check_cars(path, header["cars"])
+        summary = header.get("summary") or {}
+        if not isinstance(summary, dict) or not set(summary) <= set(names):
+            allowed = f"expected an object of {{car: {{metric: {{mean, std}}}}}} for {names}"
+            raise _problem(path, "summary", summary, allowed)
+        for car, stats in summary.items():
+            _check_summary(path, stats, f"summary.{car}")
+    else:
+        _check_summary(path, header.get("summary"))
     tracks = header.get("tracks") or {}
     for key, entry in tracks.items():
         _check_track(path, key, entry)
     return header
 
 
-def _check_summary(path: Path, summary: object) -> None:
+def _check_summary(path: Path, summary: object, where: str = "summary") -> None:
     if summary is None:
         return
     if not isinstance(summary, dict):
-        raise _problem(path, "summary", summary, "expected an object of {metric: {mean, std}}")
+        raise _problem(path, where, summary, "expected an object of {metric: {mean, std}}")
     for key, stats in summary.items():
         ok = isinstance(stats, dict) and all(_finite(stats.get(k)) for k in ("mean", "std"))
         if not ok:
-            raise _problem(path, f"summary.{key}", stats, "expected {mean: number, std: number}")
+            raise _problem(path, f"{where}.{key}", stats, "expected {mean: number, std: number}")
+
+
+COLOR = re.compile(r"#[0-9a-fA-F]{6}")
+MAX_CARS = 16
+
+
+def _check_cars(path: Path, cars: object) -> list[str]:
+    """A race's ``cars``: each with its name (``id``) and colour; returns the names."""
+    expected = "expected a list of 1 to 16 cars, each {id: name, color: '#rrggbb', driver}"
+    if not isinstance(cars, list) or not 0 < len(cars) <= MAX_CARS:
+        raise _problem(path, "cars", cars, expected)
+    names: list[str] = []
+    for index, car in enumerate(cars):
+        where = f"cars[{index}]"
+        if not isinstance(car, dict):
+            raise _problem(path, where, car, expected)
+        name = car.get("id")
+        if not (isinstance(name, str) and KEY.fullmatch(name)) or name in names:
+            allowed = "expected a car name of letters, digits, '_', '.' or '-', each car once"
+            raise _problem(path, f"{where}.id", name, allowed)
+        color = car.get("color")
+        if not (isinstance(color, str) and COLOR.fullmatch(color)):
+            raise _problem(path, f"{where}.color", color, "expected a colour '#rrggbb'")
+        if not isinstance(car.get("driver", ""), str):
+            raise _problem(path, f"{where}.driver", car.get("driver"), "expected a driver name")
+        names.append(name)
+    return names
 
 
 def _check_track(path: Path, key: str, entry: object) -> None:
@@ -145,19 +182,48 @@ def read_episodes(run_dir: Path) -> list[EpisodeResult]:
     return [_episode(path, line, row) for line, row in _csv_rows(path)]
 
 
+def read_cars(run_dir: Path, names: list[str]) -> list[CarResult]:
+    """A race's episodes.csv, one CarResult per row (car and episode); a bad cell names its
+    line and column, a car that is not one of ``names`` (results.json's cars) too."""
+    path = run_dir / EPISODES_FILE
+    rows = []
+    for line, row in _csv_rows(path):
+        values = _values(CarResult, path, line, row, ("track", "car", "driver", "end"))
+        if values["car"] not in names:
+            allowed = f"expected one of the cars of {RESULTS_FILE}: {', '.join(names)}"
+            raise _problem(path, f"line {line}, car", values["car"][:80], allowed)
+        if not 1 <= values["position"] <= len(names):
+            allowed = f"expected a place from 1 to {len(names)}"
+            raise _problem(path, f"line {line}, position", values["position"], allowed)
+        for touched in values["cars_touched"]:
+            if touched not in names:
+                allowed = f"expected cars of {RESULTS_FILE}: {', '.join(names)}"
+                raise _problem(path, f"line {line}, cars_touched", touched[:80], allowed)
+        rows.append(CarResult(**values))
+    return rows
+
+
 def _episode(path: Path, line: int, row: dict[str, str]) -> EpisodeResult:
+    return EpisodeResult(**_values(EpisodeResult, path, line, row, ("track",)))
+
+
+def _values(
+    cls: type, path: Path, line: int, row: dict[str, str], texts: tuple[str, ...]
+) -> dict[str, Any]:
+    """The fields of ``cls`` read from a CSV row; ``texts`` may be empty."""
     values: dict[str, Any] = {}
-    for f in fields_of(EpisodeResult):
+    for f in fields_of(cls):
         text = row.get(f.name, "")
         kind = str(f.type)
         optional = "None" in kind
-        if text == "" and (optional or f.name == "track"):
+        if text == "" and (optional or f.name in texts):
             values[f.name] = None if optional else ""
             continue
         try:
             values[f.name] = _cell(kind, text)
         except ValueError:
             what = "a whole number" if kind.startswith("int") else "a finite number"
+            what = f"numbers apart by spaces ({what}s)" if kind.startswith("list") else what
             what += " or empty" if optional else ""
             raise _problem(path, f"line {line}, {f.name}", text[:80], f"expected {what}") from None
         if f.name in ("video", "trace") and not FILE_NAME.fullmatch(text):
@@ -165,10 +231,13 @@ def _episode(path: Path, line: int, row: dict[str, str]) -> EpisodeResult:
             raise _problem(path, f"line {line}, {f.name}", text[:80], allowed)
     if values["episode"] < 0 or values["episode"] > 10**9:
         raise _problem(path, f"line {line}, episode", values["episode"], "expected 0 to 1e9")
-    return EpisodeResult(**values)
+    return values
 
 
 def _cell(kind: str, text: str) -> Any:
+    if kind.startswith("list["):  # items apart by spaces: numbers, or names
+        item = kind[len("list[") : -1]
+        return [_cell(item, part) for part in text.split()]
     if kind.startswith("int"):
         if len(text) > 20:
             raise ValueError(text)
@@ -181,11 +250,11 @@ def _cell(kind: str, text: str) -> Any:
     return text
 
 
-def read_trace(path: Path) -> dict[str, np.ndarray]:
+def read_trace(path: Path, keys: tuple[str, ...] = TRACE_COLUMNS) -> dict[str, np.ndarray]:
     """A trace file as columns of floats (NaN where a value is missing or not a number)."""
     rows = [row for _, row in _csv_rows(path)]
     columns = {}
-    for key in TRACE_COLUMNS:
+    for key in keys:
         cells = []
         for row in rows:
             try:

@@ -7,12 +7,9 @@ finished episodes are written, the run is marked interrupted, the open video is 
 
 from __future__ import annotations
 
-import dataclasses
-import datetime as dt
-import shutil
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,11 +22,11 @@ from tinyrace.experiment.progress import Progress
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
 from tinyrace.experiment.route import route_watch
-from tinyrace.experiment.tracks import save_track_picture
-from tinyrace.experiment.video import open_video
+from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop
 from tinyrace.sensors.view import sensor_view
 
-DEFAULT_MAX_STEPS = 1000  # when neither the experiment nor the env sets a limit (CarRacing's)
+if TYPE_CHECKING:
+    from tinyrace.experiment.race_runner import RaceRunResult
 
 
 @dataclass
@@ -50,13 +47,18 @@ def run_experiment(
     out_root: Path | None = None,
     show_progress: bool = True,
     progress: Progress | None = None,
-) -> RunResult:
+) -> RunResult | RaceRunResult:
     """Run every episode; write results.json, episodes.csv, traces, videos and report.html
     into a new run folder under ``out_root`` (default: ``output.dir``, relative to the cwd).
+    A race (several cars) is run by ``race_runner.run_race``: a driver per car, a row per car.
 
     Raises ConfigError for a bad view or driver (no run folder is left behind when no
     episode finished).
     """
+    if experiment.is_race:  # imported here: races need PettingZoo, one car does not
+        from tinyrace.experiment.race_runner import run_race
+
+        return run_race(experiment, out_root, show_progress, progress)
     config = experiment.config
     render_mode = "rgb_array" if config.output.video and config.output.view == "default" else None
     env = TinyRaceEnv(config=experiment.loaded, render_mode=render_mode)
@@ -65,53 +67,27 @@ def run_experiment(
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             driver = _driver(config.driver, config.driver_args, experiment.source)
         progress = progress or Progress(config.episodes, enabled=show_progress)
-        root = Path(out_root or config.output.dir)
-        made_root = not root.exists()
-        run = _Run(experiment, env, driver, new_run_dir(root, experiment.name), progress)
-        run.made_root = made_root
-        return run.all()
+        run = _Run(experiment, env, driver, out_root, progress)
+        return RunResult(run.run_dir, run.results, run.all())
     finally:
         env.close()
 
 
-class _Run:
-    """One run's state: the finished episodes and the track pictures saved so far."""
+class _Run(RunLoop[EpisodeResult]):
+    """One car's run: its driver, its env."""
 
     def __init__(
         self,
         experiment: Experiment,
         env: TinyRaceEnv,
         driver: Driver,
-        run_dir: Path,
+        out_root: Path | None,
         progress: Progress,
     ):
-        self.experiment, self.config = experiment, experiment.config
-        self.env, self.driver, self.run_dir, self.progress = env, driver, run_dir, progress
-        self.limit = self.config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
-        self.results: list[EpisodeResult] = []
-        self.tracks: dict[str, dict[str, Any]] = {}
-        self.made_root = False  # the parent folder was made for this run
-        progress.limit = progress.limit or self.limit
-
-    def all(self) -> RunResult:
-        interrupted = None
-        with StopSignals() as stop:
-            try:
-                for episode in range(self.config.episodes):
-                    self.results.append(self._episode(episode, stop))
-            except Interrupted as exc:
-                interrupted = exc.signum
-            except BaseException as exc:
-                self.progress.close()
-                with stop.hold():
-                    self._fail(exc)
-                raise
-            self.progress.close()  # an interrupted episode's bar
-            with stop.hold():  # a second Ctrl-C does not cut the files short
-                if interrupted is None:  # a signal after the last step: still say so
-                    interrupted = stop.signum
-                self._write(interrupted)
-        return RunResult(self.run_dir, self.results, interrupted or stop.signum)
+        config = experiment.config
+        limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
+        super().__init__(experiment, out_root, progress, limit)
+        self.env, self.driver = env, driver
 
     def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
         seed = self.config.seed + episode
@@ -141,7 +117,7 @@ class _Run:
             end=recorder.end,
             steps_per_second=self.progress.rate(recorder.steps),
             lap_time=recorder.lap_time,
-            track=self._track_picture(seed),
+            track=self.track_picture(self.env, seed),
             video=recorder.video.path.name if recorder.video is not None else None,
             trace=trace,
         )
@@ -149,12 +125,7 @@ class _Run:
         return result
 
     def _recorder(self, episode: int, stop: StopSignals) -> EpisodeRecorder:
-        out = self.config.output
-        filmed = out.video and (out.video_episodes is None or episode < out.video_episodes)
-        video = None
-        if filmed:
-            fps = out.fps or 1.0 / self.env.dt  # [Hz] default: real time
-            video = open_video(self.run_dir / f"episode_{episode:03d}", fps)
+        video = self.episode_video(episode, self.env.dt)
 
         def on_step(recorder: EpisodeRecorder) -> None:
             self.progress.update(recorder)
@@ -182,37 +153,12 @@ class _Run:
             raise RuntimeError("the env rendered no frame for the video")
         return rendered
 
-    def _track_picture(self, seed: int) -> str:
-        key, entry = save_track_picture(self.env, seed, self.run_dir, self.tracks)
-        self.tracks[key] = entry
-        return key
-
     def _write(self, interrupted: int | None, error: str | None = None) -> None:
         from tinyrace.experiment.report import write_report
 
-        header = {
-            "experiment": self.experiment.source,
-            "started": self.run_dir.name,
-            "interrupted": interrupted is not None,
-            "signal": None if interrupted is None else Interrupted(interrupted).args[0],
-            "error": error,
-            "episodes_planned": self.config.episodes,
-            "track_kind": self.env.config.kind,
-            "dt": self.env.dt,  # [s] per step
-            "tracks": self.tracks,
-            "config": dataclasses.asdict(self.config),
-        }
+        header = self.header(self.env, interrupted, error)
         payload = write_files(self.run_dir, self.results, header)
         write_report(self.run_dir, payload, self.results)
-
-    def _fail(self, exc: BaseException) -> None:
-        """No finished episode: leave nothing behind; else keep what finished."""
-        if not self.results:
-            shutil.rmtree(self.run_dir, ignore_errors=True)
-            if self.made_root and not any(self.run_dir.parent.iterdir()):
-                self.run_dir.parent.rmdir()  # made for this run only
-        else:
-            self._write(None, error=one_line(exc))
 
 
 def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
@@ -223,27 +169,19 @@ def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
         raise ConfigError(Problem(source, "driver", spec, one_line(exc))) from None
 
 
-def new_run_dir(root: Path, name: str) -> Path:
-    """``root/<name>-<YYYYmmdd-HHMMSS>``, with ``-2``, ``-3``... when taken (by this or
-    another process: the folder is claimed by an atomic mkdir)."""
-    stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    root.mkdir(parents=True, exist_ok=True)
-    n = 1
-    while True:
-        run_dir = root / (f"{name}-{stamp}" if n == 1 else f"{name}-{stamp}-{n}")
-        try:
-            run_dir.mkdir()
-        except FileExistsError:
-            n += 1
-            continue
-        return run_dir
-
-
-def print_report(result: RunResult) -> None:
-    """The table of episodes, the summary and where the files are, on stdout."""
+def print_report(result: RunResult | RaceRunResult) -> None:
+    """The table of episodes (of cars, in a race), the summary and where the files are, on
+    stdout."""
     if result.interrupted is not None:
         print(f"interrupted by {Interrupted(result.interrupted).args[0]}: finished episodes only")
-    print(table(result.episodes))
-    print()
-    print(summary_text(result.summary))
+    if not isinstance(result, RunResult):
+        from tinyrace.experiment import race_results
+
+        print(race_results.car_table(race_results.car_rows(result.episodes)))
+        print()
+        print(race_results.summary_text(result.summary))
+    else:
+        print(table(result.episodes))
+        print()
+        print(summary_text(result.summary))
     print(f"\nresults: {result.run_dir}")

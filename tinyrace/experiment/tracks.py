@@ -4,13 +4,12 @@ frame, start and lap line: what the report draws trajectories over."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
 import cv2
 
-from tinyrace.config import METRIC_KINDS, ProceduralTrackConfig
 from tinyrace.env import TinyRaceEnv
-from tinyrace.render.track_picture import image_ground, metric_ground, procedural_ground
+from tinyrace.render.track_picture import ground_picture
 
 
 def save_track_picture(
@@ -18,30 +17,21 @@ def save_track_picture(
 ) -> tuple[str, dict[str, Any]]:
     """(key, entry) of the env's current track; writes ``track_<key>.png`` the first time.
 
-    Procedural tracks differ per seed; image tracks per track index. The entry holds the
-    picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox, py = y * sy + oy), the
-    start pose and, on procedural tracks, the lap line (two points) in track units.
+    A track made anew at each reset (procedural) differs per seed; fixed tracks per track
+    index. The entry holds the picture's file, ``frame`` (sx, ox, sy, oy: px = x * sx + ox,
+    py = y * sy + oy), the start pose, the lap line (two points: where tile 0 begins) on
+    tracks with tiles, and the track's unit.
     """
-    episode: Any = env.episode
-    pictures: Any = env.pictures  # its colours (procedural) and ground texture
-    procedural = env.config.kind == "procedural"
-    key = f"seed{seed}" if procedural else f"track{episode.track_index}"
+    episode = env.episode
+    assert episode is not None, "reset() first"
+    track = episode.track
+    key = f"seed{seed}" if track.drawn_per_reset else f"track{episode.track_index}"
     if key in known:
         return key, known[key]
-    if procedural:
-        track = episode.track.detail
-        playfield = cast(ProceduralTrackConfig, env.config.tracks[0]).playfield  # [u]
-        image, frame = procedural_ground(track, pictures.colors, playfield)
-        start = track.start_pose
-        lap_line = track.tiles[0][:2].tolist()  # the edge where tile 0 begins
-    elif env.config.kind in METRIC_KINDS:
-        track = episode.track.detail
-        image, frame = metric_ground(track, pictures.ground_texture())
-        start = track.spawn
-        lap_line = None if track.circuit is None else track.tiles[0][[0, 1]].tolist()
-    else:
-        image, frame = image_ground(env.config, episode.track.detail)
-        start, lap_line = episode.track.spawns[episode.spawn_index], None
+    image, frame = ground_picture(env.config, track, lambda: env.ground.texture(track))
+    start = track.spawns[episode.spawn_index]
+    tiles = track.tiles
+    lap_line = None if tiles is None or not len(tiles) else tiles[0][:2].tolist()
     name = f"track_{key}.png"
     cv2.imwrite(str(run_dir / name), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
     entry = {
@@ -49,6 +39,6 @@ def save_track_picture(
         "frame": [frame.sx, frame.ox, frame.sy, frame.oy],
         "start": [float(v) for v in start[:2]],
         "lap_line": lap_line,
-        "unit": "u" if procedural else ("m" if env.config.kind in METRIC_KINDS else "px"),
+        "unit": track.unit,
     }
     return key, entry

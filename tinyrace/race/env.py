@@ -1,11 +1,14 @@
 """RaceEnv: the cars of one episode as PettingZoo agents, stepped together.
 
-The env builds its parts as a ``TinyRaceEnv`` does (one config: track, car model,
-sensors, rewards) with ``race.num_agents`` cars in the world, and gives every car a seat:
-its own sensors (riding on that car: ``Snapshot.seen_from``), running score, reward terms
-and end. A car whose episode ends (a lap, out of bounds, a collision that ends it) leaves
-``agents`` and is parked where it stands: an obstacle the others still meet. The episode
-ends when every car is out or at ``sim.step_limit`` (all truncated).
+The env builds its parts as a ``TinyRaceEnv`` does (one config: track, rewards) with the
+cars of ``race`` in the world (``race.cars``: each its own id, car model, sensors), and
+gives every car a seat: its actions, its own sensors (riding on that car:
+``Snapshot.seen_from``), running score, reward terms and end. A car whose episode ends
+leaves ``agents``: after its last lap (``race.laps``) it is taken off the track (it stands
+where it finished and nothing meets it, so that it does not block the line); out of
+bounds, on an obstacle or in a collision that ends it, it is parked where it stands, an
+obstacle the others still meet. The episode ends when every car is out or at
+``sim.step_limit`` (all truncated).
 
 Rewards per car are the config's reward terms of that car's facts; with
 ``race.tile_reward: first`` a tile pays only the first car to visit it.
@@ -14,7 +17,7 @@ Rewards per car are the config's reward terms of that car's facts; with
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -23,8 +26,10 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from tinyrace.actions import ActionSpec
 from tinyrace.config import car_names
 from tinyrace.env import CARRIED, CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
+from tinyrace.episodes.episode import Episode
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.rewards import ends_episode, reward_terms
 from tinyrace.sensors.base import Sensor
@@ -36,9 +41,13 @@ ACTIONS_SOURCE = "<step actions>"
 
 @dataclass
 class Seat:
-    """What the env keeps for one car: its sensors, score, and the reset's carried terms."""
+    """What the env keeps for one car: its actions, sensors and observation space, score,
+    and the reset's carried terms."""
 
+    actions: ActionSpec
     sensors: list[Sensor]
+    observation_space: spaces.Space[Any]
+    box_camera: str | None  # ``observation: box``: the id of its one camera
     score: float = 0.0
     carry: dict[str, float] = field(default_factory=dict)
 
@@ -47,17 +56,20 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
     """Cars on one tinyrace track, as a PettingZoo ParallelEnv.
 
     ## Agents
-    ``car_0`` .. ``car_{N-1}``, N = ``race.num_agents`` (or the ``num_agents`` keyword),
-    at most 16. ``car_0`` starts at the track's spawn, the others on a grid behind it.
+    The ids of ``race.cars`` (default ``car_0`` .. ``car_{N-1}``), N = ``race.num_agents``
+    (or the ``num_agents`` keyword), at most 16, in car order: car 0 first (the pole of the
+    grid, ``race.start``).
 
     ## Spaces
-    Every car has the action space and observation space of the same config's
-    ``TinyRaceEnv`` (its car model's actions; its sensors, seen from that car).
+    Per car: its car model's actions and its own sensors (``race.cars[i]``'s, else the
+    shared ones), seen from that car; cars of different models or sensors have different
+    spaces.
 
     ## Rewards, ends, infos
     Per car, as a ``TinyRaceEnv`` computes them for its one car; infos add ``car`` (the
-    index), ``position`` (place in the race by tiles visited, 1 = leading) and ``cars_hit``
-    (the other cars it touched this step).
+    index), ``id``, ``position`` (place in the race: laps and tiles, 1 = leading),
+    ``cars_hit`` (the ids of the other cars it touched this step), ``lap_times`` ([s] of
+    sim time, steps x dt, of each lap finished) and ``best_lap`` ([s], None before a lap).
     """
 
     metadata: dict[str, Any] = {  # noqa: RUF012
@@ -80,14 +92,37 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
             overrides = {**overrides, "race": {**race, "num_agents": num_agents}}
         self.core = core = TinyRaceEnv(config, environment, render_mode=render_mode, **overrides)
         self.render_mode = render_mode
-        count = core.config.race.num_agents
-        self.possible_agents = car_names(core.config)  # what pictures write beside the cars
+        racers = core.course.racers
+        # the configured ids (car_<i> by default): what pictures write beside the cars
+        self.possible_agents = car_names(core.config)
         self.agents: list[str] = []
         self._index = {agent: i for i, agent in enumerate(self.possible_agents)}
-        self.seats = [Seat(core.sensors)] + [Seat(core.make_sensors()) for _ in range(1, count)]
-        self._observation_spaces = {a: _copy(core.observation_space) for a in self.possible_agents}
-        self._action_spaces = {a: _copy(core.action_space) for a in self.possible_agents}
-        self._claimed = np.zeros(0, bool)  # tiles paid already (tile_reward: first)
+        self.seats = [self._seat(i) for i in range(len(racers))]
+        self._observation_spaces = {
+            a: _copy(seat.observation_space)
+            for a, seat in zip(self.possible_agents, self.seats, strict=True)
+        }
+        self._action_spaces = {
+            a: _copy(seat.actions.space)
+            for a, seat in zip(self.possible_agents, self.seats, strict=True)
+        }
+        self._claimed = np.zeros((1, 0), bool)  # per lap: tiles paid (tile_reward: first)
+
+    def _seat(self, car: int) -> Seat:
+        """Car ``car``'s seat: car 0 sits in the core env's; each other car gets its own
+        sensors (its entry's or the shared ones) and its car model's actions."""
+        core = self.core
+        if car == 0:
+            return Seat(core.action_spec, core.sensors, core.observation_space, core.box_camera)
+        racer = core.course.racers[car]
+        sensors = core.make_sensors(car)  # none configured: the track's default sensor
+        box_camera = core.box_sensor(sensors, car)
+        space: spaces.Space[Any]
+        if box_camera is not None:
+            space = sensors[0].space
+        else:
+            space = spaces.Dict({sensor.id: sensor.space for sensor in sensors})
+        return Seat(racer.model.actions(racer.car.car), sensors, space, box_camera)
 
     # -- PettingZoo API ---------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space[Any]:
@@ -105,7 +140,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         assert episode is not None
         self.agents = list(self.possible_agents)
         tiles = core.layout.tiles
-        self._claimed = np.zeros(0 if tiles is None else len(tiles), bool)
+        laps = core.config.race.laps
+        self._claimed = np.zeros((laps, 0 if tiles is None else len(tiles)), bool)
         facts = core.start_facts
         snapshot = core.snapshot()
         for i, seat in enumerate(self.seats):
@@ -117,7 +153,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
             seat.score = sum(seat.carry.values())
         observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
         infos = {agent: self._info(snapshot, i, {}, facts[i]) for agent, i in self._live()}
-        infos["car_0"] = {**first_info, **infos["car_0"]}
+        first = self.possible_agents[0]
+        infos[first] = {**first_info, **infos[first]}
         return observations, infos
 
     def step(
@@ -130,7 +167,7 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         self._check_agents(actions)
         world = episode.world
         for agent, i in self._live():
-            world.control(core.action_spec.read(actions[agent]), car=i)
+            world.control(self.seats[i].actions.read(actions[agent]), car=i)
         facts = episode.step(core.dt)
         core.t += core.dt
         core.steps += 1
@@ -151,15 +188,17 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         snapshot = core.snapshot()
         observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
         infos = {}
+        positions = episode.positions()  # once per step, not per car
         for agent, i in self._live():
-            info = self._info(snapshot, i, terms_of[agent], facts[i])
+            info = self._info(snapshot, i, terms_of[agent], facts[i], positions)
             if reasons[agent] is not None:
                 info["termination"] = reasons[agent]
                 info["lap_finished"] = reasons[agent] == "lap_finished"
             infos[agent] = info
         for agent in ended:
-            if not truncate:
-                episode.park(self._index[agent])
+            reason = reasons[agent]
+            if reason is not None:
+                episode.leave(self._index[agent], reason)
         self.agents = [agent for agent in self.agents if agent not in ended]
         return observations, rewards, terminations, truncations, infos
 
@@ -181,7 +220,7 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
     def _check_agents(self, actions: Mapping[str, Any]) -> None:
         """Every live car has an action, and only they: a ConfigError names the others."""
         if not isinstance(actions, Mapping):
-            allowed = "expected a dict of actions keyed by agent (car_0, car_1, ...)"
+            allowed = f"expected a dict of actions keyed by agent ({', '.join(self.agents)})"
             raise ConfigError(Problem(ACTIONS_SOURCE, "", type(actions).__name__, allowed))
         missing = [agent for agent in self.agents if agent not in actions]
         extra = [agent for agent in actions if agent not in self.agents]
@@ -209,33 +248,55 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         return terms, reward, ends_episode(facts, design)
 
     def _pay_first_visits(self, facts: list[StepFacts]) -> None:
-        """``tile_reward: first``: a tile first visited by several cars pays the first only."""
-        claimed = self._claimed
-        for fact in facts:
+        """``tile_reward: first``: a tile first visited in a lap by several cars pays the
+        first only."""
+        episode = self.core.episode
+        assert episode is not None
+        for car, fact in enumerate(facts):
+            claimed = self._claimed[episode.lap_of(car)]
             paid = [tile for tile in fact.tiles if not claimed[tile]]
             claimed[paid] = True
             fact.new_tiles = len(paid)
 
     def _observe(self, snapshot: Snapshot, car: int) -> Any:
         core = self.core
-        seen = snapshot.seen_from(car)
+        seen = replace(snapshot.seen_from(car), score=self.seats[car].score)
         sensors = self.seats[car].sensors
-        if not sensors:
-            return core.pictures.observe(seen, self.seats[car].score)
         observation = {s.id: s.observe(seen, core.layout, core.np_random) for s in sensors}
-        return observation if core.box_camera is None else observation[core.box_camera]
+        box_camera = self.seats[car].box_camera
+        return observation if box_camera is None else observation[box_camera]
 
     def _info(
-        self, snapshot: Snapshot, car: int, terms: dict[str, float], facts: StepFacts
+        self,
+        snapshot: Snapshot,
+        car: int,
+        terms: dict[str, float],
+        facts: StepFacts,
+        positions: list[int] | None = None,
     ) -> dict[str, Any]:
         episode = self.core.episode
         assert episode is not None
         info = episode.info(snapshot, car)
         info["reward_terms"] = terms
         info["car"] = car
-        info["position"] = episode.position(car)
-        info["cars_hit"] = [f"car_{other}" for other in episode.world.contacts[car].new_cars]
+        info["id"] = self.possible_agents[car]
+        info.update(race_info(episode, car, self.possible_agents, self.core.dt, positions))
         return info
+
+
+def race_info(
+    episode: Episode, car: int, names: list[str], dt: float, positions: list[int] | None = None
+) -> dict[str, Any]:
+    """Car ``car``'s place in the race, the cars it touched this step (by name), its lap
+    times and best lap [s] (``dt``: the step [s]; ``positions``: every car's place, when
+    the caller read them already)."""
+    laps = episode.lap_times(car, dt)
+    return {
+        "position": episode.position(car) if positions is None else positions[car],
+        "cars_hit": [names[other] for other in episode.world.contacts[car].new_cars],
+        "lap_times": laps,
+        "best_lap": min(laps) if laps else None,
+    }
 
 
 def _known_options(options: Mapping[str, Any] | None) -> dict[str, Any] | None:

@@ -4,9 +4,10 @@
 "speed": 0.8}, ...])`` makes the track's env with one more car per opponent on the start
 grid (``race`` knobs). Car 0 is the learner's: its observation, reward and end are the
 env's as without opponents. Before every step each opponent's driver reads its car's
-pose and speed and sets its controls; an opponent whose episode ends (out of bounds, a
-collision that ends it, its lap) is parked where it stands. ``info`` adds the learner's
-``position`` in the race and the ``cars_hit`` this step.
+pose and speed and sets its controls; an opponent whose episode ends leaves the race as a
+``RaceEnv``'s car does (after its last lap taken off the track, else parked where it
+stands). ``info`` adds the learner's ``position`` in the race, the ``cars_hit`` this
+step, its ``lap_times`` and ``best_lap`` [s].
 
 An opponent's ``driver`` is a registered driver name (``centerline``; ``speed`` scales
 its speed profile) or any object with ``controls(pose, speed) -> (steer, gas, brake)``
@@ -15,15 +16,17 @@ and, optionally, ``follow(route, action_space, dt)`` (called at every reset).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
 
 from tinyrace.drivers import DRIVERS, ActionAdapter, CenterlineDriver
-from tinyrace.drivers.centerline import route_of
+from tinyrace.drivers.centerline import CARRACING_WHEELBASE, Route, route_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.race.env import race_info
 from tinyrace.rewards import ends_episode
 
 SOURCE = "<kwargs>"
@@ -99,16 +102,19 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         super().__init__(env)
         self.core = env
         self.drivers = drivers
-        self.adapt = ActionAdapter(env.action_space, env.dt, env.action_spec.kind)
+        racers = env.course.racers
+        self.names = [racer.id for racer in racers]
+        self.specs = [racer.model.actions(racer.car.car) for racer in racers]  # per car
+        self.adapt = [ActionAdapter(spec.space, env.dt, spec.kind) for spec in self.specs]
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
         observation, info = self.env.reset(**kwargs)
         route = None
-        for driver in self.drivers:
+        for i, driver in enumerate(self.drivers, start=1):
             if hasattr(driver, "follow"):
                 route = route or route_of(self.core)
-                core = self.core
-                driver.follow(route, core.action_space, core.dt, core.action_spec.kind)
+                spec = self.specs[i]
+                driver.follow(self._route_for(route, i), spec.space, self.core.dt, spec.kind)
         return observation, self._race_info(info)
 
     def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
@@ -117,28 +123,45 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         cars = core.snapshot().cars
         for i, driver in enumerate(self.drivers, start=1):
             if i not in world.parked:
-                world.control(core.action_spec.read(self._action(driver, cars[i])), car=i)
+                world.control(self.specs[i].read(self._action(i, driver, cars[i])), car=i)
         observation, reward, terminated, truncated, info = self.env.step(action)
         design = core.config.reward_design
         episode = core.episode
         assert episode is not None
         for i, facts in enumerate(core.last_facts[1:], start=1):
-            if i not in world.parked and ends_episode(facts, design) is not None:
-                episode.park(i)
+            reason = ends_episode(facts, design) if i not in world.parked else None
+            if reason is not None:
+                episode.leave(i, reason)
         return observation, reward, terminated, truncated, self._race_info(info)
 
-    def _action(self, driver: Any, car: Any) -> Any:
-        """The action a driver takes for ``car`` (a CarState): a registered driver's own
-        ``act`` (it knows the car model's actions), else its controls adapted."""
+    def _route_for(self, route: Route, car: int) -> Route:
+        """``route`` (car 0's) for car ``car``: scaled by its wheelbase, with its steering
+        and grip (a race may mix car models)."""
+        core = self.core
+        racer = core.course.racers[car]
+        if racer.model is core.course.racers[0].model and racer.car.car == core.config.car:
+            return route
+        facts = racer.model.describe(dataclasses.replace(core.config, car=racer.car.car))
+        length = core.snapshot().cars[car].footprint[0]
+        return dataclasses.replace(
+            route,
+            unit=length / CARRACING_WHEELBASE,
+            steer_lock=facts.steer_lock,
+            steer_per_rad=facts.steer_per_rad,
+            grip=facts.grip,
+        )
+
+    def _action(self, index: int, driver: Any, car: Any) -> Any:
+        """The action a driver takes for car ``index`` (``car``: its CarState): a registered
+        driver's own ``act`` (it knows the car model's actions), else its controls adapted."""
         if isinstance(driver, CenterlineDriver):
             return driver.act(None, {"pose": car.pose, "speed": car.speed})
-        return self.adapt(driver.controls(car.pose, car.speed))
+        return self.adapt[index](driver.controls(car.pose, car.speed))
 
     def _race_info(self, info: dict[str, Any]) -> dict[str, Any]:
         episode = self.core.episode
         assert episode is not None
-        info["position"] = episode.position(0)
-        info["cars_hit"] = [f"car_{other}" for other in episode.world.contacts[0].new_cars]
+        info.update(race_info(episode, 0, self.names, self.core.dt))
         return info
 
 

@@ -15,7 +15,7 @@ import numpy as np
 from tinyrace.config import Color
 from tinyrace.config.schema import MAX_FRAME_PIXELS
 from tinyrace.sensors.draw_cars import CarLooks, draw_race
-from tinyrace.tracks.image import ImageTrack
+from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
 FOOTPRINT_COLOR = (255, 64, 64)  # RGB
@@ -28,20 +28,22 @@ _BITS = 3
 class Overview:
     """Draws overview frames of one image track."""
 
-    def __init__(self, track: ImageTrack, downscale: float, trajectory_color: Color | None):
-        width, height = track.size
+    def __init__(self, track: Track, downscale: float, trajectory_color: Color | None):
+        assert track.picture is not None, "an overview of a picture track"
+        width, height = track.picture_size
         self.scale = 1.0 / downscale  # [overview px per track px]
         size = (max(1, round(width * self.scale)), max(1, round(height * self.scale)))
         if size[0] * size[1] > MAX_FRAME_PIXELS:  # no downscale knob allocates gigabytes
             self.scale = math.sqrt(MAX_FRAME_PIXELS / (width * height))
             size = (max(1, math.floor(width * self.scale)), max(1, math.floor(height * self.scale)))
-        rgb = cv2.cvtColor(track.image, cv2.COLOR_RGBA2RGB)
+        rgb = cv2.cvtColor(track.picture, cv2.COLOR_RGBA2RGB)
         interpolation = cv2.INTER_AREA if self.scale < 1 else cv2.INTER_NEAREST
         self.background = (
             cv2.resize(rgb, size, interpolation=interpolation) if size != (width, height) else rgb
         )
-        if track.trajectory_mask is not None and trajectory_color is not None:
-            points = np.round(track.trajectory_mask * self.scale).astype(np.int64)
+        trajectory = track.trajectory_points
+        if trajectory is not None and trajectory_color is not None:
+            points = np.round(trajectory * self.scale).astype(np.int64)
             points[:, 0] = points[:, 0].clip(0, size[0] - 1)
             points[:, 1] = points[:, 1].clip(0, size[1] - 1)
             self.background[points[:, 1], points[:, 0]] = trajectory_color

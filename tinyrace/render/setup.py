@@ -1,28 +1,27 @@
-"""The pictures of an env's track kind: one ``Pictures`` class per kind, keyed by name."""
+"""The pictures of an env's tracks, drawn on the episode's ground: chosen by that ground,
+which ``tinyrace.sensors.ground.make_ground`` chose by what the tracks hold, never by their
+kind."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
-from tinyrace.config import METRIC_KINDS, EnvConfig
+from tinyrace.config import EnvConfig
 from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
-from tinyrace.tracks.base import TrackSource
-
-# track.type -> its pictures, built from the config and the source (its tracks, loaded)
-PICTURES: dict[str, Callable[[EnvConfig, Any], Pictures]] = {
-    "procedural": ProceduralPictures,
-    "image": ImagePictures,
-    **dict.fromkeys(METRIC_KINDS, MetricPictures),
-}
+from tinyrace.sensors.draw_cars import CarLooks
+from tinyrace.sensors.ground import EpisodeGround, ImageGround, MetricGround, ProceduralGround
 
 
-def make_pictures(config: EnvConfig, source: TrackSource) -> Pictures:
-    """The pictures of ``source``'s tracks (made once per env; ``reset`` per episode)."""
-    build = PICTURES.get(source.kind)
-    if build is None:
-        raise KeyError(f"no pictures for track kind {source.kind!r}; known: {', '.join(PICTURES)}")
-    return build(config, source)
+def make_pictures(config: EnvConfig, ground: EpisodeGround) -> Pictures:
+    """The pictures of the tracks whose ground is ``ground`` (made once per env; ``reset``
+    per episode): CarRacing's chase views on a ground painted anew for each track, the
+    overview of tracks that carry a picture, or the overview (and default top view) of a
+    ground drawn once per track from what it holds."""
+    if isinstance(ground, ProceduralGround):
+        return ProceduralPictures(ground, CarLooks.of(config))
+    if isinstance(ground, ImageGround):
+        return ImagePictures(config, ground)
+    if isinstance(ground, MetricGround):
+        return MetricPictures(config, ground)
+    raise TypeError(f"no pictures for a ground of type {type(ground).__name__}")

@@ -4,7 +4,7 @@ the trajectory and a legend of what the colours mean."""
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -12,11 +12,9 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
-from tinyrace.render.procedural_ground import GroundPainter
+from tinyrace.sensors.procedural_ground import GroundPainter
 from tinyrace.sensors.texture import GroundTexture, transform_points
-from tinyrace.tracks.image import ImageTrack
-from tinyrace.tracks.metric import MetricTrack
-from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.tracks.base import Track
 from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
 
 MAX_SIDE = 1600  # [px] longest side of a picture
@@ -49,11 +47,12 @@ class PictureFrame:
         )
 
 
-def procedural_ground(
-    track: ProceduralTrack, colors: GroundColors, playfield: float
-) -> tuple[np.ndarray, PictureFrame]:
-    """The track's ground, north up, cropped to the track and its kerbs plus a margin (the
-    texture's black padding beyond the playfield never shows)."""
+def painted_ground(track: Track, playfield: float) -> tuple[np.ndarray, PictureFrame]:
+    """The track's painted ground (its tiles and kerbs, in its palette), north up, cropped
+    to the track and its kerbs plus a margin (the texture's black padding beyond the
+    playfield never shows)."""
+    assert track.tiles is not None, "a painted ground has tiles"
+    colors = GroundColors.of(track)
     ppu = MAX_SIDE / (2 * playfield)  # [px/u]
     texture = GroundPainter(playfield).paint(track, colors, ppu)
     image = cv2.cvtColor(texture.image(0), cv2.COLOR_RGBA2RGB)[::-1]
@@ -71,10 +70,10 @@ def procedural_picture(config: EnvConfig, seed: int) -> np.ndarray:
     """The track CarRacing would draw for ``seed``, north up, with the start and tile 0."""
     source = ProceduralSource(config)
     rng = seeding.np_random(seed)[0]  # what reset(seed=seed) gives the env
-    track, colors = source.draw(rng, {}).track.detail, source.colors  # the env's reset order
-    image, frame = procedural_ground(track, colors, source.config.playfield)
-    x, y, angle = track.start_pose
-    heading = angle + math.pi / 2
+    track = source.draw(rng, {}).track  # the env's reset order
+    assert track.tiles is not None
+    image, frame = painted_ground(track, source.config.playfield)
+    x, y, heading = track.spawns[0]
     start = frame.pixels(np.array([x, y]))
     _arrow(image, tuple(start), (math.cos(heading), -math.sin(heading)), 40)
     lines = [
@@ -85,21 +84,23 @@ def procedural_picture(config: EnvConfig, seed: int) -> np.ndarray:
     return image
 
 
-def image_ground(config: EnvConfig, track: ImageTrack) -> tuple[np.ndarray, PictureFrame]:
+def image_ground(config: EnvConfig, track: Track) -> tuple[np.ndarray, PictureFrame]:
     """The track image (trajectory drawn back), scaled to at most MAX_SIDE."""
-    width, height = track.size
+    assert track.picture is not None, "a track with a picture"
+    width, height = track.picture_size
     scale = min(1.0, MAX_SIDE / max(width, height))
-    rgb = cv2.cvtColor(track.image, cv2.COLOR_RGBA2RGB)
+    rgb = cv2.cvtColor(track.picture, cv2.COLOR_RGBA2RGB)
     cte = config.reward_design.cross_track_error
-    if track.trajectory_mask is not None:
-        xs, ys = track.trajectory_mask[:, 0], track.trajectory_mask[:, 1]
+    trajectory = track.trajectory_points
+    if trajectory is not None:
+        xs, ys = trajectory[:, 0], trajectory[:, 1]
         rgb[ys, xs] = cte.trajectory_color
     size = (max(1, round(width * scale)), max(1, round(height * scale)))
     image = cv2.resize(rgb, size, interpolation=cv2.INTER_AREA) if scale < 1 else rgb
     return image, PictureFrame(size[0] / width, 0.0, size[1] / height, 0.0)
 
 
-def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
+def image_picture(config: EnvConfig, track: Track) -> np.ndarray:
     """The track image with the trajectory drawn back, spawns as arrows, and a colour legend."""
     image, frame = image_ground(config, track)
     cte = config.reward_design.cross_track_error
@@ -112,14 +113,14 @@ def image_picture(config: EnvConfig, track: ImageTrack) -> np.ndarray:
     entries: list[tuple[tuple[int, int, int] | None, str]] = [
         (o.color, f"obstacle {o.color!r}: {o.reward}") for o in config.reward_design.color_obstacles
     ]
-    if track.trajectory_mask is not None:
+    if track.trajectory_points is not None:
         entries.append((cte.trajectory_color, f"trajectory {cte.trajectory_color!r}"))
     entries.append((SPAWN_COLOR, "spawns (index, heading)"))
     _legend(image, entries)
     return image
 
 
-def metric_ground(track: MetricTrack, texture: GroundTexture) -> tuple[np.ndarray, PictureFrame]:
+def metric_ground(track: Track, texture: GroundTexture) -> tuple[np.ndarray, PictureFrame]:
     """A track in metres, north up, its longest side MAX_SIDE px: the road or map, cones."""
     x0, y0, x1, y1 = track.bounds
     scale = MAX_SIDE / max(x1 - x0, y1 - y0)  # [px/m]
@@ -128,7 +129,7 @@ def metric_ground(track: MetricTrack, texture: GroundTexture) -> tuple[np.ndarra
     return texture.warp(frame.matrix(), size), frame
 
 
-def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
+def metric_picture(track: Track, texture: GroundTexture) -> np.ndarray:
     """A track in metres, north up: the road or map, cones, the reference line, the start."""
     image, frame = metric_ground(track, texture)
     matrix = frame.matrix()
@@ -151,12 +152,25 @@ def metric_picture(track: MetricTrack, texture: GroundTexture) -> np.ndarray:
         entries.append((None, f"{len(track.cones)} cones"))
     if len(track.walls):
         entries.append(((0, 0, 0), f"walls ({len(track.walls)} boxes)"))
-    x, y, heading = track.spawn
+    x, y, heading = track.spawns[0]
     start = transform_points(matrix, np.array([x, y]))
     _arrow(image, (start[0], start[1]), (math.cos(heading), -math.sin(heading)), 40)
     entries.append((SPAWN_COLOR, "start, facing the direction of travel"))
     _legend(image, entries)
     return image
+
+
+def ground_picture(
+    config: EnvConfig, track: Track, texture: Callable[[], GroundTexture]
+) -> tuple[np.ndarray, PictureFrame]:
+    """The ground under a whole track, north up, by what the track holds: its painted
+    ground (tiles and kerbs), its picture, or else the ground drawn from its road, cones
+    and cells (``texture()``: the cameras' texture of it)."""
+    if track.painted is not None:
+        return painted_ground(track, track.painted.playfield)
+    if track.picture is not None:
+        return image_ground(config, track)
+    return metric_ground(track, texture())
 
 
 def _arrow(

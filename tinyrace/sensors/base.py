@@ -10,7 +10,8 @@ How to add a sensor type:
    ``knob()`` fields: units, bounds, docs) and a ``SensorContext`` (the env config, the
    ground textures). ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
-   name (the entry's ``type``), config class, builder and the track kinds it supports.
+   name (the entry's ``type``), config class, builder and what its tracks must hold.
+3. Add its config class to ``SensorConfig`` in ``tinyrace/config/sensors.py``.
 """
 
 from __future__ import annotations
@@ -92,5 +93,6 @@ class SensorType:
     name: str  # the ``type`` of a sensor entry
     config: type  # dataclass of its entry's knobs
     build: SensorBuilder
-    track_kinds: frozenset[str] | None = None  # None: every kind
+    needs: str | None = None  # what its tracks must hold (a ``TrackFacts.holds`` entry); None: any
     doc: str = ""
+    default: bool = False  # the observation of the tracks holding its needs when none is configured

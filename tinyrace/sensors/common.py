@@ -184,7 +184,7 @@ def shared_ground(
 ) -> GroundImage:
     """``paint()``, made once for every env of this process on a fixed track (read-only,
     ``tinyrace.cache``); on a procedural track, for this episode alone."""
-    if track.kind == "procedural":
+    if track.drawn_per_reset:
         return paint()
     return cache.shared((what, cache.content(track), pixels_per_unit), paint)
 
@@ -212,7 +212,7 @@ class PerTrack(Generic[_T]):
     def get(self, track: Track, make: Callable[[Track], _T]) -> _T:
         entry = self._entries.get(id(track))
         if entry is None or entry[0] is not track:
-            if track.kind == "procedural":
+            if track.drawn_per_reset:
                 self._entries.clear()
             entry = self._entries[id(track)] = (track, make(track))
         return entry[1]

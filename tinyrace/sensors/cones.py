@@ -29,7 +29,7 @@ from gymnasium import spaces
 from tinyrace import kernels
 from tinyrace.config.sensors import ConesConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, Unsupported
+from tinyrace.sensors.common import PerTrack
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
@@ -307,8 +307,5 @@ class ConesSensor:
 def build(config: ConesConfig, context: SensorContext) -> ConesSensor:
     """The cone detector: picture tracks (cones are blobs of the cone colours) or any track
     whose source lists cones."""
-    env = context.env
-    if env.kind == "procedural":
-        raise Unsupported("expected a track with cones (an image track with cone colours)")
     max_range = config.max_range if config.max_range is not None else 10 * context.car.length
     return ConesSensor(config, max_range)

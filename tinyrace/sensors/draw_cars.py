@@ -6,7 +6,9 @@ snapshot it observes but the first (the car it rides on, drawn as before, or not
 as its footprint: the box from its rear to its front axle, its width wide, which the lidar
 and the other cars meet. Colours are ``config.car_colors``, looked up by each car's index
 in the world (``Snapshot.index``: a snapshot seen from car 2 still paints car 0 red).
-With one car nothing is drawn and nothing is computed.
+With one car nothing is drawn and nothing is computed. Cars gone from the track
+(``Snapshot.gone``: they finished the race and stand where they stopped, met by nothing)
+are drawn by no camera and no overview, and not named: they left the race.
 
 ``classes`` images label every other car ``CAR_LABEL`` (never blended). The overview and
 the videos also write each car's name beside it (``draw_names``).
@@ -121,7 +123,10 @@ def fill_footprints(
     scale = math.sqrt(abs(a * e - b * d))  # [px per track unit]
     height, width = image.shape[:2]
     seen, grown = [], []
+    gone = snapshot.gone
     for k, car in enumerate(snapshot.cars[1:], start=1):
+        if k in gone:
+            continue  # off the track
         _, x, y, radius, _ = _geometry(car)
         u, v = a * x + b * y + c, d * x + e * y + f
         reach = radius * scale + min_size + 2  # [px]
@@ -221,7 +226,10 @@ def _in_front(camera: Pinhole, world_to_car: np.ndarray, snapshot: Snapshot) -> 
     ox, oy, oz = camera.axes[2].tolist()  # the optical axis in the car frame
     reach = camera.max_range
     seen = []
+    gone = snapshot.gone
     for k, car in enumerate(snapshot.cars[1:], start=1):
+        if k in gone:
+            continue  # off the track
         _, x, y, radius, _ = _geometry(car)
         ahead, right = a * x + b * y + c - px, d * x + e * y + f - py
         if ox * ahead + oy * right - oz * pz < -radius:
@@ -286,6 +294,8 @@ def draw_names(
     thickness = max(1, round(scale * 1.5))
     height, width = frame.shape[:2]
     for k, car in enumerate(snapshot.cars):
+        if k and k in snapshot.gone:
+            continue  # off the track (the car seen from is named: the picture is of it)
         index = snapshot.index(k)
         name = looks.names[index] if index < len(looks.names) else f"car_{index}"
         corners = transform_points(world_to_pixels, footprint_corners(car))

@@ -28,7 +28,7 @@ from tinyrace import cache, kernels
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors import common, raycast, raycast_numpy
+from tinyrace.sensors import common, other_cars, raycast, raycast_numpy
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
@@ -40,7 +40,6 @@ from tinyrace.sensors.common import (
     grid,
     mount,
 )
-from tinyrace.sensors.other_cars import ranges_to_cars
 from tinyrace.sensors.raycast import (
     DistanceField,
     ExactField,
@@ -166,7 +165,7 @@ def occupancy_map(
     map, aligned with the pixels' edges; walls are the occupied pixels themselves, cones
     discs of their radius, off_road what lies outside the road tiles (a band around the
     waypoints)."""
-    occupancy = getattr(track.detail, "occupancy", None)
+    occupancy = track.occupancy
     if occupancy is None:
         return None
     to_cells = occupancy.to_cells()
@@ -221,6 +220,10 @@ def _picture_labels(
 
 Cast = Callable[[DistanceField, Fan, tuple[float, float], float, bool], np.ndarray]
 CastExact = Callable[[np.ndarray, tuple[float, float], np.ndarray, np.ndarray, float], np.ndarray]
+AddCars = Callable[
+    [np.ndarray, tuple[float, float], float, bool, other_cars.BeamFan, np.ndarray, float],
+    np.ndarray,
+]
 
 
 def kernel(wanted: str | None = None) -> tuple[str, Cast]:
@@ -240,6 +243,15 @@ def exact_kernel(name: str) -> CastExact:
     from tinyrace.sensors.kernels import raycast as compiled  # imported: kernel() chose it
 
     return typed(CastExact, compiled.cast_exact)
+
+
+def cars_kernel(wanted: str | None = None) -> tuple[str, AddCars]:
+    """The path ``wanted`` (as ``kernel``'s, the same variable) of the other cars' ranges in
+    a race, by name, and its ``add_cars`` (``other_cars.add_cars`` or its compiled twin)."""
+    name, module = kernels.choose(
+        KERNEL_VARIABLE, "numpy", "tinyrace.sensors.kernels.other_cars", wanted
+    )
+    return name, other_cars.add_cars if module is None else typed(AddCars, module.add_cars)
 
 
 class LidarSensor:
@@ -281,6 +293,8 @@ class LidarSensor:
         self._fans: dict[tuple[Any, ...], Fan] = {}
         self.kernel, self._cast = kernel(kernel_name)
         self._cast_exact = exact_kernel(self.kernel)
+        self._beam_fan = other_cars.fan(self.angles)  # the other cars' ranges (a race's)
+        _, self._add_cars = cars_kernel(self.kernel)
         if self.kernel == "numpy" and not exact_only:  # ROS maps need no tables
             _check_tables(config, self.angles)
 
@@ -289,7 +303,7 @@ class LidarSensor:
         (their occupied pixels) and ALL_BLOCKS elsewhere."""
         if self.config.blocks is not None:
             return tuple(self.config.blocks)
-        return ROS_BLOCKS if track.kind == "ros_map" else ALL_BLOCKS
+        return ROS_BLOCKS if track.occupancy is not None else ALL_BLOCKS
 
     @property
     def id(self) -> str:
@@ -311,7 +325,7 @@ class LidarSensor:
         exact = occupancy_map(track, blocks, self.config.hit_classes)
         if exact is not None:
             return exact
-        if track.kind == "procedural":  # a track of its own at every reset
+        if track.drawn_per_reset:  # a track of its own at every reset
             field = self._field(track, blocks)
             return field, self._fan(field, track.y_down)
         c = self.config
@@ -368,11 +382,11 @@ class LidarSensor:
         heading = snapshot.car.pose[2]
         origin = self.origin(snapshot, track)
         ranges = self.scan(origin, heading, track.y_down)
-        if len(snapshot.cars) > 1:  # a race: the other cars stop beams too
-            beams = directions(self.angles, heading, track.y_down)
-            ranges = np.minimum(
-                ranges, ranges_to_cars(origin, beams, snapshot.cars[1:], self.max_range)
-            )
+        others = snapshot.others
+        if others:  # a race: the other cars on the track stop beams too
+            rows = other_cars.car_rows(others)
+            y_down, fan = track.y_down, self._beam_fan
+            ranges = self._add_cars(ranges, origin, heading, y_down, fan, rows, self.max_range)
         c = self.config
         classes = None
         if c.hit_classes:
@@ -433,7 +447,7 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
     if config.max_range is not None:
         max_range = config.max_range
     else:  # F1TENTH's lidar on its maps, else 10 car lengths
-        max_range = ROS_MAX_RANGE if env.kind == "ros_map" else 10 * length
+        max_range = ROS_MAX_RANGE if env.facts.occupancy_map else 10 * length
     cell = config.cell if config.cell is not None else length / 8
     cone_colors = ((0, 0, 255), (255, 255, 0))  # picture tracks: blue and yellow cones
     return LidarSensor(
@@ -441,7 +455,7 @@ def build(config: LidarConfig, context: SensorContext) -> LidarSensor:
         max_range,
         cell,
         cone_colors,
-        exact_only=env.kind == "ros_map",
+        exact_only=env.facts.occupancy_map,
         settings=cache_settings(env),
         mount=context.car.lidar_mount,
     )

@@ -24,7 +24,6 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config.bounds import MAX_LOOKAHEAD_GRID
-from tinyrace.config.schema import RosMapTrackConfig
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.sensors.base import SensorContext
@@ -300,12 +299,9 @@ def build(config: LookaheadConfig, context: SensorContext) -> LookaheadSensor:
     """The lookahead sensor: needs a reference line (a procedural centreline, or an image
     track's trajectory colour with cross_track_error.use_cte)."""
     env = context.env
-    if env.kind == "image" and not env.reward_design.cross_track_error.use_cte:
-        raise Unsupported(
-            "expected reward_design.cross_track_error.use_cte: true (with its "
-            "trajectory_color) on an image track: lookahead follows that trajectory"
-        )
-    if any(isinstance(t, RosMapTrackConfig) and t.waypoints is None for t in env.tracks):
-        raise Unsupported("expected track.waypoints on a ros_map track: lookahead follows them")
+    for track in env.tracks:
+        missing = track.reference_problem(env.reward_design)
+        if missing is not None:
+            raise Unsupported(f"{missing}: lookahead follows the reference line")
     spacing = config.spacing if config.spacing is not None else context.car.length
     return LookaheadSensor(config, spacing)

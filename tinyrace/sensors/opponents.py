@@ -13,8 +13,9 @@ the origin to the middle of its footprint, between its axles):
 | heading | rad | its heading less the car's own, wrapped to [-pi, pi) |
 
 At most ``count`` rows are cars; cars farther than ``max_range`` are left out, and so are
-all when the car races alone (every row padding). Values are clamped to the space: x and y
-to +-max_range, vx and vy to +-2 top speeds.
+all when the car races alone (every row padding), and cars gone from the track (they
+finished the race: ``Snapshot.gone``; the lidar meets them no more either). Values are
+clamped to the space: x and y to +-max_range, vx and vy to +-2 top speeds.
 """
 
 from __future__ import annotations
@@ -89,6 +90,8 @@ class OpponentsSensor:
             return out
         rows = relative_rows(snapshot, self.y_down)
         distance = np.hypot(rows[:, 1], rows[:, 2])
+        if snapshot.gone:  # finished cars left the track
+            distance[[k - 1 for k in snapshot.gone if k]] = np.inf
         order = np.argsort(distance, kind="stable")
         near = order[distance[order] <= self.max_range][: self.config.count]
         found = np.clip(rows[near], self.space.low[0], self.space.high[0])
@@ -100,4 +103,4 @@ def build(config: OpponentsConfig, context: SensorContext) -> OpponentsSensor:
     """The opponents sensor of ``config``: range 10 car lengths unless given."""
     car = context.car
     max_range = config.max_range if config.max_range is not None else 10 * car.length
-    return OpponentsSensor(config, max_range, car.top_speed, y_down=context.env.kind == "image")
+    return OpponentsSensor(config, max_range, car.top_speed, y_down=context.env.facts.y_down)

@@ -41,9 +41,18 @@ register(
 
 def _register_built_in() -> None:
     from tinyrace.config import sensors as configs
-    from tinyrace.sensors import cones, lidar, lookahead, opponents, perspective_camera, state
+    from tinyrace.sensors import (
+        chase_view,
+        cones,
+        lidar,
+        lookahead,
+        opponents,
+        perspective_camera,
+        state,
+        top_view,
+    )
 
-    for name, config, module, kinds, doc in (
+    for name, config, module, needs, doc in (
         (
             "perspective_camera",
             configs.PerspectiveCameraConfig,
@@ -64,7 +73,7 @@ def _register_built_in() -> None:
             "cones",
             configs.ConesConfig,
             cones,
-            frozenset({"image", "cone_map"}),
+            "cones",
             "cones in range by class, padded",
         ),
         (
@@ -75,28 +84,66 @@ def _register_built_in() -> None:
             "the nearest other cars of a race: position, relative velocity, heading, padded",
         ),
     ):
-        register(SensorType(name, config, module.build, kinds, doc))
+        register(SensorType(name, config, module.build, needs, doc))
+    register(
+        SensorType(
+            "chase_view",
+            configs.ChaseViewConfig,
+            chase_view.build,
+            "painted ground",  # CarRacing's tiles and kerbs, painted per track
+            "CarRacing's 96x96 view: the car from behind and above, its dashboard below",
+            default=True,
+        )
+    )
+    register(
+        SensorType(
+            "top_view",
+            configs.TopViewConfig,
+            top_view.build,
+            "metric ground",  # a ground in metres, drawn from the track
+            "the road ahead from above with the car drawn in",
+            default=True,
+        )
+    )
 
 
 _register_built_in()
 
 
+def default_sensor(context: SensorContext) -> Sensor | None:
+    """The observation of an env with no sensor configured: the first default type whose
+    needs its track holds (chase_view on a painted ground, top_view on a ground in metres),
+    under its type's name; None where the track is seen through cameras only
+    (``TrackFacts.default_view``)."""
+    facts = context.env.facts
+    if not facts.default_view:
+        return None
+    for name, found in SENSOR_TYPES.items():
+        if found.default and (found.needs is None or found.needs in facts.holds):
+            return found.build(found.config(id=name), context)
+    return None
+
+
 def build_sensors(context: SensorContext, source: str) -> list[Sensor]:
-    """The sensors of the env config's ``sensors:`` list, in order; a ConfigError lists every
-    entry that cannot work with this config (its type, its track kind, or its knobs)."""
+    """The sensors of the env config's ``sensors:`` list (tinycarlo's ``cameras:`` first), in
+    order; a ConfigError lists every entry that cannot work with this config (its type, what
+    its track holds, or its knobs), by the key the user wrote."""
     config = context.env
     built, problems = [], []
     for i, entry in enumerate(config.sensors):
-        kind = sensor_type(entry.type, source, f"sensors[{i}].type")
-        if kind.track_kinds is not None and config.kind not in kind.track_kinds:
-            kinds = ", ".join(sorted(kind.track_kinds))
-            allowed = f"a {entry.type} sensor works on track kinds: {kinds}"
-            problems.append(Problem(source, f"sensors[{i}].type", entry.type, allowed))
+        key = config.sensor_key(i)  # as written: cameras[i] or sensors[j]
+        kind = sensor_type(entry.type, source, f"{key}.type")
+        if kind.needs is not None and kind.needs not in config.facts.holds:
+            allowed = (
+                f"a {entry.type} sensor needs a track that holds {kind.needs}, "
+                f"not a {config.kind} track"
+            )
+            problems.append(Problem(source, f"{key}.type", entry.type, allowed))
             continue
         try:
             built.append(kind.build(entry, context))
         except Unsupported as exc:
-            problems.append(Problem(source, f"sensors[{i}]", entry.type, str(exc)))
+            problems.append(Problem(source, key, entry.type, str(exc)))
     if problems:
         raise ConfigError(problems)
     return built

@@ -30,7 +30,6 @@ from gymnasium import spaces
 
 from tinyrace.cars.state import CarFacts, CarState
 from tinyrace.config import EnvConfig
-from tinyrace.config.schema import ProceduralTrackConfig
 from tinyrace.config.sensors import StateConfig
 from tinyrace.sensors.base import SensorContext
 from tinyrace.tracks.base import Track
@@ -94,10 +93,11 @@ def limits(env: EnvConfig, car: CarFacts) -> Limits:
     """The configured car's limits: top speed, yaw rate, steering lock and pose extent."""
     fps = env.sim.fps or 50.0
     motion = Limits(car.top_speed, car.yaw_rate, car.steer_lock)
-    if env.kind != "procedural":
+    extents = [track.pose_extent() for track in env.tracks]
+    if None in extents:
         return motion
     # the playfield bounds the body's centre after a step (the next one ends the episode)
-    playfield = max(t.playfield for t in env.tracks if isinstance(t, ProceduralTrackConfig))
+    playfield = max(e for e in extents if e is not None)
     return replace(motion, extent=playfield + motion.speed / fps + car.length)
 
 
@@ -130,4 +130,4 @@ def build(config: StateConfig, context: SensorContext) -> StateSensor:
     """The state sensor of ``config``: wheel speeds and slips when the car models wheels."""
     env = context.env
     bounds = limits(env, context.car)
-    return StateSensor(config, context.car.wheels, y_down=env.kind == "image", bounds=bounds)
+    return StateSensor(config, context.car.wheels, y_down=env.facts.y_down, bounds=bounds)

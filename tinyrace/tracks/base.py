@@ -11,20 +11,22 @@ How to add a track source (one new kind of ``track.type``):
    file once and raises ``ConfigError`` listing every problem; ``draw(rng, options)``
    returns the ``TrackDraw`` of a new episode, drawing from ``rng`` only.
 2. Add its config dataclass (``type: Literal["<kind>"]``) to ``tinyrace/config/schema.py``.
-3. Register it in ``tinyrace/tracks/registry.py`` (``TRACK_SOURCES``) and list the kind in
-   the ``track_kinds`` of every car model that can drive on it (``tinyrace/cars/registry.py``).
+3. Register it in ``tinyrace/tracks/registry.py`` (``TRACK_SOURCES``). Its ``Track`` says
+   what it holds (unit, reference line, walls, cones, picture, ...): cars, rules, sensors
+   and pictures choose by that, never by the kind.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.circuit import Circuit
+from tinyrace.tracks.ros_map import OccupancyMap
 
 Pose = tuple[float, float, float]  # (x, y [track units], heading [rad] from +x)
 Box = tuple[float, float, float, float]  # (x0, y0, x1, y1) [track units]
@@ -78,6 +80,15 @@ class TrackRules:
     info_labels: tuple[str, ...] = ()  # episode labels in info: "track", "spawn", "unit"
 
 
+@dataclass(frozen=True)
+class PaintedGround:
+    """A ground painted from a track's tiles and kerbs over a grass pattern (CarRacing's),
+    anew for each track: what the pictures of such a track are drawn from."""
+
+    playfield: float  # [track units] the painted square spans -playfield..playfield in x and y
+    pixels_per_unit: float  # [px per track unit] the texture the cameras sample
+
+
 class ObstacleTest(Protocol):
     """The narrow phase of the obstacle-colour rule: which obstacles a footprint touches."""
 
@@ -121,12 +132,30 @@ class Track:
     obstacle_test: ObstacleTest | None = None  # obstacle colours' pixels, when there are any
     trajectory: DistanceTo | None = None  # what the cte is measured to, when not the circuit
     reference_note: str | None = None  # why the track has no reference line, when it has none
-    detail: Any = None  # the source's own data (e.g. ProceduralTrack, ImageTrack)
+    headings: np.ndarray | None = None  # (N,) [rad] direction of travel at each centreline point
+    kerbs: np.ndarray = field(default_factory=lambda: np.zeros((0, 4, 2)))  # (K, 4, 2) quads
+    kerb_red: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))  # (K,) red or white
+    occupancy: OccupancyMap | None = None  # a map's cells (free, occupied), when it is one
+    painted: PaintedGround | None = None  # its ground is painted from tiles and kerbs
+    ground_pixels_per_unit: float | None = None  # [px per track unit] a drawn ground's texture
+    drawn_per_reset: bool = False  # made anew at every reset: nothing keeps or shares it
+    attempts: int = 1  # how many tries its generator needed
+    path: str = ""  # the file it was read from, for messages ("" when generated)
 
     @property
     def obstacles(self) -> tuple[ColorLayer, ...]:
         """The colour layers a car must avoid, in ``reward_design.color_obstacles`` order."""
         return tuple(layer for layer in self.layers if layer.role == "obstacle")
+
+    @property
+    def trajectory_points(self) -> np.ndarray | None:
+        """(K, 2) pixel coordinates (x, y) of a drawn trajectory, when the track keeps one."""
+        return next((la.points for la in self.layers if la.role == "trajectory"), None)
+
+    @property
+    def picture_size(self) -> tuple[int, int]:
+        """(width, height) [px] of the track's picture ((0, 0) without one)."""
+        return (0, 0) if self.picture is None else (self.picture.shape[1], self.picture.shape[0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,7 +174,9 @@ class TrackDraw:
 class TrackSource(Protocol):
     """Turns an env config into tracks; made once per env, asked once per reset."""
 
-    kind: str  # the ``track.type`` it reads
+    kind: str  # the ``track.type`` it reads (a label for messages and results)
+    tracks: tuple[Track, ...]  # the fixed tracks it draws from; () when each draw makes one
+    painted: PaintedGround | None  # the ground of the tracks it makes, when painted per track
 
     def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
         """The track of a new episode, everything random drawn from ``rng`` in a fixed order.

@@ -23,7 +23,14 @@ from tinyrace.config.image_file import read_image_bgr
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.tracks.base import ColorLayer, Track, TrackDraw, TrackRules, pick_index
+from tinyrace.tracks.base import (
+    ColorLayer,
+    PaintedGround,
+    Track,
+    TrackDraw,
+    TrackRules,
+    pick_index,
+)
 from tinyrace.tracks.nearest import NearestPoint
 
 THRESHOLD = 100  # tinycarlo's binarisation threshold per channel
@@ -356,6 +363,7 @@ class ImageSource:
     """``track.type: image``: tinycarlo track images, each loaded once per env."""
 
     kind = "image"
+    painted: PaintedGround | None = None  # the ground is each track's picture
 
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         loaded, problems = [], []
@@ -409,5 +417,5 @@ def as_track(
         rules=IMAGE_RULES,
         obstacle_test=ObstaclePixels(image_track),
         trajectory=image_track.trajectory,
-        detail=image_track,
+        path=image_track.path,
     )

@@ -27,7 +27,7 @@ from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
 from tinyrace.tracks import polyline
-from tinyrace.tracks.base import Surface, Track, TrackDraw, TrackRules, pick_index
+from tinyrace.tracks.base import PaintedGround, Surface, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.tracks.centerline_csv import read_loop
 from tinyrace.tracks.circuit import Circuit
 from tinyrace.tracks.cone_map import RADII, read_cones, road_between
@@ -36,6 +36,7 @@ from tinyrace.tracks.ros_map import OccupancyMap, read_map
 Pose = tuple[float, float, float]
 FILES = FilesConfig()  # the default bounds on the files a track names
 OFF_ROAD_FRICTION = 0.6  # CarRacing's grass grip, as a fraction of the road's
+GROUND_PIXELS_PER_METER = 20.0  # [px/m] a drawn ground's texture when the config names none
 NO_REFERENCE = "no reference line: this ros_map track has no waypoints (track.waypoints)"
 
 
@@ -94,7 +95,10 @@ class MetricTrack:
             circuit=self.circuit,
             cone_radii=self.cone_radii,
             reference_note=NO_REFERENCE if self.circuit is None else None,
-            detail=self,
+            headings=None if self.circuit is None else self.circuit.headings,
+            occupancy=self.occupancy,
+            ground_pixels_per_unit=getattr(config, "pixels_per_meter", GROUND_PIXELS_PER_METER),
+            path=self.path,
         )
 
 
@@ -226,6 +230,10 @@ LOADERS: dict[str, Callable[..., MetricTrack]] = {
 
 class MetricSource:
     """``track.type: centerline``, ``cone_map`` or ``ros_map``: every track read once per env."""
+
+    painted: PaintedGround | None = (
+        None  # the ground is drawn once per track from its road, cones and cells
+    )
 
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         self.kind = config.kind

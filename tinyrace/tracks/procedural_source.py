@@ -16,7 +16,7 @@ import numpy as np
 from tinyrace import kernels
 from tinyrace.config import EnvConfig, ProceduralTrackConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.tracks.base import Surface, Track, TrackDraw, TrackRules
+from tinyrace.tracks.base import PaintedGround, Surface, Track, TrackDraw, TrackRules
 from tinyrace.tracks.procedural import (
     NoClosedLap,
     ProceduralTrack,
@@ -41,6 +41,14 @@ class GroundColors:
     road: np.ndarray  # (3,) float: the tile colours add a small shade to it
     background: np.ndarray
     grass: np.ndarray
+
+    @classmethod
+    def of(cls, track: Track) -> GroundColors:
+        """The colours of a track's palette (the same floats as those it was drawn with)."""
+        road, background, grass = (
+            np.array(track.palette[name], float) for name in ("road", "background", "grass")
+        )
+        return cls(road, background, grass)
 
 
 def track_params(config: ProceduralTrackConfig) -> ProceduralTrackParams:
@@ -95,11 +103,13 @@ class ProceduralSource:
     """
 
     kind = "procedural"
+    tracks: tuple[Track, ...] = ()  # a new track at every reset
 
     def __init__(self, config: EnvConfig, base_dir: Path | None = None, source: str = ""):
         track = config.tracks[0]
         assert isinstance(track, ProceduralTrackConfig)
         self.config = track
+        self.painted: PaintedGround | None = PaintedGround(track.playfield, track.pixels_per_unit)
         self.source = source
         self.params = track_params(self.config)
         self.colors = config_colors(self.config)
@@ -107,7 +117,11 @@ class ProceduralSource:
         self._trace: Trace | None = None
 
     def draw(self, rng: np.random.Generator, options: Mapping[str, object]) -> TrackDraw:
-        """CarRacing's reset order: colours (when randomised) are drawn before the track."""
+        """CarRacing's reset order: colours (when randomised) are drawn before the track.
+
+        There is one track and one start: the options ``track`` and ``spawn`` may only be
+        0 or None."""
+        _check_one(options)
         if self.config.domain_randomize and options.get("randomize", True):
             self.colors = draw_colors(rng)
         try:
@@ -129,6 +143,8 @@ class ProceduralSource:
     def track(self, generated: ProceduralTrack) -> Track:
         """The generic view of a generated track, in CarRacing's units, y up."""
         x, y, hull_angle = generated.start_pose
+        headings = generated.headings + math.pi / 2  # beta is the hull's angle
+        headings.setflags(write=False)
         side = self.config.playfield  # [u]
         colors = self.colors
         return Track(
@@ -139,6 +155,7 @@ class ProceduralSource:
             bounds=(-side, -side, side, side),
             spawns=((x, y, hull_angle + math.pi / 2),),
             centerline=generated.centerline,
+            headings=headings,
             tiles=generated.tiles,
             surfaces=(Surface("road", 1.0, generated.tiles),),
             off_road_friction=GRASS_FRICTION,
@@ -152,8 +169,23 @@ class ProceduralSource:
                 reset_step=True,  # CarRacing's reset steps the physics once
                 lap_complete_percent=self.config.lap_complete_percent,
             ),
-            detail=generated,
+            kerbs=generated.kerbs,
+            kerb_red=generated.kerb_red,
+            painted=self.painted,
+            drawn_per_reset=True,
+            attempts=generated.attempts,
         )
+
+
+def _check_one(options: Mapping[str, object]) -> None:
+    """The reset options ``track`` and ``spawn``: 0 or None (one track, one start)."""
+    for key in ("track", "spawn"):
+        value = options.get(key)
+        whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+        if value is None or (whole and value == 0):
+            continue
+        allowed = f"expected 0 or None (a procedural track has one {key})"
+        raise ConfigError(Problem("<reset options>", key, value, allowed))
 
 
 def _rgb(color: np.ndarray) -> tuple[float, float, float]:

@@ -36,7 +36,7 @@ def make_track_source(config: EnvConfig, base_dir: Path, source: str) -> TrackSo
         allowed = f"expected a track type, one of: {', '.join(sorted(TRACK_SOURCES))}"
         raise ConfigError(Problem(source, "tracks[0].type", config.kind, allowed))
     loaded = build(config, base_dir, source)
-    tracks = getattr(loaded, "tracks", None)
-    if tracks is None:  # tracks made anew at every reset stay with their env
+    if not loaded.tracks:  # tracks made anew at every reset stay with their env
         return loaded
-    return shared(("track source", type(loaded).__qualname__, digest(tracks)), lambda: loaded)
+    key = ("track source", type(loaded).__qualname__, digest(loaded.tracks))
+    return shared(key, lambda: loaded)

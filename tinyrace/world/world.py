@@ -57,7 +57,8 @@ class Contacts:
     cars: set[int] = field(default_factory=set)  # other cars (world indices) touching it now
     new_cars: list[int] = field(default_factory=list)  # cars it began touching this step
     crashed: bool = False  # this step ran into a wall: the car was put back and stopped
-    # (touching another car puts it back and stops it too: ``cars``/``new_cars`` say so)
+    # (running into another car puts it back and stops it too, unless it was moving straight
+    # away from every car it touches: ``cars``/``new_cars`` say whom it touched)
 
 
 class World:
@@ -75,6 +76,7 @@ class World:
         self.cars: list[Car] = []
         self.contacts: list[Contacts] = []  # per car
         self.parked: set[int] = set()  # cars out of the race: they stand still where they are
+        self.gone: set[int] = set()  # parked cars taken off the track: nothing meets them
         self._states: tuple[CarState, ...] | None = None  # the cars' states since the last step
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
@@ -109,6 +111,19 @@ class World:
         the other cars still meet (its contacts are still reported)."""
         self.parked.add(car)
         self.cars[car].stop()
+
+    def retire(self, car: int) -> None:
+        """Take car ``car`` off the track: parked, and its body out of the space, so that
+        nothing meets it any more (a car that finished its race does not block the line)."""
+        self.park(car)
+        if car not in self.gone:
+            self.gone.add(car)
+            body = self.cars[car].body
+            self.space.remove(body, *body.shapes)
+            contacts = self.contacts[car]
+            for other in contacts.cars:
+                self.contacts[other].cars.discard(car)
+            self.contacts[car] = Contacts()
 
     # -- track sensors ---------------------------------------------------------------------
     def add_tiles(self, tiles: np.ndarray) -> None:
@@ -170,6 +185,7 @@ class World:
         self.contacts = []
         self.cars = []
         self.parked = set()
+        self.gone = set()
         self._states = None
 
     # -- pickling ----------------------------------------------------------------------------
@@ -226,7 +242,7 @@ class World:
             for index, (car, contacts, place) in enumerate(
                 zip(cars, self.contacts, before, strict=True)
             ):
-                if contacts.walls or contacts.cars or index in parked:
+                if contacts.walls or index in parked or _closing_in(car, place, contacts, before):
                     _crash(car, place)
                     contacts.crashed = bool(contacts.walls)
         return self.contacts
@@ -254,9 +270,10 @@ class World:
             self._states = tuple(car.state() for car in self.cars)
         return self._states
 
-    def snapshot(self, t: float, steps: int) -> Snapshot:
-        """The world now, labelled with the episode's clock (``t`` [s], ``steps``)."""
-        return Snapshot(t, steps, self.states())
+    def snapshot(self, t: float, steps: int, score: float = 0.0) -> Snapshot:
+        """The world now, labelled with the episode's clock (``t`` [s], ``steps``) and the
+        controlled car's running reward (``score``)."""
+        return Snapshot(t, steps, self.states(), gone=frozenset(self.gone), score=score)
 
     @property
     def counts(self) -> tuple[int, int, int]:
@@ -320,6 +337,22 @@ Place = tuple[tuple[float, float], float]  # a body's (position, angle)
 def _place(body: pymunk.Body) -> Place:
     x, y = body.position
     return (float(x), float(y)), float(body.angle)
+
+
+def _closing_in(car: Car, place: Place, contacts: Contacts, before: list[Place]) -> bool:
+    """Whether a car touching other cars moved this step other than straight away from each
+    of them (the one it ran into stays put back, the one it touched that was pulling away
+    drives on: two cars touching nose to tail would otherwise stand there for good)."""
+    if not contacts.cars:
+        return False
+    (x0, y0), _ = place
+    x, y = car.body.position
+    dx, dy = x - x0, y - y0
+    for other in contacts.cars:
+        (ox, oy), _ = before[other]
+        if dx * (ox - x0) + dy * (oy - y0) >= 0.0:  # towards it, or across, or not at all
+            return True
+    return False
 
 
 def _crash(car: Car, before: Place) -> None:

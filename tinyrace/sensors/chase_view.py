@@ -3,21 +3,30 @@
 The frame is laid out as the reference's 1000x800 window, then mapped straight
 to the requested size (96x96 observation, 600x400 video, 1000x800 window) in one
 affine warp of the pre-drawn ground; the car and the dashboard are drawn on top.
+
+``ChaseViewSensor`` is the sensor type ``chase_view``: CarRacing's 96x96 observation, the
+default of a procedural track. The render modes' frames draw a ``ChaseView`` of their size.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 
-from tinyrace.render.car_sprite import CarSprite, Patches
-from tinyrace.render.dashboard import Dashboard
+from tinyrace.config.sensors import ChaseViewConfig
+from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.sensors.car_sprite import CarSprite, Patches
+from tinyrace.sensors.dashboard import Dashboard
 from tinyrace.sensors.draw_cars import CarLooks, draw_names, fill_footprints
 from tinyrace.sensors.texture import Affine, GroundTexture, as_matrix
+from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
 WINDOW = (1000, 800)  # [px] the reference's layout size (w, h)
+SMALL_VIEW = 160  # [px] views up to this size supersample the car and the instruments
 ZOOM = 2.7 * 6.0  # [window px/u] after the first second
 START_ZOOM = 0.1 * 6.0  # [window px/u] at t = 0
 
@@ -98,3 +107,52 @@ class ChaseView:
             draw_names(frame[:top], as_matrix(world_to_out), snapshot, looks)
         self.dashboard.draw(frame, car, score)
         return frame
+
+
+def small_dashboard(size: tuple[int, int]) -> Dashboard:
+    """The dashboard of a view of ``size`` (w, h): supersampled on small views."""
+    return Dashboard(size[0], size[1], supersample=4 if max(size) <= SMALL_VIEW else 1)
+
+
+class ChaseViewSensor:
+    """The ``chase_view`` sensor: CarRacing's view of the car, the score from the snapshot."""
+
+    def __init__(self, config: ChaseViewConfig, ground: Ground, looks: CarLooks | None = None):
+        self.config = config
+        self.ground = ground
+        self.looks = looks  # a race's colours: the other cars drawn on the ground
+        height, width = config.resolution
+        self.size = (width, height)
+        self.space = spaces.Box(0, 255, (height, width, 3), np.uint8)
+        # kept across episodes, as its patches; made at the first observation (the drawing
+        # path's choice imports numba, which gym.make does not)
+        self.dashboard: Dashboard | None = None
+        self.patches: Patches = {}
+        self.view: ChaseView | None = None  # on the current episode's ground
+
+    @property
+    def id(self) -> str:
+        return self.config.id
+
+    def reset(self, track: Track) -> None:
+        self.view = None  # a new episode has a new ground
+
+    def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        texture = self.ground.texture(track)  # asked each step: visited tiles get repainted
+        view = self.view
+        if view is None or view.texture is not texture:
+            if self.dashboard is None:
+                self.dashboard = small_dashboard(self.size)
+            dashboard = self.dashboard
+            view = self.view = ChaseView(self.size, texture, dashboard, self.patches, self.looks)
+        return view.render(snapshot, snapshot.score)
+
+    def __getstate__(self) -> dict[str, Any]:
+        # the texture belongs to the episode; the cached pictures are redrawn when next asked
+        fresh: dict[str, Any] = {"view": None, "dashboard": None, "patches": {}}
+        return {**self.__dict__, **fresh}
+
+
+def build(entry: ChaseViewConfig, context: SensorContext) -> ChaseViewSensor:
+    """A ``chase_view`` sensor from its config entry."""
+    return ChaseViewSensor(entry, context.ground, CarLooks.of(context.env))

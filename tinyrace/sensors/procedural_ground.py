@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 
 from tinyrace.sensors.texture import GroundTexture, transform_points
-from tinyrace.tracks.procedural import ProceduralTrack
+from tinyrace.tracks.base import Track
 from tinyrace.tracks.procedural_source import GroundColors
 
 _SUBPIXEL_BITS = 4  # cv2 fixed-point vertices: 1/16 px precision
@@ -35,10 +35,9 @@ class GroundPainter:
         self.playfield = playfield  # [u]
         self._bases: dict[tuple[Any, ...], np.ndarray] = {}
 
-    def paint(
-        self, track: ProceduralTrack, colors: GroundColors, pixels_per_unit: float
-    ) -> GroundTexture:
+    def paint(self, track: Track, colors: GroundColors, pixels_per_unit: float) -> GroundTexture:
         """The whole playfield at ``pixels_per_unit``; halved levels of detail follow on demand."""
+        assert track.tiles is not None, "a painted ground has tiles"
         playfield = self.playfield
         side = int(np.ceil(2 * playfield * pixels_per_unit / LEVEL_ALIGN)) * LEVEL_ALIGN
         offset = playfield * pixels_per_unit
@@ -67,13 +66,11 @@ class GroundPainter:
         return base
 
 
-def repaint_tile(
-    texture: GroundTexture, track: ProceduralTrack, index: int, road: np.ndarray
-) -> None:
+def repaint_tile(texture: GroundTexture, track: Track, index: int, road: np.ndarray) -> None:
     """A visited tile loses its shade and shows the plain road colour, as in CarRacing."""
-    texture.repaint(
-        lambda image, matrix: _fill(image, matrix, track.tiles[index : index + 1], road)
-    )
+    tiles = track.tiles
+    assert tiles is not None, "a painted ground has tiles"
+    texture.repaint(lambda image, matrix: _fill(image, matrix, tiles[index : index + 1], road))
 
 
 def _pack(color: np.ndarray) -> np.uint32:

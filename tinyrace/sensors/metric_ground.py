@@ -1,4 +1,4 @@
-"""The ground of a track in metres, drawn once per track, and its overview picture.
+"""The ground of a track in metres, drawn once per track.
 
 The road (tiles), a start line, the cones by class and a ROS map's cells are drawn
 into one RGBx texture with y up (north at the top of the picture); cameras sample it
@@ -15,13 +15,11 @@ import numpy as np
 from tinyrace import cache
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.sensors import texture
-from tinyrace.sensors.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
-from tinyrace.tracks.metric import MetricTrack
-from tinyrace.world.snapshot import Snapshot
 
 MAX_SIDE = 8192  # [px] the texture's longest side
+GROUND_PIXELS_PER_METER = 20.0  # [px/m] when the track names no resolution
 ROAD = (102, 102, 102)  # RGB, CarRacing's road
 GRASS = (102, 204, 102)  # RGB, CarRacing's background
 START_LINE = (255, 255, 255)
@@ -37,17 +35,16 @@ _BITS = 4  # cv2 fixed-point vertices: 1/16 px
 TEXTURES = DataclassCodec(GroundTexture, GroundTexture.complete)  # stored with every level
 
 
-def shared_ground(
-    layout: Track, track: MetricTrack, pixels_per_meter: float, settings: cache.Settings
-) -> GroundTexture:
-    """``paint_ground(track, pixels_per_meter)``, one read-only texture for every env of
-    this track (``layout``: its ``Track``); in the cache folder of ``settings``."""
-    key = ("metric ground", cache.content(layout), pixels_per_meter,
+def shared_ground(track: Track, settings: cache.Settings) -> GroundTexture:
+    """``paint_ground`` of ``track`` at its ``ground_pixels_per_unit``, one read-only texture
+    for every env of this track; in the cache folder of ``settings``."""
+    pixels_per_meter = track.ground_pixels_per_unit or GROUND_PIXELS_PER_METER
+    key = ("metric ground", cache.content(track), pixels_per_meter,
            cache.code(__file__, texture.__file__))  # fmt: skip
     return cache.shared(key, lambda: paint_ground(track, pixels_per_meter), settings, TEXTURES)
 
 
-def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
+def paint_ground(track: Track, pixels_per_meter: float) -> GroundTexture:
     """The whole track (its bounds) at up to ``pixels_per_meter``, as a ground texture."""
     x0, y0, x1, y1 = track.bounds
     ppm = min(pixels_per_meter, MAX_SIDE / max(x1 - x0, y1 - y0))
@@ -57,7 +54,7 @@ def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
     image[:] = (*GRASS, 255)
     if track.occupancy is not None:
         _paint_map(image, to_pixels, track)
-    else:
+    elif track.tiles is not None:
         _fill(image, to_pixels, track.tiles, ROAD)
     if track.circuit is not None and track.occupancy is None:
         _fill(image, to_pixels, _start_line(track), START_LINE)
@@ -69,7 +66,7 @@ def paint_ground(track: MetricTrack, pixels_per_meter: float) -> GroundTexture:
     return GroundTexture.from_image(image, to_pixels, border=GRASS)
 
 
-def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: MetricTrack) -> None:
+def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: Track) -> None:
     """The ROS map's cells, warped from map pixels into the texture."""
     occupancy = track.occupancy
     assert occupancy is not None
@@ -93,7 +90,7 @@ def _paint_map(image: np.ndarray, to_pixels: np.ndarray, track: MetricTrack) -> 
     )
 
 
-def _start_line(track: MetricTrack) -> np.ndarray:
+def _start_line(track: Track) -> np.ndarray:
     """A 1 m band across the road at point 0."""
     circuit = track.circuit
     assert circuit is not None
@@ -110,57 +107,3 @@ def _fill(
         return
     pixels = np.round(transform_points(matrix, polygons) * (1 << _BITS)).astype(np.int32)
     cv2.fillPoly(image, list(pixels), (*color, 255), lineType=cv2.LINE_AA, shift=_BITS)
-
-
-class MetricOverview:
-    """The whole track scaled to ``max_side`` px, the reference line, the car and camera views."""
-
-    def __init__(self, track: MetricTrack, texture: GroundTexture, max_side: int = 800):
-        x0, y0, x1, y1 = track.bounds
-        self.scale = max_side / max(x1 - x0, y1 - y0)  # [px/m]
-        self.size = (max(round((x1 - x0) * self.scale), 1), max(round((y1 - y0) * self.scale), 1))
-        self.matrix = np.array(
-            [[self.scale, 0.0, -x0 * self.scale], [0.0, -self.scale, y1 * self.scale]]
-        )
-        self.background = texture.warp(self.matrix, self.size)
-        if track.centerline is not None:
-            line = self._pixels(np.vstack((track.centerline, track.centerline[:1])))
-            cv2.polylines(self.background, [line], False, (255, 255, 255), 1, cv2.LINE_AA, _BITS)
-
-    def render(
-        self,
-        footprint: np.ndarray,
-        windows: list[np.ndarray],
-        images: list[np.ndarray],
-        race: tuple[Snapshot, CarLooks] | None = None,
-    ) -> np.ndarray:
-        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``;
-        ``race``: a snapshot of several cars, the others drawn and every car named."""
-        frame = self.background.copy()
-        for corners in windows:
-            cv2.polylines(
-                frame, [self._pixels(corners)], True, (255, 200, 0), 1, cv2.LINE_AA, _BITS
-            )
-        centre = footprint.mean(axis=0)
-        grown = centre + (footprint - centre) * max(1.0, 6.0 / (self.scale * _span(footprint)))
-        cv2.fillConvexPoly(frame, self._pixels(grown), (204, 0, 0), cv2.LINE_AA, _BITS)
-        if race is not None and len(race[0].cars) > 1:
-            draw_race(frame, self.matrix, *race, min_size=6.0)
-        x = 4
-        for image in images:  # camera insets along the top
-            h, w = image.shape[:2]
-            factor = min(self.size[0] / 4 / w, self.size[1] / 3 / h, 1.0)
-            small = cv2.resize(image, (max(int(w * factor), 1), max(int(h * factor), 1)))
-            sh, sw = small.shape[:2]
-            if x + sw > frame.shape[1] or sh + 4 > frame.shape[0]:
-                break
-            frame[4 : 4 + sh, x : x + sw] = small
-            x += sw + 6
-        return np.asarray(frame)
-
-    def _pixels(self, points: np.ndarray) -> np.ndarray:
-        return np.round(transform_points(self.matrix, points) * (1 << _BITS)).astype(np.int32)
-
-
-def _span(points: np.ndarray) -> float:
-    return float(np.ptp(points, axis=0).max()) or 1.0

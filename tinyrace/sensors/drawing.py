@@ -18,7 +18,7 @@ from tinyrace.kernels import DRAWING_VARIABLE
 def kernel(wanted: str | None = None) -> tuple[str, ModuleType | None]:
     """(path name, the compiled module or None for numpy) that ``wanted`` names (auto |
     numba | numpy; None: ``TINYRACE_DRAWING``'s value, else auto)."""
-    return kernels.choose(DRAWING_VARIABLE, "numpy", "tinyrace.render.kernels.drawing", wanted)
+    return kernels.choose(DRAWING_VARIABLE, "numpy", "tinyrace.sensors.kernels.drawing", wanted)
 
 
 def blend(

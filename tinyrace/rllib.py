@@ -1,0 +1,133 @@
+"""Adapters for RLlib (Ray): float pixels, and an env creator every env runner can call.
+
+RLlib's default CNN takes float images, not the uint8 pixels tinyrace's cameras give
+(torch: "Input type (unsigned char) and bias type (float) should be the same"), and its
+remote env runners make the env in processes of their own, where ``gym.make("tinyrace/...")``
+finds no tinyrace ids unless tinyrace was imported there. This module has both parts::
+
+    from ray.tune.registry import register_env
+    from tinyrace.rllib import make_env
+
+    register_env("tinyrace", make_env)  # env_config: {"id": ..., gym.make's keywords}
+
+``make_env`` lives in tinyrace, so a worker that unpickles it imports tinyrace (which
+registers the ids) before it calls ``gym.make``. ``FloatPixels`` wraps a Gymnasium env,
+``FloatPixelsParallel`` a PettingZoo ``ParallelEnv`` (``tinyrace.race.parallel_env``) before
+RLlib's ``ParallelPettingZooEnv``; docs/training.md runs both with PPO.
+
+Neither Ray nor torch is imported here: ``pip install "tinyrace[rllib]"`` installs Ray.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, TypeAlias
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from pettingzoo.utils.wrappers import BaseParallelWrapper
+
+CARRACING_ID = "tinyrace/CarRacing-v0"
+PIXEL_MAX = 255.0  # uint8 0..255 -> float32 0..1
+
+Observation: TypeAlias = Any  # an array, or a dict of them (a camera dict)
+
+
+def is_pixels(space: spaces.Space[Any]) -> bool:
+    """An image: a uint8 Box of shape (height, width, channels) or (height, width)."""
+    return isinstance(space, spaces.Box) and space.dtype == np.uint8 and len(space.shape) in (2, 3)
+
+
+def float_space(space: spaces.Space[Any]) -> spaces.Space[Any]:
+    """``space`` with every image (``is_pixels``) as float32 in [0, 1]: the space itself, or
+    the entries of a Dict; any other space as it is."""
+    if is_pixels(space):
+        assert isinstance(space, spaces.Box)
+        return spaces.Box(0.0, 1.0, space.shape, np.float32)
+    if isinstance(space, spaces.Dict):
+        return spaces.Dict({key: float_space(sub) for key, sub in space.spaces.items()})
+    return space
+
+
+def float_pixels(space: spaces.Space[Any], observation: Observation) -> Observation:
+    """One observation of ``space`` with its images as float32 in [0, 1] (``float_space``)."""
+    if is_pixels(space):
+        return np.asarray(observation, np.float32) / np.float32(PIXEL_MAX)
+    if isinstance(space, spaces.Dict):
+        return {key: float_pixels(space[key], value) for key, value in observation.items()}
+    return observation
+
+
+class FloatPixels(gym.ObservationWrapper[Any, Any, Any]):
+    """A Gymnasium env whose images (uint8, 0..255) are float32 in [0, 1].
+
+    A camera's Box, or each camera of a dict observation; other entries (state, lidar)
+    are left as they are. The pixels are divided by 255, nothing else: the network sees
+    the same picture, in the dtype RLlib's default CNN takes (a ``format: classes``
+    camera's class indices too).
+    """
+
+    def __init__(self, env: gym.Env[Any, Any]):
+        super().__init__(env)
+        self._pixels = env.observation_space
+        self.observation_space = float_space(env.observation_space)
+
+    def observation(self, observation: Observation) -> Observation:
+        return float_pixels(self._pixels, observation)
+
+
+class FloatPixelsParallel(BaseParallelWrapper):  # type: ignore[misc]  # pettingzoo: untyped
+    """A PettingZoo ``ParallelEnv`` (``tinyrace.race.parallel_env(...)``) whose images are
+    float32 in [0, 1], each agent's observation as ``FloatPixels`` makes it.
+
+    Everything else (``agents``, ``possible_agents``, ``action_space``, ``render``,
+    ``state``, ...) is the wrapped env's, so RLlib's ``ParallelPettingZooEnv`` takes it as
+    it takes the env.
+    """
+
+    def __init__(self, env: Any):
+        super().__init__(env)
+        self._pixels = {agent: env.observation_space(agent) for agent in env.possible_agents}
+        self._float_spaces = {agent: float_space(s) for agent, s in self._pixels.items()}
+
+    def observation_space(self, agent: str) -> spaces.Space[Any]:
+        return self._float_spaces[agent]
+
+    def _floats(self, observations: Mapping[str, Observation]) -> dict[str, Observation]:
+        return {agent: float_pixels(self._pixels[agent], o) for agent, o in observations.items()}
+
+    def reset(
+        self, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, Observation], dict[str, Any]]:
+        observations, infos = self.env.reset(seed=seed, options=options)
+        return self._floats(observations), infos
+
+    def step(self, actions: Mapping[str, Any]) -> tuple[dict[str, Observation], Any, Any, Any, Any]:
+        observations, rewards, terminations, truncations, infos = self.env.step(actions)
+        return self._floats(observations), rewards, terminations, truncations, infos
+
+
+def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any]:
+    """RLlib's env creator: ``register_env("tinyrace", make_env)``.
+
+    ``env_config["id"]`` is the env's id (default ``tinyrace/CarRacing-v0``); every other
+    key goes to ``gym.make`` as a keyword (``max_episode_steps``, ``environment``,
+    ``domain_randomize``, ...). The env's images are float32 in [0, 1] (``FloatPixels``).
+    RLlib passes an ``EnvContext``: a dict, whose worker index is no key, so it reaches
+    no env.
+    """
+    config = dict(env_config)
+    env_id = config.pop("id", CARRACING_ID)
+    return FloatPixels(gym.make(env_id, **config))
+
+
+__all__ = [
+    "CARRACING_ID",
+    "FloatPixels",
+    "FloatPixelsParallel",
+    "float_pixels",
+    "float_space",
+    "is_pixels",
+    "make_env",
+]
