@@ -40,14 +40,14 @@ def main() -> None:
     parser.add_argument("--cars", type=int, default=8)
     args = parser.parse_args()
     if args.draw == "off":
-        from tinyrace.render import chase_view
-        from tinyrace.sensors import birdseye_camera, perspective_camera
+        from tinyrace.sensors import birdseye_camera, chase_view, perspective_camera, top_view
 
         def nothing(*_: Any, **__: Any) -> None:
             return None
 
         setattr(birdseye_camera, "fill_footprints", nothing)  # noqa: B010 (a stand-in)
         setattr(chase_view, "fill_footprints", nothing)  # noqa: B010
+        setattr(top_view, "fill_footprints", nothing)  # noqa: B010
         setattr(perspective_camera, "fill_footprints_seen", nothing)  # noqa: B010
     env = parallel_env(num_agents=args.cars, **CAMERAS[args.camera])
     env.reset(seed=0)
