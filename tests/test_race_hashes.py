@@ -5,7 +5,10 @@ on the grid, so that they catch up and bump) for ``STEPS`` steps and hashes each
 car with sha256 (a camera's pixels, each state sensor's values, the rewards, the ends and
 the infos apart), so a mismatch names the car and the stream. The hashes were recorded at
 commit 8fb3648, before the multi-car step was made cheaper (benchmarks/race.py): making it
-cheaper must change no car's result.
+cheaper must change no car's result. The camera streams were re-recorded when cameras
+began to draw the other cars (the merge of main into ``seeing``: only the camera
+observations of cars that see another car changed; lidar, state, rewards, ends and infos
+kept their hashes).
 
 Re-record only after an intended change of a race's results (say why in the commit):
 ``python tests/test_race_hashes.py [case ...]`` writes tests/golden/race/<case>.json.

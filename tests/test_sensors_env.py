@@ -33,6 +33,7 @@ ENTRIES = {  # small and noisy: noise must come from the env's seed
     "state": {"pose": True},
     "lookahead": {"points": 5},
     "cones": {"max_cones": 8, "position_std": 0.5, "miss_probability": 0.2, "false_positives": 1},
+    "opponents": {"count": 2},
     "chase_view": {"resolution": [64, 80]},
     "top_view": {"resolution": [48, 40], "span": 10.0},
 }

@@ -73,6 +73,7 @@ __all__ = [
     "TrackConfig",
     "cache_settings",
     "car_colors",
+    "car_names",
     "load_env_config",
     "race_cars",
 ]
@@ -91,6 +92,12 @@ def cache_settings(config: EnvConfig) -> Settings:
     cache = config.cache
     folder = Path(cache.dir).expanduser() if cache.dir is not None else default_folder()
     return Settings(folder, int(cache.max_size * 2**20))
+
+
+def car_names(config: EnvConfig) -> list[str]:
+    """Each car's name, in car order: its agent name in a race (its ``race.cars[i].id``, else
+    ``car_<i>``), the label the overview and videos write beside it."""
+    return [car.id for car in race_cars(config)]
 
 
 KWARGS = "<kwargs>"  # the source named by problems of ``gym.make``'s keyword arguments

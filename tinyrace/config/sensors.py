@@ -259,6 +259,26 @@ class TopViewConfig:
     )
 
 
+@dataclass(frozen=True)
+class OpponentsConfig:
+    """``sensors[i]`` of ``type: opponents``: the nearest other cars of a race, car frame,
+    nearest first; float32 rows (present, x, y, vx, vy, heading), zeros past the last car."""
+
+    id: str = knob(REQUIRED, _ID)
+    type: Literal["opponents"] = _type("opponents")
+    count: int = knob(
+        3, "rows: how many of the nearest other cars are reported (K)", low=1, high=15
+    )
+    max_range: float | None = knob(
+        None,
+        "cars farther than this (the middle of their footprint from the front axle's middle) "
+        "are not reported (null: 10 car lengths)",
+        LENGTH,
+        low=0,
+        low_open=True,
+    )
+
+
 class SensorConfig(Protocol):
     """A ``sensors:`` entry: the dataclass its ``type`` names (the family of sensor configs:
     a sensor type's registry entry adds its config, see ``tinyrace.sensors.registry``)."""
@@ -276,6 +296,7 @@ for _config in (
     StateConfig,
     LookaheadConfig,
     ConesConfig,
+    OpponentsConfig,
     CameraConfig,
     ChaseViewConfig,
     TopViewConfig,

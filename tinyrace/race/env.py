@@ -27,6 +27,7 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from tinyrace.actions import ActionSpec
+from tinyrace.config import car_names
 from tinyrace.env import CARRIED, CARRIED_TERMS, RESET_OPTIONS, TinyRaceEnv
 from tinyrace.episodes.episode import Episode
 from tinyrace.errors import ConfigError, Problem
@@ -92,7 +93,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         self.core = core = TinyRaceEnv(config, environment, render_mode=render_mode, **overrides)
         self.render_mode = render_mode
         racers = core.course.racers
-        self.possible_agents = [racer.id for racer in racers]
+        # the configured ids (car_<i> by default): what pictures write beside the cars
+        self.possible_agents = car_names(core.config)
         self.agents: list[str] = []
         self._index = {agent: i for i, agent in enumerate(self.possible_agents)}
         self.seats = [self._seat(i) for i in range(len(racers))]

@@ -10,6 +10,7 @@ from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
 from tinyrace.render.overview import Overview
 from tinyrace.render.pictures import CameraViews
+from tinyrace.sensors.draw_cars import CarLooks
 from tinyrace.sensors.ground import ImageGround
 from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
@@ -23,6 +24,7 @@ class ImagePictures:
         self.tracks: Sequence[Track] = ground.tracks
         self.overviews: list[Overview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
+        self.looks = CarLooks.of(config)  # the colours and names of a race's cars
 
     def reset(self, draw: TrackDraw) -> None:
         self.index = draw.track_index
@@ -33,7 +35,8 @@ class ImagePictures:
             return cameras[0][0]
         images = [image for image, _ in cameras]
         windows = [corners for _, corners in cameras if corners is not None]
-        return self.overview().render(footprint_corners(snapshot.car), windows, images)
+        race = (snapshot, self.looks)
+        return self.overview().render(footprint_corners(snapshot.car), windows, images, race)
 
     def overview(self) -> Overview:
         overview = self.overviews[self.index]

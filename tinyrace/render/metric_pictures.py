@@ -12,6 +12,7 @@ from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import TopViewConfig
 from tinyrace.render.pictures import CameraViews
+from tinyrace.sensors.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.ground import MetricGround
 from tinyrace.sensors.texture import GroundTexture, transform_points
 from tinyrace.sensors.top_view import TopView
@@ -30,6 +31,7 @@ class MetricPictures:
         self.overviews: list[MetricOverview | None] = [None] * len(self.tracks)
         self.index = 0  # the current episode's track
         self.view: TopView | None = None  # the default view, when no image sensor drew one
+        self.looks = CarLooks.of(config)  # the colours and names of a race's cars
 
     def reset(self, draw: TrackDraw) -> None:
         self.index, self.view = draw.track_index, None
@@ -46,14 +48,15 @@ class MetricPictures:
             texture = self.ground.texture(self.tracks[self.index])
             overview = MetricOverview(self.tracks[self.index], texture)
             self.overviews[self.index] = overview
-        return overview.render(footprint_corners(snapshot.car), windows, images)
+        race = (snapshot, self.looks)
+        return overview.render(footprint_corners(snapshot.car), windows, images, race)
 
     def _default_view(self, snapshot: Snapshot) -> np.ndarray:
         """The top view a config without image sensors observes by default."""
         if self.view is None:
             texture = self.ground.texture(self.tracks[self.index])
-            self.view = TopView(TopViewConfig(id="top_view"), texture)
-        return self.view.render(snapshot.car)
+            self.view = TopView(TopViewConfig(id="top_view"), texture, self.looks.colors)
+        return self.view.render(snapshot)
 
 
 class MetricOverview:
@@ -74,9 +77,14 @@ class MetricOverview:
             )
 
     def render(
-        self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
+        self,
+        footprint: np.ndarray,
+        windows: list[np.ndarray],
+        images: list[np.ndarray],
+        race: tuple[Snapshot, CarLooks] | None = None,
     ) -> np.ndarray:
-        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``."""
+        """A frame: the car ``footprint`` (4, 2) [m] (at least a few px), camera ``windows``;
+        ``race``: a snapshot of several cars, the others drawn and every car named."""
         frame = self.background.copy()
         for corners in windows:
             cv2.polylines(
@@ -85,6 +93,8 @@ class MetricOverview:
         centre = footprint.mean(axis=0)
         grown = centre + (footprint - centre) * max(1.0, 6.0 / (self.scale * _span(footprint)))
         cv2.fillConvexPoly(frame, self._pixels(grown), (204, 0, 0), cv2.LINE_AA, _OVERVIEW_BITS)
+        if race is not None and len(race[0].cars) > 1:
+            draw_race(frame, self.matrix, *race, min_size=6.0)
         x = 4
         for image in images:  # camera insets along the top
             h, w = image.shape[:2]

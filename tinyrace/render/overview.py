@@ -14,7 +14,9 @@ import numpy as np
 
 from tinyrace.config import Color
 from tinyrace.config.schema import MAX_FRAME_PIXELS
+from tinyrace.sensors.draw_cars import CarLooks, draw_race
 from tinyrace.tracks.base import Track
+from tinyrace.world.snapshot import Snapshot
 
 FOOTPRINT_COLOR = (255, 64, 64)  # RGB
 CAR_COLOR = (204, 0, 0)
@@ -47,9 +49,14 @@ class Overview:
             self.background[points[:, 1], points[:, 0]] = trajectory_color
 
     def render(
-        self, footprint: np.ndarray, windows: list[np.ndarray], images: list[np.ndarray]
+        self,
+        footprint: np.ndarray,
+        windows: list[np.ndarray],
+        images: list[np.ndarray],
+        race: tuple[Snapshot, CarLooks] | None = None,
     ) -> np.ndarray:
-        """A frame: ``footprint`` (4, 2) and camera ``windows`` (4, 2 each) in track px."""
+        """A frame: ``footprint`` (4, 2) and camera ``windows`` (4, 2 each) in track px;
+        ``race``: a snapshot of several cars, the others drawn and every car named."""
         frame: np.ndarray = self.background.copy()
         thickness = max(1, round(2 * min(frame.shape[:2]) / 800))
         for k, corners in enumerate(windows):
@@ -61,6 +68,8 @@ class Overview:
         cv2.polylines(
             frame, [self._pixels(footprint)], True, FOOTPRINT_COLOR, thickness, cv2.LINE_AA, _BITS
         )
+        if race is not None and len(race[0].cars) > 1:
+            draw_race(frame, np.array([[self.scale, 0, 0], [0, self.scale, 0]]), *race)
         self._inset(frame, images)
         return frame
 

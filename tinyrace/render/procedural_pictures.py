@@ -12,6 +12,7 @@ from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.car_sprite import Patches
 from tinyrace.sensors.chase_view import SMALL_VIEW, ChaseView, small_dashboard
 from tinyrace.sensors.dashboard import Dashboard
+from tinyrace.sensors.draw_cars import CarLooks
 from tinyrace.sensors.ground import ProceduralGround
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.world.snapshot import Snapshot
@@ -24,11 +25,12 @@ RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "huma
 class ProceduralPictures:
     """CarRacing's views of the current episode; views are made when first asked."""
 
-    def __init__(self, ground: ProceduralGround):
+    def __init__(self, ground: ProceduralGround, looks: CarLooks | None = None):
         self.painted = ground.painted  # the playfield and the cameras' pixels_per_unit
         self.ground = ground
         self._cache: dict[tuple[int, int], tuple[Dashboard, Patches]] = {}  # across episodes
         self._views: dict[tuple[int, int], ChaseView] = {}
+        self.looks = looks  # the colours and names of a race's cars
 
     def reset(self, draw: TrackDraw) -> None:
         self._views = {}
@@ -47,7 +49,7 @@ class ProceduralPictures:
             cached = self._cache.get(size)
             if cached is None:
                 cached = self._cache[size] = (small_dashboard(size), {})
-            view = self._views[size] = ChaseView(size, texture, *cached)
+            view = self._views[size] = ChaseView(size, texture, *cached, self.looks)
         return view
 
     def _video_pixels_per_unit(self) -> float:

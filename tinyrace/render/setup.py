@@ -9,6 +9,7 @@ from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
+from tinyrace.sensors.draw_cars import CarLooks
 from tinyrace.sensors.ground import EpisodeGround, ImageGround, MetricGround, ProceduralGround
 
 
@@ -18,7 +19,7 @@ def make_pictures(config: EnvConfig, ground: EpisodeGround) -> Pictures:
     overview of tracks that carry a picture, or the overview (and default top view) of a
     ground drawn once per track from what it holds."""
     if isinstance(ground, ProceduralGround):
-        return ProceduralPictures(ground)
+        return ProceduralPictures(ground, CarLooks.of(config))
     if isinstance(ground, ImageGround):
         return ImagePictures(config, ground)
     if isinstance(ground, MetricGround):

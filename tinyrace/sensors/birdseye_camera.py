@@ -30,6 +30,7 @@ from tinyrace.sensors.common import (
     paint_labels,
     shared_ground,
 )
+from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, Paint, fill_footprints
 from tinyrace.sensors.texture import GroundTexture, compose
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -94,11 +95,13 @@ class RoiCamera:
 
 class BirdseyeCamera:
     """The ``birdseye_camera`` sensor: the ground ahead of the car as an RGB, gray or class
-    label image (``format``; labels as the perspective camera's, without a sky)."""
+    label image (``format``; labels as the perspective camera's, without a sky); the other
+    cars of a race on the ground, each in its colour (``sensors/draw_cars.py``)."""
 
-    def __init__(self, config: CameraConfig, ground: Ground):
+    def __init__(self, config: CameraConfig, ground: Ground, paints: tuple[Paint, ...] = ()):
         self.config = config
         self.ground = ground
+        self.paints = paints  # each car's paint in this format, by its index in the world
         channels = (3,) if config.format == "rgb" else ()
         self.space = spaces.Box(0, 255, (*config.resolution, *channels), np.uint8)
         self._camera: RoiCamera | None = None  # on the current episode's ground
@@ -119,6 +122,8 @@ class BirdseyeCamera:
         self._camera = None  # a new episode may have a new ground
         if self.config.format == "classes":
             self._label_ground, self._names = self._labels.get(track, self._paint_labels)
+            if len(self.paints) > 1:  # a race: the other cars are labelled too
+                self._names = {**self._names, CAR_LABEL: "car"}
 
     def _paint_labels(self, track: Track) -> tuple[GroundImage, dict[int, str]]:
         table = label_table(track)
@@ -139,10 +144,16 @@ class BirdseyeCamera:
             ground = self._label_ground
             to_out = camera.matrix(car.front_axle, car.pose[2])
             matrix = compose(to_out, cv2.invertAffineTransform(ground.to_pixels))
-            return cv2.warpAffine(
+            labels = cv2.warpAffine(
                 ground.image, matrix, camera.size, flags=cv2.INTER_NEAREST, borderValue=0
             )
+            if len(snapshot.cars) > 1:
+                fill_footprints(labels, to_out, snapshot, self.paints, antialias=False)
+            return labels
         image = camera.render(car.front_axle, car.pose[2])
+        if len(snapshot.cars) > 1:  # a race: the others, in their colours
+            to_out = camera.matrix(car.front_axle, car.pose[2])
+            fill_footprints(image, to_out, snapshot, self.paints)
         return image if self.config.format == "rgb" else cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
 
     def window(self, snapshot: Snapshot, track: Track) -> np.ndarray:
@@ -156,4 +167,5 @@ class BirdseyeCamera:
 
 def build(entry: CameraConfig, context: SensorContext) -> BirdseyeCamera:
     """A ``birdseye_camera`` from its config entry (a ``cameras:`` item)."""
-    return BirdseyeCamera(entry, context.ground)
+    paints = CarLooks.of(context.env).paints("classes" if entry.format == "classes" else "rgb")
+    return BirdseyeCamera(entry, context.ground, paints)

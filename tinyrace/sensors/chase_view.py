@@ -20,7 +20,8 @@ from tinyrace.config.sensors import ChaseViewConfig
 from tinyrace.sensors.base import Ground, SensorContext
 from tinyrace.sensors.car_sprite import CarSprite, Patches
 from tinyrace.sensors.dashboard import Dashboard
-from tinyrace.sensors.texture import Affine, GroundTexture
+from tinyrace.sensors.draw_cars import CarLooks, draw_names, fill_footprints
+from tinyrace.sensors.texture import Affine, GroundTexture, as_matrix
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -67,9 +68,13 @@ class ChaseView:
         texture: GroundTexture,
         dashboard: Dashboard,
         patches: Patches,
+        looks: CarLooks | None = None,
     ):
-        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes."""
+        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes;
+        ``looks``: the colours and names of a race's cars (the others drawn on the ground,
+        named in views larger than the observation)."""
         self.size = size  # (w, h)
+        self.looks = looks
         self.texture = texture
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
         self.sprite = CarSprite(supersample=small, patches=patches)
@@ -92,9 +97,14 @@ class ChaseView:
         frame = np.empty((size[1], size[0], 3), np.uint8)
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
+        looks = self.looks if len(snapshot.cars) > 1 else None  # a race's
+        if looks is not None:  # the other cars on the ground (sensors/draw_cars.py)
+            fill_footprints(frame[:top], as_matrix(world_to_out), snapshot, looks.colors)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
         self.sprite.draw(frame, car, world_to_out, self.skid_width, cache_key=zoom)
+        if looks is not None and self.skid_width:  # a video's view: every car's name
+            draw_names(frame[:top], as_matrix(world_to_out), snapshot, looks)
         self.dashboard.draw(frame, car, score)
         return frame
 
@@ -107,9 +117,10 @@ def small_dashboard(size: tuple[int, int]) -> Dashboard:
 class ChaseViewSensor:
     """The ``chase_view`` sensor: CarRacing's view of the car, the score from the snapshot."""
 
-    def __init__(self, config: ChaseViewConfig, ground: Ground):
+    def __init__(self, config: ChaseViewConfig, ground: Ground, looks: CarLooks | None = None):
         self.config = config
         self.ground = ground
+        self.looks = looks  # a race's colours: the other cars drawn on the ground
         height, width = config.resolution
         self.size = (width, height)
         self.space = spaces.Box(0, 255, (height, width, 3), np.uint8)
@@ -133,7 +144,7 @@ class ChaseViewSensor:
             if self.dashboard is None:
                 self.dashboard = small_dashboard(self.size)
             dashboard = self.dashboard
-            view = self.view = ChaseView(self.size, texture, dashboard, self.patches)
+            view = self.view = ChaseView(self.size, texture, dashboard, self.patches, self.looks)
         return view.render(snapshot, snapshot.score)
 
     def __getstate__(self) -> dict[str, Any]:
@@ -144,4 +155,4 @@ class ChaseViewSensor:
 
 def build(entry: ChaseViewConfig, context: SensorContext) -> ChaseViewSensor:
     """A ``chase_view`` sensor from its config entry."""
-    return ChaseViewSensor(entry, context.ground)
+    return ChaseViewSensor(entry, context.ground, CarLooks.of(context.env))

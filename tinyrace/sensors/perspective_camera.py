@@ -29,7 +29,8 @@ from tinyrace.sensors.common import (
     paint_labels,
     shared_ground,
 )
-from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, warp_below_sky
+from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, Paint, fill_footprints_seen
+from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, warp_below_sky, world_to_car
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -47,8 +48,10 @@ class PerspectiveCamera:
         length: float,
         pixels_per_unit: float,
         episode_ground: EpisodeGround,
+        paints: tuple[Paint, ...] = (),
     ):
         self.config = config
+        self.paints = paints  # each car's paint in this format, by its index in the world
         self.episode_ground = episode_ground  # the cameras' shared texture of the episode
         h, w = config.resolution
         x, y, z = config.position or (0.0, 0.0, DEFAULT_HEIGHT * length)
@@ -94,6 +97,8 @@ class PerspectiveCamera:
     def reset(self, track: Track) -> None:
         if self.config.format == "classes":
             self.ground, self._names = self._grounds.get(track, self._paint_labels)
+            if len(self.paints) > 1:  # a race: the other cars are labelled too
+                self._names = {**self._names, CAR_LABEL: "car"}
         else:  # the episode's own ground (CarRacing's tiles and grass, or the picture)
             texture = self.episode_ground.texture(track)
             self.ground = GroundImage(texture.image(0), texture.to_pixels[0])
@@ -110,7 +115,7 @@ class PerspectiveCamera:
         ground = self.ground
         assert ground is not None, "reset() before observe()"
         if self.config.format == "classes":
-            return render(
+            labels = render(
                 self.pinhole,
                 ground.image,
                 ground.to_pixels,
@@ -118,9 +123,23 @@ class PerspectiveCamera:
                 (SKY_LABEL,),
                 cv2.INTER_NEAREST,
             )
-        return self._colors(ground, placed)
+            if len(snapshot.cars) > 1:  # a race: the other cars, then the sky over them
+                self._draw_others(labels, snapshot, track, antialias=False)
+                self.pinhole.sky_paint((SKY_LABEL,)).paint(labels)
+            return labels
+        return self._colors(ground, placed, snapshot, track)
 
-    def _colors(self, ground: GroundImage, placed: np.ndarray) -> np.ndarray:
+    def _draw_others(
+        self, image: np.ndarray, snapshot: Snapshot, track: Track, antialias: bool = True
+    ) -> None:
+        """The other cars of a race on the ground (``sensors/draw_cars.py``)."""
+        car = snapshot.car
+        to_car = world_to_car(car.front_axle, car.pose[2], track.y_down)
+        fill_footprints_seen(image, self.pinhole, to_car, snapshot, self.paints, antialias)
+
+    def _colors(
+        self, ground: GroundImage, placed: np.ndarray, snapshot: Snapshot, track: Track
+    ) -> np.ndarray:
         """The ``rgb`` or ``gray`` image: the ground below the sky rows warped in RGBx (cv2's
         fast layout) into a buffer that is converted straight into the new image."""
         width, height = self.pinhole.size
@@ -136,6 +155,8 @@ class PerspectiveCamera:
             below = image[rows:]
             converted = cv2.cvtColor(scratch, self._conversion, dst=below)
             assert converted is below, "cv2 wrote into its own array"
+        if len(snapshot.cars) > 1:  # a race: the other cars, under the sky
+            self._draw_others(image, snapshot, track)
         self._sky.paint(image)
         return image
 
@@ -150,4 +171,5 @@ def build(config: PerspectiveCameraConfig, context: SensorContext) -> Perspectiv
     length = context.car.length
     track = env.tracks[0]
     ppu = getattr(track, "pixels_per_unit", None) or 8.0 / length
-    return PerspectiveCamera(config, length, ppu, context.ground)
+    paints = CarLooks.of(env).paints(config.format)
+    return PerspectiveCamera(config, length, ppu, context.ground, paints)

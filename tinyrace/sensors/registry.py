@@ -59,6 +59,7 @@ def _register_built_in() -> None:
         cones,
         lidar,
         lookahead,
+        opponents,
         perspective_camera,
         state,
         top_view,
@@ -87,6 +88,13 @@ def _register_built_in() -> None:
             cones,
             "cones",
             "cones in range by class, padded",
+        ),
+        (
+            "opponents",
+            configs.OpponentsConfig,
+            opponents,
+            None,
+            "the nearest other cars of a race: position, relative velocity, heading, padded",
         ),
     ):
         register(SensorType(name, config, module.build, needs, doc))

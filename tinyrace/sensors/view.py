@@ -21,6 +21,7 @@ from tinyrace.config import EnvConfig
 from tinyrace.sensors.base import Sensor
 from tinyrace.sensors.common import GroundImage, PerTrack, paint_colors, shared_ground
 from tinyrace.sensors.cones import ConesSensor
+from tinyrace.sensors.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.lidar import LidarSensor
 from tinyrace.sensors.lookahead import LookaheadSensor
 from tinyrace.sensors.perspective_camera import PerspectiveCamera
@@ -51,8 +52,15 @@ _VIEWS: WeakKeyDictionary[SensorHost, SensorView] = WeakKeyDictionary()  # one p
 class SensorView:
     """Draws sensor frames; ``reach`` [track units] from the car to the map's edge."""
 
-    def __init__(self, sensors: list[Sensor], reach: float, pixels_per_unit: float):
+    def __init__(
+        self,
+        sensors: list[Sensor],
+        reach: float,
+        pixels_per_unit: float,
+        looks: CarLooks | None = None,
+    ):
         self.sensors = sensors
+        self.looks = looks  # a race's colours and names: the other cars drawn and named
         self.reach = reach
         self.pixels_per_unit = pixels_per_unit  # of the ground drawn for tracks without pictures
         self._grounds: PerTrack[GroundImage] = PerTrack()
@@ -76,6 +84,8 @@ class SensorView:
             flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
         )
         frame = cv2.cvtColor(frame, cv2.COLOR_RGBA2RGB)
+        if self.looks is not None and len(snapshot.cars) > 1:
+            draw_race(frame, _compose(to_view, world_to_car), snapshot, self.looks)
         for sensor in self.sensors:
             self._draw(frame, sensor, observation.get(sensor.id), snapshot, track, to_view)
         cv2.circle(frame, _px(to_view, (0.0, 0.0)), 4, CAR_COLOR, -1, cv2.LINE_AA, _BITS)
@@ -189,5 +199,6 @@ def sensor_view(env: SensorHost) -> SensorView:
         length = env.car_facts.length
         ranges = [float(getattr(s, "max_range", 0.0) or 0.0) for s in env.sensors]
         reach = max([3 * length, *[r for r in ranges if r < 100 * length]])
-        view = _VIEWS[env] = SensorView(env.sensors, reach, 16.0 / length)
+        looks = CarLooks.of(env.config)
+        view = _VIEWS[env] = SensorView(env.sensors, reach, 16.0 / length, looks)
     return view

@@ -21,6 +21,9 @@ class Snapshot:
     cars: tuple[CarState, ...]
     gone: frozenset[int] = frozenset()  # indices into ``cars`` of the cars off the track
     score: float = 0.0  # the controlled car's running reward (CarRacing's dashboard shows it)
+    # each car's index in the world (its colour, its name), in the order of ``cars``; ()
+    # when the order is the world's own
+    order: tuple[int, ...] = ()
 
     @property
     def car(self) -> CarState:
@@ -39,6 +42,18 @@ class Snapshot:
         if car == 0:
             return self
         cars = self.cars
+        seen = (cars[car], *cars[:car], *cars[car + 1 :])
         gone = frozenset(0 if i == car else i + 1 if i < car else i for i in self.gone)
-        order = (cars[car], *cars[:car], *cars[car + 1 :])
-        return Snapshot(self.t, self.steps, order, gone=gone, score=self.score)
+        order = self.order or tuple(range(len(cars)))
+        return Snapshot(
+            self.t,
+            self.steps,
+            seen,
+            gone=gone,
+            score=self.score,
+            order=(order[car], *order[:car], *order[car + 1 :]),
+        )
+
+    def index(self, k: int) -> int:
+        """The world's index of ``cars[k]`` (what its colour and name are looked up by)."""
+        return self.order[k] if self.order else k
