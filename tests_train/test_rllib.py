@@ -32,12 +32,13 @@ from tinyrace.rllib import make_env
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGE = ROOT / "docs" / "training.md"
+README = ROOT / "README.md"
 TIMEOUT = 600  # [s] per block; each takes well under a minute on 2 cores
 CONV_FILTERS = [[16, 8, 4], [32, 4, 2], [64, 3, 2]]  # the page's, for any camera size
 ITERATION = re.compile(r"^iteration 1: (\d+) episodes, (return|returns) (.+)$", re.M)
 
 
-def _page_blocks() -> list[str]:
+def _page_blocks(page: Path = PAGE) -> list[str]:
     """The page's Python blocks that need rllib, as .ci/readme_examples.py reads them."""
     script = ROOT / ".ci" / "readme_examples.py"
     spec = importlib.util.spec_from_file_location("readme_examples", script)
@@ -45,7 +46,7 @@ def _page_blocks() -> list[str]:
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # its dataclasses look their module up
     spec.loader.exec_module(module)
-    return [b.code for b in module.blocks(PAGE) if b.kind == "python" and "rllib" in b.needs]
+    return [b.code for b in module.blocks(page) if b.kind == "python" and "rllib" in b.needs]
 
 
 BLOCKS = _page_blocks()
@@ -85,6 +86,10 @@ def test_the_page_has_both_examples():
     for code in BLOCKS:
         assert f"conv_filters={CONV_FILTERS}" in code
         assert "for i in range(1):" in code  # one iteration each, as CI runs them
+
+
+def test_the_readme_shows_both_examples_as_the_page_prints_them():
+    assert _page_blocks(README) == BLOCKS  # the very text these tests run
 
 
 def test_ppo_trains_one_iteration_on_carracing_with_two_env_runners(tmp_path: Path):
