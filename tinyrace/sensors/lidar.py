@@ -1,8 +1,8 @@
 """``type: lidar``: ranges of a fan of beams against the track's blocking layers.
 
-``blocking_map`` draws what ``blocks`` names (off-road, walls, obstacle colours, cones) into
-a grid of cells once per track; ``tinyrace.sensors.raycast_numpy`` casts the beams on it (sample
-tables and two vectorised passes, no loop over beams), or, when numba imports
+``lidar_map.blocking_map`` draws what ``blocks`` names (off-road, walls, obstacle colours,
+cones) into a grid of cells once per track; ``tinyrace.sensors.raycast_numpy`` casts the
+beams on it (sample tables and two vectorised passes, no loop over beams), or, when numba imports
 (a dependency of tinyrace), ``tinyrace.sensors.kernels.raycast``'s compiled kernel: the
 same float32 ranges bit for bit, several times faster and without the sample tables (about
 38 MB per 1080-beam lidar). The environment variable ``TINYRACE_LIDAR`` chooses the path of
@@ -20,7 +20,6 @@ from collections.abc import Callable
 from typing import Any
 from typing import cast as typed
 
-import cv2
 import numpy as np
 from gymnasium import spaces
 
@@ -28,33 +27,28 @@ from tinyrace import cache, kernels
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors import common, other_cars, raycast, raycast_numpy
+from tinyrace.sensors import common, lidar_map, other_cars, raycast, raycast_numpy
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
     PerTrack,
     Unsupported,
-    color_mask,
-    fill_boxes,
-    fill_quads,
-    grid,
     mount,
 )
+from tinyrace.sensors.lidar_map import NO_HIT, WALL_CLASS, blocking_map, occupancy_map
 from tinyrace.sensors.raycast import (
     DistanceField,
     ExactField,
     Fan,
     beam_fan,
-    distance_field,
     exact_fan,
-    exact_field,
     exact_turn,
     fan_angle,
     table_bytes,
 )
 from tinyrace.sensors.raycast_numpy import cast
 from tinyrace.tracks.base import Track
-from tinyrace.tracks.cone_map import CLASSES, RADII
+from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
 
 KERNEL_VARIABLE = "TINYRACE_LIDAR"  # environment variable: auto | numba | numpy
@@ -62,8 +56,6 @@ TABLE_LIMIT = 256 * 2**20  # [bytes] the numpy path's sample tables of one lidar
 ROS_MAX_RANGE = 30.0  # [m] max_range on ROS maps unless given: F1TENTH's (f1tenth_gym)
 ROS_BLOCKS = ("walls", "cones")  # what stops a beam on a ROS map unless ``blocks`` says
 ALL_BLOCKS = ("off_road", "walls", "obstacles", "cones")  # ... and on the other tracks
-NO_HIT, WALL_CLASS = 0, 1  # hit classes; a cone of class k is WALL_CLASS + k
-CONE_RADII = np.array([0.0, *(RADII[name] for name in CLASSES)])  # [m] by cone class id
 FIELDS = DataclassCodec(DistanceField)  # cache files of shared fields and fans
 FANS = DataclassCodec(Fan)
 
@@ -120,102 +112,6 @@ def add_noise(
     if dropout > 0:
         noisy[rng.random(noisy.shape) < dropout] = max_range
     return np.clip(noisy, 0.0, max_range, out=noisy)
-
-
-def blocking_map(
-    track: Track,
-    blocks: tuple[str, ...],
-    cell: float,
-    cone_colors: tuple[RGB, ...],
-    classes: bool = False,
-    reach: float = math.inf,
-    near: bool = True,
-) -> DistanceField:
-    """The field of what ``blocks`` names on ``track``, ``cell`` [track units] per
-    cell: off_road (outside the road surfaces, on tracks that have them), walls (a ROS map's
-    occupied cells), obstacles (picture tracks' obstacle colours), cones (the track's cones,
-    e.g. a cone map's, or the picture's cone colours, ``cone_colors`` by class id - 1).
-    ``classes``: keep each blocking cell's hit class for ``hit_classes``; ``reach`` [track
-    units] the longest range it serves; ``near``: for the numpy passes (else the compiled
-    kernel's, see ``distance_field``)."""
-    to_cells, (w, h), cell = grid(track, cell)
-    labels = np.zeros((h, w), np.uint8)  # hit class of each cell, 0 free
-    roads = [s.quads for s in track.surfaces if s.name == "road"]
-    if "off_road" in blocks and roads:
-        labels[:] = WALL_CLASS
-        for quads in roads:
-            fill_quads(labels, to_cells, quads, NO_HIT)
-    if "walls" in blocks:
-        fill_boxes(labels, to_cells, track.walls, WALL_CLASS)
-    if "cones" in blocks and len(track.cones):
-        _draw_cones(labels, to_cells, track, 1.0 / cell)
-    if track.picture is not None:
-        colors = [layer.color for layer in track.obstacles] if "obstacles" in blocks else []
-        picture = _picture_labels(track.picture, colors, cone_colors if "cones" in blocks else ())
-        if picture.shape != labels.shape:
-            picture = _pool_max(picture, (w, h))
-        labels = np.where(picture > 0, picture, labels)
-    return distance_field(labels > 0, to_cells, labels if classes else None, reach / cell, near)
-
-
-def occupancy_map(
-    track: Track, blocks: tuple[str, ...], classes: bool = False
-) -> ExactField | None:
-    """The exact field of a ROS map track (None on other tracks): one cell per pixel of the
-    map, aligned with the pixels' edges; walls are the occupied pixels themselves, cones
-    discs of their radius, off_road what lies outside the road tiles (a band around the
-    waypoints)."""
-    occupancy = track.occupancy
-    if occupancy is None:
-        return None
-    to_cells = occupancy.to_cells()
-    height, width = occupancy.shape
-    labels = np.zeros((height, width), np.uint8)
-    roads = [s.quads for s in track.surfaces if s.name == "road"]
-    if "off_road" in blocks and roads:
-        labels[:] = WALL_CLASS
-        for quads in roads:
-            fill_quads(labels, to_cells, quads, NO_HIT)
-    if "walls" in blocks:
-        labels[occupancy.occupied] = WALL_CLASS
-    if "cones" in blocks and len(track.cones):
-        _draw_cones(labels, to_cells, track, 1.0 / occupancy.info.resolution)
-    return exact_field(labels > 0, to_cells, labels if classes else None)
-
-
-def _pool_max(labels: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """(h, w) uint8: the largest label among the pixels of each cell of a ``size`` (w, h) grid
-    over ``labels`` (a cone or obstacle smaller than a cell keeps its cell; cones win over
-    walls)."""
-    starts = [np.floor(np.arange(n) * (total / n)).astype(np.int64) for n, total in
-              zip(size, labels.shape[::-1], strict=True)]  # fmt: skip
-    pooled: np.ndarray = np.maximum.reduceat(
-        np.maximum.reduceat(labels, starts[1], 0), starts[0], 1
-    )
-    return pooled
-
-
-def _draw_cones(labels: np.ndarray, to_cells: np.ndarray, track: Track, per_unit: float) -> None:
-    """The track's cones as discs of their class's base radius (tracks in metres), or one
-    cell each (tracks of unknown scale), labelled by class."""
-    ids = np.clip(track.cones[:, 2].astype(np.int64), 0, len(CLASSES))
-    metres = track.metres_per_unit
-    radii = CONE_RADII[ids] / metres * per_unit if metres else np.zeros(len(ids))  # [cells]
-    for (x, y, _), class_id, radius in zip(track.cones.tolist(), ids, radii, strict=True):
-        cx, cy = to_cells @ (x, y, 1.0)
-        cv2.circle(labels, (round(cx), round(cy)), round(radius), WALL_CLASS + int(class_id), -1)
-
-
-def _picture_labels(
-    picture: np.ndarray, obstacles: list[RGB], cone_colors: tuple[RGB, ...]
-) -> np.ndarray:
-    """(H, W) uint8 hit classes of a picture track's obstacle and cone colours."""
-    labels = np.zeros(picture.shape[:2], np.uint8)
-    for rgb in obstacles:
-        labels[color_mask(picture, rgb)] = WALL_CLASS
-    for class_id, rgb in enumerate(cone_colors, start=1):
-        labels[color_mask(picture, rgb)] = WALL_CLASS + class_id
-    return labels
 
 
 Cast = Callable[[DistanceField, Fan, tuple[float, float], float, bool], np.ndarray]
@@ -423,7 +319,8 @@ def exact_ranges(
     return ranges
 
 
-_CODE = cache.code(__file__, common.__file__, raycast.__file__)  # what makes a field
+# what makes a field: the code of these modules is in its cache key
+_CODE = cache.code(__file__, common.__file__, raycast.__file__, lidar_map.__file__)
 
 
 def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:
