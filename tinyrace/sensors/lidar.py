@@ -27,7 +27,7 @@ from tinyrace import cache, kernels
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors import common, lidar_map, other_cars, raycast, raycast_numpy
+from tinyrace.sensors import common, lidar_map, other_cars, raycast, raycast_exact, raycast_numpy
 from tinyrace.sensors.base import SensorContext
 from tinyrace.sensors.common import (
     RGB,
@@ -38,14 +38,12 @@ from tinyrace.sensors.common import (
 from tinyrace.sensors.lidar_map import NO_HIT, WALL_CLASS, blocking_map, occupancy_map
 from tinyrace.sensors.raycast import (
     DistanceField,
-    ExactField,
     Fan,
     beam_fan,
-    exact_fan,
-    exact_turn,
     fan_angle,
     table_bytes,
 )
+from tinyrace.sensors.raycast_exact import ExactField, exact_fan, exact_turn
 from tinyrace.sensors.raycast_numpy import cast
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
@@ -306,7 +304,7 @@ def exact_ranges(
     heading: float,
     max_range: float,
 ) -> np.ndarray:
-    """float32 ranges [track units] of the beams of ``fan`` (``raycast.exact_fan``) of a car
+    """float32 ranges [track units] of the beams of ``fan`` (``raycast_exact.exact_fan``) of a car
     at ``heading`` [rad] from ``origin`` [track units] by the exact traversal of ``field``
     (``cast_exact``: either path's), at most ``max_range``; 0 from a blocking cell or off the
     map."""
@@ -320,7 +318,9 @@ def exact_ranges(
 
 
 # what makes a field: the code of these modules is in its cache key
-_CODE = cache.code(__file__, common.__file__, raycast.__file__, lidar_map.__file__)
+_CODE = cache.code(
+    __file__, common.__file__, raycast.__file__, raycast_exact.__file__, lidar_map.__file__
+)
 
 
 def _check_tables(config: LidarConfig, angles: np.ndarray) -> None:

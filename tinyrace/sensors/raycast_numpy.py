@@ -20,9 +20,7 @@ import numpy as np
 from tinyrace.sensors.raycast import (
     BISECTIONS,
     CHECK_EVERY,
-    EXACT_BLOCKED,
     FINE_SAMPLES,
-    LEAP_UNIT,
     MAX_ROUNDS,
     ORIGIN_STEPS,
     OVERSHOOT,
@@ -30,6 +28,7 @@ from tinyrace.sensors.raycast import (
     Fan,
     start,
 )
+from tinyrace.sensors.raycast_exact import EXACT_BLOCKED, LEAP_UNIT
 
 FEW = 48  # beams with false alarms so few that sampling their whole rows is cheaper
 # (b0 + b1 * 2^8 + ... + b7 * 2^56) * PACK >> 56 has bit i = b_i when every b_i is 0 or 1
@@ -192,7 +191,7 @@ def cast_exact(
 ) -> np.ndarray:
     """float64 distance [cells] from ``origin`` [cells] along each unit direction (dx, dy)
     [cells] to the edge of the first blocking cell of an exact field's ``cells`` (H, w)
-    (squares centred on integer coordinates; ``raycast.ExactField``), at most ``limit``; 0
+    (squares centred on integer coordinates; ``raycast_exact.ExactField``), at most ``limit``; 0
     for every beam when the origin is off the map or in a blocking cell. An Amanatides-Woo
     traversal, vectorised over the beams: each round, a beam in a free cell with a leap
     leaps, the others step into the next cell their line crosses;

@@ -34,11 +34,9 @@ from tinyrace.sensors.raycast import (
     BISECTIONS,
     CHECK_EVERY,
     COARSE_STEP,
-    EXACT_BLOCKED,
     FINE_SAMPLES,
     FINE_STEP,
     LEAD,
-    LEAP_UNIT,
     MAX_ROUNDS,
     ORIGIN_STEPS,
     OVERSHOOT,
@@ -50,6 +48,7 @@ from tinyrace.sensors.raycast import (
     DistanceField,
     Fan,
 )
+from tinyrace.sensors.raycast_exact import EXACT_BLOCKED, LEAP_UNIT
 
 INT16 = (-32768, 32767)  # cv2.remap saturates map coordinates to int16
 # numba's cache is keyed by this file alone, and the compiled code holds raycast's constants:
