@@ -83,18 +83,23 @@ class CarState(NamedTuple):
     skids: SkidView | None = None  # skid marks, on cars that leave them
 
 
-def footprint_corners(car: CarState) -> np.ndarray:
-    """(4, 2) corners of the car's footprint: its width wide, rear axle to front axle."""
+def footprint_points(car: CarState) -> list[tuple[float, float]]:
+    """The 4 corners of the car's footprint as plain floats: its width wide, rear axle to
+    front axle (per step and car in a race's pictures, where an array costs more)."""
     x, y = car.rear_axle
     heading = car.pose[2]
     length, width = car.footprint
     fx, fy = math.cos(heading), math.sin(heading)
     rx, ry = -fy * width / 2, fx * width / 2  # half the width to the right (y down)
-    return np.array(
-        [
-            (x - rx, y - ry),
-            (x + rx, y + ry),
-            (x + rx + length * fx, y + ry + length * fy),
-            (x - rx + length * fx, y - ry + length * fy),
-        ]
-    )
+    ax, ay = length * fx, length * fy
+    return [
+        (x - rx, y - ry),
+        (x + rx, y + ry),
+        (x + rx + ax, y + ry + ay),
+        (x - rx + ax, y - ry + ay),
+    ]
+
+
+def footprint_corners(car: CarState) -> np.ndarray:
+    """(4, 2) corners of the car's footprint: its width wide, rear axle to front axle."""
+    return np.array(footprint_points(car))

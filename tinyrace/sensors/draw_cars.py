@@ -24,7 +24,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from tinyrace.cars.state import CarState, footprint_corners
+from tinyrace.cars.state import CarState, footprint_corners, footprint_points
 from tinyrace.config import EnvConfig, car_colors, car_names
 from tinyrace.config.colors import palette_color
 from tinyrace.sensors.pinhole import Pinhole
@@ -76,7 +76,7 @@ class _Geometry(NamedTuple):
     x: float  # the middle of the footprint
     y: float
     radius: float  # of the circle around the footprint
-    corners: list[tuple[float, float]]  # footprint_corners(car), in plain floats
+    corners: list[tuple[float, float]]  # footprint_points(car)
 
 
 _GEOMETRY: dict[int, _Geometry] = {}  # by id of the CarState: every seat's cameras share it
@@ -88,16 +88,11 @@ def _geometry(car: CarState) -> _Geometry:
     found = _GEOMETRY.get(id(car))
     if found is not None and found.car is car:
         return found
-    x, y = car.rear_axle
-    heading = car.pose[2]
+    corners = footprint_points(car)
     length, width = car.footprint
-    fx, fy = math.cos(heading), math.sin(heading)
-    rx, ry = -fy * width / 2, fx * width / 2
-    ax, ay = length * fx, length * fy
-    corners = [(x - rx, y - ry), (x + rx, y + ry), (x + rx + ax, y + ry + ay)]
-    corners.append((x - rx + ax, y - ry + ay))
     radius = math.hypot(length, width) / 2
-    found = _Geometry(car, x + ax / 2, y + ay / 2, radius, corners)
+    (x0, y0), (x2, y2) = corners[0], corners[2]
+    found = _Geometry(car, (x0 + x2) / 2, (y0 + y2) / 2, radius, corners)
     if len(_GEOMETRY) >= _GEOMETRY_SIZE:
         _GEOMETRY.clear()
     _GEOMETRY[id(car)] = found
