@@ -7,9 +7,10 @@ and ``tinyrace`` in shell blocks are that virtualenv's): run it with the virtual
 the wheel installed. PAGE defaults to the README beside this folder; the Markdown pages
 under ``docs/`` that a page links (``](docs/x.md)``, ``](x.md)``) are read too, and theirs.
 
-Each ```python, ```bash or ```sh block runs as written, from its own new empty folder
-(the block itself is saved in another temporary folder): Python blocks with this
-interpreter, shell blocks with ``bash -e -o pipefail``. A block that needs more than the
+Each ```python, ```bash or ```sh block runs as written, in page order, all of them in ONE
+new empty folder, as a reader who pastes them one after another (what a block writes, a
+later block finds; the block itself is saved in another temporary folder): Python blocks
+with this interpreter, shell blocks with ``bash -e -o pipefail``. A block that needs more than the
 wheel says so on the line before it::
 
     <!-- needs: train -->
@@ -90,14 +91,14 @@ def pages(first: Path) -> list[Path]:
     return seen
 
 
-def run(block: Block) -> tuple[int, str, float]:
-    """(exit status, output, seconds) of one block, from a new empty folder."""
+def run(block: Block, folder: str) -> tuple[int, str, float]:
+    """(exit status, output, seconds) of one block, run in ``folder``."""
     env = dict(os.environ)
     env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
     env.setdefault("SDL_VIDEODRIVER", "dummy")
     env.setdefault("SDL_AUDIODRIVER", "dummy")
     env.pop("PYTHONPATH", None)  # the installed package, not a checkout
-    with tempfile.TemporaryDirectory() as empty, tempfile.TemporaryDirectory() as scripts:
+    with tempfile.TemporaryDirectory() as scripts:
         if block.kind == "python":
             script = Path(scripts) / "example.py"
             command = [sys.executable, str(script)]
@@ -109,7 +110,7 @@ def run(block: Block) -> tuple[int, str, float]:
         try:
             done = subprocess.run(
                 command,
-                cwd=empty,
+                cwd=folder,
                 env=env,
                 stdin=subprocess.DEVNULL,
                 capture_output=True,
@@ -138,6 +139,11 @@ def main(argv: list[str]) -> int:
     given = {n for item in args.given for n in item.split(",") if n}
 
     every = [b for first in args.pages for page in pages(first) for b in blocks(page)]
+    with tempfile.TemporaryDirectory() as folder:  # one folder for every block, in order
+        return _run_all(every, given, args.list, folder)
+
+
+def _run_all(every: list[Block], given: set[str], listing: bool, folder: str) -> int:
     ran = failed = 0
     skipped: list[str] = []
     for block in every:
@@ -147,10 +153,10 @@ def main(argv: list[str]) -> int:
             skipped.append(f"{block.where()}: needs {', '.join(block.needs)}{reason}")
             print(f"{block.where()}: skipped, needs {', '.join(missing)}{reason}", flush=True)
             continue
-        if args.list:
+        if listing:
             print(f"{block.where()}: would run", flush=True)
             continue
-        status, output, seconds = run(block)
+        status, output, seconds = run(block, folder)
         ran += 1
         if status == 0:
             print(f"{block.where()}: ok ({seconds:.1f} s)", flush=True)
@@ -163,7 +169,7 @@ def main(argv: list[str]) -> int:
         f"{len(skipped)} skipped",
         flush=True,
     )
-    if args.list:
+    if listing:
         return 0
     if ran == 0:
         print("no block ran", file=sys.stderr)

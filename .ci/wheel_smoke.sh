@@ -39,7 +39,7 @@ for name in track_names():
 print(f"  tinyrace {tinyrace.__version__}; configs: {', '.join(config_names())}")
 PY
 
-echo "== every shell and Python block of the README and its docs pages, each from an empty folder"
+echo "== every shell and Python block of the README and its docs pages, in order, in one empty folder"
 # Blocks marked <!-- needs: moviepy --> run after moviepy is installed; those that need a
 # checkout (run by .ci/run itself), the train extra (torch; the train stage tests the same
 # example), the network or RLlib are listed as skipped with their reason.

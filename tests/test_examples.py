@@ -146,7 +146,8 @@ def test_examples_copy_makes_an_editable_copy_and_refuses_to_overwrite(elsewhere
     experiment = load_experiment(copied / "formula_student.yaml")
     assert experiment.env_config.sim.step_limit == 33
     assert cli.main(["examples", "copy", "formula_student", "mine"]) != 0
-    assert "does not exist yet" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "DIR: got 'mine'" in err and "does not exist yet" in err  # DIR as given
     assert track.read_text().count("step_limit: 33") == 1  # not overwritten
 
 

@@ -198,7 +198,7 @@ def _train_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
 
     train = commands.add_parser(
         "train",
-        help='train PPO (Stable-Baselines3) on an env; needs pip install "tinyrace[train]"',
+        help="train PPO (Stable-Baselines3) on an env; needs the train extra",
     )
     add_arguments(train, _count)
     train.set_defaults(handler=_train)
@@ -297,20 +297,7 @@ def _json_summary(result: RunResult | RaceRunResult) -> dict[str, Any]:
 def _train(args: argparse.Namespace) -> int:
     from tinyrace import train
 
-    env = train.train_env(args.target, args.max_episode_steps)  # its problems before the import
-    out = train.model_file(args.out or f"ppo_{env.name}.zip", args.force)
-    lacking = train.missing()
-    if lacking:
-        print(f"tinyrace: error: {lacking}", file=sys.stderr)
-        return 2
-    print(f"tinyrace: training PPO on {env.name} for {args.timesteps} steps, {args.envs} env(s)")
-    model = train.train(env, args.timesteps, args.envs, args.seed)
-    model.save(out)
-    print(f"saved {out}")
-    mean, std = train.evaluate(model, env, args.eval_episodes, seed=args.seed + 1000)
-    episodes = f"{args.eval_episodes} episode{'s' if args.eval_episodes > 1 else ''}"
-    print(f"evaluation: mean return {mean:.1f} ± {std:.1f} over {episodes} (deterministic)")
-    return 0
+    return train.run_command(args)
 
 
 # -- report ------------------------------------------------------------------------------------

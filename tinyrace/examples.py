@@ -154,8 +154,11 @@ def copy_example(name: str, folder: Path) -> list[Path]:
     targets = [(e, folder / e.path.name) for e in chosen]
     for _, target in targets:
         if _exists(target):
-            allowed = "a path that does not exist yet (nothing is overwritten)"
-            raise ConfigError(Problem("<command line>", "DIR", str(target), allowed))
+            allowed = (
+                f"a folder where {target.name} does not exist yet ({target} exists; "
+                "nothing is overwritten)"
+            )
+            raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed))
     try:
         folder.mkdir(parents=True, exist_ok=True)
         for example, target in targets:

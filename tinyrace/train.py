@@ -1,25 +1,33 @@
-"""``tinyrace train``: PPO (Stable-Baselines3) on a tinyrace env, saved, then evaluated.
+"""``tinyrace train``: PPO (Stable-Baselines3) on a tinyrace env, evaluated before and after.
 
-Needs the ``train`` extra: ``pip install "tinyrace[train]"`` (without a GPU, install
-PyTorch's CPU build first). The env is CarRacing-v0's pixels by default, or the env of an
-experiment or track (``tinyrace train formula_student``), found as ``tinyrace run`` finds
-it. Pixels are stacked four frames deep; the policy fits the observation: a CNN for an
-image, one network per key for a dict of observations, an MLP for a vector::
+Needs the ``train`` extra: ``pip install ".[train]"`` from a clone, or the wheel's
+``pip install "tinyrace-*.whl[train]"`` (without a GPU, install PyTorch's CPU build first).
+The env is the shipped ``f1tenth_lidar`` experiment by default (a lidar and the car's state
+on the F1TENTH loop: small vectors that PPO learns to drive in a minute or two on a CPU), or
+the env of any experiment or track (``tinyrace train carracing``: CarRacing's pixels, a far
+longer run), found as ``tinyrace run`` finds it. Pixels are stacked four frames deep; the
+policy fits the observation: a CNN for an image, one network per key for a dict, an MLP for
+a vector::
 
-    tinyrace train --timesteps 200000 --envs 4            # saves ppo_carracing.zip
-    python -m tinyrace train formula_student --timesteps 100000 --out fs.zip
+    tinyrace train                                   # saves ppo_f1tenth_lidar.zip
+    tinyrace train carracing --timesteps 200000 --out ppo_carracing.zip
 
-It prints the mean return of a few deterministic evaluation episodes at the end.
+It evaluates the untrained policy, trains with a progress bar (steps, steps/s, the mean
+return of recent episodes), saves the model and evaluates it again. Ctrl-C saves the policy
+trained so far and exits with 130.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import multiprocessing
+import signal
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import TYPE_CHECKING, Any, SupportsFloat, cast
 
 import gymnasium as gym
 from gymnasium import spaces
@@ -27,15 +35,22 @@ from gymnasium import spaces
 from tinyrace.errors import ConfigError, Problem
 
 if TYPE_CHECKING:
+    from stable_baselines3 import PPO
     from stable_baselines3.common.base_class import BaseAlgorithm
     from stable_baselines3.common.vec_env import VecEnv
 
-CARRACING_ID = "tinyrace/CarRacing-v0"
 TINYRACE_ID = "tinyrace/TinyRace-v0"
-TRAIN_EXTRA = 'pip install "tinyrace[train]"'
-FRAMES = 4  # observations stacked, so that the policy sees speed and turning
-PPO_SETTINGS = {"n_steps": 512, "batch_size": 128, "learning_rate": 3e-4}
+DEFAULT_TARGET = "f1tenth_lidar"  # the shipped experiment that learns in minutes
+TRAIN_EXTRA = 'pip install ".[train]" (from a clone; a wheel: "tinyrace-*.whl[train]")'
+FRAMES = 4  # image observations stacked, so that the policy sees speed and turning
+PPO_SETTINGS = {"n_steps": 256, "batch_size": 256, "learning_rate": 3e-4}
 MIN_STEPS = 16  # the shortest rollout per env (a very short training run)
+FAILED = "tinyrace_env_error"  # the info key by which a worker's env reports its exception
+INTERRUPTED = 130  # the exit status after Ctrl-C, as for ``tinyrace run``
+
+
+class EnvFailed(RuntimeError):
+    """An env raised while training or evaluating (in this process or a worker's)."""
 
 
 @dataclass(frozen=True)
@@ -44,7 +59,7 @@ class TrainEnv:
 
     env_id: str
     kwargs: dict[str, Any] = field(default_factory=dict)
-    name: str = "carracing"  # the default model file is ppo_<name>.zip
+    name: str = DEFAULT_TARGET  # the default model file is ppo_<name>.zip
 
 
 def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], Any]) -> None:
@@ -53,30 +68,49 @@ def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], A
         "target",
         nargs="?",
         metavar="NAME_OR_PATH",
-        help="an experiment or track, as run takes it (default: CarRacing-v0's pixels)",
+        default=DEFAULT_TARGET,
+        help="an experiment or track, as run takes it (default: %(default)s, a lidar and "
+        "the car's state on the F1TENTH loop; carracing: CarRacing's pixels, far slower)",
     )
     whole, positive = count(0, "a whole number >= 0"), count(1, "a whole number >= 1")
-    parser.add_argument("--timesteps", type=positive, default=200_000, help="env steps")
-    parser.add_argument("--envs", type=positive, default=4, help="envs, one process each")
+    parser.add_argument(
+        "--timesteps", type=positive, default=20_000, help="env steps (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--envs", type=positive, default=8, help="envs stepped together (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--subprocesses",
+        action="store_true",
+        help="step each env in a worker process of its own (default: all in this process, "
+        "the faster on few cores)",
+    )
     parser.add_argument(
         "--seed",
         type=whole,
         default=0,
-        help="seeds the envs (env i: seed + i) and the network; evaluation from seed + 1000",
+        help="seeds the envs (env i: seed + i) and the network; evaluation from seed + 1000 "
+        "(default: %(default)s)",
     )
-    parser.add_argument("--out", help="model file (default: ppo_<name>.zip in this folder)")
+    parser.add_argument(
+        "--out", help="model file (default: ppo_<name>.zip in this folder, <name> the target's)"
+    )
     parser.add_argument(
         "--eval-episodes",
         type=positive,
         default=3,
-        help="deterministic episodes whose mean return is printed at the end",
+        help="deterministic episodes whose mean return is printed before and after training "
+        "(default: %(default)s)",
     )
     parser.add_argument(
         "--max-episode-steps",
         type=positive,
-        help="end every episode after this many steps (training and evaluation)",
+        help="end every episode after this many steps, training and evaluation (default: "
+        "the experiment's max_steps, else its sim.step_limit)",
     )
-    parser.add_argument("--force", action="store_true", help="replace an existing model file")
+    parser.add_argument(
+        "--force", action="store_true", help="replace an existing model file (default: refuse)"
+    )
 
 
 def model_file(name: str, force: bool) -> Path:
@@ -112,17 +146,14 @@ def missing() -> str | None:
     )
 
 
-def train_env(target: str | Path | None, max_episode_steps: int | None = None) -> TrainEnv:
-    """The env of ``target`` (an experiment or track, as ``tinyrace run`` takes it); None:
-    CarRacing-v0. Raises ConfigError listing every problem of the experiment or track."""
-    kwargs: dict[str, Any] = {}
-    if max_episode_steps is not None:
-        kwargs["max_episode_steps"] = max_episode_steps
-    if target is None:
-        return TrainEnv(CARRACING_ID, kwargs)
+def train_env(
+    target: str | Path | None = DEFAULT_TARGET, max_episode_steps: int | None = None
+) -> TrainEnv:
+    """The env of ``target`` (an experiment or track, as ``tinyrace run`` takes it; None:
+    the default, f1tenth_lidar). Raises ConfigError listing every problem it has."""
     from tinyrace.experiment.target import load_target
 
-    experiment, _ = load_target(target, "NAME_OR_PATH")
+    experiment, _ = load_target(target or DEFAULT_TARGET, "NAME_OR_PATH")
     steps = max_episode_steps or experiment.config.max_steps
     limit = {"max_episode_steps": steps} if steps is not None else {}
     return TrainEnv(TINYRACE_ID, {**experiment.env_kwargs, **limit}, experiment.name)
@@ -132,9 +163,20 @@ def policy_for(space: spaces.Space[Any]) -> str:
     """SB3's policy for an observation space: CNN for an image, per key for a dict, else MLP."""
     if isinstance(space, spaces.Dict):
         return "MultiInputPolicy"
-    if isinstance(space, spaces.Box) and len(space.shape) == 3 and space.dtype == "uint8":
+    if _image(space):
         return "CnnPolicy"
     return "MlpPolicy"
+
+
+def _image(space: spaces.Space[Any]) -> bool:
+    return isinstance(space, spaces.Box) and len(space.shape) == 3 and space.dtype == "uint8"
+
+
+def has_images(space: spaces.Space[Any]) -> bool:
+    """Whether an observation holds a picture (then frames are stacked)."""
+    if isinstance(space, spaces.Dict):
+        return any(_image(s) for s in space.spaces.values())
+    return _image(space)
 
 
 def ppo_settings(timesteps: int, envs: int) -> dict[str, Any]:
@@ -144,33 +186,82 @@ def ppo_settings(timesteps: int, envs: int) -> dict[str, Any]:
     return {**PPO_SETTINGS, "n_steps": n_steps, "batch_size": batch_size}
 
 
-def make_envs(env: TrainEnv, envs: int, seed: int, subprocesses: bool = True) -> VecEnv:
-    """``envs`` copies of the env (one process each when ``subprocesses``), frames stacked."""
+def vector_env(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -> VecEnv:
+    """``envs`` copies of the env as one SB3 VecEnv (a worker process each when
+    ``subprocesses`` and more than one), each env Monitor-wrapped (episode returns)."""
     from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import SubprocVecEnv, VecFrameStack
+    from stable_baselines3.common.vec_env import SubprocVecEnv
 
-    vec = make_vec_env(
+    return make_vec_env(
         _make,
         n_envs=envs,
         seed=seed,
         env_kwargs={"env_id": env.env_id, "kwargs": env.kwargs},
         vec_env_cls=SubprocVecEnv if subprocesses and envs > 1 else None,
     )
-    return VecFrameStack(vec, n_stack=FRAMES)
+
+
+def make_envs(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -> VecEnv:
+    """The vector env to train on: pictures stacked ``FRAMES`` deep, vectors as they are."""
+    from stable_baselines3.common.vec_env import VecFrameStack
+
+    vec = vector_env(env, envs, seed, subprocesses)
+    return VecFrameStack(vec, n_stack=FRAMES) if has_images(vec.observation_space) else vec
 
 
 def _make(env_id: str, kwargs: dict[str, Any]) -> gym.Env[Any, Any]:
     """One env (module level, so that worker processes unpickle it and import tinyrace)."""
     import tinyrace  # noqa: F401  (registers the ids in a worker process)
 
-    env = gym.make(env_id, **kwargs)
+    if multiprocessing.parent_process() is not None:  # a worker: Ctrl-C is the trainer's
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    env: gym.Env[Any, Any] = Reporting(gym.make(env_id, **kwargs))
     if isinstance(env.observation_space, spaces.Dict) and not _flat(env.observation_space):
-        return FlatEntries(env)
+        env = FlatEntries(env)
     return env
 
 
 def _flat(space: spaces.Dict) -> bool:
     return all(isinstance(s, spaces.Box) for s in space.spaces.values())
+
+
+class Reporting(gym.Wrapper[Any, Any, Any, Any]):
+    """An env whose exceptions become an episode end with ``info[FAILED]`` (the error as
+    text), so that a worker process stays alive and the trainer ends the run with it."""
+
+    def __init__(self, env: gym.Env[Any, Any]):
+        super().__init__(env)
+        self._last: Any = None
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        try:
+            observation, info = self.env.reset(**kwargs)
+        except Exception as exc:  # noqa: BLE001  (reported to the trainer, which raises it)
+            return self._stand_in(), {FAILED: _described(exc)}
+        self._last = observation
+        return observation, info
+
+    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
+        try:
+            observation, reward, terminated, truncated, info = self.env.step(action)
+        except Exception as exc:  # noqa: BLE001  (reported to the trainer, which raises it)
+            return self._stand_in(), 0.0, True, False, {FAILED: _described(exc)}
+        self._last = observation
+        return observation, reward, terminated, truncated, info
+
+    def _stand_in(self) -> Any:
+        return self._last if self._last is not None else self.observation_space.sample()
+
+
+def _described(exc: BaseException) -> str:
+    return f"{type(exc).__name__}: {exc}"
+
+
+def raise_failure(infos: Any) -> None:
+    """Raise EnvFailed when one env's info (a sequence of them) reports an exception."""
+    for info in infos or ():
+        if isinstance(info, dict) and FAILED in info:
+            raise EnvFailed(f"an env raised during training: {info[FAILED]}")
 
 
 class FlatEntries(gym.ObservationWrapper[Any, Any, Any]):
@@ -196,19 +287,60 @@ class FlatEntries(gym.ObservationWrapper[Any, Any, Any]):
         }
 
 
-def train(
-    env: TrainEnv, timesteps: int, envs: int = 4, seed: int = 0, subprocesses: bool = True
-) -> BaseAlgorithm:
-    """A PPO agent trained for ``timesteps`` env steps on ``envs`` copies of ``env``."""
+def new_model(
+    env: TrainEnv, envs: int, seed: int, timesteps: int, subprocesses: bool = False
+) -> PPO:
+    """An untrained PPO agent on ``envs`` copies of ``env`` (its vector env: model.env)."""
+    import torch
     from stable_baselines3 import PPO
 
     vec = make_envs(env, envs, seed, subprocesses)
     try:
+        if not has_images(vec.observation_space):
+            torch.set_num_threads(1)  # a small MLP: threads cost more than they give
         policy = policy_for(vec.observation_space)
-        model = PPO(policy, vec, seed=seed, verbose=0, **ppo_settings(timesteps, envs))
-        return model.learn(total_timesteps=timesteps)
+        return PPO(policy, vec, seed=seed, verbose=0, **ppo_settings(timesteps, envs))
+    except BaseException:
+        close(vec)
+        raise
+
+
+def train(
+    env: TrainEnv, timesteps: int, envs: int = 4, seed: int = 0, subprocesses: bool = False
+) -> BaseAlgorithm:
+    """A PPO agent trained for ``timesteps`` env steps on ``envs`` copies of ``env``."""
+    model = new_model(env, envs, seed, timesteps, subprocesses)
+    try:
+        learn(model, timesteps, progress=False)
     finally:
-        vec.close()
+        close(model.get_env())
+    return model
+
+
+def learn(model: BaseAlgorithm, timesteps: int, progress: bool = True) -> BaseAlgorithm:
+    """``model.learn`` with a progress bar (when ``progress``) and env errors raised as
+    EnvFailed. Ctrl-C (KeyboardInterrupt) goes through: the model keeps what it learnt."""
+    from tinyrace.train_progress import Progress
+
+    bar = Progress(timesteps, progress)
+    try:
+        return model.learn(total_timesteps=timesteps, callback=bar)
+    finally:
+        bar.close()
+
+
+def close(vec: VecEnv | None) -> None:
+    """Close a vector env; worker processes that do not answer are ended, never waited for."""
+    if vec is None:
+        return
+    inner = getattr(vec, "unwrapped", vec)
+    processes = getattr(inner, "processes", [])
+    if any(not p.is_alive() for p in processes) or getattr(inner, "waiting", False):
+        for process in processes:  # a worker died, or a step was cut off: no goodbyes
+            process.terminate()
+        inner.closed = True
+        return
+    vec.close()
 
 
 def evaluate(model: BaseAlgorithm, env: TrainEnv, episodes: int, seed: int) -> tuple[float, float]:
@@ -217,8 +349,50 @@ def evaluate(model: BaseAlgorithm, env: TrainEnv, episodes: int, seed: int) -> t
 
     vec = make_envs(env, 1, seed, subprocesses=False)
     try:
-        result = evaluate_policy(model, vec, n_eval_episodes=episodes, deterministic=True)
+        result = evaluate_policy(
+            model,
+            vec,
+            n_eval_episodes=episodes,
+            deterministic=True,
+            callback=lambda local, _: raise_failure([local.get("info")]),
+        )
     finally:
         vec.close()
     mean, std = cast(tuple[float, float], result)  # not the per-episode lists: not asked for
     return float(mean), float(std)
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """``tinyrace train``: evaluate, train with a progress bar, save, evaluate again."""
+    env = train_env(args.target, args.max_episode_steps)  # its problems before the import
+    out = model_file(args.out or f"ppo_{env.name}.zip", args.force)
+    lacking = missing()
+    if lacking:
+        print(f"tinyrace: error: {lacking}", file=sys.stderr)
+        return 2
+    print(f"tinyrace: PPO on {env.name}: {args.timesteps} steps, {args.envs} envs", flush=True)
+    episodes = f"{args.eval_episodes} episode{'s' if args.eval_episodes > 1 else ''}"
+    model = new_model(env, args.envs, args.seed, args.timesteps, args.subprocesses)
+    try:
+        before = evaluate(model, env, args.eval_episodes, seed=args.seed + 1000)
+        print(f"untrained policy: {_returns(before, episodes)}", flush=True)
+        learn(model, args.timesteps)
+    except KeyboardInterrupt:
+        model.save(out)
+        print(f"interrupted after {model.num_timesteps} steps: saved {out}", file=sys.stderr)
+        return INTERRUPTED
+    except EnvFailed as exc:
+        print(f"tinyrace: error: {exc}", file=sys.stderr)
+        return 1
+    finally:
+        close(model.get_env())
+    model.save(out)
+    print(f"saved {out}")
+    after = evaluate(model, env, args.eval_episodes, seed=args.seed + 1000)
+    print(f"trained policy:   {_returns(after, episodes)}")
+    return 0
+
+
+def _returns(evaluation: tuple[float, float], episodes: str) -> str:
+    mean, std = evaluation
+    return f"mean return {mean:.1f} ± {std:.1f} over {episodes} (deterministic)"

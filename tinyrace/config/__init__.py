@@ -188,14 +188,7 @@ def load_env_config(
     if isinstance(config, LoadedConfig) and not laid.keys and environment is None:
         return config  # already validated (e.g. by ``tinyrace play``)
     if config is not None and environment is not None:
-        raise ConfigError(
-            Problem(
-                KWARGS,
-                "environment",
-                str(environment),
-                "give either config= or environment=, not both",
-            )
-        )
+        config, laid = None, _config_over_folder(config, environment, laid)
     raw, source, base_dir = _read_source(cast(_Source, config), environment)
     if laid.keys:
         raw = deep_merge(raw, _spelled_as(laid.keys, raw))
@@ -209,6 +202,18 @@ def load_env_config(
 
 
 _Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
+
+
+def _config_over_folder(config: Any, environment: str | Path, laid: Overrides) -> Overrides:
+    """``config=`` (a YAML path or a dict) given with ``environment=``: its keys laid over
+    the folder's track.yaml like keyword arguments, which in turn override them."""
+    if isinstance(config, LoadedConfig):
+        allowed = "give a YAML path or a dict as config= with environment= (not a loaded one)"
+        raise ConfigError(Problem(KWARGS, "environment", str(environment), allowed))
+    raw, source, _ = _read_source(config, None)
+    keys = deep_merge(raw, _spelled_as(laid.keys, raw))
+    named = f"{source} + {laid.source}" if laid.keys else source  # where a bad key came from
+    return Overrides(keys, named, laid.prefix)
 
 
 def _read_source(
