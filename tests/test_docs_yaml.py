@@ -1,9 +1,10 @@
 """Every YAML block of the README and the docs pages loads as shown, its env made and reset:
 an experiment (a block with ``env:``, ``driver:`` or ``episodes:``) through
-``load_experiment``, any other block as an env config (``gym.make(config=...)``). A block that is part of a larger file says so on
-the line before it, ``<!-- fragment of: NAME (why) -->``: laid over the shipped track NAME
-(as ``gym.make(environment=NAME, **block)``) when there is one, else (a file of the
-reader's, as ``my_track/track.yaml``) parsed as YAML only."""
+``load_experiment``, any other block as an env config (``gym.make(config=...)``). A block
+that is part of a larger file says so on the line before it,
+``<!-- fragment of: NAME (why) -->``: laid over the shipped track NAME (as
+``gym.make(environment=NAME, **block)``) when there is one, else (a file of the reader's,
+as ``my_track/track.yaml``) parsed as YAML only."""
 
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ def test_the_bar_shows_episode_step_return_and_lap():
     info = {"pose": (0.0, 0.0, 0.0), "speed": 3.0, "tiles_visited": 64, "tiles_total": 256}
     progress.update(recorder_after(340, 1.5, info))
     line = stream.getvalue().split("\r")[-1]  # the bar as last drawn
-    assert "episode 2/5" in line and "340/1000" in line
+    assert "episode 1 (2/5)" in line and "340/1000" in line
     assert "return 510.0" in line and "lap 25%" in line
 
 
@@ -53,7 +53,7 @@ def test_the_bar_is_cleared_before_the_episode_line():
     result = EpisodeResult(0, 0, 3.0, 3, None, None, 0, 0, None, "max_steps", 100.0)
     progress.end_episode(0, result)
     last = stream.getvalue().splitlines()[-1].split("\r")[-1]
-    assert last.startswith("episode 1/2: return 3.0, 3 steps, max_steps")
+    assert last.startswith("episode 0 (1/2): return 3.0, 3 steps, max_steps")
 
 
 def test_a_stopped_run_clears_its_bar():
@@ -85,5 +85,5 @@ def test_not_a_terminal_one_line_per_episode():
     progress.update(recorder_after(3, 1.0, {}))
     result = EpisodeResult(0, 0, 3.0, 3, None, None, 1, 0, None, "lap_finished", 100.0, 0.06)
     progress.end_episode(0, result)
-    assert stream.getvalue().startswith("episode 1/2: return 3.0, 3 steps, lap 0.06 s")
+    assert stream.getvalue().startswith("episode 0 (1/2): return 3.0, 3 steps, lap 0.06 s")
     assert stream.getvalue().count("\n") == 1

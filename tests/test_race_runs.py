@@ -355,7 +355,7 @@ def test_an_interrupted_race_keeps_its_finished_episodes(tmp_path: Path):
     )
     try:
         for line in process.stderr:  # one line per finished episode (not a terminal)
-            if line.startswith("episode 1/50"):
+            if line.startswith("episode 0 (1/50)"):
                 break
         process.send_signal(signal.SIGINT)
         err = process.communicate(timeout=120)[1]

@@ -43,7 +43,7 @@ def test_an_interrupted_run_keeps_its_data(signum: int, code: int, tmp_path: Pat
     )
     try:
         for line in process.stderr:  # one line per finished episode (not a terminal)
-            if line.startswith("episode 1/50"):
+            if line.startswith("episode 0 (1/50)"):
                 break
         process.send_signal(signum)
         err = process.communicate(timeout=120)[1]

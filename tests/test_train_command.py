@@ -29,7 +29,7 @@ def test_without_the_extra_it_names_the_pip_command(here: Path, capsys, monkeypa
     assert cli.main(["train", "--timesteps", "10"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("tinyrace: error: tinyrace train needs ")
-    assert module.replace("_", "-") in err and 'pip install "tinyrace[train]"' in err
+    assert module.replace("_", "-") in err and 'pip install ".[train]"' in err
     assert "\n" not in err and not list(here.iterdir())  # one line, no model file
 
 
@@ -47,8 +47,16 @@ def test_out_is_checked_before_training(here: Path, capsys, out: str, said: str)
     assert (here / "taken.zip").read_text() == "a model"
 
 
-def test_the_default_env_is_carracing_and_a_name_is_an_experiments_env():
-    assert train.train_env(None) == train.TrainEnv("tinyrace/CarRacing-v0", {}, "carracing")
+def test_the_default_env_is_f1tenth_lidar_and_a_name_is_an_experiments_env():
+    default = train.train_env(None)
+    assert default == train.train_env("f1tenth_lidar") and default.name == "f1tenth_lidar"
+    made = gym.make(default.env_id, **default.kwargs)
+    try:  # small vectors, no pixels: what learns in minutes
+        space = made.observation_space
+        assert isinstance(space, spaces.Dict) and set(space.spaces) == {"lidar", "state"}
+        assert not train.has_images(space) and train.policy_for(space) == "MultiInputPolicy"
+    finally:
+        made.close()
     env = train.train_env("formula_student")
     assert env.env_id == "tinyrace/TinyRace-v0" and env.name == "formula_student"
     assert Path(env.kwargs["config"]) == shipped_track("formula_student") / "track.yaml"
@@ -91,8 +99,48 @@ def test_nested_dict_observations_are_flattened_per_key():
     finally:
         env.close()
     plain = train._make(**_kwargs(train.train_env(None)))
-    assert isinstance(plain, gym.Wrapper) and not isinstance(plain, train.FlatEntries)
+    assert isinstance(plain, train.Reporting) and not isinstance(plain, train.FlatEntries)
     plain.close()
+
+
+def test_help_shows_every_default(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["train", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for default in ("default: f1tenth_lidar", "default: 20000", "default: 8", "default: 0",
+                    "default: 1", "default: ppo_<name>.zip", "default: the experiment's",
+                    "default: all in this process", "default: refuse"):  # fmt: skip
+        assert default in text, default
+
+
+class _Breaks(gym.Wrapper):
+    """An env whose step raises at its third step."""
+
+    def __init__(self, env):
+        super().__init__(env)
+        self.steps = 0
+
+    def step(self, action):
+        self.steps += 1
+        if self.steps == 3:
+            raise FloatingPointError("the car blew up")
+        return self.env.step(action)
+
+
+def test_an_env_error_is_reported_not_raised_and_ends_the_episode():
+    env = train.Reporting(_Breaks(gym.make("tinyrace/TinyRace-v0", **train.train_env().kwargs)))
+    try:
+        first, _ = env.reset(seed=0)
+        for _ in range(2):
+            env.step(env.action_space.sample())
+        observation, reward, terminated, _, info = env.step(env.action_space.sample())
+        assert terminated and reward == 0.0 and env.observation_space.contains(observation)
+        assert info[train.FAILED] == "FloatingPointError: the car blew up"
+        with pytest.raises(train.EnvFailed, match="FloatingPointError: the car blew up"):
+            train.raise_failure([{}, info])
+        train.raise_failure([{}, {"x": 1}])  # no report: nothing raised
+    finally:
+        env.close()
 
 
 def _kwargs(env: train.TrainEnv) -> dict:

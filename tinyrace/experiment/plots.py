@@ -9,6 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
@@ -88,8 +89,10 @@ def track_axes(
     figure = Figure(figsize=(size, size * height / width), layout="constrained")
     ax = figure.add_subplot()
     ax.imshow(background, extent=extent, interpolation="antialiased")
-    if lap_line is not None:
-        ax.plot(*np.asarray(lap_line).T, color=LAP_LINE, lw=3, label=lap_label)
+    if lap_line is not None:  # on top of the paths, outlined: seen on any ground
+        outline = [patheffects.withStroke(linewidth=7, foreground="black")]
+        ax.plot(*np.asarray(lap_line).T, color=LAP_LINE, lw=4, label=lap_label, zorder=5,
+                path_effects=outline, solid_capstyle="butt")  # fmt: skip
     return figure, ax
 
 
@@ -180,17 +183,51 @@ def bars(
     return figure
 
 
+BAND_FROM = 5  # episodes from which the time series show a median and a band, not lines
+
+
 def time_series(series: Sequence[Series], panels: Sequence[str]) -> Figure:
-    """Stacked panels sharing the time axis [s], one line per episode in each."""
+    """Stacked panels sharing the time axis [s]: one line per episode in each, or from
+    ``BAND_FROM`` episodes on, each episode a thin grey line under their median and the band
+    from the lowest to the highest value (episodes still running at that time)."""
     figure = Figure(figsize=(10, 1.0 + 2.2 * len(panels)), layout="constrained")
     axes = figure.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+    banded = len(series) >= BAND_FROM
     for ax, panel in zip(axes, panels, strict=True):
-        for entry in series:
-            ax.plot(entry.t, entry.values[panel], lw=1.2, label=entry.label)
+        if banded:
+            _band(ax, series, panel)
+        else:
+            for entry in series:
+                ax.plot(entry.t, entry.values[panel], lw=1.2, label=entry.label)
         ax.set_ylabel(panel)
         ax.grid(color="#e4e4e4")
         ax.yaxis.set_major_locator(MaxNLocator(5))
     axes[-1].set_xlabel("time since reset [s]")
-    if len(series) > 1:
+    if banded:
+        axes[0].legend(
+            loc="upper left", bbox_to_anchor=(1.01, 1.0), title=f"{len(series)} episodes"
+        )
+    elif len(series) > 1:
         axes[0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), title="episode")
     return figure
+
+
+def _band(ax: Axes, series: Sequence[Series], panel: str) -> None:
+    """The episodes' median over time and the band from their lowest to highest value, on
+    the longest episode's times (an episode that ended counts no more)."""
+    longest = max(series, key=lambda s: len(s.t)).t
+    rows = np.full((len(series), len(longest)), np.nan)
+    for k, entry in enumerate(series):
+        ok = np.isfinite(entry.values[panel]) & np.isfinite(entry.t)
+        if ok.sum() >= 2:
+            inside = (longest >= entry.t[ok][0]) & (longest <= entry.t[ok][-1])
+            rows[k, inside] = np.interp(longest[inside], entry.t[ok], entry.values[panel][ok])
+        ax.plot(entry.t, entry.values[panel], lw=0.6, color="#9a9a9a", alpha=0.6,
+                label="each episode" if k == 0 else None)  # fmt: skip
+    counted = np.isfinite(rows).any(axis=0)
+    if not counted.any():
+        return
+    t, kept = longest[counted], rows[:, counted]
+    low, high = np.nanmin(kept, axis=0), np.nanmax(kept, axis=0)
+    ax.fill_between(t, low, high, color=BAR, alpha=0.25, lw=0, label="lowest to highest")
+    ax.plot(t, np.nanmedian(kept, axis=0), color=BAR, lw=1.8, label="median")

@@ -47,7 +47,7 @@ class Progress:
             self.close()
             self._bar = tqdm(
                 total=self.limit or None,
-                desc=f"episode {episode + 1}/{self.episodes}",
+                desc=self.name(episode),
                 unit="step",
                 file=self.stream,
                 leave=False,
@@ -55,9 +55,17 @@ class Progress:
                 dynamic_ncols=True,
             )
 
-    def rate(self, steps: int) -> float:
-        """[steps/s] in the current episode so far."""
-        return steps / max(time.perf_counter() - self._episode_started, 1e-9)
+    def name(self, episode: int) -> str:
+        """``episode 3 (4/5)``: the number of the tables and files (from 0), then the count."""
+        return f"episode {episode} ({episode + 1}/{self.episodes})"
+
+    def elapsed(self) -> float:
+        """[s] of wall time in the current episode so far (videos included)."""
+        return time.perf_counter() - self._episode_started
+
+    def rate(self, steps: int, left_out: float = 0.0) -> float:
+        """[steps/s] in the current episode so far, ``left_out`` seconds (video) not counted."""
+        return steps / max(self.elapsed() - left_out, 1e-9)
 
     def update(self, recorder: EpisodeRecorder) -> None:
         """After a step: the bar's step count, return and lap progress."""
@@ -76,7 +84,10 @@ class Progress:
             return
         lap = f", lap {result.lap_time:.2f} s" if result.lap_time is not None else ""
         summary = f"return {result.episode_return:.1f}, {result.steps} steps{lap}, {result.end}"
-        self.stream.write(f"episode {episode + 1}/{self.episodes}: {summary}\n")
+        summary += f"; simulated {result.steps_per_second:.0f} steps/s"
+        if result.wall_seconds is not None:
+            summary += f", {result.wall_seconds:.1f} s wall (video included)"
+        self.stream.write(f"{self.name(episode)}: {summary}\n")
         self.stream.flush()
 
     def close(self) -> None:

@@ -154,7 +154,7 @@ class RaceRun(RunLoop[RaceEpisode]):
             car = by_car[agent]
             lap = f" {car.best_lap:.2f} s" if car.best_lap is not None else ""
             places.append(f"{car.position}. {agent}{lap} ({car.end})")
-        line = f"episode {result.episode + 1}/{self.config.episodes}: {', '.join(places)}\n"
+        line = f"{progress.name(result.episode)}: {', '.join(places)}\n"
         progress.stream.write(line)
         progress.stream.flush()
 

@@ -4,6 +4,7 @@ report) and its video, all taken from what the episode loop shows the observer."
 from __future__ import annotations
 
 import csv
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -61,6 +62,7 @@ class EpisodeRecorder:
         self.episode_return = 0.0
         self.steps = 0
         self.frames = 0  # written to the video
+        self.film_seconds = 0.0  # [s] spent drawing and writing video frames
         self.obstacle_hits = 0
         self.end = "max_steps"
         self.info: dict[str, Any] = {}
@@ -125,8 +127,10 @@ class EpisodeRecorder:
 
     def _film(self, observation: Any) -> None:
         if self.video is not None and self.frame is not None:
+            started = time.perf_counter()
             self.video.write(self.frame(observation))
             self.frames += 1
+            self.film_seconds += time.perf_counter() - started
 
     def _steer(self, action: Any) -> float:
         if isinstance(self.space, spaces.Discrete):

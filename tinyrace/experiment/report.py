@@ -300,18 +300,69 @@ def _html(
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>{STYLE}</style></head><body>
 <h1>{html.escape(title)}</h1>
-<p>Experiment: {html.escape(str(header.get("experiment", "")))};
+<p>Experiment: {html.escape(experiment_name(header))};
 {len(results)} of {planned} episode(s) finished; track kind:
 {html.escape(str(header.get("track_kind", "?")))}; lengths in {html.escape(unit)}.</p>
 {state_html(header)}
+{speed_html(results)}
 <h2>Episodes</h2>
 {table_html(head, rows, text=[len(head) - 1])}
+{files_html(results)}
 <h2>Summary</h2>
 {table_html(stats_head, stats, text=[0])}
 <h2>Charts</h2>
 {figures}
 </body></html>
 """
+
+
+def experiment_name(header: dict[str, Any]) -> str:
+    """The experiment file's name (a shipped one's full path names site-packages: noise)."""
+    source = str(header.get("experiment", ""))
+    return Path(source).name if source.endswith((".yaml", ".yml")) else source
+
+
+def speed_html(results: Sequence[EpisodeResult]) -> str:
+    """The simulation's speed (video writing left out) apart from the run's wall time."""
+    if not results:
+        return ""
+    steps = sum(r.steps for r in results)
+    simulated = sum(r.steps / max(r.steps_per_second, 1e-9) for r in results)
+    walls = [r.wall_seconds for r in results if r.wall_seconds is not None]
+    text = (
+        f"Simulation: {steps / max(simulated, 1e-9):,.0f} steps/s over {steps:,} steps "
+        "(the env and the driver; drawing and writing videos left out)."
+    )
+    if len(walls) == len(results):
+        text += (
+            f" Wall time of the episodes: {sum(walls):.1f} s "
+            f"({steps / max(sum(walls), 1e-9):,.0f} steps/s with videos, traces and pictures)."
+        )
+    return f"<p>{html.escape(text)}</p>"
+
+
+def files_html(results: Sequence[EpisodeResult]) -> str:
+    """Each episode's video and trace, linked (files beside the report)."""
+    rows = [(r.episode, r.video, r.trace) for r in results if r.video or r.trace]
+    if not rows:
+        return ""
+    body = "\n".join(
+        f"<tr><td class=num>{episode}</td><td>{_link(video)}</td><td>{_link(trace)}</td></tr>"
+        for episode, video, trace in rows
+    )
+    return (
+        "<h3>Files per episode</h3>\n<table>\n<thead><tr><th scope=col>ep</th>"
+        "<th scope=col>video</th><th scope=col>trace (CSV, one row per step)</th></tr></thead>"
+        f"\n<tbody>\n{body}\n</tbody>\n</table>"
+    )
+
+
+def _link(name: str | None) -> str:
+    if not name:
+        return "-"
+    from urllib.parse import quote
+
+    return f"<a href='{html.escape(quote(name))}'>{html.escape(name)}</a>"
 
 
 def state_html(header: dict[str, Any]) -> str:

@@ -35,6 +35,7 @@ class EpisodeResult:
     video: str | None = None  # file name in the run folder
     trace: str | None = None  # the per-step trace file (record.TRACE_COLUMNS)
     wall_hits: int | None = None  # tracks in metres: steps on which a wall stopped the car
+    wall_seconds: float | None = None  # [s] the episode's wall time, video writing included
 
 
 COLUMNS = (
@@ -57,7 +58,8 @@ SUMMARIZED = (  # key, title ({unit}: the track's length unit)
     ("obstacle_hits", "obstacle hits [steps]"),
     ("wall_hits", "wall hits [steps]"),
     ("mean_abs_cte", "mean |cross-track error| [{unit}]"),
-    ("steps_per_second", "speed of the simulation [steps/s]"),
+    ("steps_per_second", "simulation speed [steps/s] (env, driver; no video writing)"),
+    ("wall_seconds", "wall time per episode [s] (video writing included)"),
 )
 
 

@@ -95,6 +95,7 @@ class _Run(RunLoop[EpisodeResult]):
         self.progress.start_episode(episode)
         try:
             run_episode(self.env, self.driver, seed, self.limit, recorder)
+            simulated = self.progress.rate(recorder.steps, recorder.film_seconds)
         except DriverError as exc:
             where = f"episode {episode} (seed {seed}): {exc}"
             problem = Problem(self.experiment.source, "driver", self.config.driver, where)
@@ -115,11 +116,12 @@ class _Run(RunLoop[EpisodeResult]):
             wall_hits=recorder.info.get("walls_hit"),
             mean_abs_cte=recorder.mean_abs_cte,
             end=recorder.end,
-            steps_per_second=self.progress.rate(recorder.steps),
+            steps_per_second=simulated,
             lap_time=recorder.lap_time,
             track=self.track_picture(self.env, seed),
             video=recorder.video.path.name if recorder.video is not None else None,
             trace=trace,
+            wall_seconds=self.progress.elapsed(),
         )
         self.progress.end_episode(episode, result)
         return result
