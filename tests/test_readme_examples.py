@@ -1,5 +1,6 @@
 """The runner of the README's and its docs pages' shell and Python blocks
-(.ci/readme_examples.py): each block runs as written from an empty folder, a failing line
+(.ci/readme_examples.py): the blocks run as written, in order, in one folder that starts
+empty (a later block finds what an earlier one wrote, as for a reader), a failing line
 fails it, a block that needs an extra is listed, not run. CI runs it over every page
 against the installed wheel (.ci/wheel_smoke.sh); `python .ci/readme_examples.py` runs it
 here."""
@@ -66,6 +67,21 @@ def test_a_failing_shell_line_fails_the_runner_and_blocks_start_in_an_empty_fold
     assert "README.md:1 (shell): ok" in done.stdout
     assert "README.md:6 (shell): FAILED (exit 1" in done.stdout
     assert "not reached" not in done.stdout
+
+
+def test_the_blocks_share_one_folder_in_page_order(tmp_path: Path):
+    """The README's quick start copies a track, a later block uses the copy: one folder."""
+    readme = tmp_path / "README.md"
+    readme.write_text(
+        "```bash\necho copied > made.txt\n```\n\n"
+        "```python\nfrom pathlib import Path\nassert Path('made.txt').read_text() == 'copied\\n'\n"
+        "Path('second.txt').write_text('x')\n```\n\n"
+        "```sh\ntest -f second.txt && test -f made.txt\n```\n"
+    )
+    done = _run(str(readme))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "3 blocks: 3 ran, 3 ok, 0 failed, 0 skipped" in done.stdout
+    assert not (tmp_path / "made.txt").exists()  # the folder is a new one, not the page's
 
 
 def test_blocks_that_need_an_extra_are_listed_not_run_unless_given(tmp_path: Path):

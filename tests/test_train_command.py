@@ -130,7 +130,7 @@ class _Breaks(gym.Wrapper):
 def test_an_env_error_is_reported_not_raised_and_ends_the_episode():
     env = train.Reporting(_Breaks(gym.make("tinyrace/TinyRace-v0", **train.train_env().kwargs)))
     try:
-        first, _ = env.reset(seed=0)
+        env.reset(seed=0)
         for _ in range(2):
             env.step(env.action_space.sample())
         observation, reward, terminated, _, info = env.step(env.action_space.sample())

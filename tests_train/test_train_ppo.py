@@ -9,8 +9,10 @@ from __future__ import annotations
 import math
 import os
 import re
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +24,9 @@ from stable_baselines3.common.policies import MultiInputActorCriticPolicy
 from tinyrace import cli, train
 
 ROOT = Path(__file__).resolve().parents[1]
-EVALUATION = re.compile(r"evaluation: mean return (-?[\d.]+) ± ([\d.]+) over 1 episode")
+EVALUATION = re.compile(
+    r"(untrained|trained) policy: +mean return (-?[\d.]+) ± ([\d.]+) over 1 episode"
+)
 
 
 @pytest.fixture
@@ -31,13 +35,19 @@ def here(tmp_path: Path, monkeypatch) -> Path:
     return tmp_path
 
 
-def test_tinyrace_train_saves_a_model_and_prints_its_evaluation(here: Path, capsys):
-    argv = ["--timesteps", "256", "--envs", "2", "--eval-episodes", "1"]
+def evaluations(out: str) -> dict[str, float]:
+    return {m[1]: float(m[2]) for m in EVALUATION.finditer(out)}
+
+
+def test_tinyrace_train_on_pixels_saves_a_model_and_prints_both_evaluations(here: Path, capsys):
+    argv = ["carracing", "--timesteps", "256", "--envs", "2", "--subprocesses"]
     argv += ["--max-episode-steps", "60", "--out", "model.zip"]
     assert cli.main(["train", *argv]) == 0, capsys.readouterr().err
-    out = capsys.readouterr().out
-    found = EVALUATION.search(out)
-    assert found and math.isfinite(float(found[1])) and float(found[2]) == 0.0, out
+    captured = capsys.readouterr()
+    found = evaluations(captured.out)
+    assert set(found) == {"untrained", "trained"}, captured.out
+    assert all(math.isfinite(v) for v in found.values())
+    assert "training: 100%" in captured.err and "256/256" in captured.err  # the bar
     model = PPO.load(here / "model.zip")
     assert model.num_timesteps >= 256
     assert model.observation_space.shape == (12, 96, 96)  # 4 frames, channels first in SB3
@@ -46,8 +56,91 @@ def test_tinyrace_train_saves_a_model_and_prints_its_evaluation(here: Path, caps
     assert model.action_space.contains(action[0].astype(np.float32))
 
 
+def test_the_default_run_learns_to_drive(here: Path, capsys):
+    """``tinyrace train`` as the README prints it: the trained policy's return is far above
+    the untrained one's (f1tenth_lidar: the untrained car meets a wall at once)."""
+    assert cli.main(["train"]) == 0, capsys.readouterr().err
+    captured = capsys.readouterr()
+    found = evaluations(captured.out)
+    assert found["trained"] > found["untrained"] + 300, captured.out
+    assert "mean of the last 20 episodes" in captured.err  # the bar's recent return
+    assert PPO.load(here / "ppo_f1tenth_lidar.zip").num_timesteps >= 20_000
+
+
+def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
+    command = [sys.executable, "-m", "tinyrace", "train", "--timesteps", "1000000"]
+    process = subprocess.Popen(
+        [*command, "--subprocesses", "--envs", "2", "--out", "partial.zip"],
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, as a terminal's foreground job
+    )
+    try:
+        assert process.stdout is not None
+        for line in process.stdout:  # training starts after the untrained evaluation
+            if line.startswith("untrained policy"):
+                break
+        time.sleep(5)
+        os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: the trainer and its workers
+        _, err = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert process.returncode == 130, err[-2000:]
+    assert "interrupted after" in err and "saved partial.zip" in err
+    assert "BrokenPipeError" not in err and "Traceback" not in err
+    assert PPO.load(here / "partial.zip").num_timesteps < 1_000_000
+
+
+BREAKING = """
+import gymnasium as gym
+
+import tinyrace  # noqa: F401
+
+
+class Breaks(gym.Wrapper):
+    def __init__(self, **kwargs):
+        super().__init__(gym.make("tinyrace/TinyRace-v0", **kwargs))
+        self.steps = 0
+
+    def step(self, action):
+        self.steps += 1
+        if self.steps == 50:
+            raise FloatingPointError("the car blew up")
+        return self.env.step(action)
+
+
+gym.register("Breaks-v0", entry_point=Breaks)
+"""
+
+
+def test_a_worker_env_that_raises_ends_the_run_with_its_error(here: Path):
+    """In a worker process (SubprocVecEnv): the run ends with the error, never hangs."""
+    (here / "breaking.py").write_text(BREAKING)
+    script = (
+        "from tinyrace import train\n"
+        "env = train.TrainEnv('breaking:Breaks-v0', train.train_env().kwargs, 'breaks')\n"
+        "try:\n"
+        "    train.train(env, 4000, envs=2, subprocesses=True)\n"
+        "except train.EnvFailed as exc:\n"
+        "    print('failed:', exc)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        env={**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{here}"},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "failed: an env raised during training: FloatingPointError: the car blew up" in (
+        done.stdout
+    )
+
+
 def test_training_changes_the_policy(here: Path):
-    env = train.train_env(None, max_episode_steps=40)
+    env = train.train_env("carracing", max_episode_steps=40)
     before = PPO("CnnPolicy", train.make_envs(env, 1, 0, subprocesses=False), seed=0)
     weights = [p.detach().clone() for p in before.policy.parameters()]
     model = train.train(env, 128, envs=1, seed=0, subprocesses=False)

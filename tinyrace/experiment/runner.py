@@ -23,6 +23,8 @@ from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
 from tinyrace.experiment.route import route_watch
 from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop
+from tinyrace.sensors.birdseye_camera import BirdseyeCamera
+from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.sensors.view import sensor_view
 
 if TYPE_CHECKING:
@@ -153,7 +155,9 @@ class _Run(RunLoop[EpisodeResult]):
         rendered = self.env.render()  # the env was made with render_mode rgb_array
         if rendered is None:
             raise RuntimeError("the env rendered no frame for the video")
-        return rendered
+        named: np.ndarray = rendered.copy()
+        self.env.pictures.name_insets(named, *_inset_cameras(self.env))  # who is who
+        return named
 
     def _write(self, interrupted: int | None, error: str | None = None) -> None:
         from tinyrace.experiment.report import write_report
@@ -161,6 +165,13 @@ class _Run(RunLoop[EpisodeResult]):
         header = self.header(self.env, interrupted, error)
         payload = write_files(self.run_dir, self.results, header)
         write_report(self.run_dir, payload, self.results)
+
+
+def _inset_cameras(env: TinyRaceEnv) -> tuple[list[str], list[tuple[int, ...]]]:
+    """The ids and image sizes of the cameras an image track's overview insets, in order."""
+    views = [s for s in env.sensors if isinstance(s, (BirdseyeCamera, TopViewSensor))]
+    sizes = [tuple(s.space.shape or ())[:2] for s in views]
+    return [s.id for s in views], sizes
 
 
 def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:

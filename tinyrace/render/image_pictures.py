@@ -8,7 +8,7 @@ import numpy as np
 
 from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
-from tinyrace.render.overview import Overview
+from tinyrace.render.overview import Overview, label_insets
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.draw_cars import CarLooks
 from tinyrace.sensors.ground import ImageGround
@@ -37,6 +37,12 @@ class ImagePictures:
         windows = [corners for _, corners in cameras if corners is not None]
         race = (snapshot, self.looks)
         return self.overview().render(footprint_corners(snapshot.car), windows, images, race)
+
+    def name_insets(
+        self, frame: np.ndarray, names: Sequence[str], sizes: Sequence[tuple[int, ...]]
+    ) -> None:
+        """Each camera's id under its inset, in its window's colour."""
+        label_insets(frame, list(names), list(sizes))
 
     def overview(self) -> Overview:
         overview = self.overviews[self.index]

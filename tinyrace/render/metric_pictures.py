@@ -58,6 +58,11 @@ class MetricPictures:
             self.view = TopView(TopViewConfig(id="top_view"), texture, self.looks.colors)
         return self.view.render(snapshot)
 
+    def name_insets(
+        self, frame: np.ndarray, names: Sequence[str], sizes: Sequence[tuple[int, ...]]
+    ) -> None:
+        """This picture insets no camera image: nothing to name."""
+
 
 class MetricOverview:
     """The whole track scaled to ``max_side`` px, the reference line, the car and camera views."""

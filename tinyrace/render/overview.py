@@ -78,20 +78,43 @@ class Overview:
 
     def _inset(self, frame: np.ndarray, images: list[np.ndarray]) -> None:
         """Camera images side by side along the top-left, each framed in its roi colour."""
-        x = 4
-        max_w = max(1, int(frame.shape[1] * INSET_FRACTION))
-        max_h = max(1, frame.shape[0] // 3)
-        for k, image in enumerate(images):
-            h, w = image.shape[:2]
-            factor = min(max_w / w, max_h / h, 1.0)
-            small = cv2.resize(
-                image,
-                (max(1, int(w * factor)), max(1, int(h * factor))),
-                interpolation=cv2.INTER_AREA,
-            )
-            sh, sw = small.shape[:2]
-            if x + sw + 2 > frame.shape[1] or sh + 6 > frame.shape[0]:
-                break
-            frame[4 : 4 + sh, x : x + sw] = small
+        boxes = inset_boxes(frame.shape, [image.shape[:2] for image in images])
+        for k, (image, (x, y, sw, sh)) in enumerate(zip(images, boxes, strict=False)):
+            small = cv2.resize(image, (sw, sh), interpolation=cv2.INTER_AREA)
+            frame[y : y + sh, x : x + sw] = small
             cv2.rectangle(frame, (x - 1, 3), (x + sw, 4 + sh), ROI_COLORS[k % len(ROI_COLORS)], 1)
-            x += sw + 6
+
+
+def inset_boxes(
+    frame_shape: tuple[int, ...], sizes: list[tuple[int, ...]]
+) -> list[tuple[int, int, int, int]]:
+    """Where the overview insets camera images of ``sizes`` (height, width): (x, y, width,
+    height) each [px], left to right along the top; those that do not fit are left out."""
+    x, boxes = 4, []
+    max_w = max(1, int(frame_shape[1] * INSET_FRACTION))
+    max_h = max(1, frame_shape[0] // 3)
+    for h, w in (size[:2] for size in sizes):
+        factor = min(max_w / w, max_h / h, 1.0)
+        sw, sh = max(1, int(w * factor)), max(1, int(h * factor))
+        if x + sw + 2 > frame_shape[1] or sh + 6 > frame_shape[0]:
+            break
+        boxes.append((x, 4, sw, sh))
+        x += sw + 6
+    return boxes
+
+
+def label_insets(frame: np.ndarray, names: list[str], sizes: list[tuple[int, ...]]) -> None:
+    """Each inset camera image's name written under it (in its roi colour, on black): for
+    videos, where a reader cannot tell the cameras apart otherwise."""
+    scale = max(0.35, min(frame.shape[:2]) / 1400)
+    for k, (name, (x, y, _, sh)) in enumerate(
+        zip(names, inset_boxes(frame.shape, sizes), strict=False)
+    ):
+        (tw, th), base = cv2.getTextSize(name, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
+        top = y + sh + 3
+        if top + th + base + 2 > frame.shape[0]:
+            continue
+        cv2.rectangle(frame, (x - 1, top), (x + tw + 3, top + th + base + 2), (0, 0, 0), -1)
+        color = ROI_COLORS[k % len(ROI_COLORS)]
+        cv2.putText(frame, name, (x + 1, top + th + 1), cv2.FONT_HERSHEY_SIMPLEX, scale, color, 1,
+                    cv2.LINE_AA)  # fmt: skip

@@ -30,3 +30,9 @@ class Pictures(Protocol):
     def frame(self, mode: str, snapshot: Snapshot, cameras: CameraViews = ()) -> np.ndarray:
         """The picture of render mode ``mode``; ``cameras``: each image sensor's view now."""
         ...
+
+    def name_insets(
+        self, frame: np.ndarray, names: Sequence[str], sizes: Sequence[tuple[int, ...]]
+    ) -> None:
+        """Write each camera's name by its inset in an overview ``frame`` (videos: ``names``
+        and image ``sizes`` in the order of ``frame``'s cameras); nothing without insets."""

@@ -3,6 +3,7 @@ episode's ground (``tinyrace.sensors.ground``) at the size's resolution."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -59,3 +60,8 @@ class ProceduralPictures:
     def __getstate__(self) -> dict[str, Any]:
         """Leave out the pictures: they are redrawn when next asked."""
         return {**self.__dict__, "_cache": {}, "_views": {}}
+
+    def name_insets(
+        self, frame: np.ndarray, names: Sequence[str], sizes: Sequence[tuple[int, ...]]
+    ) -> None:
+        """This picture insets no camera image: nothing to name."""
