@@ -104,7 +104,10 @@ def test_the_report_is_self_contained_with_html_tables(tmp_path: Path):
     assert all(decoded(image).shape[0] > 100 and image["alt"] for image in page.images)
     for name in ("report_returns.png", "report_lap_times.png", "report_time_series.png"):
         assert (result.run_dir / name).is_file()
-    episodes, summary = page.tables
+    episodes, files, summary = page.tables
+    assert files[0] == ["ep", "video", "trace (CSV, one row per step)"]
+    assert [row[0] for row in files[1:]] == ["0", "1"]
+    assert [row[2] for row in files[1:]] == [e.trace for e in result.episodes]
     assert episodes[0] == [
         "ep", "return", "steps", "tiles", "laps", "lap [s]", "hits", "|cte| [u]", "end"
     ]  # fmt: skip
