@@ -34,6 +34,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
         "validate",
         "play",
         "train",
+        "train_progress",
         "rllib",
         "cli",
         "__main__",

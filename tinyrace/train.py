@@ -322,7 +322,7 @@ def learn(model: BaseAlgorithm, timesteps: int, progress: bool = True) -> BaseAl
     EnvFailed. Ctrl-C (KeyboardInterrupt) goes through: the model keeps what it learnt."""
     from tinyrace.train_progress import Progress
 
-    bar = Progress(timesteps, progress)
+    bar = Progress(timesteps, raise_failure, progress)
     try:
         return model.learn(total_timesteps=timesteps, callback=bar)
     finally:

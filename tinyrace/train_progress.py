@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 from tqdm import tqdm
-
-from tinyrace.train import raise_failure
 
 REFRESH = 0.5  # [s] between updates of the recent mean return
 RECENT = 20  # episodes in the recent mean return
@@ -17,11 +17,13 @@ RECENT = 20  # episodes in the recent mean return
 
 class Progress(BaseCallback):
     """A tqdm bar on stderr (steps done, steps/s, the mean return of the last ``RECENT``
-    episodes) when ``show``; raises EnvFailed when an env reports an exception."""
+    episodes) when ``show``. ``check`` gets each step's infos: the trainer's raises when
+    an env reported an exception."""
 
-    def __init__(self, total: int, show: bool = True):
+    def __init__(self, total: int, check: Callable[[Any], None], show: bool = True):
         super().__init__()
         self.total = total
+        self.check = check
         self.show = show
         self.bar: tqdm[None] | None = None
         self._shown = 0.0  # when the return was last written
@@ -33,7 +35,7 @@ class Progress(BaseCallback):
             )
 
     def _on_step(self) -> bool:
-        raise_failure(self.locals.get("infos"))
+        self.check(self.locals.get("infos"))
         if self.bar is not None:
             self.bar.update(min(self.training_env.num_envs, self.total - self.bar.n))
             if time.monotonic() - self._shown > REFRESH:
