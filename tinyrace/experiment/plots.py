@@ -125,7 +125,8 @@ def _draw_path(ax: Axes, path: Path2D, norm: Normalize, first: bool) -> LineColl
     lines = LineCollection(list(segments), cmap=SPEED_MAP, norm=norm, linewidths=2.2)
     lines.set_array(speed[1:])
     ax.add_collection(lines)
-    ax.plot(*points[0], "o", ms=9, mfc="#28c83c", mec="black", label="start" if first else None)
+    start = "start" if first else None
+    ax.plot(*points[0], "o", ms=9, mfc="#28c83c", mec="black", label=start, zorder=6)  # on top
     hits = path.hits[ok]
     if hits.any():
         ax.plot(*points[hits].T, "o", ms=7, mfc="none", mec="#ff9600", label="obstacle hit")
