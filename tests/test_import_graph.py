@@ -21,6 +21,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("tracks",),
     ("cars",),
     ("world",),
+    ("ground",),
     ("sensors",),
     ("render",),
     ("rewards",),

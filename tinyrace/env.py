@@ -17,6 +17,7 @@ from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.episode import Episode
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem, did_you_mean
+from tinyrace.ground.grounds import make_ground
 from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
@@ -29,7 +30,6 @@ from tinyrace.rewards import (
 )
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
-from tinyrace.sensors.ground import make_ground
 from tinyrace.sensors.registry import build_sensors, default_sensor
 from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.tracks.base import Track

@@ -112,8 +112,8 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
+    from tinyrace.ground.grounds import MetricGround
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
-    from tinyrace.sensors.ground import MetricGround
 
     if target == "procedural":  # the CLI's name for CarRacing's track
         image = procedural_picture(load_env_config().config, seed)

@@ -1,16 +1,16 @@
 """The pictures of an env's tracks, drawn on the episode's ground: chosen by that ground,
-which ``tinyrace.sensors.ground.make_ground`` chose by what the tracks hold, never by their
+which ``tinyrace.ground.grounds.make_ground`` chose by what the tracks hold, never by their
 kind."""
 
 from __future__ import annotations
 
 from tinyrace.config import EnvConfig
+from tinyrace.ground.grounds import EpisodeGround, ImageGround, MetricGround, ProceduralGround
 from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.pictures import Pictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
-from tinyrace.sensors.draw_cars import CarLooks
-from tinyrace.sensors.ground import EpisodeGround, ImageGround, MetricGround, ProceduralGround
+from tinyrace.sensors.machinery.draw_cars import CarLooks
 
 
 def make_pictures(config: EnvConfig, ground: EpisodeGround) -> Pictures:

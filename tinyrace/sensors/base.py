@@ -28,7 +28,7 @@ from gymnasium import spaces
 if TYPE_CHECKING:
     from tinyrace.cars.state import CarFacts
     from tinyrace.config import EnvConfig
-    from tinyrace.sensors.texture import GroundTexture
+    from tinyrace.ground.texture import GroundTexture
     from tinyrace.tracks.base import Track
     from tinyrace.world.snapshot import Snapshot
 

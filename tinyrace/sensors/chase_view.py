@@ -17,11 +17,11 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config.sensors import ChaseViewConfig
+from tinyrace.ground.texture import Affine, GroundTexture, as_matrix
 from tinyrace.sensors.base import Ground, SensorContext
-from tinyrace.sensors.car_sprite import CarSprite, Patches
-from tinyrace.sensors.dashboard import Dashboard
-from tinyrace.sensors.draw_cars import CarLooks, draw_names, fill_footprints
-from tinyrace.sensors.texture import Affine, GroundTexture, as_matrix
+from tinyrace.sensors.machinery.car_sprite import CarSprite, Patches
+from tinyrace.sensors.machinery.dashboard import Dashboard
+from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_names, fill_footprints
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -98,7 +98,7 @@ class ChaseView:
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
         looks = self.looks if len(snapshot.cars) > 1 else None  # a race's
-        if looks is not None:  # the other cars on the ground (sensors/draw_cars.py)
+        if looks is not None:  # the other cars on the ground (sensors/machinery/draw_cars.py)
             fill_footprints(frame[:top], as_matrix(world_to_out), snapshot, looks.colors)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)

@@ -29,7 +29,7 @@ from gymnasium import spaces
 from tinyrace import kernels
 from tinyrace.config.sensors import ConesConfig
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack
+from tinyrace.sensors.machinery.common import PerTrack
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot

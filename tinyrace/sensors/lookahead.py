@@ -27,7 +27,7 @@ from tinyrace.config.bounds import MAX_LOOKAHEAD_GRID
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported
+from tinyrace.sensors.machinery.common import PerTrack, PlanePoints, Unsupported
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 

@@ -16,9 +16,9 @@ import numpy as np
 
 from tinyrace import cache
 from tinyrace.config import EnvConfig, cache_settings
-from tinyrace.sensors.metric_ground import shared_ground
-from tinyrace.sensors.procedural_ground import GroundPainter, repaint_tile
-from tinyrace.sensors.texture import GroundTexture
+from tinyrace.ground.metric import shared_ground
+from tinyrace.ground.procedural import GroundPainter, repaint_tile
+from tinyrace.ground.texture import GroundTexture
 from tinyrace.tracks.base import PaintedGround, Track, TrackDraw, TrackSource
 from tinyrace.tracks.procedural_source import GroundColors
 
