@@ -1,9 +1,9 @@
 """One episode: a world with the track's static shapes and the cars, judged by rule parts.
 
 The track says which rule parts its episodes are made of (``Track.rules``); the
-``Course`` (``course.py``, made once per env) furnishes one world per track with what those parts need
-and hands it to each new ``Episode``, which builds the parts for each car and turns the
-world's contacts after a step into each car's ``StepFacts``. Nothing here depends on
+``Course`` (``course.py``, made once per env) furnishes one world per track with what those
+parts need and hands it to each new ``Episode``, which builds the parts for each car and
+turns the world's contacts after a step into each car's ``StepFacts``. Nothing here depends on
 the kind of track.
 """
 
