@@ -48,14 +48,21 @@ class TinyRaceEnv(gym.Env):
     """A car on a 2D track seen from above, configured by YAML.
 
     ## Description
-    Two kinds of track, chosen by the config's ``track.type``: ``procedural``
-    reproduces Gymnasium's CarRacing-v3 (same tracks for the same seed, same
-    rewards), ``image`` loads a tinycarlo 1.1 track folder whose pixel colours
-    are markings, obstacles and a reference trajectory.
+    Composed of parts the config names. The track source by ``tracks[].type``
+    (``tinyrace.tracks.registry``): ``procedural`` reproduces Gymnasium's
+    CarRacing-v3 (same tracks for the same seed, same rewards), ``image`` loads a tinycarlo
+    track folder whose pixel colours are markings, obstacles and a reference trajectory,
+    ``centerline`` a reference line with its widths (CSV), ``cone_map`` a cone layout and
+    ``ros_map`` an occupancy map of a ROS map server. The car model by ``car.model``
+    (``tinyrace.cars.registry``; each track type has a default): ``dynamic`` (CarRacing's
+    car with tyre slip), ``kinematic`` (tinycarlo's constant-speed bicycle),
+    ``kinematic_throttle`` (a kinematic bicycle with throttle) and ``single_track``
+    (CommonRoad's single-track model, F1TENTH's). Parts registered by user code join them.
 
     ## Action Space
-    Dynamic car: Box([-1, 0, 0], [1, 1, 1]) as [steer, gas, brake] (steer +1 turns
-    right), or CarRacing's Discrete(5). Kinematic car: Box(-1, 1, (1,)) steering.
+    The car model's (``env.unwrapped.action_spec``): ``dynamic``: Box [steer, gas, brake] or
+    CarRacing's Discrete(5); ``kinematic``: Box [steer]; ``kinematic_throttle``: Box [steer,
+    throttle]; ``single_track``: Box [steering angle, speed], or raw rates.
 
     ## Observation Space
     Every observation is a sensor's (``tinyrace.sensors``; tinycarlo's ``cameras:`` are

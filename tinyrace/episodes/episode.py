@@ -162,10 +162,6 @@ class Episode:
         self.steps += 1
         return self._judge()
 
-    def park(self, car: int) -> None:
-        """Take car ``car`` out of the race (it stays, standing, as an obstacle)."""
-        self.world.park(car)
-
     def leave(self, car: int, reason: str) -> None:
         """Car ``car``'s episode ended for ``reason``: a car that finished its race is taken
         off the track (it does not block the line), any other is parked as an obstacle."""
