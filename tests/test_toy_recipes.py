@@ -27,11 +27,12 @@ from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.knobs import REQUIRED, knob
 from tinyrace.config.schema import METRE_CAR, TrackFacts
+from tinyrace.config.sensors import SensorDefaults
 from tinyrace.drivers.centerline import CenterlineDriver
 from tinyrace.episodes.rules import RULES, Info
 from tinyrace.errors import ConfigError
 from tinyrace.sensors import registry as sensor_registry
-from tinyrace.sensors.base import SensorContext, SensorType
+from tinyrace.sensors.base import SensorContext, SensorType, TopDown
 from tinyrace.tracks import registry as track_registry
 from tinyrace.tracks.base import Track, TrackDraw, TrackRules, pick_index
 from tinyrace.world.facts import StepFacts
@@ -120,7 +121,7 @@ class FinishGate:
 
 
 @dataclass(frozen=True)
-class CompassConfig:
+class CompassConfig(SensorDefaults):
     """``sensors[i]`` of ``type: compass``: the car's heading as a unit vector."""
 
     id: str = knob(REQUIRED, "observation key of this sensor")
@@ -143,6 +144,12 @@ class Compass:
         clean = np.array([math.cos(heading), math.sin(heading)])
         noisy = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
         return np.clip(noisy, -2.0, 2.0).astype(np.float32)
+
+    def describe(self) -> str:
+        return "the car's heading as a unit vector"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # no picture from above
 
 
 def build_compass(entry: CompassConfig, context: SensorContext) -> Compass:

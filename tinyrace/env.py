@@ -29,9 +29,7 @@ from tinyrace.rewards import (
     shaping_from_config,
 )
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
-from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.registry import build_sensors, default_sensor
-from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.tracks.base import Track
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
@@ -330,8 +328,9 @@ class TinyRaceEnv(gym.Env):
     def _camera_views(self, snapshot: Snapshot) -> CameraViews:
         """Each top-down image sensor's image now (this step's, when it has observed) and
         its track window (None for a view without one), for the overview picture."""
-        views = [s for s in self.sensors if isinstance(s, (BirdseyeCamera, TopViewSensor))]
-        if not views:
+        views = [(s, s.top_down(snapshot, self.layout)) for s in self.sensors]
+        shown = [(sensor, top.window) for sensor, top in views if top is not None]
+        if not shown:
             return []
         observed = self._observed
         if observed is None or observed[0] is not self.episode or observed[1] != self.steps:
@@ -344,9 +343,9 @@ class TinyRaceEnv(gym.Env):
                     if view.id in images
                     else view.observe(snapshot, self.layout, self.np_random)
                 ),
-                view.window(snapshot, self.layout) if isinstance(view, BirdseyeCamera) else None,
+                window,
             )
-            for view in views
+            for view, window in shown
         ]
 
     def close(self) -> None:

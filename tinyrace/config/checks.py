@@ -7,11 +7,9 @@ from __future__ import annotations
 import dataclasses
 
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
-from tinyrace.config.camera_info import intrinsics_problems
 from tinyrace.config.loader import Parser
 from tinyrace.config.race import race_cars, race_problems
 from tinyrace.config.schema import MAX_RACE_CARS, EnvConfig, RewardConfig
-from tinyrace.config.sensors import ConesConfig, LidarConfig, PerspectiveCameraConfig, SensorConfig
 
 
 def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
@@ -53,13 +51,8 @@ def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_a
             parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
     _check_camera_pixels(config, parser, at)
     for i, sensor in enumerate(config.sensors):
-        if isinstance(sensor, PerspectiveCameraConfig):
-            for key, value, allowed in intrinsics_problems(sensor):
-                parser.problem(f"{at}sensors[{i}].{key}", value, allowed)
-            position = sensor.position
-            if position and not position[2] > 0:
-                allowed = "expected a camera above the ground: position [x, y, z] with z > 0"
-                parser.problem(f"{at}sensors[{i}].position", list(position), allowed)
+        for key, value, allowed in sensor.problems():
+            parser.problem(f"{at}sensors[{i}].{key}", value, allowed)
 
 
 def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) -> None:
@@ -82,13 +75,6 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         _check_observation(own, parser, car_at, f"{car_at}sensors")
 
 
-def _one_array(sensor: SensorConfig) -> bool:
-    """Whether a sensor's observation is one array (a Box), not a Dict of arrays."""
-    if isinstance(sensor, LidarConfig):
-        return not sensor.hit_classes
-    return not isinstance(sensor, ConesConfig)
-
-
 def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:
     """``observation: box`` is one camera's image: exactly one camera or image sensor (a
     problem names ``where``)."""
@@ -98,7 +84,7 @@ def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:
     allowed = ""
     if len(ids) > 1:
         allowed = f"box needs exactly one camera or sensor, not {ids} (use dict)"
-    elif config.sensors and not _one_array(config.sensors[0]):
+    elif config.sensors and config.sensors[0].dict_observation:
         allowed = (
             f"box needs a camera or a sensor of one array, not a {config.sensors[0].type} "
             "sensor whose observation is a Dict (cones; lidar with hit_classes): use dict"
@@ -120,14 +106,14 @@ def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> Non
 
 
 def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
-    """Every camera's pixels together: the ``cameras`` and the perspective ``sensors`` (whose
-    pixels count PERSPECTIVE_PIXEL_WEIGHT times: each keeps a ray and its ground point)."""
+    """Every camera's pixels together: the ``cameras`` and the ``sensors`` that count camera
+    pixels (a perspective camera's count PERSPECTIVE_PIXEL_WEIGHT times: each keeps a ray
+    and its ground point)."""
     sizes = [(f"cameras[{i}]", c.resolution, 1) for i, c in enumerate(config.cameras)]
-    sizes += [
-        (f"sensors[{i}]", s.resolution, PERSPECTIVE_PIXEL_WEIGHT)
-        for i, s in enumerate(config.sensors)
-        if isinstance(s, PerspectiveCameraConfig)
-    ]
+    for i, sensor in enumerate(config.sensors):
+        pixels = sensor.camera_pixels()
+        if pixels is not None:
+            sizes.append((f"sensors[{i}]", *pixels))
     total = sum(height * width * weight for _, (height, width), weight in sizes)  # [px]
     if total > MAX_CAMERA_PIXELS:
         allowed = (

@@ -34,6 +34,35 @@ class EpisodeGround(Protocol):
         """The ground of ``track`` in the current episode (as the cameras sample it)."""
         ...
 
+    @property
+    def tracks(self) -> Sequence[Track]:
+        """The fixed tracks it serves, a texture each (none: a track drawn at each reset)."""
+        ...
+
+    @property
+    def carries_pictures(self) -> bool:
+        """Whether its textures are the tracks' own pictures (an overview shows them as
+        they are, not a ground drawn from what the tracks hold)."""
+        ...
+
+    def rescalable(self) -> Rescalable | None:
+        """The ground painted anew at any resolution (render's views at their own sizes),
+        or None: one texture per track."""
+        ...
+
+
+class Rescalable(Protocol):
+    """A ground painted at any resolution: CarRacing's, painted at each reset."""
+
+    @property
+    def painted(self) -> PaintedGround:
+        """The playfield and the cameras' pixels_per_unit."""
+        ...
+
+    def texture_at(self, pixels_per_unit: float) -> GroundTexture:
+        """The ground at ``pixels_per_unit`` now (every tile visited so far repainted)."""
+        ...
+
 
 class ProceduralGround:
     """CarRacing's ground, painted at each reset in the episode's colours, at any number of
@@ -48,6 +77,12 @@ class ProceduralGround:
         self.visited: Sequence[int] = ()
         self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
         self._painted = 0  # visited tiles repainted on every texture
+
+    tracks: Sequence[Track] = ()  # a new track at each reset
+    carries_pictures = False
+
+    def rescalable(self) -> Rescalable | None:
+        return self
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
         self.track, self.colors, self.visited = draw.track, GroundColors.of(draw.track), visited
@@ -102,6 +137,11 @@ class ImageGround:
     def texture(self, track: Track) -> GroundTexture:
         return self.textures[self.index]
 
+    carries_pictures = True
+
+    def rescalable(self) -> Rescalable | None:
+        return None
+
 
 class MetricGround:
     """Every fixed track's ground drawn from what it holds (road, cones, a map's cells) at
@@ -124,6 +164,11 @@ class MetricGround:
             texture = shared_ground(self.tracks[self.index], self.cache)
             self.textures[self.index] = texture
         return texture
+
+    carries_pictures = False
+
+    def rescalable(self) -> Rescalable | None:
+        return None
 
 
 def make_ground(config: EnvConfig, source: TrackSource) -> EpisodeGround:

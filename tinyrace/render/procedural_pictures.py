@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from tinyrace.config import MAX_TEXTURE_SIDE
-from tinyrace.ground.grounds import ProceduralGround
+from tinyrace.ground.grounds import Rescalable
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.chase_view import SMALL_VIEW, ChaseView, small_dashboard
 from tinyrace.sensors.machinery.car_sprite import Patches
@@ -25,7 +25,7 @@ RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "huma
 class ProceduralPictures:
     """CarRacing's views of the current episode; views are made when first asked."""
 
-    def __init__(self, ground: ProceduralGround, looks: CarLooks | None = None):
+    def __init__(self, ground: Rescalable, looks: CarLooks | None = None):
         self.painted = ground.painted  # the playfield and the cameras' pixels_per_unit
         self.ground = ground
         self._cache: dict[tuple[int, int], tuple[Dashboard, Patches]] = {}  # across episodes

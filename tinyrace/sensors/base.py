@@ -53,6 +53,24 @@ class Sensor(Protocol):
         """The observation now; noise from ``rng`` only."""
         ...
 
+    def describe(self) -> str:
+        """What it observes, in a few words (``tinyrace validate`` prints it beside its id
+        and the shapes of its space)."""
+        ...
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        """Its image as a top-down picture of the ground around the car, for ``render()``'s
+        overview, or None: its observation is no such picture."""
+        ...
+
+
+@dataclass(frozen=True)
+class TopDown:
+    """A sensor's image seen as a top-down picture: the track window it shows (its corners,
+    drawn on the overview), or None for a view whose window is not drawn."""
+
+    window: np.ndarray | None = None
+
 
 @runtime_checkable
 class Labelled(Protocol):

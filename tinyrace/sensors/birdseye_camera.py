@@ -22,7 +22,7 @@ from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
 from tinyrace.ground.texture import GroundTexture, compose
-from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.sensors.base import Ground, SensorContext, TopDown
 from tinyrace.sensors.machinery.common import (
     GroundImage,
     PerTrack,
@@ -117,6 +117,13 @@ class BirdseyeCamera:
         """The name of each label value of a ``classes`` image on the current track (a new
         dict each time: infos never share it)."""
         return dict(self._names)
+
+    def describe(self) -> str:
+        c = self.config
+        return f"bird's-eye camera, {c.format}, a {c.roi[0]:g} x {c.roi[1]:g} window ahead"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return TopDown(self.window(snapshot, track))
 
     def reset(self, track: Track) -> None:
         self._camera = None  # a new episode may have a new ground

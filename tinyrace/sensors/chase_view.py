@@ -18,7 +18,7 @@ from gymnasium import spaces
 
 from tinyrace.config.sensors import ChaseViewConfig
 from tinyrace.ground.texture import Affine, GroundTexture, as_matrix
-from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.sensors.base import Ground, SensorContext, TopDown
 from tinyrace.sensors.machinery.car_sprite import CarSprite, Patches
 from tinyrace.sensors.machinery.dashboard import Dashboard
 from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_names, fill_footprints
@@ -133,6 +133,12 @@ class ChaseViewSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        return "CarRacing's chase view with its dashboard"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         self.view = None  # a new episode has a new ground

@@ -27,7 +27,7 @@ from tinyrace import cache, kernels
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.base import SensorContext, TopDown
 from tinyrace.sensors.machinery import (
     common,
     lidar_map,
@@ -209,6 +209,14 @@ class LidarSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        c = self.config
+        hits = ", and what each beam hit" if c.hit_classes else ""
+        return f"lidar, {c.beams} beams over {c.fov:g} deg, ranges up to {self.max_range:g}{hits}"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         made = self._fields.get(track, self._tables)

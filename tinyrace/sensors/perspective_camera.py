@@ -19,7 +19,7 @@ from gymnasium import spaces
 
 from tinyrace.config.sensors import PerspectiveCameraConfig
 from tinyrace.sensors.base import Ground as EpisodeGround
-from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.base import SensorContext, TopDown
 from tinyrace.sensors.machinery.common import (
     GroundImage,
     PerTrack,
@@ -99,6 +99,12 @@ class PerspectiveCamera:
         """The name of each label value of a ``classes`` image on the current track (a new
         dict each time: infos never share it)."""
         return dict(self._names)
+
+    def describe(self) -> str:
+        return f"perspective camera, {self.config.format}, pitched {self.config.pitch:g} deg"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         if self.config.format == "classes":

@@ -19,7 +19,7 @@ from tinyrace.cars.state import footprint_corners
 from tinyrace.config import CameraConfig
 from tinyrace.config.sensors import TopViewConfig
 from tinyrace.ground.texture import GroundTexture, transform_points
-from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.sensors.base import Ground, SensorContext, TopDown
 from tinyrace.sensors.birdseye_camera import RoiCamera
 from tinyrace.sensors.machinery.draw_cars import CarLooks, Paint, fill_footprints
 from tinyrace.tracks.base import Track
@@ -80,6 +80,12 @@ class TopViewSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        return f"the road from above, {self.config.span:g} wheelbases across, the car drawn in"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return TopDown()  # turned with the car: no window drawn on the overview
 
     def reset(self, track: Track) -> None:
         self._view = None  # a new episode may have a new ground
