@@ -34,7 +34,7 @@ from tinyrace.errors import ConfigError
 from tinyrace.sensors import registry as sensor_registry
 from tinyrace.sensors.base import SensorContext, SensorType, TopDown
 from tinyrace.tracks import registry as track_registry
-from tinyrace.tracks.base import Track, TrackDraw, TrackRules, pick_index
+from tinyrace.tracks.base import PaintedGround, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import Contacts, World
@@ -59,8 +59,8 @@ class RingTrackConfig(TrackFacts):
 class RingSource:
     """One ring per config track; the start on its right-hand side, driving left round."""
 
-    kind = "ring"
-    painted = None
+    kind: str = "ring"
+    painted: PaintedGround | None = None
 
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         self.tracks = tuple(_ring(c) for c in config.tracks if isinstance(c, RingTrackConfig))
@@ -142,8 +142,9 @@ class Compass:
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         heading = snapshot.car.pose[2]
         clean = np.array([math.cos(heading), math.sin(heading)])
-        noisy = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
-        return np.clip(noisy, -2.0, 2.0).astype(np.float32)
+        noisy: np.ndarray = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
+        clipped: np.ndarray = np.clip(noisy, -2.0, 2.0)
+        return clipped.astype(np.float32)
 
     def describe(self) -> str:
         return "the car's heading as a unit vector"
