@@ -60,7 +60,7 @@ def start_summary(parts: Parts) -> str:
     """'; start free: ...' on tracks with walls or cones: the car's footprint at its spawns
     and how far it is from the nearest wall and cone (``prepare`` refuses a spawn that
     touches either)."""
-    fits = start_fits(parts.config, getattr(parts.source, "tracks", ()), parts.car_model)
+    fits = start_fits(parts.config, parts.source.tracks, parts.car_model)
     if not fits:
         return ""
     length, width = fits[0].size

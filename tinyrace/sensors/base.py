@@ -5,10 +5,13 @@ A sensor reads a ``Snapshot`` (``tinyrace.world.snapshot``) and the episode's ``
 dropouts) comes from the ``rng`` it is given: the env's ``np_random``.
 
 How to add a sensor type:
-1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor``, a builder
+1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor`` (it describes
+   itself, and says whether its image is a picture from above), a builder
    ``build(entry, context) -> Sensor`` and its config entry: a dataclass of ``knob()``
-   fields (units, bounds, docs) with ``id`` and ``type: Literal["<type>"]``. The
-   ``SensorContext`` gives the env config, the ground and the car's facts.
+   fields (units, bounds, docs) with ``id`` and ``type: Literal["<type>"]``, subclassing
+   ``SensorDefaults`` (``tinyrace.config.sensors``). The ``SensorContext`` gives the env
+   config, the ground and the car's facts; what sensor types share is in
+   ``sensors/machinery/``.
    ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
    name (the entry's ``type``), config class, builder and what its tracks must hold; the
