@@ -68,6 +68,11 @@ class ProceduralGround:
     """CarRacing's ground, painted at each reset in the episode's colours, at any number of
     resolutions (the observation's, the videos'), each made when first asked."""
 
+    @classmethod
+    def serving(cls, config: EnvConfig, source: TrackSource) -> ProceduralGround | None:
+        """CarRacing's ground, for a source that paints each track it makes."""
+        return cls(source.painted) if source.painted is not None else None
+
     def __init__(self, painted: PaintedGround):
         self.painted = painted  # the playfield and the cameras' pixels_per_unit
         self.pixels_per_unit = painted.pixels_per_unit  # [px/u] of the cameras' texture
@@ -124,6 +129,12 @@ class ProceduralGround:
 class ImageGround:
     """The picture each fixed track carries, as a texture (made once per env)."""
 
+    @classmethod
+    def serving(cls, config: EnvConfig, source: TrackSource) -> ImageGround | None:
+        """The pictures, for a source whose fixed tracks all carry one."""
+        tracks = source.tracks
+        return cls(tracks) if tracks and all(t.picture is not None for t in tracks) else None
+
     def __init__(self, tracks: Sequence[Track]):
         self.tracks = tracks
         self.textures = [
@@ -148,6 +159,11 @@ class MetricGround:
     its ``ground_pixels_per_unit``, made at its first read and shared with the other envs of
     the track (``shared_ground``)."""
 
+    @classmethod
+    def serving(cls, config: EnvConfig, source: TrackSource) -> MetricGround | None:
+        """A ground drawn from what the tracks hold: any source's fixed tracks."""
+        return cls(config, source.tracks)
+
     def __init__(self, config: EnvConfig, tracks: Sequence[Track]):
         self.tracks = tracks
         self.cache: cache.Settings = cache_settings(config)
@@ -171,17 +187,27 @@ class MetricGround:
         return None
 
 
+class GroundType(Protocol):
+    """A kind of ground: made for a track source it serves (else None)."""
+
+    def serving(self, config: EnvConfig, source: TrackSource) -> EpisodeGround | None: ...
+
+
+# The kinds of ground, the first that serves a source is its ground (the last serves all).
+GROUND_TYPES: list[GroundType] = [ProceduralGround, ImageGround, MetricGround]
+
+
 def make_ground(config: EnvConfig, source: TrackSource) -> EpisodeGround:
-    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode), chosen
-    by what the tracks hold, never by their kind: a ground painted anew for each track from
-    its tiles and kerbs (``source.painted``), the picture each fixed track carries
-    (``Track.picture``), or else a ground drawn once per track from what it holds (road,
-    cones, a map's cells)."""
-    if source.painted is not None:
-        return ProceduralGround(source.painted)
-    if source.tracks and all(track.picture is not None for track in source.tracks):
-        return ImageGround(source.tracks)
-    return MetricGround(config, source.tracks)
+    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode): the
+    first of ``GROUND_TYPES`` that serves the source, by what it offers, never by its kind:
+    a ground painted anew for each track from its tiles and kerbs (``source.painted``), the
+    picture each fixed track carries (``Track.picture``), or else a ground drawn once per
+    track from what it holds (road, cones, a map's cells)."""
+    for ground_type in GROUND_TYPES:
+        ground = ground_type.serving(config, source)
+        if ground is not None:
+            return ground
+    raise ValueError(f"no ground serves a {source.kind} source")
 
 
 def _picture(track: Track) -> np.ndarray:
