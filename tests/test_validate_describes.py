@@ -16,6 +16,7 @@ import yaml
 
 from tinyrace.config import race_cars
 from tinyrace.env import TinyRaceEnv
+from tinyrace.race.env import RaceEnv
 from tinyrace.validate import load_any, validate_path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,6 +55,18 @@ COMBINATIONS: dict[str, tuple[str, dict[str, Any]]] = {
             "race": {"num_agents": 3, "laps": 2},
         },
     ),
+    "a race whose cars have sensors of their own": (
+        "circuit",
+        {
+            "cameras": [],
+            "sensors": [{"id": "motion", "type": "state"}],
+            "race": {"cars": [
+                {"id": "red"},
+                {"id": "blue", "sensors": [{**LIDAR, "hit_classes": True}]},
+                {"id": "green", "cameras": [{"id": "eye", "resolution": [24, 32]}]},
+            ]},
+        },
+    ),
     "perspective cameras on a picture track": (
         "formula_student",
         {
@@ -79,15 +92,34 @@ def _shape(space: gym.Space[Any]) -> str:
     return f"{'x'.join(map(str, space.shape or ()))} {space.dtype}"
 
 
-def _named(summary: str) -> list[tuple[str, str]]:
-    """(id, shapes) of each sensor the summary says the env observes."""
-    observes = summary.split("; observes: ", 1)[1].split("; start free:", 1)[0]
+def _named(section: str) -> list[tuple[str, str]]:
+    """(id, shapes) of each sensor a section (``observes: ...``) names."""
     found = []
-    for entry in observes.split("; "):
+    for entry in section.split(" observes: ", 1)[1].split("; "):
         match = re.fullmatch(r"(\S+) (\{.*\}|\S+ \S+) \((.+)\)", entry)
-        assert match, f"not a sensor's description: {entry!r} in {summary!r}"
+        assert match, f"not a sensor's description: {entry!r} in {section!r}"
         found.append((match[1], match[2]))
     return found
+
+
+def _sections(summary: str) -> dict[str, list[tuple[str, str]]]:
+    """What each car observes by its id ("" for the first car)."""
+    observes = " " + summary.split("; observes: ", 1)[1].split("; start free:", 1)[0]
+    first, *others = observes.split(" | ")
+    named = {"": _named(" observes:" + first)}
+    for section in others:
+        named[section.split(" ", 1)[0]] = _named(" " + section)
+    return named
+
+
+def _agrees(named: list[tuple[str, str]], space: gym.Space[Any], first_id: str) -> None:
+    """The sensors named are the observation space's keys with their spaces."""
+    if isinstance(space, gym.spaces.Dict):
+        expected = [(key, _shape(value)) for key, value in space.spaces.items()]
+        assert sorted(named) == sorted(expected) and len(named) == len(expected)
+    else:  # one sensor's observation, as a plain Box
+        assert [shapes for _, shapes in named] == [_shape(space)]
+        assert named[0][0] == first_id
 
 
 def _check(path: Path) -> None:
@@ -96,14 +128,8 @@ def _check(path: Path) -> None:
     loaded = load_any(path)
     env = TinyRaceEnv(config=loaded)
     try:
-        space = env.observation_space
-        named = _named(summary)
-        if isinstance(space, gym.spaces.Dict):
-            expected = [(key, _shape(value)) for key, value in space.spaces.items()]
-            assert sorted(named) == sorted(expected) and len(named) == len(expected)
-        else:  # one sensor's observation, as a plain Box
-            assert [shapes for _, shapes in named] == [_shape(space)]
-            assert named[0][0] == env.sensors[0].id
+        sections = _sections(summary)
+        _agrees(sections[""], env.observation_space, env.sensors[0].id)
         cars = race_cars(env.config)
         race = re.search(r"; race: (\d+) cars \(([^)]*)\), (\d+) laps?;", summary)
         if len(cars) > 1:
@@ -111,9 +137,18 @@ def _check(path: Path) -> None:
             assert int(race[1]) == len(cars) and race[2] == ", ".join(c.id for c in cars)
             assert int(race[3]) == env.config.race.laps
         else:
-            assert race is None, summary
+            assert race is None and list(sections) == [""], summary
     finally:
         env.close()
+    if len(cars) > 1:  # each car's seat in the PettingZoo race
+        race_env = RaceEnv(config=loaded)
+        try:
+            for car in cars[1:]:
+                named = sections.get(car.id, sections[""])
+                seat = race_env.seats[car.index]
+                _agrees(named, race_env.observation_space(car.id), seat.sensors[0].id)
+        finally:
+            race_env.close()
 
 
 @pytest.mark.parametrize("path", CONFIGS + TRACKS, ids=lambda p: p.name)

@@ -6,7 +6,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
@@ -17,6 +17,9 @@ from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.episodes.start_pose import start_fits
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.sensors.base import Sensor
+
+if TYPE_CHECKING:
+    from tinyrace.env import TinyRaceEnv
 
 COMMAND_LINE = "<command line>"  # the source named by errors in command-line arguments
 
@@ -74,16 +77,16 @@ def start_summary(parts: Parts) -> str:
     return text
 
 
-def try_one_step(loaded: LoadedConfig) -> list[str]:
+def try_one_step(loaded: LoadedConfig) -> str:
     """Build the env of ``loaded``, reset it with seed 0 and take one neutral step; what
-    the env observes (``observation_lines``)."""
+    its cars observe (``observation_summary``)."""
     from tinyrace.env import TinyRaceEnv
 
     env = TinyRaceEnv(config=loaded)
     try:
         env.reset(seed=0)
         env.step(neutral_action(env.action_space))
-        return observation_lines(env.sensors)
+        return observation_summary(env)
     finally:
         env.close()
 
@@ -97,9 +100,9 @@ def neutral_action(space: gym.Space[Any]) -> Any:
     return space.sample()  # another kind of space: any valid action
 
 
-def describe(config: EnvConfig, observes: Sequence[str]) -> str:
+def describe(config: EnvConfig, observes: str) -> str:
     """One line: the tracks, the car model, the race (when there are several cars) and what
-    the (first) car observes, each sensor as ``observation_lines`` says it."""
+    the cars observe (``observation_summary``)."""
     text = (
         f"{config.kind} track ({len(config.tracks)} track(s)), {config.car.model} car, "
         f"{config.sim.fps:g} fps"
@@ -109,7 +112,20 @@ def describe(config: EnvConfig, observes: Sequence[str]) -> str:
         names = ", ".join(car.id for car in cars)
         laps = config.race.laps
         text += f"; race: {len(cars)} cars ({names}), {laps} lap{'s' if laps > 1 else ''}"
-    return f"{text}; observes: {'; '.join(observes)}"
+    return f"{text}; {observes}"
+
+
+def observation_summary(env: TinyRaceEnv) -> str:
+    """What the first car observes (``observes: ...``), then each race car with sensors of
+    its own (`` | car_1 observes: ...``); the others observe as the first does."""
+    sections = ["observes: " + "; ".join(observation_lines(env.sensors))]
+    entries = env.config.race.cars
+    for index, car in enumerate(race_cars(env.config)[1:], start=1):
+        entry = entries[index] if index < len(entries) else None
+        if entry is not None and (entry.cameras is not None or entry.sensors is not None):
+            lines = observation_lines(env.make_sensors(index))
+            sections.append(f"{car.id} observes: " + "; ".join(lines))
+    return " | ".join(sections)
 
 
 def observation_lines(sensors: Sequence[Sensor]) -> list[str]:
