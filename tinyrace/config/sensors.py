@@ -8,12 +8,12 @@ are positive to the left (counter-clockwise seen from above).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 from tinyrace.config import families
 from tinyrace.config.bounds import PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.calibration import Found, calibration_problems
 from tinyrace.config.colors import Color
 from tinyrace.config.knobs import REQUIRED, knob
 
@@ -28,9 +28,6 @@ _FORMAT = (
 
 def _type(name: str) -> Any:
     return knob(name, "sensor type")
-
-
-Found = tuple[str, Any, str]  # (key, value, allowed) of one problem of an entry
 
 
 class SensorDefaults:
@@ -124,27 +121,7 @@ class PerspectiveCameraConfig(SensorDefaults):
 
     def calibration_problems(self) -> list[Found]:
         """(key, value, allowed) of each inconsistency of its calibration knobs."""
-        found: list[Found] = []
-        if self.camera_info is not None:
-            for key in ("fov", "intrinsics", "distortion"):
-                if getattr(self, key) is not None:
-                    allowed = (
-                        f"give camera_info or {key}, not both (camera_info sets the intrinsics)"
-                    )
-                    found.append((key, getattr(self, key), allowed))
-        if self.intrinsics is not None and self.fov is not None:
-            allowed = "give fov or intrinsics, not both (intrinsics set the field of view)"
-            found.append(("fov", self.fov, allowed))
-        if self.distortion is not None and self.intrinsics is None and self.camera_info is None:
-            found.append(("distortion", list(self.distortion), "distortion needs intrinsics"))
-        if self.intrinsics is not None:
-            fx, fy = self.intrinsics[:2]
-            if not (fx > 0 and fy > 0 and all(map(math.isfinite, self.intrinsics))):
-                allowed = "expected [fx, fy, cx, cy] with focal lengths fx, fy > 0 [px]"
-                found.append(("intrinsics", list(self.intrinsics), allowed))
-        if self.distortion is not None and not all(map(math.isfinite, self.distortion)):
-            found.append(("distortion", list(self.distortion), "expected finite numbers"))
-        return found
+        return calibration_problems(self)
 
     def camera_pixels(self) -> tuple[tuple[int, int], int] | None:
         """Each pixel counts PERSPECTIVE_PIXEL_WEIGHT times: it keeps a ray and its ground
