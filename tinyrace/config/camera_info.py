@@ -31,25 +31,7 @@ MAX_BYTES = 1 << 20  # [bytes] a camera_info file at most
 
 def intrinsics_problems(camera: PerspectiveCameraConfig) -> list[tuple[str, Any, str]]:
     """(key, value, allowed) of each inconsistency of a camera entry's calibration knobs."""
-    found: list[tuple[str, Any, str]] = []
-    if camera.camera_info is not None:
-        for key in ("fov", "intrinsics", "distortion"):
-            if getattr(camera, key) is not None:
-                allowed = f"give camera_info or {key}, not both (camera_info sets the intrinsics)"
-                found.append((key, getattr(camera, key), allowed))
-    if camera.intrinsics is not None and camera.fov is not None:
-        allowed = "give fov or intrinsics, not both (intrinsics set the field of view)"
-        found.append(("fov", camera.fov, allowed))
-    if camera.distortion is not None and camera.intrinsics is None and camera.camera_info is None:
-        found.append(("distortion", list(camera.distortion), "distortion needs intrinsics"))
-    if camera.intrinsics is not None:
-        fx, fy = camera.intrinsics[:2]
-        if not (fx > 0 and fy > 0 and all(map(math.isfinite, camera.intrinsics))):
-            allowed = "expected [fx, fy, cx, cy] with focal lengths fx, fy > 0 [px]"
-            found.append(("intrinsics", list(camera.intrinsics), allowed))
-    if camera.distortion is not None and not all(map(math.isfinite, camera.distortion)):
-        found.append(("distortion", list(camera.distortion), "expected finite numbers"))
-    return found
+    return camera.calibration_problems()
 
 
 def read_camera_info(

@@ -158,3 +158,15 @@ def race_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
         allowed = f"poses are read with start: poses only (start is {race.start})"
         problem("poses", [list(p) for p in race.poses], allowed)
     return problems
+
+
+def car_colors(config: EnvConfig) -> list[Color]:
+    """Each car's colour, in car order (what cameras, the overview and videos draw): its
+    ``race.cars[i].colour``, else the palette's colour of its index."""
+    return [car.colour for car in race_cars(config)]
+
+
+def car_names(config: EnvConfig) -> list[str]:
+    """Each car's name, in car order: its agent name in a race (its ``race.cars[i].id``, else
+    ``car_<i>``), the label the overview and videos write beside it."""
+    return [car.id for car in race_cars(config)]

@@ -23,8 +23,6 @@ from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.results import EpisodeResult, summary, summary_text, table, write_files
 from tinyrace.experiment.route import route_watch
 from tinyrace.experiment.run_loop import DEFAULT_MAX_STEPS, RunLoop
-from tinyrace.sensors.birdseye_camera import BirdseyeCamera
-from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.sensors.view import sensor_view
 
 if TYPE_CHECKING:
@@ -90,6 +88,7 @@ class _Run(RunLoop[EpisodeResult]):
         limit = config.max_steps or env.config.sim.step_limit or DEFAULT_MAX_STEPS
         super().__init__(experiment, out_root, progress, limit)
         self.env, self.driver = env, driver
+        self._insets: tuple[list[str], list[tuple[int, ...]]] | None = None  # names, sizes
 
     def _episode(self, episode: int, stop: StopSignals) -> EpisodeResult:
         seed = self.config.seed + episode
@@ -156,7 +155,9 @@ class _Run(RunLoop[EpisodeResult]):
         if rendered is None:
             raise RuntimeError("the env rendered no frame for the video")
         named: np.ndarray = rendered.copy()
-        self.env.pictures.name_insets(named, *_inset_cameras(self.env))  # who is who
+        if self._insets is None:  # the same cameras all run long
+            self._insets = _inset_cameras(self.env)
+        self.env.pictures.name_insets(named, *self._insets)  # who is who
         return named
 
     def _write(self, interrupted: int | None, error: str | None = None) -> None:
@@ -168,8 +169,10 @@ class _Run(RunLoop[EpisodeResult]):
 
 
 def _inset_cameras(env: TinyRaceEnv) -> tuple[list[str], list[tuple[int, ...]]]:
-    """The ids and image sizes of the cameras an image track's overview insets, in order."""
-    views = [s for s in env.sensors if isinstance(s, (BirdseyeCamera, TopViewSensor))]
+    """The ids and image sizes of the cameras an overview insets (the sensors with a
+    top-down picture), in order."""
+    snapshot = env.snapshot()
+    views = [s for s in env.sensors if s.top_down(snapshot, env.layout) is not None]
     sizes = [tuple(s.space.shape or ())[:2] for s in views]
     return [s.id for s in views], sizes
 

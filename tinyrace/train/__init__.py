@@ -320,7 +320,7 @@ def train(
 def learn(model: BaseAlgorithm, timesteps: int, progress: bool = True) -> BaseAlgorithm:
     """``model.learn`` with a progress bar (when ``progress``) and env errors raised as
     EnvFailed. Ctrl-C (KeyboardInterrupt) goes through: the model keeps what it learnt."""
-    from tinyrace.train_progress import Progress
+    from tinyrace.train.progress import Progress
 
     bar = Progress(timesteps, raise_failure, progress)
     try:
