@@ -393,12 +393,13 @@ def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] 
     """The ``poses`` reset option: one finite (x, y, heading) per car [track units, rad]."""
     if value is None:
         return None
-    try:
-        poses = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    try:  # numbers only: true/false and text are no coordinates (the config refuses them too)
+        raw = np.asarray(value)
+        poses = raw.astype(np.float64) if raw.dtype.kind in "iuf" else np.zeros(0)
+    except (TypeError, ValueError, OverflowError):
         poses = np.zeros(0)
     if poses.shape != (count, 3) or not np.isfinite(poses).all():
-        allowed = f"expected {count} finite (x, y, heading) poses, one per car"
+        allowed = f"expected {count} poses [x, y, heading] of finite numbers, one per car"
         raise ConfigError(Problem(RESET_SOURCE, "poses", _short(value), allowed))
     return [(float(x), float(y), float(h)) for x, y, h in poses.tolist()]
 

@@ -20,6 +20,7 @@ from tinyrace.config.race import (
     inherited,
     lay_cars_over_car,
     race_cars,
+    race_pixel_problems,
     race_problems,
     resolve_race_cars,
 )
@@ -334,6 +335,7 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
         return
     parser.problems += race_problems(config, at, parser.source)
+    parser.problems += race_pixel_problems(config, at, parser.source)
     for i, entry in enumerate(cars):
         if entry.cameras is None and entry.sensors is None:
             continue  # the shared ones, checked above

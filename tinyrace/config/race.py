@@ -14,10 +14,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.colors import Color, palette_color
 from tinyrace.config.loader import deep_merge
 from tinyrace.config.schema import MAX_RACE_CARS, CameraConfig, CarConfig, EnvConfig
-from tinyrace.config.sensors import SensorConfig, cameras_first
+from tinyrace.config.sensors import PerspectiveCameraConfig, SensorConfig, cameras_first
 from tinyrace.errors import Problem
 
 CAR_KNOBS = ("wheelbase", "track_width", "velocity", "pixels_per_unit")  # null: by track kind
@@ -158,3 +159,31 @@ def race_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
         allowed = f"poses are read with start: poses only (start is {race.start})"
         problem("poses", [list(p) for p in race.poses], allowed)
     return problems
+
+
+def car_pixels(car: RaceCar) -> int:
+    """[px] the pixels of one car's cameras: each bird's-eye camera's, and each perspective
+    camera's counted PERSPECTIVE_PIXEL_WEIGHT times (it keeps a ray and a ground point each)."""
+    total = sum(h * w for h, w in (camera.resolution for camera in car.cameras))
+    for sensor in car.written_sensors:
+        if isinstance(sensor, PerspectiveCameraConfig):
+            height, width = sensor.resolution
+            total += height * width * PERSPECTIVE_PIXEL_WEIGHT
+    return total
+
+
+def race_pixel_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
+    """The cameras of every car of the env together within MAX_CAMERA_PIXELS (each car's own
+    are checked with its sensors; this bounds the env, which draws them all)."""
+    cars = race_cars(config)
+    pixels = {car.id: car_pixels(car) for car in cars}
+    total = sum(pixels.values())
+    if len(cars) < 2 or total <= MAX_CAMERA_PIXELS or max(pixels.values()) > MAX_CAMERA_PIXELS:
+        return []  # one car's own excess is told at its cameras and sensors
+    allowed = (
+        f"expected the cameras of all {len(cars)} cars of one env to have at most "
+        f"{MAX_CAMERA_PIXELS:,} px together, a perspective_camera pixel counted "
+        f"{PERSPECTIVE_PIXEL_WEIGHT} times (here {total:,}: fewer cars or smaller cameras)"
+    )
+    where = "race.cars" if config.race.cars else "race.num_agents"
+    return [Problem(source, f"{at}{where}", f"{len(cars)} cars", allowed)]

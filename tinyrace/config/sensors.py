@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 from tinyrace.config import families
+from tinyrace.config.bounds import MAX_INTRINSIC
 from tinyrace.config.colors import Color
 from tinyrace.config.knobs import REQUIRED, knob
 
@@ -64,6 +65,7 @@ class PerspectiveCameraConfig:
         "[fx, fy, cx, cy] focal lengths and principal point, pixel centres on integer "
         "coordinates (OpenCV's camera matrix); instead of fov",
         "px",
+        magnitude=MAX_INTRINSIC,
     )
     distortion: tuple[float, float, float, float, float] | None = knob(
         None,
