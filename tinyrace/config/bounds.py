@@ -39,6 +39,12 @@ MAX_WORKERS = 64  # worker processes of one vector env
 MAX_RUN_FILE_BYTES = 128 << 20  # [bytes] results.json, episodes.csv or a trace, for report
 MAX_CSV_FIELD = 4096  # [characters] one field of episodes.csv or a trace, for report
 MAX_EPISODES = 1_000_000  # episodes of one run (--episodes and the episodes key)
+MAX_ID_LENGTH = 64  # [characters] a car's id (race.cars[i].id): it names the car in files
+ID_CHARACTERS = (
+    "printable characters other than spaces (letters of any script, digits, punctuation)"
+)
+MAX_TRAIN_ENVS = 64  # envs of `tinyrace train --envs` (one process each)
+MAX_LOCK_WAIT = 120.0  # [s] a wait for another process's cache lock, then a private build
 MAX_SEED = 2**63 - 1  # the largest first seed of --seed (numpy's seeds are 64-bit)
 
 BOUNDS = (
@@ -74,4 +80,30 @@ BOUNDS = (
     Bound("MAX_RUN_FILE_BYTES", MAX_RUN_FILE_BYTES, "bytes", "a run file read by report"),
     Bound("MAX_CSV_FIELD", MAX_CSV_FIELD, "characters", "a field of a run's CSV files"),
     Bound("MAX_EPISODES", MAX_EPISODES, "episodes", "episodes of one run"),
+    Bound(
+        "MAX_ID_LENGTH",
+        MAX_ID_LENGTH,
+        "characters",
+        f"a car id (race.cars[i].id) of {ID_CHARACTERS} (ID_CHARACTERS)",
+    ),
+    Bound("MAX_TRAIN_ENVS", MAX_TRAIN_ENVS, "envs", "tinyrace train --envs (a process each)"),
+    Bound(
+        "MAX_LOCK_WAIT",
+        MAX_LOCK_WAIT,
+        "s",
+        "a wait for a cache entry another process builds; then it is built privately",
+    ),
+    Bound("MAX_INTRINSIC", MAX_INTRINSIC, "px", "a perspective camera's fx, fy, cx, cy"),
 )
+
+
+def id_problem(text: object) -> str | None:
+    """Why ``text`` is no car id (None when it is one): 1 to MAX_ID_LENGTH characters of
+    ID_CHARACTERS."""
+    if not isinstance(text, str) or not text:
+        return "expected a non-empty string"
+    if len(text) > MAX_ID_LENGTH:
+        return f"expected at most {MAX_ID_LENGTH} characters (it has {len(text)})"
+    if not text.isprintable() or " " in text:
+        return f"expected {ID_CHARACTERS}"
+    return None

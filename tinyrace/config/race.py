@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT, id_problem
 from tinyrace.config.colors import Color, palette_color
 from tinyrace.config.loader import deep_merge
 from tinyrace.config.schema import MAX_RACE_CARS, CameraConfig, CarConfig, EnvConfig
@@ -146,6 +146,9 @@ def race_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
     cars = race_cars(config)
     seen: dict[str, int] = {}
     for car in cars:
+        wrong = id_problem(car.id) if car.own_car else None
+        if wrong is not None:
+            problem(f"cars[{car.index}].id", car.id, f"{wrong} (it names the car in files)")
         if car.id in seen:
             allowed = f"expected a unique car id; car {seen[car.id]} is called {car.id!r} too"
             problem(f"cars[{car.index}].id", car.id, allowed)

@@ -4,6 +4,7 @@ report) and its video, all taken from what the episode loop shows the observer."
 from __future__ import annotations
 
 import csv
+import io
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -12,6 +13,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.actions import DISCRETE_CONTROLS
+from tinyrace.experiment.files import write_text
 from tinyrace.experiment.route import RouteWatch
 from tinyrace.experiment.video import VideoWriter
 
@@ -151,10 +153,11 @@ class EpisodeRecorder:
             self.video.close()
 
     def write_trace(self, path: Path) -> None:
-        with path.open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(TRACE_COLUMNS)
-            writer.writerows(_rounded(row) for row in self.rows)
+        handle = io.StringIO(newline="")
+        writer = csv.writer(handle)
+        writer.writerow(TRACE_COLUMNS)
+        writer.writerows(_rounded(row) for row in self.rows)
+        write_text(path, handle.getvalue())
 
 
 def _rounded(row: tuple[Any, ...]) -> tuple[Any, ...]:
