@@ -361,9 +361,9 @@ def _examples(args: argparse.Namespace) -> int:
 
 # -- cache -------------------------------------------------------------------------------------
 def _cache(args: argparse.Namespace) -> int:
-    from tinyrace.cache import default_folder, disk
+    from tinyrace.cache import default_folder, disk, folder_of
 
-    folder = Path(args.dir).expanduser() if args.dir else default_folder()
+    folder = folder_of(args.dir, "<command line>", "--dir") if args.dir else default_folder()
     if args.action == "clear":
         removed = disk.clear(folder)
         print(f"removed {removed} cache file(s) from {folder}")

@@ -10,25 +10,40 @@ track's large read-only data. One file per entry, ``<key>.npc``, in the cache fo
                            arrays, each at a multiple of ALIGN bytes
 
 An entry is trusted only when every header field is the one expected and the payload's
-length and checksum match: a corrupt, truncated, foreign (other tinyrace version or
-machine) or misnamed file is rebuilt. Writers write a temporary file and rename it into
-place (``os.replace``), under a lock file where the platform has ``fcntl``: two processes
-building one entry at once never leave a mixed file, and the second waits for the first
-and maps its result. Past ``max_bytes`` the least recently used entries are removed.
+length and keyed checksum match (an HMAC-SHA256 of the header and payload under the
+folder's own random key, ``KEY_FILE``, which only tinyrace writes): a corrupt, truncated,
+foreign (other tinyrace version or machine), misnamed or hand-made file is rebuilt.
+Writers write a temporary file and rename it into place (``os.replace``), under a lock
+file where the platform has ``fcntl``: two processes building one entry at once never
+leave a mixed file, and the second waits for the first (at most ``LOCK_WAIT`` seconds,
+then it builds its own copy in memory, and the warning names the holder's process) and
+maps its result. Past ``max_bytes`` the least recently used entries are removed.
+
+Only regular files are read, mapped or locked (opened without blocking and without
+following links): a FIFO, device, folder or link at an entry's name is an ``OSError``
+(the caller shares in memory) and is never removed. Only files the cache writes (named
+``<64 hex digits>.npc`` / ``.lock``, or ``.tmp-*.npc``, and starting as it writes them)
+are ever removed, by ``trim`` and ``clear``.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
+import hmac
 import json
 import mmap
 import os
 import platform
+import re
+import secrets
+import stat
 import struct
 import sys
 import tempfile
-from collections.abc import Iterator
+import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,11 +51,17 @@ from typing import Any
 import numpy as np
 
 MAGIC = b"TINYRACE-CACHE\x00\x00"  # 16 bytes
-FORMAT = 1  # the layout of this file format
+FORMAT = 2  # the layout of this file format (2: the checksum is keyed)
 SUFFIX = ".npc"
 LOCK_SUFFIX = ".lock"
 TEMP_PREFIX = ".tmp-"
+KEY_FILE = ".tinyrace-key"  # the folder's random HMAC key (KEY_BYTES bytes, mode 0600)
+KEY_BYTES = 32
 ALIGN = 64  # [bytes] arrays start at multiples of this
+LOCK_WAIT = 120.0  # [s] the longest wait for another process's lock (config/bounds.py lists it)
+ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.npc")  # what the cache names its files
+LOCK_NAME = re.compile(r"[0-9a-f]{64}\.lock")
+TEMP_NAME = re.compile(r"\.tmp-[a-z0-9_]{6,16}\.npc")  # tempfile.mkstemp's names
 # magic, format, header size, version, machine, key, payload length, sha256, meta length
 _HEADER = struct.Struct("<16sII32s32s64sQ32sQ")
 HEADER = _HEADER.size
@@ -62,6 +83,14 @@ def machine_tag() -> str:
     return hashlib.sha256("|".join(parts).encode()).hexdigest()[:32]
 
 
+class NotRegular(OSError):
+    """A name of the cache folder is not a regular file (a FIFO, device, folder or link)."""
+
+
+class LockHeld(OSError):
+    """Another process held an entry's lock past ``LOCK_WAIT``."""
+
+
 @dataclass(frozen=True)
 class Entry:
     """What an entry holds: plain JSON ``values`` and named arrays."""
@@ -76,22 +105,22 @@ def path_of(folder: Path, key: str) -> Path:
 
 def read(folder: Path, key: str, version: str) -> Entry | None:
     """The entry ``key`` mapped read-only, or None when there is none or it is not to be
-    trusted (see the module docstring); an untrusted file is removed."""
+    trusted (see the module docstring); an untrusted regular file is removed. A name that
+    is not a regular file raises ``NotRegular`` (an OSError) and is left alone."""
     path = path_of(folder, key)
     try:
-        with open(path, "rb") as file:
-            size = os.fstat(file.fileno()).st_size
-            if size < HEADER:
-                raise ValueError("truncated header")
-            mapped = mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ)
+        fd = _open_regular(path, os.O_RDONLY)
     except FileNotFoundError:
         return None
-    except (OSError, ValueError):
-        _remove(path)
-        return None
-    entry = _trusted(mapped, key, version)
+    try:
+        size = os.fstat(fd).st_size
+        mapped = mmap.mmap(fd, 0, access=mmap.ACCESS_READ) if size >= HEADER else None
+    finally:
+        os.close(fd)
+    entry = None if mapped is None else _trusted(mapped, key, version, folder_key(folder))
     if entry is None:
-        mapped.close()
+        if mapped is not None:
+            mapped.close()
         _remove(path)
         return None
     with contextlib.suppress(OSError):
@@ -99,7 +128,7 @@ def read(folder: Path, key: str, version: str) -> Entry | None:
     return entry
 
 
-def _trusted(mapped: mmap.mmap, key: str, version: str) -> Entry | None:
+def _trusted(mapped: mmap.mmap, key: str, version: str, secret: bytes) -> Entry | None:
     fields = _HEADER.unpack_from(mapped, 0)
     magic, fmt, header, file_version, machine, file_key, length, checksum, meta_length = fields
     expected = (MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(), key.encode())
@@ -109,7 +138,8 @@ def _trusted(mapped: mmap.mmap, key: str, version: str) -> Entry | None:
         return None
     payload = memoryview(mapped)[HEADER:]
     try:
-        if hashlib.sha256(payload).digest() != checksum:
+        unsigned = _HEADER.pack(*fields[:7], bytes(32), meta_length)
+        if not hmac.compare_digest(_mac(secret, [unsigned, payload]), checksum):
             return None
         meta = json.loads(bytes(payload[:meta_length]))
         arrays = {
@@ -141,22 +171,24 @@ def write(folder: Path, key: str, version: str, entry: Entry) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     meta, layout = _layout(entry)
     length = layout[-1][2] if layout else len(meta)
-    hasher = hashlib.sha256()
-    for chunk in _payload(meta, layout):
-        hasher.update(chunk)
-    header = _HEADER.pack(MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(),
-                          key.encode(), length, hasher.digest(), len(meta))  # fmt: skip
+    fields = (MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(), key.encode(),
+              length)  # fmt: skip
+    unsigned = _HEADER.pack(*fields, bytes(32), len(meta))
+    mac = _mac(folder_key(folder), [unsigned, *_payload(meta, layout)])
+    header = _HEADER.pack(*fields, mac, len(meta))
+    target = path_of(folder, key)
+    _check_replaceable(target)
     handle, temp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=SUFFIX, dir=folder)
     try:
         with os.fdopen(handle, "wb") as file:
             file.write(header)
             for chunk in _payload(meta, layout):
                 file.write(chunk)
-        os.replace(temp, path_of(folder, key))
+        os.replace(temp, target)
     except BaseException:
         _remove(Path(temp))
         raise
-    return path_of(folder, key)
+    return target
 
 
 def _layout(entry: Entry) -> tuple[bytes, list[tuple[np.ndarray, int, int]]]:
@@ -197,7 +229,8 @@ def _text(text: str, size: int) -> bytes:
 @contextlib.contextmanager
 def locked(folder: Path, key: str) -> Iterator[None]:
     """Hold the entry's lock file while building it (where the platform has ``fcntl``;
-    elsewhere the rename alone keeps the file whole)."""
+    elsewhere the rename alone keeps the file whole). A lock another process holds past
+    ``LOCK_WAIT`` seconds raises ``LockHeld`` naming that process."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover - Windows
@@ -205,27 +238,120 @@ def locked(folder: Path, key: str) -> Iterator[None]:
         return
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{key}{LOCK_SUFFIX}"
-    with open(path, "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    fd = _open_regular(path, os.O_RDWR | os.O_CREAT)
+    try:
+        deadline = time.monotonic() + LOCK_WAIT
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    raise LockHeld(
+                        errno.EAGAIN,
+                        f"its lock is held by {_holder(fd)} for more than {LOCK_WAIT:g} s",
+                        str(path),
+                    ) from None
+                time.sleep(0.05)
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)  # who holds it, for a waiter's message
         try:
             yield
         finally:
             if not path_of(folder, key).exists():  # nothing stored: no lock file left behind
                 _remove(path)
-            fcntl.flock(lock, fcntl.LOCK_UN)
+            fcntl.flock(fd, fcntl.LOCK_UN)
+    finally:
+        os.close(fd)
+
+
+def _holder(fd: int) -> str:
+    """The process that wrote the lock file ``fd`` (its id), as far as it says."""
+    text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    return f"process {text}" if text.isdigit() else "another process"
+
+
+def folder_key(folder: Path) -> bytes:
+    """The folder's HMAC key: read from ``KEY_FILE``, or made (random, mode 0600) when the
+    folder has none. An OSError when it cannot be read or made."""
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / KEY_FILE
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NO_FOLLOW, 0o600)
+    except FileExistsError:
+        pass
+    else:
+        handle, temp = tempfile.mkstemp(prefix=".tmp-key-", dir=folder)
+        os.close(fd)  # claimed: write the key whole beside it, then move it in
+        with os.fdopen(handle, "wb") as file:
+            file.write(secrets.token_bytes(KEY_BYTES))
+        os.replace(temp, path)
+    for _ in range(100):  # another process may be moving its key in
+        fd = _open_regular(path, os.O_RDONLY)
+        try:
+            data = os.pread(fd, KEY_BYTES + 1, 0)
+        finally:
+            os.close(fd)
+        if len(data) == KEY_BYTES:
+            return data
+        time.sleep(0.01)
+    raise OSError(errno.EINVAL, f"expected {KEY_BYTES} bytes of key", str(path))
+
+
+_NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0)
+
+
+def _mac(secret: bytes, chunks: Iterable[bytes | memoryview]) -> bytes:
+    mac = hmac.new(secret, digestmod=hashlib.sha256)
+    for chunk in chunks:
+        mac.update(chunk)
+    return mac.digest()
+
+
+def _open_regular(path: Path, flags: int) -> int:
+    """A descriptor of the regular file ``path`` (made with mode 0644 under ``os.O_CREAT``),
+    opened without blocking on a FIFO and without following a link; ``NotRegular`` else."""
+    try:
+        fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0) | _NO_FOLLOW, 0o644)
+    except OSError as exc:
+        if exc.errno in (errno.ELOOP, errno.ENXIO, errno.EISDIR):  # a link, FIFO, folder
+            raise NotRegular(exc.errno, "not a regular file", str(path)) from None
+        raise
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise NotRegular(errno.EINVAL, "not a regular file (a FIFO, device or folder)", str(path))
+    return fd
+
+
+def _check_replaceable(path: Path) -> None:
+    """``NotRegular`` when something other than a regular file has the name ``path``."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    if not stat.S_ISREG(mode):
+        raise NotRegular(errno.EINVAL, "not a regular file (left alone)", str(path))
 
 
 def entries(folder: Path) -> list[Path]:
-    """The cache files of ``folder``, least recently used first."""
-    if not folder.is_dir():
-        return []
+    """The cache files of ``folder`` (regular files named as the cache names them), least
+    recently used first."""
     found = []
-    for path in folder.glob(f"*{SUFFIX}"):
-        if path.name.startswith(TEMP_PREFIX):
-            continue
+    for path in _names(folder, ENTRY_NAME):
         with contextlib.suppress(OSError):
-            found.append((path.stat().st_mtime, path))
+            info = os.lstat(path)
+            if stat.S_ISREG(info.st_mode):
+                found.append((info.st_mtime, path))
     return [path for _, path in sorted(found)]
+
+
+def _names(folder: Path, pattern: re.Pattern[str]) -> list[Path]:
+    try:
+        if not stat.S_ISDIR(os.stat(folder).st_mode):
+            return []
+        return [folder / n for n in os.listdir(folder) if pattern.fullmatch(n)]
+    except (OSError, ValueError):
+        return []
 
 
 def trim(folder: Path, max_bytes: int) -> None:
@@ -243,18 +369,37 @@ def trim(folder: Path, max_bytes: int) -> None:
 
 
 def clear(folder: Path) -> int:
-    """Remove every cache file, lock file and leftover temporary file of ``folder``; the
-    number of entries removed. Nothing else in the folder is touched."""
+    """Remove every cache file, lock file, leftover temporary file and the key of ``folder``; the
+    number of entries removed. Only regular files the cache wrote are removed: named as it
+    names them and, for entries and temporary files, starting with its MAGIC (a lock file
+    holds at most a process id). Nothing else in the folder is touched."""
     removed = 0
-    if not folder.is_dir():
-        return 0
-    for path in folder.iterdir():
-        name = path.name
-        ours = name.endswith(SUFFIX) or name.endswith(LOCK_SUFFIX)
-        if ours and path.is_file():
-            removed += name.endswith(SUFFIX) and not name.startswith(TEMP_PREFIX)
-            _remove(path)
+    for pattern in (ENTRY_NAME, TEMP_NAME, LOCK_NAME):
+        for path in _names(folder, pattern):
+            if _written_here(path, pattern):
+                removed += pattern is ENTRY_NAME
+                _remove(path)
+    key = folder / KEY_FILE
+    with contextlib.suppress(OSError, ValueError):
+        if stat.S_ISREG(os.lstat(key).st_mode) and os.lstat(key).st_size == KEY_BYTES:
+            _remove(key)  # the folder's key, which only the cache writes
     return removed
+
+
+def _written_here(path: Path, pattern: re.Pattern[str]) -> bool:
+    """Whether the regular file ``path`` is one the cache writes (see ``clear``)."""
+    try:
+        fd = _open_regular(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        head = os.pread(fd, len(MAGIC) + 1, 0)
+        size = os.fstat(fd).st_size
+    finally:
+        os.close(fd)
+    if pattern is LOCK_NAME:
+        return size <= 32 and (not head or head.strip().isdigit())
+    return head.startswith(MAGIC) or (pattern is TEMP_NAME and size == 0)
 
 
 def _size(path: Path) -> int:

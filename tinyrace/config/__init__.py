@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
-from tinyrace.cache import Settings, default_folder
+from tinyrace.cache import Settings, default_folder, folder_of
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, MAX_TEXTURE_SIDE, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
@@ -91,7 +91,9 @@ def car_colors(config: EnvConfig) -> list[Color]:
 def cache_settings(config: EnvConfig) -> Settings:
     """Where the config's envs keep shared track data on disk, and how much (``cache``)."""
     cache = config.cache
-    folder = Path(cache.dir).expanduser() if cache.dir is not None else default_folder()
+    folder = (
+        default_folder() if cache.dir is None else folder_of(cache.dir, "<config>", "cache.dir")
+    )
     return Settings(folder, int(cache.max_size * 2**20))
 
 

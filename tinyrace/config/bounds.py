@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from tinyrace.cache.disk import LOCK_WAIT as MAX_LOCK_WAIT  # [s] then a private build
+
 
 @dataclass(frozen=True)
 class Bound:
@@ -44,7 +46,6 @@ ID_CHARACTERS = (
     "printable characters other than spaces (letters of any script, digits, punctuation)"
 )
 MAX_TRAIN_ENVS = 64  # envs of `tinyrace train --envs` (one process each)
-MAX_LOCK_WAIT = 120.0  # [s] a wait for another process's cache lock, then a private build
 MAX_SEED = 2**63 - 1  # the largest first seed of --seed (numpy's seeds are 64-bit)
 
 BOUNDS = (
