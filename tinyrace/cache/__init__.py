@@ -78,6 +78,15 @@ def folder_of(text: str, source: str, key: str) -> Path:
     raise ConfigError(Problem(source, key, text, allowed))
 
 
+def folder_problems(text: str, source: str, key: str) -> list[Problem]:
+    """``folder_of``'s problems, as a list (empty when ``text`` names a folder)."""
+    try:
+        folder_of(text, source, key)
+    except ConfigError as error:
+        return error.problems
+    return []
+
+
 class Codec(Protocol[T]):
     """Turns a value into a cache entry (named arrays and JSON values) and back."""
 

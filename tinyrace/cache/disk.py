@@ -114,6 +114,7 @@ def read(folder: Path, key: str, version: str) -> Entry | None:
         return None
     try:
         size = os.fstat(fd).st_size
+        ours = size == 0 or os.pread(fd, len(MAGIC), 0) == MAGIC  # else someone else's file
         mapped = mmap.mmap(fd, 0, access=mmap.ACCESS_READ) if size >= HEADER else None
     finally:
         os.close(fd)
@@ -121,6 +122,8 @@ def read(folder: Path, key: str, version: str) -> Entry | None:
     if entry is None:
         if mapped is not None:
             mapped.close()
+        if not ours:
+            raise NotRegular(errno.EINVAL, "not a file of the cache (left alone)", str(path))
         _remove(path)
         return None
     with contextlib.suppress(OSError):
@@ -240,6 +243,9 @@ def locked(folder: Path, key: str) -> Iterator[None]:
     path = folder / f"{key}{LOCK_SUFFIX}"
     fd = _open_regular(path, os.O_RDWR | os.O_CREAT)
     try:
+        held = os.pread(fd, 33, 0)
+        if held and not held.strip().isdigit():  # a file of someone else's: never truncated
+            raise NotRegular(errno.EINVAL, "not a lock file of the cache (left alone)", str(path))
         deadline = time.monotonic() + LOCK_WAIT
         while True:
             try:

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, cast
 
-from tinyrace.cache import Settings, default_folder, folder_of
+from tinyrace.cache import Settings, default_folder, folder_of, folder_problems
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, MAX_TEXTURE_SIDE, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.camera_info import intrinsics_problems, with_camera_info
 from tinyrace.config.colors import Color
@@ -307,6 +307,8 @@ def _check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         for key, value, allowed in track.problems(config.files):
             parser.problem(f"{at}tracks[{i}].{key}", value, allowed)
     _check_race(config, parser, at, not seen)
+    if config.cache.dir is not None:
+        parser.problems += folder_problems(config.cache.dir, parser.source, f"{at}cache.dir")
 
 
 def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_at: str) -> None:

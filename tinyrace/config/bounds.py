@@ -33,7 +33,7 @@ RESOLUTION_RANGE = (1e-4, 1e3)  # [m/px] a ROS map's resolution (F1TENTH maps: 0
 MAX_CROSSING_PAIRS = 50_000_000  # segment pairs sharing grid cells in the self-crossing check
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB
 MAX_INTRINSIC = 1e15  # [px] |fx|, |fy|, |cx|, |cy| of a perspective camera (1e12: a long telephoto)
-MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together (perspective ones too)
+MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images of one env (every car's) together
 PERSPECTIVE_PIXEL_WEIGHT = 4  # a perspective camera's pixel counts 4 (it keeps a ray per pixel)
 MAX_LOOKAHEAD_GRID = 1_000_000  # grid points of a lookahead sensor's line (8 per spacing)
 MAX_ENVS = 256  # envs of one vector env (each holds its own track, textures and car)
@@ -73,7 +73,8 @@ BOUNDS = (
         "MAX_CAMERA_PIXELS",
         MAX_CAMERA_PIXELS,
         "px",
-        "cameras and perspective cameras together, a perspective pixel counted "
+        "cameras and perspective cameras of one env together (every car's), a perspective "
+        "pixel counted "
         f"{PERSPECTIVE_PIXEL_WEIGHT} times (PERSPECTIVE_PIXEL_WEIGHT: it keeps a ray each)",
     ),
     Bound("MAX_ENVS", MAX_ENVS, "envs", "num_envs of make_vec / make_batch"),

@@ -14,6 +14,9 @@ from tinyrace.actions import DISCRETE_CONTROLS
 from tinyrace.cars.dynamic_shape import DynamicCarSpec
 
 Controls = tuple[float, float, float]  # (steer -1..1, +1 right; gas 0..1; brake 0..1)
+CONTROLS_EXPECTED = (
+    "expected (steer, gas, brake): three finite numbers (steer -1..1, gas and brake 0..1)"
+)
 
 
 def checked_controls(value: object, who: str) -> Controls:
@@ -38,10 +41,7 @@ def checked_controls(value: object, who: str) -> Controls:
     ):
         text = repr(value)
         text = text if len(text) <= 60 else text[:57] + "..."
-        raise ValueError(
-            f"{who}: controls(pose, speed) returned {text}; expected (steer, gas, brake): "
-            "three finite numbers (steer -1..1, gas and brake 0..1)"
-        )
+        raise ValueError(f"{who}: controls(pose, speed) returned {text}; {CONTROLS_EXPECTED}")
     return numbers[0], numbers[1], numbers[2]
 
 

@@ -24,7 +24,7 @@ from typing import Any
 import gymnasium as gym
 
 from tinyrace.drivers import DRIVERS, ActionAdapter, CenterlineDriver
-from tinyrace.drivers.base import checked_controls
+from tinyrace.drivers.base import CONTROLS_EXPECTED, checked_controls
 from tinyrace.drivers.centerline import CARRACING_WHEELBASE, Route, route_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
@@ -160,13 +160,13 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         driver's own ``act`` (it knows the car model's actions), else its controls adapted."""
         if isinstance(driver, CenterlineDriver):
             return driver.act(None, {"pose": car.pose, "speed": car.speed})
-        who = f"opponents[{index - 1}] (car {self.names[index]!r})"
+        value = driver.controls(car.pose, car.speed)
         try:
-            controls = checked_controls(driver.controls(car.pose, car.speed), who)
-        except ValueError as exc:
-            allowed = str(exc).split("; ", 1)[-1]
+            controls = checked_controls(value, f"opponents[{index - 1}]")
+        except ValueError:
             path = f"opponents[{index - 1}].driver.controls"
-            raise ConfigError(Problem(SOURCE, path, _short(exc.args[0]), allowed)) from None
+            allowed = f"car {self.names[index]!r}: controls(pose, speed) {CONTROLS_EXPECTED}"
+            raise ConfigError(Problem(SOURCE, path, value, allowed)) from None
         return self.adapt[index](controls)
 
     def _race_info(self, info: dict[str, Any]) -> dict[str, Any]:
