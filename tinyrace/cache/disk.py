@@ -292,7 +292,7 @@ def folder_key(folder: Path) -> bytes:
         with os.fdopen(handle, "wb") as file:
             file.write(secrets.token_bytes(KEY_BYTES))
         os.replace(temp, path)
-    for _ in range(100):  # another process may be moving its key in
+    for _ in range(20):  # another process may be moving its key in
         fd = _open_regular(path, os.O_RDONLY)
         try:
             data = os.pread(fd, KEY_BYTES + 1, 0)
