@@ -62,7 +62,7 @@ def read_camera_info(
     try:  # a regular file only, checked before a byte is read (a FIFO would block)
         text = read_bytes(path, MAX_BYTES, "a camera_info YAML").decode("utf-8")
     except ConfigError as error:
-        allowed = error.problems[0].allowed
+        allowed = f"expected a readable camera_info YAML: {error.problems[0].allowed}"
         raise ConfigError(Problem(source, where, str(path), allowed)) from None
     except UnicodeDecodeError as error:
         allowed = f"expected a camera_info YAML of UTF-8 text (byte {error.start} is not)"

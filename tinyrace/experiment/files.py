@@ -51,7 +51,7 @@ def check_writable(path: Path) -> None:
         return
     kind = "a symbolic link" if stat.S_ISLNK(info.st_mode) else _kind(info.st_mode)
     allowed = (
-        f"expected a regular file or no file there; it is {kind}: tinyrace never writes "
+        f"expected a regular file or no file there, not {kind}: tinyrace never writes "
         "through a link nor removes what it did not write (move it away, or use another folder)"
     )
     raise ConfigError(Problem(str(path), "", path.name, allowed))
