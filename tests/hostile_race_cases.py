@@ -23,6 +23,7 @@ RACE = {  # procedural: the dynamic car, pedals (Box(3,)) or CarRacing's five bu
 }
 NEUTRAL = {"pedals": np.zeros(3, np.float32), "buttons": 0}
 _ENVS: dict[str, Any] = {}
+_FRESH: dict[str, bool] = {}  # per form: the last action case stepped whole (no reset needed)
 
 
 def _problems(exc: Any) -> list[tuple[str, str, str]]:
@@ -102,13 +103,14 @@ def action_case(form: str, car: str, action: Any) -> dict[str, Any]:
 
     env = _race(form)
     actions = {**NEUTRAL, car: action}
+    if _FRESH.get(form) is not True or len(env.agents) < 2:  # else the race goes on
+        env.reset(seed=0)
+    _FRESH[form] = False  # until this step is done
     try:
         if form == "parallel":
-            env.reset(seed=0)
             observations, *_ = env.step(actions)
             wrong = _check_parallel(env, observations)
         else:
-            env.reset(seed=0)
             wrong = None
             for agent in env.agent_iter(2):
                 env.step(actions[agent])
@@ -116,6 +118,7 @@ def action_case(form: str, car: str, action: Any) -> dict[str, Any]:
                 wrong = wrong or _wrong(env.observation_space(agent), env.observe(agent))
     except InvalidAction as exc:
         return {"outcome": "invalid_action", "error": str(exc)}
+    _FRESH[form] = True  # a whole step: the next case may step on
     if wrong is not None:
         return {"outcome": "bad_observation", "error": wrong}
     return {"outcome": "ok"}
@@ -126,6 +129,7 @@ def reset_case(form: str, options: Any) -> dict[str, Any]:
     from tinyrace.errors import ConfigError
 
     env = _race(form)
+    _FRESH[form] = False  # the action cases reset it next
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # an unknown option is left out with a warning

@@ -37,7 +37,7 @@ from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT, 
 SEED = 39
 SECONDS = 20  # [s] per case (a race of 16 cars with cameras builds in a few seconds)
 SCALE = 2 if os.environ.get("HYPOTHESIS_PROFILE") == "ci" else 1
-CASES = {"race_config": 220, "action": 340, "reset": 130, "opponents": 120,
+CASES = {"race_config": 200, "action": 400, "reset": 130, "opponents": 120,
          "camera_info": 110, "cache": 110}  # fmt: skip
 MIN_CASES = 1000
 NAN, INF = float("nan"), float("inf")

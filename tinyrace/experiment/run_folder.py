@@ -108,7 +108,7 @@ def _check_cars(path: Path, cars: object) -> list[str]:
             raise _problem(path, f"{where}.color", color, "expected a colour '#rrggbb'")
         if not isinstance(car.get("driver", ""), str):
             raise _problem(path, f"{where}.driver", car.get("driver"), "expected a driver name")
-        names.append(name)
+        names.append(str(name))
     return names
 
 

@@ -9,7 +9,7 @@ which car sent it, what it was and the car's action space.
 from __future__ import annotations
 
 import reprlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 import gymnasium as gym
@@ -45,7 +45,7 @@ def reset_options(options: object, owner: str = "RaceEnv") -> dict[str, Any] | N
 
 
 def read_actions(
-    seats: list[HasActions], actions: Mapping[str, Any], live: Iterable[tuple[str, int]]
+    seats: Sequence[HasActions], actions: Mapping[str, Any], live: Iterable[tuple[str, int]]
 ) -> list[tuple[int, tuple[float, ...]]]:
     """(car index, controls) of every live car, each action read by its car's spec; the
     first bad one raises ``InvalidAction`` naming its car (nothing is applied before)."""
