@@ -142,8 +142,9 @@ def _other_format(path: Path) -> None:
 def test_an_untrusted_entry_is_rebuilt(tmp_path: Path, damage):
     build = Builds()
     share("table", build, tmp_path)
-    damage(only_entry(tmp_path))
-    damaged = only_entry(tmp_path).read_bytes()
+    path = only_entry(tmp_path)
+    damage(path)
+    damaged = path.read_bytes()
     foreign = damaged[: len(disk.MAGIC)] != disk.MAGIC and len(damaged) > 0
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -151,8 +152,9 @@ def test_an_untrusted_entry_is_rebuilt(tmp_path: Path, damage):
     assert build.calls == 2
     assert_same(table, make_table())
     if foreign:  # not a file the cache wrote (no MAGIC): left alone, the value built in memory
-        assert only_entry(tmp_path).read_bytes() == damaged
+        assert path.read_bytes() == damaged
         assert any("not a file of the cache" in str(w.message) for w in caught)
+        assert disk.entries(tmp_path) == []  # not the cache's: neither listed nor trimmed
     else:
         assert disk.read(tmp_path, only_entry(tmp_path).stem, cache.VERSION) is not None
 

@@ -109,6 +109,19 @@ def test_cache_clear_removes_only_what_the_cache_wrote(tmp_path: Path, capsys):
     assert (folder / ("d" * 64 + ".npc")).exists()
 
 
+def test_trimming_the_cache_removes_only_its_own_entries_and_locks(tmp_path: Path):
+    entry = stored_entry(tmp_path)
+    user_entry = tmp_path / ("e" * 64 + ".npc")
+    user_entry.write_bytes(b"x" * 5_000_000)  # large, old, named like an entry: not the cache's
+    os.utime(user_entry, (0, 0))
+    user_lock = entry.with_suffix(disk.LOCK_SUFFIX)
+    user_lock.write_text("my own lock notes")
+    disk.trim(tmp_path, 0)
+    assert not entry.exists()
+    assert user_entry.stat().st_size == 5_000_000
+    assert user_lock.read_text() == "my own lock notes"
+
+
 def test_cache_entries_replaced_by_fifos_are_neither_read_nor_removed(tmp_path: Path):
     entry = stored_entry(tmp_path)
     entry.unlink()

@@ -340,13 +340,13 @@ def _check_replaceable(path: Path) -> None:
 
 
 def entries(folder: Path) -> list[Path]:
-    """The cache files of ``folder`` (regular files named as the cache names them), least
-    recently used first."""
+    """The cache files of ``folder`` (regular files named as the cache names them, starting
+    with its MAGIC), least recently used first."""
     found = []
     for path in _names(folder, ENTRY_NAME):
         with contextlib.suppress(OSError):
             info = os.lstat(path)
-            if stat.S_ISREG(info.st_mode):
+            if stat.S_ISREG(info.st_mode) and _written_here(path, ENTRY_NAME):
                 found.append((info.st_mtime, path))
     return [path for _, path in sorted(found)]
 
@@ -370,7 +370,9 @@ def trim(folder: Path, max_bytes: int) -> None:
         if total <= max_bytes:
             break
         _remove(path)
-        _remove(path.with_suffix(LOCK_SUFFIX))
+        lock = path.with_suffix(LOCK_SUFFIX)
+        if _written_here(lock, LOCK_NAME):
+            _remove(lock)
         total -= size
 
 
