@@ -37,26 +37,33 @@ import mmap
 import os
 import platform
 import re
-import secrets
 import stat
 import struct
 import sys
 import tempfile
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from tinyrace.cache.files import (
+    KEY_BYTES,
+    KEY_FILE,
+    NotRegular,
+    check_replaceable,
+    folder_key,
+    mac,
+    open_regular,
+)
+
 MAGIC = b"TINYRACE-CACHE\x00\x00"  # 16 bytes
 FORMAT = 2  # the layout of this file format (2: the checksum is keyed)
 SUFFIX = ".npc"
 LOCK_SUFFIX = ".lock"
 TEMP_PREFIX = ".tmp-"
-KEY_FILE = ".tinyrace-key"  # the folder's random HMAC key (KEY_BYTES bytes, mode 0600)
-KEY_BYTES = 32
 ALIGN = 64  # [bytes] arrays start at multiples of this
 LOCK_WAIT = 120.0  # [s] the longest wait for another process's lock (config/bounds.py lists it)
 ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.npc")  # what the cache names its files
@@ -83,10 +90,6 @@ def machine_tag() -> str:
     return hashlib.sha256("|".join(parts).encode()).hexdigest()[:32]
 
 
-class NotRegular(OSError):
-    """A name of the cache folder is not a regular file (a FIFO, device, folder or link)."""
-
-
 class LockHeld(OSError):
     """Another process held an entry's lock past ``LOCK_WAIT``."""
 
@@ -109,7 +112,7 @@ def read(folder: Path, key: str, version: str) -> Entry | None:
     is not a regular file raises ``NotRegular`` (an OSError) and is left alone."""
     path = path_of(folder, key)
     try:
-        fd = _open_regular(path, os.O_RDONLY)
+        fd = open_regular(path, os.O_RDONLY)
     except FileNotFoundError:
         return None
     try:
@@ -142,7 +145,7 @@ def _trusted(mapped: mmap.mmap, key: str, version: str, secret: bytes) -> Entry 
     payload = memoryview(mapped)[HEADER:]
     try:
         unsigned = _HEADER.pack(*fields[:7], bytes(32), meta_length)
-        if not hmac.compare_digest(_mac(secret, [unsigned, payload]), checksum):
+        if not hmac.compare_digest(mac(secret, [unsigned, payload]), checksum):
             return None
         meta = json.loads(bytes(payload[:meta_length]))
         arrays = {
@@ -177,10 +180,10 @@ def write(folder: Path, key: str, version: str, entry: Entry) -> Path:
     fields = (MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(), key.encode(),
               length)  # fmt: skip
     unsigned = _HEADER.pack(*fields, bytes(32), len(meta))
-    mac = _mac(folder_key(folder), [unsigned, *_payload(meta, layout)])
-    header = _HEADER.pack(*fields, mac, len(meta))
+    signature = mac(folder_key(folder), [unsigned, *_payload(meta, layout)])
+    header = _HEADER.pack(*fields, signature, len(meta))
     target = path_of(folder, key)
-    _check_replaceable(target)
+    check_replaceable(target)
     handle, temp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=SUFFIX, dir=folder)
     try:
         with os.fdopen(handle, "wb") as file:
@@ -241,7 +244,7 @@ def locked(folder: Path, key: str) -> Iterator[None]:
         return
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{key}{LOCK_SUFFIX}"
-    fd = _open_regular(path, os.O_RDWR | os.O_CREAT)
+    fd = open_regular(path, os.O_RDWR | os.O_CREAT)
     try:
         held = os.pread(fd, 33, 0)
         if held and not held.strip().isdigit():  # a file of someone else's: never truncated
@@ -275,68 +278,6 @@ def _holder(fd: int) -> str:
     """The process that wrote the lock file ``fd`` (its id), as far as it says."""
     text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
     return f"process {text}" if text.isdigit() else "another process"
-
-
-def folder_key(folder: Path) -> bytes:
-    """The folder's HMAC key: read from ``KEY_FILE``, or made (random, mode 0600) when the
-    folder has none. An OSError when it cannot be read or made."""
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / KEY_FILE
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _NO_FOLLOW, 0o600)
-    except FileExistsError:
-        pass
-    else:
-        handle, temp = tempfile.mkstemp(prefix=".tmp-key-", dir=folder)
-        os.close(fd)  # claimed: write the key whole beside it, then move it in
-        with os.fdopen(handle, "wb") as file:
-            file.write(secrets.token_bytes(KEY_BYTES))
-        os.replace(temp, path)
-    for _ in range(20):  # another process may be moving its key in
-        fd = _open_regular(path, os.O_RDONLY)
-        try:
-            data = os.pread(fd, KEY_BYTES + 1, 0)
-        finally:
-            os.close(fd)
-        if len(data) == KEY_BYTES:
-            return data
-        time.sleep(0.01)
-    raise OSError(errno.EINVAL, f"expected {KEY_BYTES} bytes of key", str(path))
-
-
-_NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0)
-
-
-def _mac(secret: bytes, chunks: Iterable[bytes | memoryview]) -> bytes:
-    mac = hmac.new(secret, digestmod=hashlib.sha256)
-    for chunk in chunks:
-        mac.update(chunk)
-    return mac.digest()
-
-
-def _open_regular(path: Path, flags: int) -> int:
-    """A descriptor of the regular file ``path`` (made with mode 0644 under ``os.O_CREAT``),
-    opened without blocking on a FIFO and without following a link; ``NotRegular`` else."""
-    try:
-        fd = os.open(path, flags | getattr(os, "O_NONBLOCK", 0) | _NO_FOLLOW, 0o644)
-    except OSError as exc:
-        if exc.errno in (errno.ELOOP, errno.ENXIO, errno.EISDIR):  # a link, FIFO, folder
-            raise NotRegular(exc.errno, "not a regular file", str(path)) from None
-        raise
-    if not stat.S_ISREG(os.fstat(fd).st_mode):
-        os.close(fd)
-        raise NotRegular(errno.EINVAL, "not a regular file (a FIFO, device or folder)", str(path))
-    return fd
-
-
-def _check_replaceable(path: Path) -> None:
-    """``NotRegular`` when something other than a regular file has the name ``path``."""
-    try:
-        mode = os.lstat(path).st_mode
-    except FileNotFoundError:
-        return
-    if not stat.S_ISREG(mode):
-        raise NotRegular(errno.EINVAL, "not a regular file (left alone)", str(path))
 
 
 def entries(folder: Path) -> list[Path]:
@@ -397,7 +338,7 @@ def clear(folder: Path) -> int:
 def _written_here(path: Path, pattern: re.Pattern[str]) -> bool:
     """Whether the regular file ``path`` is one the cache writes (see ``clear``)."""
     try:
-        fd = _open_regular(path, os.O_RDONLY)
+        fd = open_regular(path, os.O_RDONLY)
     except OSError:
         return False
     try:
