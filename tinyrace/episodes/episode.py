@@ -283,8 +283,9 @@ class Course:
             except ValueError as exc:
                 raise ConfigError(self._no_room(str(exc))) from None
             return Start(poses, self.source, paths)
+        spacing, offset = race.grid_spacing, race.grid_offset
         try:
-            poses = grid_poses(*(draw.track, draw.spawn, count, size), *self._grid_knobs())
+            poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset)
         except ValueError as exc:
             allowed = f"expected a smaller race.grid_spacing or fewer cars: {exc}"
             problem = Problem(self.source, "race.grid_spacing", race.grid_spacing, allowed)
@@ -294,9 +295,6 @@ class Course:
             "cars, a smaller race.grid_spacing or race.grid_offset make room)"
         )
         return Start(poses, self.source, paths, hint, f"{count} cars")
-
-    def _grid_knobs(self) -> tuple[float, float]:
-        return self.config.race.grid_spacing, self.config.race.grid_offset
 
     def _car_key(self, car: int) -> str:
         """The key that names car ``car`` in the config."""
