@@ -482,6 +482,35 @@ def test_report_never_writes_through_a_symlink(race_run: Path, tmp_path: Path, n
     assert cli.main(["report", str(race_run)]) == 0  # the run folder still reports
 
 
+@pytest.mark.parametrize("kind", ["symlink", "fifo", "folder", "hardlink"])
+def test_run_files_are_never_written_through_what_stands_at_their_name(tmp_path, kind):
+    from tinyrace.experiment.files import write_text
+
+    precious = tmp_path / "precious.txt"
+    precious.write_text("mine")
+    target = tmp_path / "run" / "episode_000_car_0_trace.csv"
+    target.parent.mkdir()
+    if kind == "symlink":
+        target.symlink_to(precious)
+    elif kind == "fifo":
+        os.mkfifo(target)
+    elif kind == "folder":
+        target.mkdir()
+    else:
+        os.link(precious, target)
+    with alarm():
+        if kind == "hardlink":  # a regular file: replaced by a new one, the other name kept
+            write_text(target, "t,x\n")
+            assert target.read_text() == "t,x\n"
+        else:
+            with pytest.raises(
+                ConfigError, match=f"not a {'symbolic link' if kind == 'symlink' else ''}"
+            ):
+                write_text(target, "t,x\n")
+    assert precious.read_text() == "mine"
+    assert sorted(p.name for p in target.parent.iterdir()) == [target.name]  # no temp left
+
+
 def test_run_an_empty_name_or_an_empty_yaml_is_an_error(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert cli.main(["run", ""]) == 2
