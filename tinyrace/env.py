@@ -399,12 +399,17 @@ def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] 
     """The ``poses`` reset option: one finite (x, y, heading) per car [track units, rad]."""
     if value is None:
         return None
-    try:
-        poses = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    try:  # numbers only: true/false and text are no coordinates (the config refuses them too)
+        raw = np.asarray(value, dtype=object)
+        numbers = all(
+            isinstance(x, (int, float, np.number)) and x is not True and x is not False
+            for x in raw.flat
+        )
+        poses = raw.astype(np.float64) if numbers else np.zeros(0)
+    except (TypeError, ValueError, OverflowError):
         poses = np.zeros(0)
     if poses.shape != (count, 3) or not np.isfinite(poses).all():
-        allowed = f"expected {count} finite (x, y, heading) poses, one per car"
+        allowed = f"expected {count} finite (x, y, heading) poses of numbers, one per car"
         raise ConfigError(Problem(RESET_SOURCE, "poses", _short(value), allowed))
     return [(float(x), float(y), float(h)) for x, y, h in poses.tolist()]
 

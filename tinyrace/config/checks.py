@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import dataclasses
 
+from tinyrace.cache import folder_problems
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.loader import Parser
-from tinyrace.config.race import race_cars, race_problems
+from tinyrace.config.race import race_cars, race_pixel_problems, race_problems
 from tinyrace.config.schema import MAX_RACE_CARS, EnvConfig, RewardConfig
 
 
@@ -38,6 +39,8 @@ def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         for key, value, allowed in track.problems(config.files):
             parser.problem(f"{at}tracks[{i}].{key}", value, allowed)
     _check_race(config, parser, at, not seen)
+    if config.cache.dir is not None:
+        parser.problems += folder_problems(config.cache.dir, parser.source, f"{at}cache.dir")
 
 
 def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_at: str) -> None:
@@ -63,6 +66,7 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
         return
     parser.problems += race_problems(config, at, parser.source)
+    parser.problems += race_pixel_problems(config, at, parser.source)
     for i, entry in enumerate(cars):
         if entry.cameras is None and entry.sensors is None:
             continue  # the shared ones, checked above

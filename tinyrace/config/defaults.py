@@ -4,9 +4,8 @@ the config's envs keep shared track data."""
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
-from tinyrace.cache import Settings, default_folder
+from tinyrace.cache import Settings, default_folder, folder_of
 from tinyrace.config.schema import EnvConfig
 from tinyrace.config.sensors import SensorConfig, cameras_first
 
@@ -14,7 +13,9 @@ from tinyrace.config.sensors import SensorConfig, cameras_first
 def cache_settings(config: EnvConfig) -> Settings:
     """Where the config's envs keep shared track data on disk, and how much (``cache``)."""
     cache = config.cache
-    folder = Path(cache.dir).expanduser() if cache.dir is not None else default_folder()
+    folder = (
+        default_folder() if cache.dir is None else folder_of(cache.dir, "<config>", "cache.dir")
+    )
     return Settings(folder, int(cache.max_size * 2**20))
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 from tinyrace.config import families
-from tinyrace.config.bounds import PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.bounds import MAX_INTRINSIC, PERSPECTIVE_PIXEL_WEIGHT
 from tinyrace.config.calibration import Found, calibration_problems
 from tinyrace.config.colors import Color
 from tinyrace.config.knobs import REQUIRED, knob
@@ -87,6 +87,7 @@ class PerspectiveCameraConfig(SensorDefaults):
         "[fx, fy, cx, cy] focal lengths and principal point, pixel centres on integer "
         "coordinates (OpenCV's camera matrix); instead of fov",
         "px",
+        magnitude=MAX_INTRINSIC,
     )
     distortion: tuple[float, float, float, float, float] | None = knob(
         None,

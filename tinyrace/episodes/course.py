@@ -85,7 +85,13 @@ class Course:
             except ValueError as exc:
                 raise ConfigError(self._no_room(str(exc))) from None
             return Start(poses, self.source, paths)
-        poses = grid_poses(draw.track, draw.spawn, count, size, race.grid_spacing, race.grid_offset)
+        spacing, offset = race.grid_spacing, race.grid_offset
+        try:
+            poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset)
+        except ValueError as exc:
+            allowed = f"expected a smaller race.grid_spacing or fewer cars: {exc}"
+            problem = Problem(self.source, "race.grid_spacing", race.grid_spacing, allowed)
+            raise ConfigError(problem) from None
         hint = (
             f" (grid places behind spawn {draw.spawn_index} of track {draw.track_index}: fewer "
             "cars, a smaller race.grid_spacing or race.grid_offset make room)"

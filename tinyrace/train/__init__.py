@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any, SupportsFloat, cast
 import gymnasium as gym
 from gymnasium import spaces
 
+from tinyrace.config.bounds import MAX_TRAIN_ENVS
 from tinyrace.errors import ConfigError, Problem
 
 if TYPE_CHECKING:
@@ -62,8 +63,9 @@ class TrainEnv:
     name: str = DEFAULT_TARGET  # the default model file is ppo_<name>.zip
 
 
-def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], Any]) -> None:
-    """``tinyrace train``'s arguments; ``count(low, what)`` parses a whole number >= low."""
+def add_arguments(parser: argparse.ArgumentParser, count: Callable[..., Any]) -> None:
+    """``tinyrace train``'s arguments; ``count(low, what[, high])`` parses a whole number from
+    low (to high)."""
     parser.add_argument(
         "target",
         nargs="?",
@@ -76,8 +78,9 @@ def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], A
     parser.add_argument(
         "--timesteps", type=positive, default=20_000, help="env steps (default: %(default)s)"
     )
+    envs = count(1, f"a whole number from 1 to {MAX_TRAIN_ENVS}", MAX_TRAIN_ENVS)
     parser.add_argument(
-        "--envs", type=positive, default=8, help="envs stepped together (default: %(default)s)"
+        "--envs", type=envs, default=8, help="envs stepped together (default: %(default)s)"
     )
     parser.add_argument(
         "--subprocesses",
@@ -154,6 +157,13 @@ def train_env(
     from tinyrace.experiment.target import load_target
 
     experiment, _ = load_target(target or DEFAULT_TARGET, "NAME_OR_PATH")
+    if experiment.is_race:
+        allowed = (
+            f"a race of {len(experiment.agents)} cars cannot be trained this way: tinyrace "
+            "train trains one car; name an experiment or track of one car (a learner among "
+            "driven cars: gym.make(..., opponents=[...]); all cars: tinyrace.race.parallel_env)"
+        )
+        raise ConfigError(Problem("<command line>", "NAME_OR_PATH", str(target), allowed))
     steps = max_episode_steps or experiment.config.max_steps
     limit = {"max_episode_steps": steps} if steps is not None else {}
     return TrainEnv(TINYRACE_ID, {**experiment.env_kwargs, **limit}, experiment.name)
@@ -365,7 +375,7 @@ def evaluate(model: BaseAlgorithm, env: TrainEnv, episodes: int, seed: int) -> t
 def run_command(args: argparse.Namespace) -> int:
     """``tinyrace train``: evaluate, train with a progress bar, save, evaluate again."""
     env = train_env(args.target, args.max_episode_steps)  # its problems before the import
-    out = model_file(args.out or f"ppo_{env.name}.zip", args.force)
+    out = model_file(args.out if args.out is not None else f"ppo_{env.name}.zip", args.force)
     lacking = missing()
     if lacking:
         print(f"tinyrace: error: {lacking}", file=sys.stderr)
