@@ -50,7 +50,7 @@ def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) 
             world.add_car(car_model.build(world.space, spawn, config.car, track))
             state = world.states()[0]
             corners = footprint_corners(state)
-            walls = _box_clearance(corners, np.asarray(track.walls, np.float64))
+            walls = _wall_clearance(corners, track.wall_quads)
             cones = _cone_clearance(corners, track.cones[:, :2], track.cone_radii)
             length, width = state.footprint
             fits.append(StartFit(index, spawn, corners, (length, width), walls, cones))
@@ -98,7 +98,7 @@ def placement_problems(
     or on another car (footprints, as the world sees them), named by its id and by the key
     (``paths[i]``) its pose came from, showing ``value`` (None: the pose)."""
     corners = [footprint_corners(state) for state in states]
-    walls = np.asarray(track.walls, np.float64)
+    walls = track.wall_quads
     x0, y0, x1, y1 = track.bounds
     problems = []
     for i, (state, quad) in enumerate(zip(states, corners, strict=True)):
@@ -106,7 +106,7 @@ def placement_problems(
         x, y = state.rear_axle if track.rules.bounds_point == "rear_axle" else state.pose[:2]
         if not (x0 <= x <= x1 and y0 <= y <= y1):
             where.append(f"outside the track's bounds {list(track.bounds)}")
-        if _box_clearance(quad, walls) <= 0:
+        if _wall_clearance(quad, walls) <= 0:
             where.append("on a wall")
         if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) <= 0:
             where.append("on a cone")
@@ -139,33 +139,38 @@ def _quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
     return True
 
 
-def _box_clearance(corners: np.ndarray, boxes: np.ndarray) -> float:
-    """[m] the smallest distance between the convex polygon ``corners`` and the (M, 4)
-    boxes x0, y0, x1, y1; negative (the overlap along the best separating axis) when one
-    overlaps; inf without boxes."""
-    if len(boxes) == 0:
+def _wall_clearance(corners: np.ndarray, quads: np.ndarray) -> float:
+    """[m] the smallest distance between the convex polygon ``corners`` and the (M, 4, 2)
+    convex quads; negative (the overlap along the best separating axis) when one
+    overlaps; inf without quads."""
+    if len(quads) == 0:
         return math.inf
     polygon = np.asarray(corners, np.float64)
-    # separating axes: the boxes' (x, y) and the polygon's edge normals
-    edges = np.roll(polygon, -1, axis=0) - polygon
-    normals = np.column_stack((-edges[:, 1], edges[:, 0]))
-    normals /= np.hypot(normals[:, 0], normals[:, 1])[:, None]
-    axes = np.vstack(([1.0, 0.0], [0.0, 1.0], normals))  # (A, 2)
-    box_corners = np.stack(
-        [boxes[:, [0, 1]], boxes[:, [2, 1]], boxes[:, [2, 3]], boxes[:, [0, 3]]], axis=1
-    )  # (M, 4, 2)
-    along_box = box_corners @ axes.T  # (M, 4, A)
-    along_polygon = polygon @ axes.T  # (4, A)
+    quads = np.asarray(quads, np.float64)
+    # separating axes: the polygon's edge normals and each quad's
+    axes = np.concatenate(
+        (np.broadcast_to(_normals(polygon), (len(quads), 4, 2)), _normals(quads)), 1
+    )
+    along_quad = np.einsum("mkd,mad->mka", quads, axes)  # (M, 4 corners, A axes)
+    along_polygon = np.einsum("kd,mad->mka", polygon, axes)
     gap = np.maximum(
-        along_box.min(axis=1) - along_polygon.max(axis=0),
-        along_polygon.min(axis=0) - along_box.max(axis=1),
+        along_quad.min(axis=1) - along_polygon.max(axis=1),
+        along_polygon.min(axis=1) - along_quad.max(axis=1),
     )  # (M, A): > 0 on an axis that separates
-    separation = gap.max(axis=1)  # per box: > 0 apart (a lower bound of the distance)
+    separation = gap.max(axis=1)  # per quad: > 0 apart (a lower bound of the distance)
     overlapping = separation <= 0
     if overlapping.any():
         return float(separation.min())
-    # apart: the exact distance between the polygon and each box (corner to edge, both ways)
-    return float(min(_distance(polygon, box) for box in box_corners[np.argsort(separation)[:8]]))
+    # apart: the exact distance between the polygon and each quad (corner to edge, both ways)
+    return float(min(_distance(polygon, quad) for quad in quads[np.argsort(separation)[:8]]))
+
+
+def _normals(polygons: np.ndarray) -> np.ndarray:
+    """(..., K, 2) unit normals of the edges of convex polygons (..., K, 2)."""
+    edges = np.roll(polygons, -1, axis=-2) - polygons
+    normals = np.stack((-edges[..., 1], edges[..., 0]), axis=-1)
+    length = np.hypot(normals[..., 0], normals[..., 1])[..., None]
+    return np.asarray(normals / np.where(length > 0, length, 1.0))
 
 
 def _distance(a: np.ndarray, b: np.ndarray) -> float:

@@ -38,6 +38,7 @@ from tinyrace.cars.collision import (
     WHEEL,
 )
 from tinyrace.cars.state import CarState
+from tinyrace.tracks.base import as_quads
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.tile_sensors import tile_sensors
 
@@ -139,11 +140,11 @@ class World:
         if shapes:
             self.space.add(*shapes)
 
-    def add_walls(self, boxes: np.ndarray) -> None:
-        """Solid cells of a map (M x 4: x0, y0, x1, y1); the footprint reports touching them."""
+    def add_walls(self, walls: np.ndarray) -> None:
+        """Solid walls (M x 4 boxes x0, y0, x1, y1, or M x 4 x 2 convex quads: a map's
+        pixels); the footprint reports running into them."""
         shapes = []
-        for index, (x0, y0, x1, y1) in enumerate(boxes.tolist()):
-            corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        for index, corners in enumerate(as_quads(walls).tolist()):
             shapes.append(self._static_sensor(corners, WALL, index, OBSTACLE_FILTER))
         if shapes:
             self.space.add(*shapes)
