@@ -242,8 +242,8 @@ def test_a_pose_on_a_wall_or_outside_the_track_is_refused():
     _, _, x1, y1 = env.core.layout.bounds
     with pytest.raises(ConfigError, match=r"poses\[1\].*car 'car_1' would start outside"):
         env.reset(seed=0, options={"poses": [pole, (x1 + 5.0, y1 + 5.0, 0.0)]})
-    wall = env.core.layout.walls[0]
-    on_wall = ((wall[0] + wall[2]) / 2, (wall[1] + wall[3]) / 2, 0.0)
+    x, y = env.core.layout.wall_quads[0].mean(axis=0)  # a wall's middle
+    on_wall = (float(x), float(y), 0.0)
     with pytest.raises(ConfigError, match=r"poses\[1\].*car 'car_1' would start .*on a wall"):
         env.reset(seed=0, options={"poses": [pole, on_wall]})
 

@@ -2,9 +2,11 @@
 no wall and no cone, or the config is refused (``prepare``: ``gym.make`` and ``tinyrace
 validate`` alike), naming the pose's file and key.
 
-The footprint is the car's as the world sees it (``cars.state.footprint_corners`` of the car
-built at the spawn: rear to front axle, its width wide); walls are the track's solid boxes
-(what stops the car), cones discs of their base radius.
+The footprint is the car's outline as the world sees it (``World.footprints`` of the car
+built at the spawn: its whole body where the model has one, e.g. the single-track car's
+0.58 m, not only from axle to axle); walls are the track's solid boxes or quads (what
+stops the car), cones discs of their base radius. Touching (an overlap of at most
+``world.TOUCH``) is no hit, in these checks as in the world.
 """
 
 from __future__ import annotations
@@ -16,11 +18,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from tinyrace.cars.registry import CarModel
-from tinyrace.cars.state import CarState, footprint_corners
+from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
 from tinyrace.errors import Problem
 from tinyrace.tracks.base import Track
-from tinyrace.world.world import World
+from tinyrace.world.world import TOUCH, World
 
 
 @dataclass(frozen=True)
@@ -30,13 +32,14 @@ class StartFit:
     track_index: int
     spawn: tuple[float, float, float]  # (x [m], y [m], heading [rad])
     corners: np.ndarray  # (4, 2) [m]
-    size: tuple[float, float]  # (length rear to front axle, width) [m]
-    wall_clearance: float  # [m] to the nearest wall box; < 0: overlapping (inf: no walls)
+    size: tuple[float, float]  # (length, width) [m] of the footprint
+    wall_clearance: float  # [m] to the nearest wall; < 0: overlapping (inf: no walls)
     cone_clearance: float  # [m] to the nearest cone's edge; < 0: overlapping (inf: no cones)
 
     @property
     def free(self) -> bool:
-        return self.wall_clearance > 0 and self.cone_clearance > 0
+        """Clear of walls and cones, or only touching them."""
+        return min(self.wall_clearance, self.cone_clearance) >= -TOUCH
 
 
 def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) -> list[StartFit]:
@@ -48,12 +51,10 @@ def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) 
         for spawn in track.spawns:
             world = World()
             world.add_car(car_model.build(world.space, spawn, config.car, track))
-            state = world.states()[0]
-            corners = footprint_corners(state)
+            (corners,) = world.footprints()
             walls = _wall_clearance(corners, track.wall_quads)
             cones = _cone_clearance(corners, track.cones[:, :2], track.cone_radii)
-            length, width = state.footprint
-            fits.append(StartFit(index, spawn, corners, (length, width), walls, cones))
+            fits.append(StartFit(index, spawn, corners, quad_size(corners), walls, cones))
     return fits
 
 
@@ -76,7 +77,7 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         origin = "" if given else " (the start pose is this file's first point)"
         allowed = (
             f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} m, "
-            f"rear to front axle x width, at {pose} [m, m, rad]) touches no wall or cone; it "
+            f"length x width, at {pose} [m, m, rad]) overlaps no wall or cone; it "
             f"overlaps {what}{origin}: move the spawn (track.spawn) or make the car smaller "
             "(car.wheelbase, car.track_width)"
         )
@@ -93,11 +94,15 @@ def placement_problems(
     paths: Sequence[str],
     hint: str = "",
     value: object = None,
+    *,
+    footprints: Sequence[np.ndarray],
 ) -> list[Problem]:
     """A Problem for each car that starts outside the track's bounds, on a wall or a cone,
-    or on another car (footprints, as the world sees them), named by its id and by the key
-    (``paths[i]``) its pose came from, showing ``value`` (None: the pose)."""
-    corners = [footprint_corners(state) for state in states]
+    or on another car (``footprints``: each car's outline as the world sees it,
+    ``World.footprints``), named by its id and by the key (``paths[i]``) its pose came
+    from, showing ``value`` (None: the pose). Cars that only touch are no problem."""
+    corners = list(footprints)
+    assert len(corners) == len(states)
     walls = track.wall_quads
     x0, y0, x1, y1 = track.bounds
     problems = []
@@ -106,14 +111,14 @@ def placement_problems(
         x, y = state.rear_axle if track.rules.bounds_point == "rear_axle" else state.pose[:2]
         if not (x0 <= x <= x1 and y0 <= y <= y1):
             where.append(f"outside the track's bounds {list(track.bounds)}")
-        if _wall_clearance(quad, walls) <= 0:
+        if _wall_clearance(quad, walls) < -TOUCH:
             where.append("on a wall")
-        if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) <= 0:
+        if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) < -TOUCH:
             where.append("on a cone")
-        where += [f"on car {names[j]!r}" for j in range(i) if _quads_overlap(quad, corners[j])]
+        where += [f"on car {names[j]!r}" for j in range(i) if quads_overlap(quad, corners[j])]
         if where:
             pose = [round(v, 4) for v in state.pose]
-            length, width = state.footprint
+            length, width = quad_size(quad)
             allowed = (
                 f"car {names[i]!r} would start {' and '.join(where)} (its footprint {length:.2f} "
                 f"x {width:.2f} track units at {pose}): expected a start pose clear of the "
@@ -123,20 +128,15 @@ def placement_problems(
     return problems
 
 
-def _quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two convex quads overlap by more than a touch (no separating axis among their
-    edges' normals)."""
-    for quad in (a, b):
-        edges = np.roll(quad, -1, axis=0) - quad
-        normals = np.column_stack((-edges[:, 1], edges[:, 0]))
-        along_a, along_b = a @ normals.T, b @ normals.T  # (4, 4): corner by axis
-        scale = np.hypot(normals[:, 0], normals[:, 1]) * 1e-9
-        apart = (along_a.max(0) <= along_b.min(0) + scale) | (
-            along_b.max(0) <= along_a.min(0) + scale
-        )
-        if apart.any():
-            return False
-    return True
+def quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two convex quads overlap by more than a touch (``world.TOUCH``)."""
+    return _wall_clearance(a, np.asarray(b, np.float64)[None]) < -TOUCH
+
+
+def quad_size(quad: np.ndarray) -> tuple[float, float]:
+    """(length, width) of a rectangle given by its 4 corners in order (its longer side first)."""
+    first, second = (float(np.hypot(*(quad[k + 1] - quad[k]))) for k in (0, 1))
+    return max(first, second), min(first, second)
 
 
 def _wall_clearance(corners: np.ndarray, quads: np.ndarray) -> float:

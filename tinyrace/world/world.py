@@ -43,6 +43,7 @@ from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.tile_sensors import tile_sensors
 
 MAX_CARS = 16  # cars one world holds
+TOUCH = 1e-6  # [track units] an overlap this deep or less is a touch, not a hit (rounding)
 
 
 @dataclass
@@ -53,10 +54,10 @@ class Contacts:
     wheel_tiles: list[set[int]] = field(default_factory=lambda: [set() for _ in range(4)])
     new_tile_touches: list[int] = field(default_factory=list)  # tiles a wheel began touching
     obstacle_cells: set[int] = field(default_factory=set)  # cells the footprint overlaps now
-    walls: set[int] = field(default_factory=set)  # wall boxes the footprint overlaps now
+    walls: set[int] = field(default_factory=set)  # walls the footprint runs into now
     cones: set[int] = field(default_factory=set)  # cones the footprint overlaps now
-    cars: set[int] = field(default_factory=set)  # other cars (world indices) touching it now
-    new_cars: list[int] = field(default_factory=list)  # cars it began touching this step
+    cars: set[int] = field(default_factory=set)  # other cars (world indices) it overlaps now
+    new_cars: list[int] = field(default_factory=list)  # cars it began overlapping this step
     crashed: bool = False  # this step ran into a wall: the car was put back and stopped
     # (running into another car puts it back and stops it too, unless it was moving straight
     # away from every car it touches: ``cars``/``new_cars`` say whom it touched)
@@ -67,13 +68,16 @@ class World:
 
     Units are the track's: world units on procedural tracks, pixels on image tracks,
     metres on metric tracks. ``grass_off_tiles``: a wheel touching no road tile grips as
-    on grass (CarRacing); otherwise every wheel grips as on road. Cars are numbered in
+    on grass (CarRacing); otherwise every wheel grips as on road. ``touch`` [track units]:
+    a car whose outline overlaps a wall or another car by no more than this only touches
+    it (not a hit: it drives on, and the contact is not reported). Cars are numbered in
     the order they were added; ``contacts[i]`` and ``states()[i]`` are car ``i``'s.
     """
 
-    def __init__(self, grass_off_tiles: bool = False) -> None:
+    def __init__(self, grass_off_tiles: bool = False, touch: float = TOUCH) -> None:
         self.space = pymunk.Space()
         self.grass_off_tiles = grass_off_tiles
+        self.touch = touch
         self.cars: list[Car] = []
         self.contacts: list[Contacts] = []  # per car
         self.parked: set[int] = set()  # cars out of the race: they stand still where they are
@@ -82,9 +86,10 @@ class World:
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
         self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
-        self.space.on_collision(FOOTPRINT, WALL, begin=self._wall_on, separate=self._wall_off)
+        # walls and cars: judged on every step's overlap (pre_solve), so that a touch is no hit
+        self.space.on_collision(FOOTPRINT, WALL, pre_solve=self._wall_on, separate=self._wall_off)
         self.space.on_collision(FOOTPRINT, CONE, begin=self._cone_on, separate=self._cone_off)
-        self.space.on_collision(CAR, CAR, begin=self._car_on, separate=self._car_off)
+        self.space.on_collision(CAR, CAR, pre_solve=self._car_on, separate=self._car_off)
 
     # -- cars ----------------------------------------------------------------------------------
     def add_car(self, car: Car) -> int:
@@ -212,6 +217,17 @@ class World:
         for body, velocity, spin in saved:
             body.velocity, body.angular_velocity = velocity, spin
 
+    def footprints(self) -> list[np.ndarray]:
+        """Per car, the (4, 2) corners [track units] of the outline that meets walls, cones
+        and other cars, where its body stands now (its whole body on the single-track car,
+        not only from axle to axle)."""
+        quads = []
+        for car in self.cars:
+            body = car.body
+            shape = next(s for s in body.shapes if s.collision_type == FOOTPRINT)
+            quads.append(np.array([tuple(body.local_to_world(v)) for v in shape.get_vertices()]))
+        return quads
+
     # -- stepping ----------------------------------------------------------------------------
     def step(self, dt: float, actions: Sequence[Sequence[Any]] = ()) -> list[Contacts]:
         """One step of ``dt`` seconds: ``actions`` (controls per car, if given) handed over,
@@ -303,7 +319,10 @@ class World:
 
     def _wall_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, wall = _ordered(arbiter, FOOTPRINT)
-        self.contacts[car.car].walls.add(wall.index)
+        if _depth(arbiter) > self.touch:
+            self.contacts[car.car].walls.add(wall.index)
+        else:
+            self.contacts[car.car].walls.discard(wall.index)
 
     def _wall_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, wall = _ordered(arbiter, FOOTPRINT)
@@ -319,10 +338,14 @@ class World:
 
     def _car_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         a, b = arbiter.shapes
+        deep = _depth(arbiter) > self.touch
         for me, other in ((a.car, b.car), (b.car, a.car)):
             contacts = self.contacts[me]
-            contacts.cars.add(other)
-            contacts.new_cars.append(other)
+            if not deep:
+                contacts.cars.discard(other)
+            elif other not in contacts.cars:
+                contacts.cars.add(other)
+                contacts.new_cars.append(other)
 
     def _car_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         a, b = arbiter.shapes
@@ -373,6 +396,12 @@ def _outline(body: pymunk.Body, index: int) -> pymunk.Poly:
     outline.filter = CAR_FILTER
     outline.car = index
     return outline
+
+
+def _depth(arbiter: pymunk.Arbiter) -> float:
+    """[track units] how deep two shapes overlap (0 when they only touch)."""
+    points = arbiter.contact_point_set.points
+    return -min((point.distance for point in points), default=0.0)
 
 
 def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:
