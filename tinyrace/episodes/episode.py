@@ -21,7 +21,7 @@ from tinyrace.cars.registry import CarModel
 from tinyrace.config import EnvConfig, RaceCar
 from tinyrace.episodes.rules import Rule, rule_type
 from tinyrace.episodes.start import grid_poses, random_poses
-from tinyrace.episodes.start_pose import placement_problems
+from tinyrace.episodes.start_pose import grid_check, placement_problems
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Pose, Track, TrackDraw
 from tinyrace.world.facts import StepFacts
@@ -284,7 +284,10 @@ class Course:
             except ValueError as exc:
                 raise ConfigError(self._no_room(str(exc))) from None
             return Start(poses, self.source, paths)
-        poses = grid_poses(draw.track, draw.spawn, count, size, race.grid_spacing, race.grid_offset)
+        cars = [(racer.model, racer.car.car) for racer in self.racers]
+        fits = grid_check(draw.track, cars)  # each place clear, else the next one
+        spacing, offset = race.grid_spacing, race.grid_offset
+        poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset, fits)
         hint = (
             f" (grid places behind spawn {draw.spawn_index} of track {draw.track_index}: fewer "
             "cars, a smaller race.grid_spacing or race.grid_offset make room)"

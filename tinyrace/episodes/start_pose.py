@@ -12,16 +12,16 @@ stops the car), cones discs of their base radius. Touching (an overlap of at mos
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from tinyrace.cars.registry import CarModel
 from tinyrace.cars.state import CarState
-from tinyrace.config import EnvConfig
+from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.errors import Problem
-from tinyrace.tracks.base import Track
+from tinyrace.tracks.base import Pose, Track, as_quads
 from tinyrace.world.world import TOUCH, World
 
 
@@ -128,6 +128,64 @@ def placement_problems(
     return problems
 
 
+def grid_check(
+    track: Track, cars: Sequence[tuple[CarModel, CarConfig]]
+) -> Callable[[int, Pose], bool]:
+    """``fits(k, pose)`` for the start grid (``start.grid_poses``): whether car ``k``'s
+    footprint (``cars[k]``'s model built as its config says) at ``pose`` lies inside the
+    track's bounds, clear of its walls, cones and obstacle colours and of the cars placed
+    before it; a place that fits is taken (remembered). The pole (car 0) always fits: its
+    place is the spawn's, which the config's own checks judge."""
+    outlines = _outlines(track, cars)
+    placed: list[np.ndarray] = []
+    x0, y0, x1, y1 = track.bounds
+    walls = track.wall_quads
+    cones, radii = track.cones[:, :2], track.cone_radii
+
+    def fits(k: int, pose: Pose) -> bool:
+        quad = _at(outlines[k], pose)
+        if k == 0:
+            placed.append(quad)
+            return True
+        inside = bool(((quad >= (x0, y0)) & (quad <= (x1, y1))).all())
+        clear = (
+            inside
+            and _wall_clearance(quad, walls) >= -TOUCH
+            and _cone_clearance(quad, cones, radii) >= -TOUCH
+            and not _on_obstacle(track, quad)
+            and not any(quads_overlap(quad, other) for other in placed)
+        )
+        if clear:
+            placed.append(quad)
+        return clear
+
+    return fits
+
+
+def _outlines(track: Track, cars: Sequence[tuple[CarModel, CarConfig]]) -> list[np.ndarray]:
+    """Each car's footprint built at the pose (0, 0, 0), in a scratch world."""
+    world = World()
+    for model, car in cars:
+        world.add_car(model.build(world.space, (0.0, 0.0, 0.0), car, track))
+    return world.footprints()
+
+
+def _at(outline: np.ndarray, pose: Pose) -> np.ndarray:
+    """``outline`` (a footprint at the pose (0, 0, 0)) moved to ``pose``."""
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    return np.asarray(outline @ np.array([[c, s], [-s, c]]) + (x, y), np.float64)
+
+
+def _on_obstacle(track: Track, quad: np.ndarray) -> bool:
+    """Whether a pixel of an obstacle colour lies inside ``quad`` (picture tracks)."""
+    test = track.obstacle_test
+    if test is None or len(test.cells) == 0:
+        return False
+    near = np.flatnonzero(_separations(quad, as_quads(test.cells)) < 0)
+    return bool(near.size) and bool(test.touched(quad, near.tolist()))
+
+
 def quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two convex quads overlap by more than a touch (``world.TOUCH``)."""
     return _wall_clearance(a, np.asarray(b, np.float64)[None]) < -TOUCH
@@ -147,6 +205,17 @@ def _wall_clearance(corners: np.ndarray, quads: np.ndarray) -> float:
         return math.inf
     polygon = np.asarray(corners, np.float64)
     quads = np.asarray(quads, np.float64)
+    separation = _separations(polygon, quads)  # per quad: > 0 apart (a lower bound)
+    overlapping = separation <= 0
+    if overlapping.any():
+        return float(separation.min())
+    # apart: the exact distance between the polygon and each quad (corner to edge, both ways)
+    return float(min(_distance(polygon, quad) for quad in quads[np.argsort(separation)[:8]]))
+
+
+def _separations(polygon: np.ndarray, quads: np.ndarray) -> np.ndarray:
+    """(M,) per quad, the largest gap along a separating axis between the convex
+    ``polygon`` and the quad: > 0 apart, <= 0 overlapping by that much."""
     # separating axes: the polygon's edge normals and each quad's
     axes = np.concatenate(
         (np.broadcast_to(_normals(polygon), (len(quads), 4, 2)), _normals(quads)), 1
@@ -157,12 +226,7 @@ def _wall_clearance(corners: np.ndarray, quads: np.ndarray) -> float:
         along_quad.min(axis=1) - along_polygon.max(axis=1),
         along_polygon.min(axis=1) - along_quad.max(axis=1),
     )  # (M, A): > 0 on an axis that separates
-    separation = gap.max(axis=1)  # per quad: > 0 apart (a lower bound of the distance)
-    overlapping = separation <= 0
-    if overlapping.any():
-        return float(separation.min())
-    # apart: the exact distance between the polygon and each quad (corner to edge, both ways)
-    return float(min(_distance(polygon, quad) for quad in quads[np.argsort(separation)[:8]]))
+    return np.asarray(gap.max(axis=1))
 
 
 def _normals(polygons: np.ndarray) -> np.ndarray:
