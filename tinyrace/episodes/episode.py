@@ -286,8 +286,9 @@ class Course:
             return Start(poses, self.source, paths)
         cars = [(racer.model, racer.car.car) for racer in self.racers]
         fits = grid_check(draw.track, cars)  # each place clear, else the next one
+        key = tuple((model.name, car) for model, car in cars)  # the grid kept per track
         spacing, offset = race.grid_spacing, race.grid_offset
-        poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset, fits)
+        poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset, fits, key)
         hint = (
             f" (grid places behind spawn {draw.spawn_index} of track {draw.track_index}: fewer "
             "cars, a smaller race.grid_spacing or race.grid_offset make room)"

@@ -13,7 +13,8 @@ lengths and widths, so that one config fits tracks in any unit.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+import weakref
+from collections.abc import Callable, Hashable, Sequence
 
 import numpy as np
 
@@ -21,6 +22,8 @@ from tinyrace.tracks.base import Pose, Track
 
 PLACES_PER_CAR = 3  # grid places tried per car before the grid gives up on clear ones
 Fits = Callable[[int, Pose], bool]  # whether car k may start at a pose (given those placed)
+# grids already laid on a track (fixed tracks serve many resets), by the cars' key and knobs
+_GRIDS: weakref.WeakKeyDictionary[Track, dict[Hashable, list[Pose]]] = weakref.WeakKeyDictionary()
 
 
 def grid_poses(
@@ -31,6 +34,7 @@ def grid_poses(
     spacing: float,
     offset: float,
     fits: Fits | None = None,
+    cars: Hashable = None,
 ) -> list[Pose]:
     """``count`` start poses: ``spawn`` first (unchanged for one car), then the grid's
     places behind it, each ``spacing`` car lengths behind the one before along the
@@ -38,9 +42,26 @@ def grid_poses(
     places) of it. ``fits(k, pose)``: whether car ``k`` may start there (with cars
     ``0..k-1`` placed); a place that does not fit is skipped. When too few places fit,
     the rest are the next places unchecked (the start's check then names the car).
-    ``size``: (length, width) [track units]."""
+    ``size``: (length, width) [track units]. ``cars``: a key of the cars ``fits`` judges;
+    given, the grid is kept for the next call with the same track, cars and knobs."""
     if count == 1:
         return [spawn]
+    kept = _GRIDS.setdefault(track, {}) if cars is not None else {}
+    key = (cars, spawn, count, size, spacing, offset)
+    if key not in kept:
+        kept[key] = _lay_grid(track, spawn, count, size, spacing, offset, fits)
+    return list(kept[key])
+
+
+def _lay_grid(
+    track: Track,
+    spawn: Pose,
+    count: int,
+    size: tuple[float, float],
+    spacing: float,
+    offset: float,
+    fits: Fits | None,
+) -> list[Pose]:
     tries = count * PLACES_PER_CAR if fits else count
     places = grid_places(track, spawn, tries, size, spacing, offset)
     poses: list[Pose] = []

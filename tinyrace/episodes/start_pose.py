@@ -111,7 +111,7 @@ def placement_problems(
         x, y = state.rear_axle if track.rules.bounds_point == "rear_axle" else state.pose[:2]
         if not (x0 <= x <= x1 and y0 <= y <= y1):
             where.append(f"outside the track's bounds {list(track.bounds)}")
-        if _wall_clearance(quad, walls) < -TOUCH:
+        if _overlaps(quad, walls):
             where.append("on a wall")
         if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) < -TOUCH:
             where.append("on a cone")
@@ -136,13 +136,15 @@ def grid_check(
     track's bounds, clear of its walls, cones and obstacle colours and of the cars placed
     before it; a place that fits is taken (remembered). The pole (car 0) always fits: its
     place is the spawn's, which the config's own checks judge."""
-    outlines = _outlines(track, cars)
+    outlines: list[np.ndarray] = []  # built at the first call (a kept grid asks none)
     placed: list[np.ndarray] = []
     x0, y0, x1, y1 = track.bounds
     walls = track.wall_quads
     cones, radii = track.cones[:, :2], track.cone_radii
 
     def fits(k: int, pose: Pose) -> bool:
+        if not outlines:
+            outlines.extend(_outlines(track, cars))
         quad = _at(outlines[k], pose)
         if k == 0:
             placed.append(quad)
@@ -150,7 +152,7 @@ def grid_check(
         inside = bool(((quad >= (x0, y0)) & (quad <= (x1, y1))).all())
         clear = (
             inside
-            and _wall_clearance(quad, walls) >= -TOUCH
+            and not _overlaps(quad, walls)
             and _cone_clearance(quad, cones, radii) >= -TOUCH
             and not _on_obstacle(track, quad)
             and not any(quads_overlap(quad, other) for other in placed)
@@ -182,13 +184,28 @@ def _on_obstacle(track: Track, quad: np.ndarray) -> bool:
     test = track.obstacle_test
     if test is None or len(test.cells) == 0:
         return False
-    near = np.flatnonzero(_separations(quad, as_quads(test.cells)) < 0)
+    cells = as_quads(test.cells)
+    low, high = quad.min(axis=0), quad.max(axis=0)
+    near = np.flatnonzero(((cells.min(axis=1) <= high) & (cells.max(axis=1) >= low)).all(axis=1))
     return bool(near.size) and bool(test.touched(quad, near.tolist()))
 
 
 def quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two convex quads overlap by more than a touch (``world.TOUCH``)."""
-    return _wall_clearance(a, np.asarray(b, np.float64)[None]) < -TOUCH
+    return _overlaps(a, np.asarray(b, np.float64)[None])
+
+
+def _overlaps(polygon: np.ndarray, quads: np.ndarray) -> bool:
+    """Whether the convex ``polygon`` overlaps any of the (M, 4, 2) convex ``quads`` by
+    more than a touch (only the quads whose bounding boxes meet its own are tested)."""
+    if len(quads) == 0:
+        return False
+    polygon = np.asarray(polygon, np.float64)
+    low, high = polygon.min(axis=0) - TOUCH, polygon.max(axis=0) + TOUCH
+    near = ((quads.min(axis=1) <= high) & (quads.max(axis=1) >= low)).all(axis=1)
+    if not near.any():
+        return False
+    return bool(_separations(polygon, quads[near]).min() < -TOUCH)
 
 
 def quad_size(quad: np.ndarray) -> tuple[float, float]:
