@@ -152,3 +152,12 @@ def test_a_body_over_a_wall_is_refused_though_its_axles_are_clear():
         _track(wall_ahead(0.0)), world.states(), ["a"], "t", ["p0"], footprints=world.footprints()
     )
     assert touching == []
+
+
+def test_a_cone_touched_is_left_standing_and_one_millimetre_in_is_knocked():
+    radius = 0.1  # [m]
+    for overlap, knocked in ((0.0, set()), (MM, {0})):
+        world = world_with([(0.0, 0.0, 0.0)])
+        world.add_cones(np.array([[NOSE + radius - overlap, 0.0]]), np.array([radius]))
+        [contacts] = world.look(DT)
+        assert contacts.cones == knocked, overlap

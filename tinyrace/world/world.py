@@ -70,8 +70,8 @@ class World:
     Units are the track's: world units on procedural tracks, pixels on image tracks,
     metres on metric tracks. ``grass_off_tiles``: a wheel touching no road tile grips as
     on grass (CarRacing); otherwise every wheel grips as on road. ``touch`` [track units]:
-    a car whose outline overlaps a wall or another car by no more than this only touches
-    it (not a hit: it drives on, and the contact is not reported). Cars are numbered in
+    a car whose outline overlaps a wall, a cone or another car by no more than this only
+    touches it (not a hit: it drives on, and the contact is not reported). Cars are numbered in
     the order they were added; ``contacts[i]`` and ``states()[i]`` are car ``i``'s.
     """
 
@@ -87,9 +87,9 @@ class World:
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
         self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
-        # walls and cars: judged on every step's overlap (pre_solve), so that a touch is no hit
+        # walls, cones and cars: judged on every step's overlap (pre_solve): a touch is no hit
         self.space.on_collision(FOOTPRINT, WALL, pre_solve=self._wall_on, separate=self._wall_off)
-        self.space.on_collision(FOOTPRINT, CONE, begin=self._cone_on, separate=self._cone_off)
+        self.space.on_collision(FOOTPRINT, CONE, pre_solve=self._cone_on, separate=self._cone_off)
         self.space.on_collision(CAR, CAR, pre_solve=self._car_on, separate=self._car_off)
 
     # -- cars ----------------------------------------------------------------------------------
@@ -332,7 +332,11 @@ class World:
 
     def _cone_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, cone = _ordered(arbiter, FOOTPRINT)
-        self.contacts[car.car].cones.add(cone.index)
+        cones = self.contacts[car.car].cones
+        if _depth(arbiter) > self.touch:
+            cones.add(cone.index)
+        else:
+            cones.discard(cone.index)
 
     def _cone_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, cone = _ordered(arbiter, FOOTPRINT)
