@@ -15,8 +15,9 @@ import math
 import numpy as np
 import pytest
 
-from tinyrace.episodes.start import grid_places, grid_poses
+from tinyrace.episodes.start import grid_places, grid_poses, line_length
 from tinyrace.episodes.start_pose import grid_check, quads_overlap
+from tinyrace.errors import ConfigError
 from tinyrace.examples import track_names
 from tinyrace.race import parallel_env
 from tinyrace.tracks.base import Track
@@ -131,3 +132,19 @@ def test_formula_student_races_four_cars_inside_its_picture():
     assert len(observations) == 4
     for _ in range(5):
         env.step({agent: env.action_space(agent).sample() * 0 for agent in env.agents})
+
+
+def test_a_grid_longer_than_the_reference_line_is_refused_at_grid_spacing():
+    """No place wraps round the loop onto the cars ahead of it."""
+    with pytest.raises(ConfigError, match=r"race\.grid_spacing: got 1000000000.0.*long"):
+        parallel_env(environment="circuit", num_agents=3, race={"grid_spacing": 1e9})
+    env = parallel_env(environment="circuit", num_agents=1)
+    env.reset(seed=0)
+    track = env.core.layout
+    loop = line_length(track.centerline)
+    size = (loop / 3.5, 2.0)  # [m] 4 places fit on the line, not 5
+    places = grid_places(track, track.spawns[0], 5, size, 1.0, 0.0)
+    taken = grid_poses(track, track.spawns[0], 4, size, 1.0, 0.0, lambda k, p: p != places[1])
+    assert taken == [places[0], places[2], places[3], places[1]]  # not place 4: past the end
+    with pytest.raises(ValueError, match="long"):
+        grid_poses(track, track.spawns[0], 5, size, 1.0, 0.0)

@@ -288,7 +288,12 @@ class Course:
         fits = grid_check(draw.track, cars)  # each place clear, else the next one
         key = tuple((model.name, car) for model, car in cars)  # the grid kept per track
         spacing, offset = race.grid_spacing, race.grid_offset
-        poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset, fits, key)
+        try:
+            poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset, fits, key)
+        except ValueError as exc:
+            allowed = f"expected a smaller race.grid_spacing or fewer cars: {exc}"
+            problem = Problem(self.source, "race.grid_spacing", race.grid_spacing, allowed)
+            raise ConfigError(problem) from None
         hint = (
             f" (grid places behind spawn {draw.spawn_index} of track {draw.track_index}: fewer "
             "cars, a smaller race.grid_spacing or race.grid_offset make room)"

@@ -42,6 +42,7 @@ def grid_poses(
     places) of it. ``fits(k, pose)``: whether car ``k`` may start there (with cars
     ``0..k-1`` placed); a place that does not fit is skipped. When too few places fit,
     the rest are the next places unchecked (the start's check then names the car).
+    Raises ValueError when the grid is longer than the reference line (it would wrap).
     ``size``: (length, width) [track units]. ``cars``: a key of the cars ``fits`` judges;
     given, the grid is kept for the next call with the same track, cars and knobs."""
     if count == 1:
@@ -63,6 +64,15 @@ def _lay_grid(
     fits: Fits | None,
 ) -> list[Pose]:
     tries = count * PLACES_PER_CAR if fits else count
+    if has_line(track):  # the grid stays behind the pole: no place wraps round the loop
+        assert track.centerline is not None
+        loop, step = line_length(track.centerline), spacing * size[0]
+        if (count - 1) * step >= loop:
+            raise ValueError(
+                f"{count} cars {spacing:g} car lengths apart need {(count - 1) * step:.1f} "
+                f"track units of the reference line behind the pole; it is {loop:.1f} long"
+            )
+        tries = min(tries, math.ceil(loop / step))
     places = grid_places(track, spawn, tries, size, spacing, offset)
     poses: list[Pose] = []
     unused = []
