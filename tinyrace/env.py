@@ -55,7 +55,8 @@ class TinyRaceEnv(gym.Env):
 
     ## Action Space
     Dynamic car: Box([-1, 0, 0], [1, 1, 1]) as [steer, gas, brake] (steer +1 turns
-    right), or CarRacing's Discrete(5). Kinematic car: Box(-1, 1, (1,)) steering.
+    right; left on tracks in metres, docs/conventions.md), or CarRacing's Discrete(5).
+    Kinematic car: Box(-1, 1, (1,)) steering.
 
     ## Observation Space
     Every observation is a sensor's (``tinyrace.sensors``; tinycarlo's ``cameras:`` are

@@ -24,6 +24,7 @@ from tinyrace.config.race import (
     resolve_race_cars,
 )
 from tinyrace.config.schema import (
+    F1TENTH_GYM_RATE,
     MAX_RACE_CARS,
     CacheConfig,
     CameraConfig,
@@ -409,7 +410,8 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     carracing_rules = facts.carracing_rules  # tiles, laps, time penalty
     sim = config.sim
     if sim.fps is None:
-        sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
+        fps = 50.0 if carracing_rules else 30.0
+        sim = dataclasses.replace(sim, fps=F1TENTH_GYM_RATE if config.car.compat else fps)
     sizes = facts.car_sizes
     car = config.car
     car = dataclasses.replace(
