@@ -120,6 +120,7 @@ def test_the_env_steps_f1tenth_gyms_car_at_its_rate():
         ({"model": "single_track", "compat": "f1tenth_gym"}, {"fps": 50}, "sim.fps"),
         ({"model": "single_track", "compat": "f1tenth_gym", "substeps": 4}, {}, "car.substeps"),
         ({"model": "single_track", "compat": "gym"}, {}, "car.compat"),
+        ({"model": "single_track", "compat": "f1tenth_gym", "kinematic_below": 0.1}, {}, "car.kin"),
     ],
 )
 def test_what_compat_refuses(car, sim, key):

@@ -309,6 +309,9 @@ def _compat_problems(config: EnvConfig, model: CarModel, source: str) -> list[Pr
     if car.substeps not in (None, 1):
         allowed = "null or 1 under car.compat (f1tenth_gym integrates one RK4 step per step)"
         problems.append(Problem(source, "car.substeps", car.substeps, allowed))
+    if car.kinematic_below is not None:
+        allowed = "null under car.compat (f1tenth_gym switches models at 0.5 m/s)"
+        problems.append(Problem(source, "car.kinematic_below", car.kinematic_below, allowed))
     return problems
 
 

@@ -126,7 +126,7 @@ class CarConfig:
         "single_track: f1tenth_gym's car step by step (its 2-step steering delay, bang-bang "
         "steering controller, kinematic model about the rear axle below 0.5 m/s, one RK4 "
         "step per sim step at its 100 Hz, the lidar at the pose), to port results; null: "
-        "tinyrace's car (see docs/cars.md)",
+        "tinyrace's car (see docs/tracks.md)",
     )
     wheelbase: float | None = knob(
         None,
