@@ -145,18 +145,16 @@ def ppo_settings(timesteps: int, envs: int) -> dict[str, Any]:
 
 
 def make_envs(env: TrainEnv, envs: int, seed: int, subprocesses: bool = True) -> VecEnv:
-    """``envs`` copies of the env (one process each when ``subprocesses``), frames stacked."""
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import SubprocVecEnv, VecFrameStack
+    """``envs`` copies of the env (stepped by tinyrace's vector env in one worker process per
+    core when ``subprocesses``, else in this process), frames stacked."""
+    from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
 
-    vec = make_vec_env(
-        _make,
-        n_envs=envs,
-        seed=seed,
-        env_kwargs={"env_id": env.env_id, "kwargs": env.kwargs},
-        vec_env_cls=SubprocVecEnv if subprocesses and envs > 1 else None,
-    )
-    return VecFrameStack(vec, n_stack=FRAMES)
+    from tinyrace.sb3 import make_vec_env
+
+    workers = None if subprocesses and envs > 1 else 0
+    kwargs = {"env_id": env.env_id, "kwargs": env.kwargs}
+    vec = make_vec_env(_make, envs, seed=seed, workers=workers, env_kwargs=kwargs)
+    return VecFrameStack(VecMonitor(vec), n_stack=FRAMES)
 
 
 def _make(env_id: str, kwargs: dict[str, Any]) -> gym.Env[Any, Any]:

@@ -333,6 +333,23 @@ class BatchVectorEnv(VectorEnv):
         replies = self._exchange("call", [(name, args, kwargs)] * len(self._slices))
         return tuple(_flat(replies))
 
+    def call_at(
+        self, indices: Sequence[int], name: str, *args: Any, **kwargs: Any
+    ) -> tuple[Any, ...]:
+        """``call`` for the envs in ``indices`` only (in increasing order of index)."""
+        only = sorted(set(indices))
+        replies = self._exchange("call", [(name, args, kwargs, only)] * len(self._slices))
+        return tuple(_flat(replies))
+
+    def set_attr_at(self, indices: Sequence[int], name: str, value: Any) -> None:
+        """Set attribute ``name`` of the envs in ``indices`` to ``value``."""
+        only = sorted(set(indices))
+        self._exchange("set_attr", [(name, [value] * (s.stop - s.start), only) for s in self._slices])
+
+    def wrapped_by(self, kind: type[Any]) -> tuple[bool, ...]:
+        """Whether each env has a wrapper of type ``kind``."""
+        return tuple(_flat(self._exchange("wrapped_by", [(kind,)] * len(self._slices))))
+
     def get_attr(self, name: str) -> tuple[Any, ...]:
         """Attribute ``name`` of every env."""
         return self.call(name)

@@ -90,17 +90,42 @@ class EnvSlice:
         self.autoreset = ended
         return rewards, terminated, truncated, infos
 
-    def call(self, name: str, args: tuple[Any, ...], kwargs: dict[str, Any]) -> list[Any]:
+    def call(
+        self,
+        name: str,
+        args: tuple[Any, ...],
+        kwargs: dict[str, Any],
+        only: Sequence[int] | None = None,
+    ) -> list[Any]:
+        """Call method ``name`` of each env (or read the attribute); ``only``: those envs
+        (vector env indices), the others left alone."""
         results = []
-        for env in self.envs:
+        for j, env in enumerate(self.envs):
+            if only is not None and self.first + j not in only:
+                continue
             attribute = env.get_wrapper_attr(name)
             results.append(attribute(*args, **kwargs) if callable(attribute) else attribute)
         self._invalidate()
         return results
 
-    def set_attr(self, name: str, values: Sequence[Any]) -> None:
-        for env, value in zip(self.envs, values, strict=True):
-            env.set_wrapper_attr(name, value)
+    def wrapped_by(self, kind: type[Any]) -> list[bool]:
+        """Whether each env has a wrapper of type ``kind`` (a subclass counts)."""
+        found = []
+        for env in self.envs:
+            layer: Any = env
+            while isinstance(layer, gym.Wrapper) and not isinstance(layer, kind):
+                layer = layer.env
+            found.append(isinstance(layer, kind))
+        return found
+
+    def set_attr(
+        self, name: str, values: Sequence[Any], only: Sequence[int] | None = None
+    ) -> None:
+        """Set attribute ``name`` of each env to its value; ``only``: those envs (vector
+        env indices), the others left alone."""
+        for j, (env, value) in enumerate(zip(self.envs, values, strict=True)):
+            if only is None or self.first + j in only:
+                env.set_wrapper_attr(name, value)
         self._invalidate()
 
     def _invalidate(self) -> None:
