@@ -86,13 +86,15 @@ def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float) -> float
 
 
 def standin(num_envs: int, workers: int) -> Any:
-    from standin import StandIn
-
     from tinyrace.vector import BatchVectorEnv
+
+    from standin import StandIn
 
     observation = gym.spaces.Box(0, 255, (96, 96, 3), np.uint8)
     action = gym.spaces.Box(np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32))
-    return BatchVectorEnv([functools.partial(StandIn, 0.0, observation, action)] * num_envs, workers)
+    return BatchVectorEnv(
+        [functools.partial(StandIn, 0.0, observation, action)] * num_envs, workers
+    )
 
 
 def envpool_case(threads: int) -> tuple[Callable[[], Any], int] | None:
@@ -157,7 +159,10 @@ def main() -> None:
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
             rates[name].append(measure(args.seconds))
-        print(f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()), flush=True)
+        print(
+            f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()),
+            flush=True,
+        )
     one = statistics.median(rates["one_env"])
     print(f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env):")
     for name, values in rates.items():

@@ -20,10 +20,9 @@ import pytest
 from gymnasium.error import AlreadyPendingCallError, NoAsyncCallError
 
 import tinyrace  # noqa: F401  (registers the env ids)
+from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.shared import INFO_BYTES, flatten, merge_columns, record_dtype, records
-
-from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
 
 SHM = Path("/dev/shm")
 BOUND = 60  # [s] a test that waits longer has hung
@@ -165,7 +164,7 @@ def segments() -> set[str]:
 def test_a_raising_env_is_named_by_its_index():
     vector = BatchVectorEnv([Doomed] * 4, workers=2)
     vector.reset(seed=0)
-    with bounded(), pytest.raises(KeyError, match="refused 0.9") as raised:
+    with bounded(), pytest.raises(KeyError, match=r"refused 0\.9") as raised:
         vector.step(np.array([[0.0], [0.0], [0.0], [0.9]], np.float32))
     notes = "\n".join(raised.value.__notes__)
     assert "raised by env 3" in notes and "worker 1 (envs 2-3)" in notes

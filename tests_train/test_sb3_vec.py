@@ -92,11 +92,22 @@ def test_sb3_wrappers_and_ppo_run_on_it():
     assert observations.shape == (2, 96, 96, 12) and observations.dtype == np.float32
     episodes = []
     for _ in range(45):
-        *_, dones, infos = wrapped.step(np.tile([0.0, 0.5, 0.0], (2, 1)).astype(np.float32))
+        *_, infos = wrapped.step(np.tile([0.0, 0.5, 0.0], (2, 1)).astype(np.float32))
         episodes += [info["episode"]["l"] for info in infos if "episode" in info]
-        assert all(info["terminal_observation"].shape == (96, 96, 12) for info in infos if "terminal_observation" in info)
+        assert all(
+            info["terminal_observation"].shape == (96, 96, 12)
+            for info in infos
+            if "terminal_observation" in info
+        )
     assert episodes == [20, 20, 20, 20]
-    model = PPO("CnnPolicy", VecFrameStack(make_vec_env(MAKE, 2, workers=2, seed=0), 4), n_steps=32, batch_size=32, n_epochs=1, seed=0)
+    model = PPO(
+        "CnnPolicy",
+        VecFrameStack(make_vec_env(MAKE, 2, workers=2, seed=0), 4),
+        n_steps=32,
+        batch_size=32,
+        n_epochs=1,
+        seed=0,
+    )
     model.learn(64)
     assert model.num_timesteps >= 64
     model.get_env().close()
@@ -108,7 +119,12 @@ def test_sb3_env_checker_accepts_the_env():
 
 
 def test_split_infos_keeps_masks():
-    merged = {"a": np.array([1.5, 0.0]), "_a": np.array([True, False]), "d": {"x": np.array([1, 2]), "_x": np.array([True, True])}, "_d": np.array([False, True])}
+    merged = {
+        "a": np.array([1.5, 0.0]),
+        "_a": np.array([True, False]),
+        "d": {"x": np.array([1, 2]), "_x": np.array([True, True])},
+        "_d": np.array([False, True]),
+    }
     assert split_infos(merged, 2) == [{"a": 1.5}, {"d": {"x": 2}}]
 
 
@@ -125,6 +141,6 @@ def test_the_id_works_in_sb3_subprocess_workers(start_method):
     )
     observations = vec.reset()
     assert observations.shape == (2, 96, 96, 3)
-    observations, rewards, dones, infos = vec.step(np.zeros((2, 3), np.float32))
+    observations, rewards, _, infos = vec.step(np.zeros((2, 3), np.float32))
     assert rewards.shape == (2,) and "tiles_total" in infos[0]
     vec.close()

@@ -62,7 +62,7 @@ class BatchVecEnv(VecEnv):
                     self.reset_infos[index] = split[index]
         self._reset_seeds()
         self._reset_options()
-        return observations
+        return observations  # type: ignore[no-any-return]  # the vector env's batch
 
     def step_async(self, actions: np.ndarray) -> None:
         self.venv.step_async(actions)
@@ -74,7 +74,7 @@ class BatchVecEnv(VecEnv):
         for index, info in enumerate(infos):
             info["TimeLimit.truncated"] = bool(truncated[index] and not terminated[index])
         if dones.any():  # the vector env resets them at the next step; SB3 wants it now
-            done = np.flatnonzero(dones)
+            done = np.flatnonzero(dones).tolist()
             for index in done:
                 infos[index]["terminal_observation"] = _row(observations, index)
             observations, reset_infos = self.venv.reset(options={"reset_mask": dones})
@@ -119,7 +119,7 @@ class BatchVecEnv(VecEnv):
 
 
 def make_vec_env(
-    env_id: str | Callable[[], gym.Env],
+    env_id: str | Callable[..., gym.Env],
     n_envs: int = 1,
     seed: int | None = None,
     workers: int | None = None,

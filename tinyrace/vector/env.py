@@ -35,6 +35,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import multiprocessing
+import time
 from collections.abc import Callable, Sequence
 from copy import deepcopy
 from multiprocessing.connection import Connection
@@ -57,9 +58,11 @@ from tinyrace.vector.worker import acquire, work
 
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
 # [s] the parent polls for the workers' answers this long before it sleeps (a step of
-# a few envs takes less: the answer comes without a wake-up)
+# a few envs takes less: the answer comes without a wake-up); after a step that took
+# longer it sleeps at once, leaving the cores to the workers
 PARENT_SPIN = 0.002
 LIVENESS = 0.05  # [s] a sleeping parent looks this often whether the workers live
+StepResult = tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]
 ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
 
 
@@ -104,6 +107,9 @@ class BatchVectorEnv(VectorEnv):
         self._local: EnvSlice | None = None  # workers=0: the envs, stepped in this process
         self._memory: Any = None
         self._pending = False
+        self._pending_local: StepResult | None = None  # workers=0: step_async's results
+        self._by_pipe = False  # the pending step's actions went over the pipes
+        self._spin = PARENT_SPIN  # [s] how long the parent polls for the next answers
         # The shared memory must exist before the workers start, so the spaces come from
         # an env made here (as AsyncVectorEnv does).
         probe = env_fns[0]()
@@ -123,7 +129,10 @@ class BatchVectorEnv(VectorEnv):
         bounds = np.linspace(0, self.num_envs, min(max(workers, 1), self.num_envs) + 1)
         self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds.astype(int))]
         layout = shared.Layout(
-            self.single_observation_space, self.single_action_space, self.num_envs, len(self._slices)
+            self.single_observation_space,
+            self.single_action_space,
+            self.num_envs,
+            len(self._slices),
         )
         if workers == 0:
             self._views = layout.views(bytearray(layout.size))
@@ -143,14 +152,14 @@ class BatchVectorEnv(VectorEnv):
 
     def _start(self, ctx: Any, layout: shared.Layout, batch_physics: bool, numpy_from: int) -> None:
         block = (self._memory.name, layout)
+        physics = (batch_physics, numpy_from)
         for number, envs in enumerate(self._slices):
             parent, child = ctx.Pipe()
             semaphores = (ctx.Semaphore(0), ctx.Semaphore(0))  # go, done
             fns = [CloudpickleWrapper(fn) for fn in self.env_fns[envs]]
             process = ctx.Process(
                 target=work,
-                args=(child, parent, number, fns, envs.start, block, semaphores)
-                + (batch_physics, numpy_from),
+                args=(child, parent, number, fns, envs.start, block, semaphores, *physics),
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
             )
@@ -244,8 +253,10 @@ class BatchVectorEnv(VectorEnv):
             raise gym.error.NoAsyncCallError("step_wait was called before step_async", "step")
         self._pending = False
         if self._local is not None:
-            results, self._pending_local = self._pending_local, None
-            return results  # type: ignore[no-any-return]
+            results = self._pending_local
+            assert results is not None
+            self._pending_local = None
+            return results
         if self._by_pipe:
             replies = self._receive_all()
             rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
@@ -256,8 +267,11 @@ class BatchVectorEnv(VectorEnv):
                 np.array(truncated, dtype=np.bool_),
                 merge_infos(env_infos, self.num_envs),
             )
+        start = time.perf_counter()
         for number in range(len(self._slices)):
             self._await_done(number)
+        # a step that took longer than the spin will likely again: sleep at once next time
+        self._spin = PARENT_SPIN if time.perf_counter() - start < PARENT_SPIN else 0.0
         infos = self._collect_infos()
         views = self._views
         return (
@@ -271,7 +285,7 @@ class BatchVectorEnv(VectorEnv):
     def _await_done(self, number: int) -> None:
         """Wait for worker ``number``'s step; if it dies meanwhile, close and say so."""
         done = self._semaphores[number][1]
-        if acquire(done, PARENT_SPIN):
+        if acquire(done, self._spin):
             return
         process = self._processes[number]
         try:
@@ -344,7 +358,9 @@ class BatchVectorEnv(VectorEnv):
     def set_attr_at(self, indices: Sequence[int], name: str, value: Any) -> None:
         """Set attribute ``name`` of the envs in ``indices`` to ``value``."""
         only = sorted(set(indices))
-        self._exchange("set_attr", [(name, [value] * (s.stop - s.start), only) for s in self._slices])
+        self._exchange(
+            "set_attr", [(name, [value] * (s.stop - s.start), only) for s in self._slices]
+        )
 
     def wrapped_by(self, kind: type[Any]) -> tuple[bool, ...]:
         """Whether each env has a wrapper of type ``kind``."""
@@ -423,7 +439,7 @@ class BatchVectorEnv(VectorEnv):
             with contextlib.suppress(OSError):  # a dead worker: reported by _receive_all
                 self._signal(number, pipe, message)
 
-    def _signal(self, number: int, pipe: Connection, message: bytes) -> None:
+    def _signal(self, number: int, pipe: Connection, message: bytes | memoryview) -> None:
         """Put ``message`` in worker ``number``'s pipe and wake it to read it."""
         pipe.send_bytes(message)
         self._views.command[number] = shared.PIPE
@@ -480,4 +496,3 @@ def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
 
 def _flat(per_worker: Sequence[list[Any]]) -> list[Any]:
     return list(itertools.chain.from_iterable(per_worker))
-

@@ -5,13 +5,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, SupportsFloat
 
-Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
-
 import gymnasium as gym
 import numpy as np
 
 from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
 from tinyrace.vector.shared import Views
+
+Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 
 
 class EnvSlice:
@@ -47,7 +47,8 @@ class EnvSlice:
             try:
                 observation, info = env.reset(seed=seeds[j], options=options)
             except Exception as error:
-                raise _blame(error, self.first + j)
+                _blame(error, self.first + j)
+                raise
             self._write(j, observation)
             self.autoreset[j] = False
             infos.append(info)
@@ -61,16 +62,18 @@ class EnvSlice:
         rewards, terminations, truncations and infos, as lists (they pickle faster)."""
         n = len(self.envs)
         autoreset = self.autoreset
+        results: list[Step | None]
         if self.batch is not None:
             results = self.batch.step(actions, autoreset, self._write)
         else:
-            results: list[Step | None] = [None] * n
+            results = [None] * n
             for j, env in enumerate(self.envs):
                 if not autoreset[j]:
                     try:
                         results[j] = env.step(actions[j])
                     except Exception as error:
-                        raise _blame(error, self.first + j)
+                        _blame(error, self.first + j)
+                        raise
         rewards: list[SupportsFloat] = [0.0] * n
         terminated, truncated = [False] * n, [False] * n
         infos: list[dict[str, Any]] = [{}] * n
@@ -79,7 +82,8 @@ class EnvSlice:
                 try:
                     observation, infos[j] = self.envs[j].reset()
                 except Exception as error:
-                    raise _blame(error, self.first + j)
+                    _blame(error, self.first + j)
+                    raise
                 self._write(j, observation)
                 continue
             observation, rewards[j], terminated[j], truncated[j], infos[j] = result
@@ -118,9 +122,7 @@ class EnvSlice:
             found.append(isinstance(layer, kind))
         return found
 
-    def set_attr(
-        self, name: str, values: Sequence[Any], only: Sequence[int] | None = None
-    ) -> None:
+    def set_attr(self, name: str, values: Sequence[Any], only: Sequence[int] | None = None) -> None:
         """Set attribute ``name`` of each env to its value; ``only``: those envs (vector
         env indices), the others left alone."""
         for j, (env, value) in enumerate(zip(self.envs, values, strict=True)):
@@ -145,10 +147,10 @@ class EnvSlice:
             _write_nested(target, self.first + j, observation)
 
 
-def _blame(error: Exception, index: int) -> Exception:
-    """``error``, with a note naming the env that raised it (kept when it is pickled)."""
-    error.add_note(f"raised by env {index}")
-    return error
+def _blame(error: Exception, index: int) -> None:
+    """Add a note naming the env that raised ``error`` (kept when it is pickled)."""
+    if hasattr(error, "add_note"):  # Python >= 3.11
+        error.add_note(f"raised by env {index}")
 
 
 def _write_nested(target: Any, index: int, observation: Any) -> None:

@@ -39,9 +39,7 @@ def died(number: int, envs: slice, exitcode: int | None) -> RuntimeError:
     )
 
 
-def rebuild_error(
-    error: tuple[str, str, str, bytes | None], number: int, envs: slice
-) -> Exception:
+def rebuild_error(error: tuple[str, str, str, bytes | None], number: int, envs: slice) -> Exception:
     """The worker's exception (or a RuntimeError naming it), its traceback as a note."""
     name, message, trace, pickled = error
     rebuilt: Exception | None = None
@@ -61,8 +59,8 @@ def await_close(pipe: Connection, timeout: float) -> None:
     try:
         while pipe.poll(timeout):
             message = pipe.recv()
-            if isinstance(message, tuple) and len(message) == 2 and message[1] is not None:
-                if isinstance(message[1], str) and message[1] == CLOSED:
-                    return
+            closed = isinstance(message, tuple) and len(message) == 2
+            if closed and isinstance(message[1], str) and message[1] == CLOSED:
+                return
     except (EOFError, OSError):
         return

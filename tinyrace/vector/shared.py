@@ -17,6 +17,7 @@ dict ``merge_infos`` makes of the infos themselves, bit for bit.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from multiprocessing.shared_memory import SharedMemory
@@ -82,8 +83,10 @@ class Layout:
         self.observation_space, self.num_envs, self.workers = observation_space, num_envs, workers
         self.size = 0
         self._observations = self._place_space(observation_space)
-        array_actions = isinstance(action_space, LEAVES)
-        self._actions = self._place(action_space.shape, action_space.dtype) if array_actions else None  # type: ignore[arg-type]
+        array_actions = isinstance(action_space, LEAVES) and action_space.shape is not None
+        self._actions = (
+            self._place(action_space.shape or (), action_space.dtype) if array_actions else None
+        )
         self._rewards = self._place((), np.float64)
         self._terminated = self._place((), np.bool_)
         self._truncated = self._place((), np.bool_)
@@ -134,14 +137,10 @@ def free_block(block: SharedMemory | None) -> None:
     """Close and unlink ``block`` (once; a block already unlinked is left alone)."""
     if block is None:
         return
-    try:
+    with contextlib.suppress(BufferError):  # views still alive: the OS frees it with them
         block.close()
-    except BufferError:  # views still alive somewhere: unlink anyway, the OS frees it later
-        pass
-    try:
+    with contextlib.suppress(FileNotFoundError):
         block.unlink()
-    except FileNotFoundError:
-        pass
 
 
 # -- infos ------------------------------------------------------------------------------------
@@ -172,13 +171,13 @@ def flatten(info: dict[str, Any]) -> tuple[Signature, list[Any]] | None:
 
 def record_dtype(signature: Signature) -> np.dtype | None:
     """The record layout of infos with ``signature``; None if it exceeds INFO_BYTES."""
-    fields = []
+    fields: list[tuple[Any, ...]] = []
     for kind, length in _leaves(signature):
         name = f"f{len(fields)}"
         if kind is tuple:
             fields.append((name, np.float64, (length,)))
         else:
-            fields.append((name, np.dtype(kind)))  # type: ignore[arg-type]
+            fields.append((name, np.dtype(kind)))
     dtype = np.dtype(fields)
     return dtype if dtype.itemsize <= INFO_BYTES else None
 
@@ -193,9 +192,10 @@ def _leaves(signature: Signature) -> Iterator[tuple[Any, int]]:
 
 def records(infos: np.ndarray, dtype: np.dtype) -> np.ndarray:
     """The rows of ``infos`` (uint8, INFO_BYTES per env) as records of ``dtype``."""
-    return np.ndarray(
+    rows: np.ndarray = np.ndarray(
         (len(infos),), dtype=dtype, buffer=infos, offset=0, strides=(INFO_BYTES,)
     )
+    return rows
 
 
 def merge_columns(signature: Signature, rows: np.ndarray) -> dict[str, Any]:
