@@ -50,6 +50,7 @@ from gymnasium.vector.utils import CloudpickleWrapper, batch_space, iterate
 
 from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
 from tinyrace.vector import shared
+from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
 from tinyrace.vector.failures import await_close, check_count, died, rebuild_error
@@ -147,8 +148,7 @@ class BatchVectorEnv(VectorEnv):
         except BaseException:  # e.g. an env that cannot be made in a worker
             self.close()
             raise
-        self._signatures: list[shared.Signature | None] = [None] * len(self._slices)
-        self._records: list[np.ndarray | None] = [None] * len(self._slices)
+        self._answers = Answers(self._views.infos, self._slices)
 
     def _start(self, ctx: Any, layout: shared.Layout, batch_physics: bool, numpy_from: int) -> None:
         block = (self._memory.name, layout)
@@ -272,7 +272,11 @@ class BatchVectorEnv(VectorEnv):
             self._await_done(number)
         # a step that took longer than the spin will likely again: sleep at once next time
         self._spin = PARENT_SPIN if time.perf_counter() - start < PARENT_SPIN else 0.0
-        infos = self._collect_infos()
+        try:
+            infos = self._answers.collect(self._views.status, self._pipes)
+        except (EOFError, OSError):  # a worker died after its "done"
+            self.close()
+            raise
         views = self._views
         return (
             self._observations_out(),
@@ -297,46 +301,6 @@ class BatchVectorEnv(VectorEnv):
             if not self.closed:
                 self.close()
             raise
-
-    def _collect_infos(self) -> dict[str, Any]:
-        """The step's infos: columns of the records when every worker wrote the same kind,
-        else each env's info (from its record or the pipe), merged."""
-        status = self._views.status
-        per_worker: list[Any] = []
-        error: Exception | None = None
-        for number, pipe in enumerate(self._pipes):
-            code = int(status[number])
-            if code == shared.FAILED:
-                _, described = pipe.recv()
-                error = error or rebuild_error(described, number, self._slices[number])
-                per_worker.append(None)
-            elif code == shared.INFOS_BY_PIPE:
-                per_worker.append(pipe.recv())
-            else:
-                if code == shared.NEW_SIGNATURE:
-                    self._set_signature(number, pipe.recv())
-                per_worker.append(self._signatures[number])
-        if error is not None:
-            raise error
-        first = per_worker[0]
-        if isinstance(first, tuple) and all(s is first or s == first for s in per_worker):
-            dtype = self._records[0].dtype  # type: ignore[union-attr]
-            return shared.merge_columns(first, shared.records(self._views.infos, dtype))
-        infos: list[dict[str, Any]] = []
-        for number, item in enumerate(per_worker):
-            if isinstance(item, list):
-                infos.extend(item)
-            else:
-                rows = self._records[number]
-                assert rows is not None and item is not None
-                infos.extend(shared.unflatten(item, row) for row in rows)
-        return merge_infos(infos, self.num_envs)
-
-    def _set_signature(self, number: int, signature: shared.Signature) -> None:
-        dtype = shared.record_dtype(signature)
-        assert dtype is not None  # the worker checked it
-        self._signatures[number] = signature
-        self._records[number] = shared.records(self._views.infos[self._slices[number]], dtype)
 
     def render(self) -> tuple[Any, ...]:
         """The frames of the envs, as a tuple (``SyncVectorEnv.render``)."""
@@ -407,7 +371,7 @@ class BatchVectorEnv(VectorEnv):
                 process.terminate()
                 process.join()
         self._pipes, self._processes, self._semaphores = [], [], []
-        self._views = self._records = None  # type: ignore[assignment]  # before the memory
+        self._views = self._answers = None  # type: ignore[assignment]  # before the memory
         memory, self._memory = self._memory, None
         shared.free_block(memory)
 
