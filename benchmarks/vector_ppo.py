@@ -26,26 +26,28 @@ HYPERPARAMETERS: dict[str, Any] = {"n_steps": 64, "batch_size": 128, "n_epochs":
 
 
 def batch_envs(envs: int, workers: int) -> Any:
+    from stable_baselines3.common.vec_env import VecMonitor
+
     from tinyrace.sb3 import make_vec_env
 
-    return make_vec_env("tinyrace/CarRacing-v0", envs, seed=0, workers=workers)
+    return VecMonitor(make_vec_env("tinyrace/CarRacing-v0", envs, seed=0, workers=workers))
 
 
 def subproc_envs(env_id: str, envs: int) -> Any:
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import SubprocVecEnv
 
-    return make_vec_env(env_id, n_envs=envs, seed=0, vec_env_cls=SubprocVecEnv)
+    return make_vec_env(env_id, n_envs=envs, seed=0, vec_env_cls=SubprocVecEnv)  # Monitor each
 
 
 def fps(make: Callable[[], Any], timesteps: int) -> float:
     """PPO's timesteps per second on the envs ``make`` builds (frames stacked)."""
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
+    from stable_baselines3.common.vec_env import VecFrameStack
 
     torch.set_num_threads(1)
-    envs = VecFrameStack(VecMonitor(make()), 4)
+    envs = VecFrameStack(make(), 4)
     model = PPO("CnnPolicy", envs, **HYPERPARAMETERS)
     start = time.perf_counter()
     model.learn(timesteps)
