@@ -27,7 +27,6 @@ HYPERPARAMETERS: dict[str, Any] = {"n_steps": 64, "batch_size": 128, "n_epochs":
 
 def batch_envs(envs: int, workers: int) -> Any:
     from stable_baselines3.common.vec_env import VecMonitor
-
     from tinyrace.sb3 import make_vec_env
 
     return VecMonitor(make_vec_env("tinyrace/CarRacing-v0", envs, seed=0, workers=workers))
