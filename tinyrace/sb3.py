@@ -37,7 +37,7 @@ from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.make import _workers
 
 
-class BatchVecEnv(VecEnv):
+class BatchVecEnv(VecEnv):  # type: ignore[misc, unused-ignore]  # Any where SB3 is absent
     """An SB3 ``VecEnv`` that steps a ``BatchVectorEnv`` (which it owns and closes)."""
 
     def __init__(self, venv: BatchVectorEnv):
@@ -62,7 +62,7 @@ class BatchVecEnv(VecEnv):
                     self.reset_infos[index] = split[index]
         self._reset_seeds()
         self._reset_options()
-        return observations  # type: ignore[no-any-return]  # the vector env's batch
+        return observations  # type: ignore[no-any-return, unused-ignore]  # the batch
 
     def step_async(self, actions: np.ndarray) -> None:
         self.venv.step_async(actions)
