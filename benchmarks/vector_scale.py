@@ -36,6 +36,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 ENV_ID = "tinyrace/CarRacing-v0"
 WARMUP = 50  # [steps] per case and round, before the clock starts
 ACTIONS = 256  # pre-drawn action batches, cycled
+# [s] this thread's CPU time per env-step: one env's, and the last vector case's (with
+# workers=0, the whole work; robust to a loaded machine, unlike wall time)
+CPU: dict[str, list[float]] = {"one_env": [], "last": [], "in_process_8": []}
 
 
 def _actions(num_envs: int) -> list[np.ndarray]:
@@ -51,18 +54,19 @@ def rate_single(seconds: float) -> float:
     env = gym.make(ENV_ID)
     env.reset(seed=0)
     actions = [a[0] for a in _actions(1)]
-    steps, start, deadline = 0, 0.0, None
+    steps, start, cpu, deadline = 0, 0.0, 0.0, None
     while True:
         _, _, terminated, truncated, _ = env.step(actions[steps % ACTIONS])
         if terminated or truncated:
             env.reset()
         steps += 1
         if steps == WARMUP:
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.thread_time()
             deadline = start + seconds
         if deadline is not None and steps % 16 == 0 and time.perf_counter() > deadline:
             break
     rate = (steps - WARMUP) / (time.perf_counter() - start)
+    CPU["one_env"].append((time.thread_time() - cpu) / (steps - WARMUP))
     env.close()
     return rate
 
@@ -75,11 +79,12 @@ def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float) -> float
         actions = _actions(num_envs)
         for index in range(WARMUP):
             vector.step(actions[index % ACTIONS])
-        steps, start = 0, time.perf_counter()
+        steps, start, cpu = 0, time.perf_counter(), time.thread_time()
         deadline = start + seconds
         while time.perf_counter() < deadline:
             vector.step(actions[steps % ACTIONS])
             steps += 1
+        CPU["last"] = [(time.thread_time() - cpu) / (steps * num_envs)]
         return steps * num_envs / (time.perf_counter() - start)
     finally:
         vector.close()
@@ -159,6 +164,8 @@ def main() -> None:
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
             rates[name].append(measure(args.seconds))
+            if name == "in_process_8":
+                CPU["in_process_8"] += CPU["last"]
         print(
             f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()),
             flush=True,
@@ -168,6 +175,11 @@ def main() -> None:
     for name, values in rates.items():
         median = statistics.median(values)
         print(f"  {name:>14}: {median:>10,.0f}  {median / one:6.2f}x")
+    one_cpu, batch_cpu = (statistics.median(CPU[k]) for k in ("one_env", "in_process_8"))
+    print(
+        f"  CPU per env-step (thread time): one env {one_cpu * 1e6:.0f} us, 8 in process "
+        f"{batch_cpu * 1e6:.0f} us: {one_cpu / batch_cpu:.2f}x"
+    )
     print(f"load after: {os.getloadavg()}")
 
 
