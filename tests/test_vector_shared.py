@@ -22,6 +22,7 @@ from gymnasium.error import AlreadyPendingCallError, NoAsyncCallError
 import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
 from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector.pool import AsyncBatch
 from tinyrace.vector.shared import INFO_BYTES, flatten, merge_columns, record_dtype, records
 
 SHM = Path("/dev/shm")
@@ -204,3 +205,45 @@ def test_closing_frees_the_shared_memory():
     in_process = make_batch("tinyrace/CarRacing-v0", 2, workers=0)
     assert segments() <= before  # workers=0 shares nothing
     in_process.close()
+
+
+# -- EnvPool-style asynchronous stepping ------------------------------------------------------
+def _action(env: int, step: int) -> np.ndarray:
+    """Env ``env``'s action at its ``step``-th step: the same in every stepping order."""
+    rng = np.random.default_rng(1000 * env + step)
+    return np.array([rng.uniform(-1, 1), rng.uniform(0, 1), rng.uniform(0, 0.2)], np.float32)
+
+
+def test_async_batches_give_each_env_its_sync_trajectory():
+    num_envs, steps = 4, 60
+    sync = gym.vector.SyncVectorEnv([FACTORIES["procedural"]] * num_envs)
+    sync.reset(seed=3)
+    expected = [[] for _ in range(num_envs)]
+    for step in range(steps):
+        actions = np.stack([_action(i, step) for i in range(num_envs)])
+        observations, rewards, terminated, truncated, _ = sync.step(actions)
+        for i in range(num_envs):
+            expected[i].append((observations[i], rewards[i], terminated[i], truncated[i]))
+    sync.close()
+    pool = AsyncBatch(BatchVectorEnv([FACTORIES["procedural"]] * num_envs, workers=2), 2)
+    pool.reset(seed=3)
+    got = [[] for _ in range(num_envs)]
+    pool.send(np.stack([_action(i, 0) for i in range(num_envs)]), np.arange(num_envs))
+    with bounded():
+        while min(len(g) for g in got) < steps:
+            observations, rewards, terminated, truncated, infos = pool.recv()
+            ids = infos["env_id"]
+            assert len(ids) == 2 and sorted(ids.tolist()) in ([0, 1], [2, 3])
+            assert infos["speed"].shape == (2,) and infos["_speed"].all()
+            for row, i in enumerate(ids.tolist()):
+                got[i].append((observations[row], rewards[row], terminated[row], truncated[row]))
+            if all(len(got[i]) < steps for i in ids.tolist()):
+                pool.send(np.stack([_action(i, len(got[i])) for i in ids.tolist()]), ids)
+        while pool.in_flight:
+            pool.recv()
+    for i in range(num_envs):
+        for step, (a, b) in enumerate(zip(expected[i], got[i][:steps], strict=True)):
+            assert np.array_equal(a[0], b[0]) and a[1:] == b[1:], (i, step)
+    with pytest.raises(ValueError, match="every env of worker 0"):
+        pool.send(np.zeros((1, 3), np.float32), [0])
+    pool.close()

@@ -21,13 +21,18 @@ class Answers:
         self.signatures: list[shared.Signature | None] = [None] * len(slices)
         self.records: list[np.ndarray | None] = [None] * len(slices)
 
-    def collect(self, status: np.ndarray, pipes: list[Connection]) -> dict[str, Any]:
-        """The step's merged infos: columns of the records when every worker wrote the
-        same kind, else each env's info (from its record or the pipe), merged. A worker's
-        exception is raised once every worker's answer is read (the pipes stay in step)."""
+    def collect(
+        self, status: np.ndarray, pipes: list[Connection], numbers: list[int] | None = None
+    ) -> dict[str, Any]:
+        """The step's merged infos of the workers ``numbers`` (default: all), their envs in
+        that order: columns of the records when every worker wrote the same kind, else
+        each env's info (from its record or the pipe), merged. A worker's exception is
+        raised once every worker's answer is read (the pipes stay in step)."""
+        numbers = list(range(len(pipes))) if numbers is None else numbers
         per_worker: list[Any] = []
         error: Exception | None = None
-        for number, pipe in enumerate(pipes):
+        for number in numbers:
+            pipe = pipes[number]
             code = int(status[number])
             if code == shared.FAILED:
                 _, described = pipe.recv()
@@ -43,18 +48,21 @@ class Answers:
             raise error
         first = per_worker[0]
         if isinstance(first, tuple) and all(s is first or s == first for s in per_worker):
-            rows = self.records[0]
+            rows = self.records[numbers[0]]
             assert rows is not None
-            return shared.merge_columns(first, shared.records(self.infos, rows.dtype))
+            if len(numbers) == len(pipes):  # every env, in order: one view of all records
+                return shared.merge_columns(first, shared.records(self.infos, rows.dtype))
+            parts = [self.records[number] for number in numbers]
+            return shared.merge_columns(first, np.concatenate(parts))  # type: ignore[arg-type]
         infos: list[dict[str, Any]] = []
-        for number, item in enumerate(per_worker):
+        for number, item in zip(numbers, per_worker, strict=True):
             if isinstance(item, list):
                 infos.extend(item)
             else:
                 records = self.records[number]
                 assert records is not None and item is not None
                 infos.extend(shared.unflatten(item, row) for row in records)
-        return merge_infos(infos, len(self.infos))
+        return merge_infos(infos, len(infos))
 
     def _announce(self, number: int, signature: shared.Signature) -> None:
         dtype = shared.record_dtype(signature)
