@@ -79,6 +79,7 @@ class Episode:
                 start.paths,
                 start.hint,
                 start.value,
+                footprints=world.footprints(),
             )
             if problems:
                 raise ConfigError(problems)
