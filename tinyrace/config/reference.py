@@ -31,6 +31,7 @@ from tinyrace.config.schema import (
     SimConfig,
     track_configs,
 )
+from tinyrace.config.rules import rule_configs
 from tinyrace.config.sensors import sensor_configs
 
 START = (
@@ -56,6 +57,7 @@ def sections() -> list[tuple[str, type, str]]:
             CrossTrackErrorConfig,
             "reward_design.cross_track_error",
         ),
+        *((f"rules[i]: type {name}", c, "rules[i]") for name, c in rule_configs().items()),
         ("files", FilesConfig, "files"),
         ("race", RaceConfig, "race"),
         ("race.cars[i]", RaceCarConfig, "race.cars[i]"),
