@@ -110,12 +110,12 @@ def test_a_plugins_entry_point_registers_its_part_before_gym_make(tmp_path: Path
         "'scale': 2.0}])\n"
         "observation, _ = env.reset(seed=0)\n"
         "observation, *_ = env.step(env.action_space.sample())\n"
-        "problems, summary = validate_path(__import__('pathlib').Path(r'%s'))\n"
+        "problems, summary = validate_path(__import__('pathlib').Path(r'TRACK'))\n"
         "titles = [title for title, _, _ in sections()]\n"
         "print(json.dumps({'plugins': tinyrace.load_plugins(), 't': float(observation['t'][0]),"
         " 'dt': env.unwrapped.dt, 'problems': problems, 'reference': "
-        "'sensors[i]: type sim_clock' in titles}))\n" % track
-    )
+        "'sensors[i]: type sim_clock' in titles}))\n"
+    ).replace("TRACK", str(track))
     done = _run(script, tmp_path)
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout.strip().splitlines()[-1])
@@ -157,14 +157,13 @@ def test_a_rule_part_registered_by_user_code_is_in_the_reference_and_validates(
         "from tinyrace.episodes.rules import register\n"
         "from tinyrace.config.reference import markdown\n"
         "from tinyrace.validate import validate_path\n"
-        "before = validate_path(Path(r'%s'))[0]\n"
+        "before = validate_path(Path(r'TRACK'))[0]\n"
         "register(toy_rules.SPEED_LIMIT)\n"
-        "after = validate_path(Path(r'%s'))[0]\n"
+        "after = validate_path(Path(r'TRACK'))[0]\n"
         "page = markdown()\n"
         "print(json.dumps({'before': before, 'after': after, 'page': 'rules[i]: type "
         "speed_limit' in page and 'steps over the limit that end the episode' in page}))\n"
-        % (track, track)
-    )
+    ).replace("TRACK", str(track))
     done = _run(script, tmp_path, ROOT / "tests")
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout.strip().splitlines()[-1])

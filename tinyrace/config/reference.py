@@ -17,6 +17,7 @@ from typing import Any, Literal, Union
 from tinyrace.config.bounds import BOUNDS
 from tinyrace.config.colors import Color
 from tinyrace.config.experiment import ExperimentConfig, OutputConfig
+from tinyrace.config.rules import rule_configs
 from tinyrace.config.schema import (
     CacheConfig,
     CameraConfig,
@@ -31,7 +32,6 @@ from tinyrace.config.schema import (
     SimConfig,
     track_configs,
 )
-from tinyrace.config.rules import rule_configs
 from tinyrace.config.sensors import sensor_configs
 
 START = (
