@@ -22,8 +22,9 @@ from typing import Any
 
 import gymnasium as gym
 
+from tinyrace.cars import CARRACING_WHEELBASE
 from tinyrace.drivers import DRIVERS, ActionAdapter, CenterlineDriver
-from tinyrace.drivers.centerline import CARRACING_WHEELBASE, Route, route_of
+from tinyrace.drivers.centerline import Route, route_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.race.env import race_info
