@@ -21,7 +21,6 @@ from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
-from tinyrace.rewards import shaping_from_config
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.birdseye_camera import BirdseyeCamera
 from tinyrace.sensors.ground import make_ground
@@ -108,11 +107,7 @@ class TinyRaceEnv(gym.Env):
         self.sensors: list[Sensor] = self.make_sensors()
         self.box_camera = self.box_sensor(self.sensors)
         self.observation_space = self._observation_space()
-        shaping = (
-            _checked_shaping(cte_shaping)
-            if cte_shaping is not None
-            else shaping_from_config(self.config.reward_design)
-        )
+        shaping = None if cte_shaping is None else _checked_shaping(cte_shaping)
         self.referee = Referee(self.config, shaping)  # judges every step of every episode
         self.dt = self.referee.dt  # [s]
         self.episode: Episode | None = None

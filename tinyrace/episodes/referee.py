@@ -12,7 +12,15 @@ from dataclasses import dataclass
 
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.rules import rule_type
-from tinyrace.rewards import CteShaping, Design, Judging, end_of, judging, reward_terms
+from tinyrace.rewards import (
+    CteShaping,
+    Design,
+    Judging,
+    end_of,
+    judging,
+    reward_terms,
+    shaping_from_config,
+)
 from tinyrace.world.facts import StepFacts
 
 
@@ -29,9 +37,11 @@ class CarStep:
 
 class Referee:
     """The rewards and ends of every step of an env (``config``'s ``reward_design`` and
-    ``rules:`` entries, ``shaping`` for the cross-track error)."""
+    ``rules:`` entries; ``shaping`` for the cross-track error, else the design's own)."""
 
-    def __init__(self, config: EnvConfig, shaping: CteShaping | None) -> None:
+    def __init__(self, config: EnvConfig, shaping: CteShaping | None = None) -> None:
+        if shaping is None:
+            shaping = shaping_from_config(config.reward_design)
         settings = {entry.type: entry for entry in config.rules}
         self.design = Design(config.reward_design, shaping, settings)
         self.limit = config.sim.step_limit  # [steps] or None
