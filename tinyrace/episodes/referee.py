@@ -8,7 +8,7 @@ asks its referee for each car's ``CarStep`` after the rules found the facts.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from tinyrace.config import EnvConfig
 from tinyrace.episodes.rules import rule_type
@@ -24,8 +24,7 @@ from tinyrace.rewards import (
 from tinyrace.world.facts import StepFacts
 
 
-@dataclass(frozen=True)
-class CarStep:
+class CarStep(NamedTuple):
     """One car's step, judged: its reward terms and their sum, why its episode ends (or
     None) and whether the step limit truncates it."""
 
