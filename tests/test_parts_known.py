@@ -1,7 +1,7 @@
-"""Registered is known: ``import tinyrace`` alone fills every registry and every config
-family; a part registered before ``gym.make`` (by the user's code, or by a plugin's entry
-point in the group ``tinyrace.parts``) is known to config loading, ``tinyrace validate``
-and the generated YAML reference."""
+"""Registered is known: the config layer knows every built-in part's config before any
+registry is imported; a part registered before ``gym.make`` (by the user's code, or by a
+plugin's entry point in the group ``tinyrace.parts``, loaded by ``import tinyrace``) is
+known to config loading, ``tinyrace validate`` and the generated YAML reference."""
 
 from __future__ import annotations
 
@@ -73,29 +73,38 @@ def _run(script: str, *paths: Path) -> subprocess.CompletedProcess[str]:
     )
 
 
-def test_import_tinyrace_alone_makes_every_built_in_part_known_to_every_layer() -> None:
+def test_every_built_in_part_is_known_to_the_config_layer_before_its_registry() -> None:
+    """``import tinyrace`` stays light (tests/test_carracing_env.py), yet the config layer
+    knows every built-in track type and sensor type that the registries, once imported,
+    hold: config loading accepts them without a registry imported by hand."""
     script = (
         "import json, sys, tinyrace\n"
         "from tinyrace.config import families, load_env_config\n"
         "from tinyrace.config.sensors import SensorConfig\n"
-        "sensors = sys.modules['tinyrace.sensors.registry'].SENSOR_TYPES\n"
-        "rules = sys.modules['tinyrace.episodes.rules'].RULES\n"
-        "models = sys.modules['tinyrace.cars.registry'].CAR_MODELS\n"
-        "sources = sys.modules['tinyrace.tracks.registry'].TRACK_SOURCES\n"
-        "drivers = sys.modules['tinyrace.drivers'].DRIVERS\n"
+        "from tinyrace.config.tracks import TrackFacts\n"
         "config = load_env_config({'sensors': [{'id': 'l', 'type': 'lidar'}]}).config\n"
-        "print(json.dumps({'sensors': sorted(sensors), 'family': sorted(families.members("
-        "SensorConfig)), 'rules': sorted(rules), 'models': sorted(models), 'sources': "
-        "sorted(sources), 'drivers': sorted(drivers), 'loaded': config.sensors[0].type}))\n"
+        "early = 'tinyrace.sensors.registry' in sys.modules\n"
+        "known = {'sensors': sorted(families.members(SensorConfig)), "
+        "'tracks': sorted(families.members(TrackFacts))}\n"
+        "tinyrace.load_parts()\n"
+        "from tinyrace.sensors.registry import SENSOR_TYPES\n"
+        "from tinyrace.tracks.registry import TRACK_SOURCES\n"
+        "from tinyrace.episodes.rules import RULES\n"
+        "from tinyrace.cars.registry import CAR_MODELS\n"
+        "from tinyrace.drivers import DRIVERS\n"
+        "print(json.dumps({**known, 'early': early, 'loaded': config.sensors[0].type, "
+        "'registry_sensors': sorted(SENSOR_TYPES), 'registry_tracks': sorted(TRACK_SOURCES), "
+        "'rules': sorted(RULES), 'models': sorted(CAR_MODELS), 'drivers': sorted(DRIVERS)}))\n"
     )
     done = _run(script)
     assert done.returncode == 0, done.stderr
     known = json.loads(done.stdout.strip().splitlines()[-1])
-    assert known["sensors"] == known["family"] and "lidar" in known["sensors"]
+    assert known["loaded"] == "lidar" and known["early"] is False
+    assert known["sensors"] == known["registry_sensors"] and "lidar" in known["sensors"]
+    assert known["tracks"] == known["registry_tracks"] and "ros_map" in known["tracks"]
     assert {"tile_touches", "playfield", "collisions", "clock", "laps"} <= set(known["rules"])
     assert {"dynamic", "kinematic", "single_track"} <= set(known["models"])
-    assert {"procedural", "image", "ros_map"} <= set(known["sources"])
-    assert "centerline" in known["drivers"] and known["loaded"] == "lidar"
+    assert "centerline" in known["drivers"]
 
 
 def test_a_plugins_entry_point_registers_its_part_before_gym_make(tmp_path: Path) -> None:

@@ -1,11 +1,15 @@
 """tinyrace: fast 2D driving environments for reinforcement learning and driving-software tests.
 
-Importing tinyrace registers its Gymnasium environments and makes every part known to
-every layer: the built-in track sources, car models, sensor types, rule parts and drivers
-(their registries filled, their config classes in the config families the loader, the
-validator and the YAML reference read), then the parts of installed plugins: each entry
-point of the group ``tinyrace.parts`` is loaded, and called when it is a function (one
-that registers parts, as ``tinyrace.sensors.registry.register`` does).
+Importing tinyrace registers its Gymnasium environments and the parts of installed
+plugins: each entry point of the group ``tinyrace.parts`` is loaded, and called when it is
+a function (one that registers parts, as ``tinyrace.sensors.registry.register`` does).
+It imports nothing heavy (no pymunk, cv2 or window library) unless a plugin does.
+
+The built-in parts need no loading: each registry (track sources, car models, sensor
+types, rule parts, drivers) holds its built-in parts as soon as any layer imports it, and
+the config classes of the built-in track types and sensor types are in the config
+families the loader, ``tinyrace validate`` and the YAML reference read from the start.
+``load_parts()`` imports every registry at once (for a tool that lists them all).
 """
 
 from importlib.metadata import PackageNotFoundError, entry_points, version
@@ -52,15 +56,13 @@ def load_plugins() -> list[str]:
     return loaded
 
 
-def _load_parts() -> None:
-    """Every built-in part's registry (importing it registers them), then the plugins."""
+def load_parts() -> None:
+    """Import every built-in registry (each fills itself with its parts when imported)."""
     import tinyrace.cars.registry
     import tinyrace.drivers
     import tinyrace.episodes.rules
     import tinyrace.sensors.registry
     import tinyrace.tracks.registry  # noqa: F401
 
-    load_plugins()
 
-
-_load_parts()
+load_plugins()

@@ -133,7 +133,11 @@ def _tiles_pay(facts: StepFacts, design: Design) -> float | None:
 
 # ``tiles``: tile_progress shared out over the tiles, paid per newly visited tile; the
 # tiles the reset's step touched are paid by the first step (as CarRacing does)
-TILES = Term("tiles", _tiles_pay, lambda d: bool(d.rewards.tile_progress), carried=True)
+def _tiles_paid(design: Design) -> bool:
+    return bool(design.rewards.tile_progress)
+
+
+TILES = Term("tiles", _tiles_pay, _tiles_paid, carried=True)
 
 
 def _off_road_pay(facts: StepFacts, design: Design) -> float | None:
@@ -144,7 +148,11 @@ def _off_road_pay(facts: StepFacts, design: Design) -> float | None:
 
 
 # ``off_road``: the penalty per wheel on grass
-OFF_ROAD = Term("off_road", _off_road_pay, lambda d: bool(d.rewards.off_road_penalty))
+def _off_road_charged(design: Design) -> bool:
+    return bool(design.rewards.off_road_penalty)
+
+
+OFF_ROAD = Term("off_road", _off_road_pay, _off_road_charged)
 
 
 def road_tiles(track: Track) -> np.ndarray:

@@ -13,5 +13,9 @@ def _time_pay(facts: StepFacts, design: Design) -> float | None:
     return -penalty if penalty else None
 
 
-TIME = Term("time", _time_pay, lambda d: bool(d.rewards.time_penalty))
+def _charged(design: Design) -> bool:
+    return bool(design.rewards.time_penalty)
+
+
+TIME = Term("time", _time_pay, _charged)
 PART = RulePart("clock", None, terms=(TIME,), always=True, doc="the per-step time cost")

@@ -53,6 +53,14 @@ def _walls_pay(facts: StepFacts, design: Design) -> float | None:
     return -penalty if facts.wall_hit and penalty else None
 
 
+def _cones_charged(design: Design) -> bool:
+    return bool(design.rewards.cone_penalty)
+
+
+def _walls_charged(design: Design) -> bool:
+    return bool(design.rewards.wall_penalty)
+
+
 def _ends(facts: StepFacts, design: Design) -> bool:
     return facts.collision_ends
 
@@ -62,8 +70,8 @@ PART = RulePart(
     Collisions,
     furnish,
     terms=(
-        Term("cones", _cones_pay, lambda d: bool(d.rewards.cone_penalty)),
-        Term("walls", _walls_pay, lambda d: bool(d.rewards.wall_penalty)),
+        Term("cones", _cones_pay, _cones_charged),
+        Term("walls", _walls_pay, _walls_charged),
     ),
     ends=(End("collision", _ends),),
     doc="walls stop the car, cones are knocked over",

@@ -38,5 +38,9 @@ def _cte_pay(facts: StepFacts, design: Design) -> float | None:
 
 
 # ``cte``: the shaping of the cross-track error
-CTE = Term("cte", _cte_pay, lambda d: d.shaping is not None)
+def _shaped(design: Design) -> bool:
+    return design.shaping is not None
+
+
+CTE = Term("cte", _cte_pay, _shaped)
 PART = RulePart("trajectory_error", TrajectoryError, terms=(CTE,), doc="distance to a trajectory")
