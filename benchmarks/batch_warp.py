@@ -25,7 +25,7 @@ from typing import Any
 import cv2
 import gymnasium as gym
 import tinyrace  # noqa: F401  (registers the env ids)
-import tinyrace.sensors.texture as texture
+import tinyrace.ground.texture as texture
 from tinyrace.vector import make_batch
 
 from report import print_table
@@ -36,7 +36,7 @@ WARMUP = 300  # [steps] of each before the rounds
 
 
 class TimedCv2:
-    """cv2 for ``tinyrace.sensors.texture``, with its ``warpAffine`` calls timed."""
+    """cv2 for ``tinyrace.ground.texture``, with its ``warpAffine`` calls timed."""
 
     def __init__(self) -> None:
         self.seconds, self.calls = 0.0, 0

@@ -4,7 +4,7 @@
 on the circuit (``birdseye``: a 96x96 birdseye camera each; ``perspective``: a 120x160
 pinhole camera each) or CarRacing's track (``carracing``: its 96x96 view each) takes 60
 warm-up steps with a little gas, then ``STEPS`` more; ``DRAW`` ``off`` replaces the drawing
-of the other cars (``sensors/draw_cars.py``) by nothing. Run it with ``STEPS`` = 0 and K
+of the other cars (``sensors/machinery/draw_cars.py``) by nothing. Run it with ``STEPS`` = 0 and K
 under ``valgrind --tool=callgrind``; instructions per race step = (Ir(K) - Ir(0)) / K;
 the drawing's share = 1 - off / on.
 """

@@ -263,7 +263,7 @@ began = time.perf_counter()
 import numpy as np
 from tinyrace.sensors.kernels import raycast as raycast_numba
 from tinyrace.sensors.lidar import beam_angles
-from tinyrace.sensors.raycast import beam_fan, distance_field, fan_angle
+from tinyrace.sensors.machinery.raycast import beam_fan, distance_field, fan_angle
 imported = time.perf_counter() - began
 blocking = np.random.default_rng(0).random((400, 400)) < 0.01
 field = distance_field(blocking, np.eye(2, 3), reach=200.0, near=False)

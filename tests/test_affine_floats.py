@@ -15,13 +15,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
-from tinyrace.sensors.chase_view import chase_affine, chase_matrix
-from tinyrace.sensors.texture import (
+from tinyrace.ground.texture import (
     GroundTexture,
     compose,
     compose_shift_scale,
     fused_multiply_add,
 )
+from tinyrace.sensors.chase_view import chase_affine, chase_matrix
 
 # finite, no subnormals, far from overflow: the range an affine of a track lives in
 _FLOATS = st.one_of(

@@ -16,7 +16,7 @@ import yaml
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
-from tinyrace.sensors.pinhole import Pinhole, car_to_world, render
+from tinyrace.sensors.machinery.pinhole import Pinhole, car_to_world, render
 
 SIZE = (640, 480)  # (width, height) [px]
 MATRIX = (410.0, 405.0, 327.3, 236.8)  # fx, fy, cx, cy [px]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tinyrace.cars.state import CarState, WheelState
-from tinyrace.sensors.dashboard import Dashboard
+from tinyrace.sensors.machinery.dashboard import Dashboard
 
 
 def _car(rng: np.random.Generator) -> CarState:

@@ -14,9 +14,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
-from tinyrace.sensors import drawing, texture
-from tinyrace.sensors.dashboard import BAR_STEPS, Dashboard
+from tinyrace.ground import texture
 from tinyrace.sensors.kernels import drawing as drawing_numba
+from tinyrace.sensors.machinery import drawing
+from tinyrace.sensors.machinery.dashboard import BAR_STEPS, Dashboard
 
 SIZES = [(96, 96, 4), (600, 400, 1), (1000, 800, 1), (150, 120, 2)]  # (w, h, supersample)
 

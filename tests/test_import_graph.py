@@ -14,31 +14,30 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "tinyrace"
 
-# Bottom to top; a module may import from its own layer and the layers below it.
+# Bottom to top; a module may import from its own layer and the layers below it. The top
+# layers are in the order docs/ARCHITECTURE.md draws (checked below): what users run is
+# ordered too, not one flat layer.
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "examples", "actions", "kernels", "cache"),
     ("config",),
     ("tracks",),
     ("cars",),
     ("world",),
+    ("ground",),
     ("sensors",),
     ("render",),
     ("rewards",),
     ("episodes",),
     ("env", "carracing"),
-    (
-        "drivers",
-        "experiment",
-        "vector",
-        "race",
-        "validate",
-        "play",
-        "train",
-        "rllib",
-        "cli",
-        "__main__",
-        "__init__",
-    ),
+    ("drivers",),
+    ("__init__",),
+    ("race",),
+    ("vector",),
+    ("experiment",),
+    ("validate",),
+    ("play",),
+    ("train", "rllib"),
+    ("cli", "__main__"),
 )
 
 
@@ -218,3 +217,30 @@ def test_episodes_hold_rules_not_pictures():
 def test_the_cycle_finder_finds_cycles():
     assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert _cycle({"a": {"b"}, "b": set()}) is None
+
+
+ARCHITECTURE = PACKAGE.parent / "docs" / "ARCHITECTURE.md"
+
+
+def _drawn_layers() -> list[tuple[str, ...]]:
+    """The layers of docs/ARCHITECTURE.md's first picture, bottom to top: each line that
+    starts with module (``env.py``) or folder (``race/``) names is one layer."""
+    text = ARCHITECTURE.read_text()
+    picture = text.split("```", 2)[1]
+    drawn = []
+    for line in picture.splitlines():
+        names = []
+        for token in line.split():
+            if not (token.endswith(".py") or token.endswith("/")):
+                break
+            names.append(token.removesuffix(".py").removesuffix("/"))
+        if names:
+            drawn.append(tuple(names))
+    return drawn[::-1]
+
+
+def test_the_layers_are_the_ones_the_architecture_page_draws():
+    """The page's picture and LAYERS list the same layers in the same order."""
+    assert [tuple(sorted(layer)) for layer in _drawn_layers()] == [
+        tuple(sorted(layer)) for layer in LAYERS
+    ]

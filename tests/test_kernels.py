@@ -11,7 +11,9 @@ import pytest
 import tinyrace
 from tinyrace.cars import dynamic_python
 from tinyrace.cars.dynamic import physics_kernel
-from tinyrace.sensors import cones, drawing, lidar, other_cars, raycast_numpy, texture
+from tinyrace.ground import texture
+from tinyrace.sensors import cones, lidar
+from tinyrace.sensors.machinery import drawing, other_cars, raycast_numpy
 from tinyrace.tracks import procedural, procedural_source
 
 KERNELS = {  # name: (compiled module, chooser, plain path's name, plain path)
@@ -32,7 +34,7 @@ KERNELS = {  # name: (compiled module, chooser, plain path's name, plain path)
         procedural.trace_path,
     ),
     "texture": (
-        "tinyrace.sensors.kernels.texture",
+        "tinyrace.ground.kernels.texture",
         texture.compose_kernel,
         "numpy",
         texture.shift_scale_matrix,

@@ -10,8 +10,8 @@ import pytest
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
-from tinyrace.sensors.common import color_mask
 from tinyrace.sensors.lidar import WALL_CLASS
+from tinyrace.sensors.machinery.common import color_mask
 from tinyrace.tracks.cone_map import CLASSES
 
 WALLS_AND_CONES = ["walls", "cones"]  # not off_road: the metric tracks' road edges are no walls

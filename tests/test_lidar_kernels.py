@@ -17,10 +17,10 @@ from tinyrace.errors import ConfigError
 from tinyrace.examples import TRACKS_DIR
 from tinyrace.kernels import compiled as compiled_module
 from tinyrace.kernels.compiled import compiler
-from tinyrace.sensors import raycast, raycast_numpy
 from tinyrace.sensors.kernels import raycast as raycast_numba
 from tinyrace.sensors.lidar import KERNEL_VARIABLE, LidarSensor, beam_angles, kernel
-from tinyrace.sensors.raycast import (
+from tinyrace.sensors.machinery import raycast, raycast_numpy
+from tinyrace.sensors.machinery.raycast import (
     FINE_STEP,
     SECTOR_SLOPES,
     SECTORS,

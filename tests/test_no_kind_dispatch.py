@@ -25,11 +25,11 @@ import numpy as np
 import pytest
 
 from tinyrace.config import EnvConfig
+from tinyrace.ground.grounds import ImageGround, MetricGround, ProceduralGround, make_ground
 from tinyrace.render.image_pictures import ImagePictures
 from tinyrace.render.metric_pictures import MetricPictures
 from tinyrace.render.procedural_pictures import ProceduralPictures
 from tinyrace.render.setup import make_pictures
-from tinyrace.sensors.ground import ImageGround, MetricGround, ProceduralGround, make_ground
 from tinyrace.tracks.base import PaintedGround, Track, TrackDraw
 from tinyrace.tracks.registry import TRACK_SOURCES
 

@@ -1,4 +1,4 @@
-"""Beams against other cars' footprints (sensors/other_cars.py) against an exact
+"""Beams against other cars' footprints (sensors/machinery/other_cars.py) against an exact
 segment-by-segment intersection."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from tinyrace.cars.state import CarState, footprint_corners
-from tinyrace.sensors.other_cars import ranges_to_cars
+from tinyrace.sensors.machinery.other_cars import ranges_to_cars
 
 
 def car_at(x: float, y: float, heading: float, length: float, width: float) -> CarState:

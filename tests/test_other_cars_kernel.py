@@ -10,9 +10,9 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tinyrace.sensors import other_cars
 from tinyrace.sensors.kernels import other_cars as compiled
 from tinyrace.sensors.lidar import beam_angles, directions
+from tinyrace.sensors.machinery import other_cars
 
 FANS = [(1, 270.0), (3, 2.0), (7, 90.0), (8, 30.0), (100, 359.0), (360, 360.0), (1080, 270.0)]
 

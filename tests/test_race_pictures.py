@@ -1,5 +1,5 @@
-"""A car in a race sees the others (sensors/draw_cars.py): cameras draw their footprints in
-their colours, the overviews and videos draw and name every car."""
+"""A car in a race sees the others (sensors/machinery/draw_cars.py): cameras draw their
+footprints in their colours, the overviews and videos draw and name every car."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import pytest
 
 from tinyrace.cars.state import CarState, footprint_corners
 from tinyrace.config import car_colors
+from tinyrace.ground.texture import transform_points
 from tinyrace.race import parallel_env
-from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, draw_names, draw_race
-from tinyrace.sensors.pinhole import world_to_car
-from tinyrace.sensors.texture import transform_points
+from tinyrace.sensors.machinery.draw_cars import CAR_LABEL, CarLooks, draw_names, draw_race
+from tinyrace.sensors.machinery.pinhole import world_to_car
 from tinyrace.world.snapshot import Snapshot
 
 CAMERA = {"id": "camera", "resolution": [100, 100], "roi": [10, 10]}  # 10 px/m, 10 m ahead

@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from tinyrace.sensors import raycast, raycast_numpy
 from tinyrace.sensors.kernels import raycast as raycast_numba
 from tinyrace.sensors.lidar import add_noise, beam_angles, directions
-from tinyrace.sensors.raycast import beam_fan, fan_angle
+from tinyrace.sensors.machinery import raycast, raycast_numpy
+from tinyrace.sensors.machinery.raycast import beam_fan, fan_angle
 
 SIZE = 401  # cells per side of the test maps
 PATHS = ["numpy", "numba"]

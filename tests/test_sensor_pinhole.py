@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, world_to_car
+from tinyrace.sensors.machinery.pinhole import Pinhole, car_to_world, render, world_to_car
 
 PX_PER_UNIT = 20.0  # texture resolution of the test ground
 SIDE = 60.0  # [u] the test ground spans [-30, 30] on both axes, y up

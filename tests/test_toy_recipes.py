@@ -29,6 +29,7 @@ from tinyrace.cars.state import CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.knobs import REQUIRED, knob
 from tinyrace.config.schema import METRE_CAR, TrackFacts
+from tinyrace.config.sensors import SensorDefaults
 from tinyrace.drivers.centerline import CenterlineDriver
 from tinyrace.episodes.rules import RULES, Info, RuleBase, RulePart
 from tinyrace.episodes.rules import register as register_rule
@@ -36,9 +37,9 @@ from tinyrace.episodes.rules import unregister as unregister_rule
 from tinyrace.errors import ConfigError
 from tinyrace.rewards import ENDS, TERMS, Design, End, Term
 from tinyrace.sensors import registry as sensor_registry
-from tinyrace.sensors.base import SensorContext, SensorType
+from tinyrace.sensors.base import SensorContext, SensorType, TopDown
 from tinyrace.tracks import registry as track_registry
-from tinyrace.tracks.base import Track, TrackDraw, TrackRules, pick_index
+from tinyrace.tracks.base import PaintedGround, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import Contacts
@@ -63,8 +64,8 @@ class RingTrackConfig(TrackFacts):
 class RingSource:
     """One ring per config track; the start on its right-hand side, driving left round."""
 
-    kind = "ring"
-    painted = None
+    kind: str = "ring"
+    painted: PaintedGround | None = None
 
     def __init__(self, config: EnvConfig, base_dir: Path, source: str):
         self.tracks = tuple(_ring(c) for c in config.tracks if isinstance(c, RingTrackConfig))
@@ -167,7 +168,7 @@ SPEED_LIMIT = RulePart(
 
 
 @dataclass(frozen=True)
-class CompassConfig:
+class CompassConfig(SensorDefaults):
     """``sensors[i]`` of ``type: compass``: the car's heading as a unit vector."""
 
     id: str = knob(REQUIRED, "observation key of this sensor")
@@ -188,8 +189,15 @@ class Compass:
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
         heading = snapshot.car.pose[2]
         clean = np.array([math.cos(heading), math.sin(heading)])
-        noisy = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
-        return np.clip(noisy, -2.0, 2.0).astype(np.float32)
+        noisy: np.ndarray = clean + rng.normal(0.0, self.noise, 2) if self.noise > 0 else clean
+        clipped: np.ndarray = np.clip(noisy, -2.0, 2.0)
+        return clipped.astype(np.float32)
+
+    def describe(self) -> str:
+        return "the car's heading as a unit vector"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # no picture from above
 
 
 def build_compass(entry: CompassConfig, context: SensorContext) -> Compass:

@@ -216,7 +216,8 @@ def _run(args: argparse.Namespace) -> int:
     from tinyrace.experiment import print_report, run_experiment
     from tinyrace.experiment.target import load_target
 
-    experiment, track = load_target(args.experiment or default_experiment(), "NAME_OR_PATH")
+    target = args.experiment if args.experiment is not None else default_experiment()
+    experiment, track = load_target(target, "NAME_OR_PATH")
     experiment = _overridden(experiment, args)
     out = _out_folder(args.out, experiment.config.output.dir, args.force)
     config = experiment.config
@@ -298,7 +299,7 @@ def _train(args: argparse.Namespace) -> int:
     from tinyrace import train
 
     env = train.train_env(args.target, args.max_episode_steps)  # its problems before the import
-    out = train.model_file(args.out or f"ppo_{env.name}.zip", args.force)
+    out = train.model_file(args.out if args.out is not None else f"ppo_{env.name}.zip", args.force)
     lacking = train.missing()
     if lacking:
         print(f"tinyrace: error: {lacking}", file=sys.stderr)
@@ -361,9 +362,9 @@ def _examples(args: argparse.Namespace) -> int:
 
 # -- cache -------------------------------------------------------------------------------------
 def _cache(args: argparse.Namespace) -> int:
-    from tinyrace.cache import default_folder, disk
+    from tinyrace.cache import default_folder, disk, folder_of
 
-    folder = Path(args.dir).expanduser() if args.dir else default_folder()
+    folder = folder_of(args.dir, "<command line>", "--dir") if args.dir else default_folder()
     if args.action == "clear":
         removed = disk.clear(folder)
         print(f"removed {removed} cache file(s) from {folder}")

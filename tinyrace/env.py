@@ -18,14 +18,12 @@ from tinyrace.episodes.episode import Episode
 from tinyrace.episodes.referee import CarStep, Referee
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem, did_you_mean
+from tinyrace.ground.grounds import make_ground
 from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
-from tinyrace.sensors.birdseye_camera import BirdseyeCamera
-from tinyrace.sensors.ground import make_ground
 from tinyrace.sensors.registry import build_sensors, default_sensor
-from tinyrace.sensors.top_view import TopViewSensor
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
@@ -39,14 +37,21 @@ class TinyRaceEnv(gym.Env):
     """A car on a 2D track seen from above, configured by YAML.
 
     ## Description
-    Two kinds of track, chosen by the config's ``track.type``: ``procedural``
-    reproduces Gymnasium's CarRacing-v3 (same tracks for the same seed, same
-    rewards), ``image`` loads a tinycarlo 1.1 track folder whose pixel colours
-    are markings, obstacles and a reference trajectory.
+    Composed of parts the config names. The track source by ``tracks[].type``
+    (``tinyrace.tracks.registry``): ``procedural`` reproduces Gymnasium's
+    CarRacing-v3 (same tracks for the same seed, same rewards), ``image`` loads a tinycarlo
+    track folder whose pixel colours are markings, obstacles and a reference trajectory,
+    ``centerline`` a reference line with its widths (CSV), ``cone_map`` a cone layout and
+    ``ros_map`` an occupancy map of a ROS map server. The car model by ``car.model``
+    (``tinyrace.cars.registry``; each track type has a default): ``dynamic`` (CarRacing's
+    car with tyre slip), ``kinematic`` (tinycarlo's constant-speed bicycle),
+    ``kinematic_throttle`` (a kinematic bicycle with throttle) and ``single_track``
+    (CommonRoad's single-track model, F1TENTH's). Parts registered by user code join them.
 
     ## Action Space
-    Dynamic car: Box([-1, 0, 0], [1, 1, 1]) as [steer, gas, brake] (steer +1 turns
-    right), or CarRacing's Discrete(5). Kinematic car: Box(-1, 1, (1,)) steering.
+    The car model's (``env.unwrapped.action_spec``): ``dynamic``: Box [steer, gas, brake] or
+    CarRacing's Discrete(5); ``kinematic``: Box [steer]; ``kinematic_throttle``: Box [steer,
+    throttle]; ``single_track``: Box [steering angle, speed], or raw rates.
 
     ## Observation Space
     Every observation is a sensor's (``tinyrace.sensors``; tinycarlo's ``cameras:`` are
@@ -303,8 +308,9 @@ class TinyRaceEnv(gym.Env):
     def _camera_views(self, snapshot: Snapshot) -> CameraViews:
         """Each top-down image sensor's image now (this step's, when it has observed) and
         its track window (None for a view without one), for the overview picture."""
-        views = [s for s in self.sensors if isinstance(s, (BirdseyeCamera, TopViewSensor))]
-        if not views:
+        views = [(s, s.top_down(snapshot, self.layout)) for s in self.sensors]
+        shown = [(sensor, top.window) for sensor, top in views if top is not None]
+        if not shown:
             return []
         observed = self._observed
         if observed is None or observed[0] is not self.episode or observed[1] != self.steps:
@@ -317,9 +323,9 @@ class TinyRaceEnv(gym.Env):
                     if view.id in images
                     else view.observe(snapshot, self.layout, self.np_random)
                 ),
-                view.window(snapshot, self.layout) if isinstance(view, BirdseyeCamera) else None,
+                window,
             )
-            for view in views
+            for view, window in shown
         ]
 
     def close(self) -> None:
@@ -363,12 +369,17 @@ def _check_poses(value: object, count: int) -> list[tuple[float, float, float]] 
     """The ``poses`` reset option: one finite (x, y, heading) per car [track units, rad]."""
     if value is None:
         return None
-    try:
-        poses = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    try:  # numbers only: true/false and text are no coordinates (the config refuses them too)
+        raw = np.asarray(value, dtype=object)
+        numbers = all(
+            isinstance(x, (int, float, np.number)) and x is not True and x is not False
+            for x in raw.flat
+        )
+        poses = raw.astype(np.float64) if numbers else np.zeros(0)
+    except (TypeError, ValueError, OverflowError):
         poses = np.zeros(0)
     if poses.shape != (count, 3) or not np.isfinite(poses).all():
-        allowed = f"expected {count} finite (x, y, heading) poses, one per car"
+        allowed = f"expected {count} finite (x, y, heading) poses of numbers, one per car"
         raise ConfigError(Problem(RESET_SOURCE, "poses", _short(value), allowed))
     return [(float(x), float(y), float(h)) for x, y, h in poses.tolist()]
 

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any, cast
 import gymnasium as gym
 from gymnasium import spaces
 
+from tinyrace.config.bounds import MAX_TRAIN_ENVS
 from tinyrace.errors import ConfigError, Problem
 
 if TYPE_CHECKING:
@@ -47,8 +48,9 @@ class TrainEnv:
     name: str = "carracing"  # the default model file is ppo_<name>.zip
 
 
-def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], Any]) -> None:
-    """``tinyrace train``'s arguments; ``count(low, what)`` parses a whole number >= low."""
+def add_arguments(parser: argparse.ArgumentParser, count: Callable[..., Any]) -> None:
+    """``tinyrace train``'s arguments; ``count(low, what[, high])`` parses a whole number from
+    low (to high)."""
     parser.add_argument(
         "target",
         nargs="?",
@@ -57,7 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser, count: Callable[[int, str], A
     )
     whole, positive = count(0, "a whole number >= 0"), count(1, "a whole number >= 1")
     parser.add_argument("--timesteps", type=positive, default=200_000, help="env steps")
-    parser.add_argument("--envs", type=positive, default=4, help="envs, one process each")
+    envs = count(1, f"a whole number from 1 to {MAX_TRAIN_ENVS}", MAX_TRAIN_ENVS)
+    parser.add_argument("--envs", type=envs, default=4, help="envs, one process each")
     parser.add_argument(
         "--seed",
         type=whole,
@@ -123,6 +126,13 @@ def train_env(target: str | Path | None, max_episode_steps: int | None = None) -
     from tinyrace.experiment.target import load_target
 
     experiment, _ = load_target(target, "NAME_OR_PATH")
+    if experiment.is_race:
+        allowed = (
+            f"a race of {len(experiment.agents)} cars cannot be trained this way: tinyrace "
+            "train trains one car; name an experiment or track of one car (a learner among "
+            "driven cars: gym.make(..., opponents=[...]); all cars: tinyrace.race.parallel_env)"
+        )
+        raise ConfigError(Problem("<command line>", "NAME_OR_PATH", str(target), allowed))
     steps = max_episode_steps or experiment.config.max_steps
     limit = {"max_episode_steps": steps} if steps is not None else {}
     return TrainEnv(TINYRACE_ID, {**experiment.env_kwargs, **limit}, experiment.name)

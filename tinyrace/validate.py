@@ -3,18 +3,23 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import gymnasium as gym
 import numpy as np
 
-from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config
+from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, load_env_config, race_cars
 from tinyrace.config.loader import read_yaml
 from tinyrace.episodes.setup import Parts, prepare
 from tinyrace.episodes.start_pose import start_fits
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.sensors.base import Sensor
+
+if TYPE_CHECKING:
+    from tinyrace.env import TinyRaceEnv
 
 COMMAND_LINE = "<command line>"  # the source named by errors in command-line arguments
 
@@ -48,17 +53,17 @@ def validate_path(path: Path) -> tuple[list[str], str]:
     try:
         loaded = load_any(path)
         parts = build_course(loaded)  # the same parts the env is made of
-        try_one_step(loaded)
+        observes = try_one_step(loaded)
     except ConfigError as exc:
         return [str(p) for p in exc.problems], ""
-    return [], describe(parts.config) + start_summary(parts)
+    return [], describe(parts.config, observes) + start_summary(parts)
 
 
 def start_summary(parts: Parts) -> str:
     """'; start free: ...' on tracks with walls or cones: the car's footprint at its spawns
     and how far it is from the nearest wall and cone (``prepare`` refuses a spawn that
     touches either)."""
-    fits = start_fits(parts.config, getattr(parts.source, "tracks", ()), parts.car_model)
+    fits = start_fits(parts.config, parts.source.tracks, parts.car_model)
     if not fits:
         return ""
     length, width = fits[0].size
@@ -72,14 +77,16 @@ def start_summary(parts: Parts) -> str:
     return text
 
 
-def try_one_step(loaded: LoadedConfig) -> None:
-    """Build the env of ``loaded``, reset it with seed 0 and take one neutral step."""
+def try_one_step(loaded: LoadedConfig) -> str:
+    """Build the env of ``loaded``, reset it with seed 0 and take one neutral step; what
+    its cars observe (``observation_summary``)."""
     from tinyrace.env import TinyRaceEnv
 
     env = TinyRaceEnv(config=loaded)
     try:
         env.reset(seed=0)
         env.step(neutral_action(env.action_space))
+        return observation_summary(env)
     finally:
         env.close()
 
@@ -93,12 +100,49 @@ def neutral_action(space: gym.Space[Any]) -> Any:
     return space.sample()  # another kind of space: any valid action
 
 
-def describe(config: EnvConfig) -> str:
-    cameras = ", ".join(f"{c.id} {c.resolution[0]}x{c.resolution[1]}" for c in config.cameras)
-    return (
+def describe(config: EnvConfig, observes: str) -> str:
+    """One line: the tracks, the car model, the race (when there are several cars) and what
+    the cars observe (``observation_summary``)."""
+    text = (
         f"{config.kind} track ({len(config.tracks)} track(s)), {config.car.model} car, "
-        f"{config.sim.fps:g} fps, cameras: {cameras or 'CarRacing 96x96 view'}"
+        f"{config.sim.fps:g} fps"
     )
+    cars = race_cars(config)
+    if len(cars) > 1:
+        names = ", ".join(car.id for car in cars)
+        laps = config.race.laps
+        text += f"; race: {len(cars)} cars ({names}), {laps} lap{'s' if laps > 1 else ''}"
+    return f"{text}; {observes}"
+
+
+def observation_summary(env: TinyRaceEnv) -> str:
+    """What the first car observes (``observes: ...``), then each race car with sensors of
+    its own (`` | car_1 observes: ...``); the others observe as the first does."""
+    sections = ["observes: " + "; ".join(observation_lines(env.sensors))]
+    entries = env.config.race.cars
+    for index, car in enumerate(race_cars(env.config)[1:], start=1):
+        entry = entries[index] if index < len(entries) else None
+        if entry is not None and (entry.cameras is not None or entry.sensors is not None):
+            lines = observation_lines(env.make_sensors(index))
+            sections.append(f"{car.id} observes: " + "; ".join(lines))
+    return " | ".join(sections)
+
+
+def observation_lines(sensors: Sequence[Sensor]) -> list[str]:
+    """Each sensor the env observes: its id, its space's shapes and dtypes, and what it
+    says it observes (``Sensor.describe``)."""
+    return [f"{s.id} {space_text(s.space)} ({s.describe()})" for s in sensors]
+
+
+def space_text(space: gym.Space[Any]) -> str:
+    """A space's shape and dtype (``96x96x3 uint8``); a Dict's, key by key; a Discrete's
+    values (``0..32``)."""
+    if isinstance(space, gym.spaces.Dict):
+        return "{" + ", ".join(f"{k}: {space_text(v)}" for k, v in space.spaces.items()) + "}"
+    if isinstance(space, gym.spaces.Discrete):
+        return f"{space.start}..{space.start + space.n - 1}"
+    shape = "x".join(str(side) for side in space.shape or ())
+    return f"{shape} {space.dtype}"
 
 
 @dataclass(frozen=True)
@@ -112,8 +156,8 @@ class Picture:
 
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
+    from tinyrace.ground.grounds import make_ground
     from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
-    from tinyrace.sensors.ground import MetricGround
 
     if target == "procedural":  # the CLI's name for CarRacing's track
         image = procedural_picture(load_env_config().config, seed)
@@ -124,13 +168,13 @@ def picture(target: str, seed: int) -> Picture:
     name = named.name if named.is_dir() else named.stem  # `show .` names the folder
     inputs = input_files(path, loaded)
     parts = build_course(loaded)
-    if parts.source.painted is not None:  # a new track per seed, painted from its tiles
+    ground = make_ground(parts.config, parts.source)  # what the env's pictures are drawn on
+    if ground.rescalable() is not None:  # a new track per seed, painted from its tiles
         return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
-    if first.picture is not None:
+    if ground.carries_pictures:
         return Picture(image_picture(parts.config, first), name, inputs)
-    texture = MetricGround(parts.config, parts.source.tracks).texture(first)
-    return Picture(metric_picture(first, texture), name, inputs)
+    return Picture(metric_picture(first, ground.texture(first)), name, inputs)
 
 
 def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:

@@ -26,6 +26,7 @@ from typing import Any, Protocol, TypeVar
 
 from tinyrace.cache import disk
 from tinyrace.cache.digest import digest, freeze
+from tinyrace.errors import ConfigError, Problem
 
 T = TypeVar("T")
 DIR_VARIABLE = "TINYRACE_CACHE_DIR"  # environment variable: the cache folder
@@ -52,13 +53,38 @@ class Settings:
 
 
 def default_folder() -> Path:
-    """``$TINYRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/tinyrace``, else ``~/.cache/tinyrace``."""
+    """``$TINYRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/tinyrace``, else ``~/.cache/tinyrace``.
+    A ConfigError when the variable names no folder the system can have."""
     chosen = os.environ.get(DIR_VARIABLE)
     if chosen:
-        return Path(chosen).expanduser()
+        return folder_of(chosen, "<environment>", f"${DIR_VARIABLE}")
     xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg else Path.home() / ".cache"
+    base = folder_of(xdg, "<environment>", "$XDG_CACHE_HOME") if xdg else Path.home() / ".cache"
     return base / "tinyrace"
+
+
+def folder_of(text: str, source: str, key: str) -> Path:
+    """The cache folder ``text`` names (``~`` and ``~user`` expanded); a ConfigError naming
+    ``source`` and ``key`` when it holds a NUL byte or names a user this system lacks."""
+    allowed = None
+    if "\x00" in text:
+        allowed = "expected a folder name without a NUL byte"
+    else:
+        try:
+            return Path(text).expanduser()
+        except RuntimeError:  # ~nosuchuser
+            user = text.split("/", 1)[0]
+            allowed = f"expected a folder; {user} names no user of this system"
+    raise ConfigError(Problem(source, key, text, allowed))
+
+
+def folder_problems(text: str, source: str, key: str) -> list[Problem]:
+    """``folder_of``'s problems, as a list (empty when ``text`` names a folder)."""
+    try:
+        folder_of(text, source, key)
+    except ConfigError as error:
+        return error.problems
+    return []
 
 
 class Codec(Protocol[T]):
@@ -131,10 +157,19 @@ def _through_disk(name: str, build: Callable[[], T], settings: Settings, codec: 
                     entry = _stored(value, name, settings, codec)
                     if entry is None:
                         return value
+        return codec.decode(entry)
+    except disk.LockHeld as error:  # a builder that hangs: this process builds its own copy
+        warnings.warn(
+            f"tinyrace: the cache entry {error.filename} is being built elsewhere ({error}); "
+            "this process builds its own copy in memory",
+            RuntimeWarning,
+            stacklevel=3,
+        )
     except OSError as error:
         _warn_once(folder, error)
-        return _built(build)
-    return codec.decode(entry)
+    except (KeyError, IndexError, ValueError, TypeError) as error:  # an entry of other code
+        _warn_once(folder, OSError(f"an entry does not decode: {type(error).__name__} {error}"))
+    return _built(build)
 
 
 def _stored(value: T, name: str, settings: Settings, codec: Codec[T]) -> disk.Entry | None:

@@ -10,24 +10,38 @@ track's large read-only data. One file per entry, ``<key>.npc``, in the cache fo
                            arrays, each at a multiple of ALIGN bytes
 
 An entry is trusted only when every header field is the one expected and the payload's
-length and checksum match: a corrupt, truncated, foreign (other tinyrace version or
-machine) or misnamed file is rebuilt. Writers write a temporary file and rename it into
-place (``os.replace``), under a lock file where the platform has ``fcntl``: two processes
-building one entry at once never leave a mixed file, and the second waits for the first
-and maps its result. Past ``max_bytes`` the least recently used entries are removed.
+length and keyed checksum match (an HMAC-SHA256 of the header and payload under the
+folder's own random key, ``KEY_FILE``, which only tinyrace writes): a corrupt, truncated,
+foreign (other tinyrace version or machine), misnamed or hand-made file is rebuilt.
+Writers write a temporary file and rename it into place (``os.replace``), under a lock
+file where the platform has ``fcntl``: two processes building one entry at once never
+leave a mixed file, and the second waits for the first (at most ``LOCK_WAIT`` seconds,
+then it builds its own copy in memory, and the warning names the holder's process) and
+maps its result. Past ``max_bytes`` the least recently used entries are removed.
+
+Only regular files are read, mapped or locked (opened without blocking and without
+following links): a FIFO, device, folder or link at an entry's name is an ``OSError``
+(the caller shares in memory) and is never removed. Only files the cache writes (named
+``<64 hex digits>.npc`` / ``.lock``, or ``.tmp-*.npc``, and starting as it writes them)
+are ever removed, by ``trim`` and ``clear``.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
+import hmac
 import json
 import mmap
 import os
 import platform
+import re
+import stat
 import struct
 import sys
 import tempfile
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,12 +49,26 @@ from typing import Any
 
 import numpy as np
 
+from tinyrace.cache.files import (
+    KEY_BYTES,
+    KEY_FILE,
+    NotRegular,
+    check_replaceable,
+    folder_key,
+    mac,
+    open_regular,
+)
+
 MAGIC = b"TINYRACE-CACHE\x00\x00"  # 16 bytes
-FORMAT = 1  # the layout of this file format
+FORMAT = 2  # the layout of this file format (2: the checksum is keyed)
 SUFFIX = ".npc"
 LOCK_SUFFIX = ".lock"
 TEMP_PREFIX = ".tmp-"
 ALIGN = 64  # [bytes] arrays start at multiples of this
+LOCK_WAIT = 120.0  # [s] the longest wait for another process's lock (config/bounds.py lists it)
+ENTRY_NAME = re.compile(r"[0-9a-f]{64}\.npc")  # what the cache names its files
+LOCK_NAME = re.compile(r"[0-9a-f]{64}\.lock")
+TEMP_NAME = re.compile(r"\.tmp-[a-z0-9_]{6,16}\.npc")  # tempfile.mkstemp's names
 # magic, format, header size, version, machine, key, payload length, sha256, meta length
 _HEADER = struct.Struct("<16sII32s32s64sQ32sQ")
 HEADER = _HEADER.size
@@ -62,6 +90,10 @@ def machine_tag() -> str:
     return hashlib.sha256("|".join(parts).encode()).hexdigest()[:32]
 
 
+class LockHeld(OSError):
+    """Another process held an entry's lock past ``LOCK_WAIT``."""
+
+
 @dataclass(frozen=True)
 class Entry:
     """What an entry holds: plain JSON ``values`` and named arrays."""
@@ -76,22 +108,25 @@ def path_of(folder: Path, key: str) -> Path:
 
 def read(folder: Path, key: str, version: str) -> Entry | None:
     """The entry ``key`` mapped read-only, or None when there is none or it is not to be
-    trusted (see the module docstring); an untrusted file is removed."""
+    trusted (see the module docstring); an untrusted regular file is removed. A name that
+    is not a regular file raises ``NotRegular`` (an OSError) and is left alone."""
     path = path_of(folder, key)
     try:
-        with open(path, "rb") as file:
-            size = os.fstat(file.fileno()).st_size
-            if size < HEADER:
-                raise ValueError("truncated header")
-            mapped = mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ)
+        fd = open_regular(path, os.O_RDONLY)
     except FileNotFoundError:
         return None
-    except (OSError, ValueError):
-        _remove(path)
-        return None
-    entry = _trusted(mapped, key, version)
+    try:
+        size = os.fstat(fd).st_size
+        ours = size == 0 or os.pread(fd, len(MAGIC), 0) == MAGIC  # else someone else's file
+        mapped = mmap.mmap(fd, 0, access=mmap.ACCESS_READ) if size >= HEADER else None
+    finally:
+        os.close(fd)
+    entry = None if mapped is None else _trusted(mapped, key, version, folder_key(folder))
     if entry is None:
-        mapped.close()
+        if mapped is not None:
+            mapped.close()
+        if not ours:
+            raise NotRegular(errno.EINVAL, "not a file of the cache (left alone)", str(path))
         _remove(path)
         return None
     with contextlib.suppress(OSError):
@@ -99,7 +134,7 @@ def read(folder: Path, key: str, version: str) -> Entry | None:
     return entry
 
 
-def _trusted(mapped: mmap.mmap, key: str, version: str) -> Entry | None:
+def _trusted(mapped: mmap.mmap, key: str, version: str, secret: bytes) -> Entry | None:
     fields = _HEADER.unpack_from(mapped, 0)
     magic, fmt, header, file_version, machine, file_key, length, checksum, meta_length = fields
     expected = (MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(), key.encode())
@@ -109,7 +144,8 @@ def _trusted(mapped: mmap.mmap, key: str, version: str) -> Entry | None:
         return None
     payload = memoryview(mapped)[HEADER:]
     try:
-        if hashlib.sha256(payload).digest() != checksum:
+        unsigned = _HEADER.pack(*fields[:7], bytes(32), meta_length)
+        if not hmac.compare_digest(mac(secret, [unsigned, payload]), checksum):
             return None
         meta = json.loads(bytes(payload[:meta_length]))
         arrays = {
@@ -141,22 +177,24 @@ def write(folder: Path, key: str, version: str, entry: Entry) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     meta, layout = _layout(entry)
     length = layout[-1][2] if layout else len(meta)
-    hasher = hashlib.sha256()
-    for chunk in _payload(meta, layout):
-        hasher.update(chunk)
-    header = _HEADER.pack(MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(),
-                          key.encode(), length, hasher.digest(), len(meta))  # fmt: skip
+    fields = (MAGIC, FORMAT, HEADER, _text(version, 32), machine_tag().encode(), key.encode(),
+              length)  # fmt: skip
+    unsigned = _HEADER.pack(*fields, bytes(32), len(meta))
+    signature = mac(folder_key(folder), [unsigned, *_payload(meta, layout)])
+    header = _HEADER.pack(*fields, signature, len(meta))
+    target = path_of(folder, key)
+    check_replaceable(target)
     handle, temp = tempfile.mkstemp(prefix=TEMP_PREFIX, suffix=SUFFIX, dir=folder)
     try:
         with os.fdopen(handle, "wb") as file:
             file.write(header)
             for chunk in _payload(meta, layout):
                 file.write(chunk)
-        os.replace(temp, path_of(folder, key))
+        os.replace(temp, target)
     except BaseException:
         _remove(Path(temp))
         raise
-    return path_of(folder, key)
+    return target
 
 
 def _layout(entry: Entry) -> tuple[bytes, list[tuple[np.ndarray, int, int]]]:
@@ -197,7 +235,8 @@ def _text(text: str, size: int) -> bytes:
 @contextlib.contextmanager
 def locked(folder: Path, key: str) -> Iterator[None]:
     """Hold the entry's lock file while building it (where the platform has ``fcntl``;
-    elsewhere the rename alone keeps the file whole)."""
+    elsewhere the rename alone keeps the file whole). A lock another process holds past
+    ``LOCK_WAIT`` seconds raises ``LockHeld`` naming that process."""
     try:
         import fcntl
     except ImportError:  # pragma: no cover - Windows
@@ -205,27 +244,61 @@ def locked(folder: Path, key: str) -> Iterator[None]:
         return
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{key}{LOCK_SUFFIX}"
-    with open(path, "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    fd = open_regular(path, os.O_RDWR | os.O_CREAT)
+    try:
+        held = os.pread(fd, 33, 0)
+        if held and not held.strip().isdigit():  # a file of someone else's: never truncated
+            raise NotRegular(errno.EINVAL, "not a lock file of the cache (left alone)", str(path))
+        deadline = time.monotonic() + LOCK_WAIT
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    raise LockHeld(
+                        errno.EAGAIN,
+                        f"its lock is held by {_holder(fd)} for more than {LOCK_WAIT:g} s",
+                        str(path),
+                    ) from None
+                time.sleep(0.05)
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)  # who holds it, for a waiter's message
         try:
             yield
         finally:
             if not path_of(folder, key).exists():  # nothing stored: no lock file left behind
                 _remove(path)
-            fcntl.flock(lock, fcntl.LOCK_UN)
+            fcntl.flock(fd, fcntl.LOCK_UN)
+    finally:
+        os.close(fd)
+
+
+def _holder(fd: int) -> str:
+    """The process that wrote the lock file ``fd`` (its id), as far as it says."""
+    text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    return f"process {text}" if text.isdigit() else "another process"
 
 
 def entries(folder: Path) -> list[Path]:
-    """The cache files of ``folder``, least recently used first."""
-    if not folder.is_dir():
-        return []
+    """The cache files of ``folder`` (regular files named as the cache names them, starting
+    with its MAGIC), least recently used first."""
     found = []
-    for path in folder.glob(f"*{SUFFIX}"):
-        if path.name.startswith(TEMP_PREFIX):
-            continue
+    for path in _names(folder, ENTRY_NAME):
         with contextlib.suppress(OSError):
-            found.append((path.stat().st_mtime, path))
+            info = os.lstat(path)
+            if stat.S_ISREG(info.st_mode) and _written_here(path, ENTRY_NAME):
+                found.append((info.st_mtime, path))
     return [path for _, path in sorted(found)]
+
+
+def _names(folder: Path, pattern: re.Pattern[str]) -> list[Path]:
+    try:
+        if not stat.S_ISDIR(os.stat(folder).st_mode):
+            return []
+        return [folder / n for n in os.listdir(folder) if pattern.fullmatch(n)]
+    except (OSError, ValueError):
+        return []
 
 
 def trim(folder: Path, max_bytes: int) -> None:
@@ -238,23 +311,44 @@ def trim(folder: Path, max_bytes: int) -> None:
         if total <= max_bytes:
             break
         _remove(path)
-        _remove(path.with_suffix(LOCK_SUFFIX))
+        lock = path.with_suffix(LOCK_SUFFIX)
+        if _written_here(lock, LOCK_NAME):
+            _remove(lock)
         total -= size
 
 
 def clear(folder: Path) -> int:
-    """Remove every cache file, lock file and leftover temporary file of ``folder``; the
-    number of entries removed. Nothing else in the folder is touched."""
+    """Remove every cache file, lock file, leftover temporary file and the key of ``folder``; the
+    number of entries removed. Only regular files the cache wrote are removed: named as it
+    names them and, for entries and temporary files, starting with its MAGIC (a lock file
+    holds at most a process id). Nothing else in the folder is touched."""
     removed = 0
-    if not folder.is_dir():
-        return 0
-    for path in folder.iterdir():
-        name = path.name
-        ours = name.endswith(SUFFIX) or name.endswith(LOCK_SUFFIX)
-        if ours and path.is_file():
-            removed += name.endswith(SUFFIX) and not name.startswith(TEMP_PREFIX)
-            _remove(path)
+    for pattern in (ENTRY_NAME, TEMP_NAME, LOCK_NAME):
+        for path in _names(folder, pattern):
+            if _written_here(path, pattern):
+                removed += pattern is ENTRY_NAME
+                _remove(path)
+    key = folder / KEY_FILE
+    with contextlib.suppress(OSError, ValueError):
+        if stat.S_ISREG(os.lstat(key).st_mode) and os.lstat(key).st_size == KEY_BYTES:
+            _remove(key)  # the folder's key, which only the cache writes
     return removed
+
+
+def _written_here(path: Path, pattern: re.Pattern[str]) -> bool:
+    """Whether the regular file ``path`` is one the cache writes (see ``clear``)."""
+    try:
+        fd = open_regular(path, os.O_RDONLY)
+    except OSError:
+        return False
+    try:
+        head = os.pread(fd, len(MAGIC) + 1, 0)
+        size = os.fstat(fd).st_size
+    finally:
+        os.close(fd)
+    if pattern is LOCK_NAME:
+        return size <= 32 and (not head or head.strip().isdigit())
+    return head.startswith(MAGIC) or (pattern is TEMP_NAME and size == 0)
 
 
 def _size(path: Path) -> int:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from tinyrace.cache.disk import LOCK_WAIT as MAX_LOCK_WAIT  # [s] then a private build
+
 
 @dataclass(frozen=True)
 class Bound:
@@ -30,7 +32,8 @@ MIN_MAP_SIDE = 2  # [cells] a ROS map's width and height
 RESOLUTION_RANGE = (1e-4, 1e3)  # [m/px] a ROS map's resolution (F1TENTH maps: 0.05)
 MAX_CROSSING_PAIRS = 50_000_000  # segment pairs sharing grid cells in the self-crossing check
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB
-MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images together (perspective ones too)
+MAX_INTRINSIC = 1e15  # [px] |fx|, |fy|, |cx|, |cy| of a perspective camera (1e12: a long telephoto)
+MAX_CAMERA_PIXELS = 4096 * 4096  # [px] all cameras' images of one env (every car's) together
 PERSPECTIVE_PIXEL_WEIGHT = 4  # a perspective camera's pixel counts 4 (it keeps a ray per pixel)
 MAX_LOOKAHEAD_GRID = 1_000_000  # grid points of a lookahead sensor's line (8 per spacing)
 MAX_ENVS = 256  # envs of one vector env (each holds its own track, textures and car)
@@ -38,6 +41,11 @@ MAX_WORKERS = 64  # worker processes of one vector env
 MAX_RUN_FILE_BYTES = 128 << 20  # [bytes] results.json, episodes.csv or a trace, for report
 MAX_CSV_FIELD = 4096  # [characters] one field of episodes.csv or a trace, for report
 MAX_EPISODES = 1_000_000  # episodes of one run (--episodes and the episodes key)
+MAX_ID_LENGTH = 64  # [characters] a car's id (race.cars[i].id): it names the car in files
+ID_CHARACTERS = (
+    "printable characters other than spaces (letters of any script, digits, punctuation)"
+)
+MAX_TRAIN_ENVS = 64  # envs of `tinyrace train --envs` (one process each)
 MAX_SEED = 2**63 - 1  # the largest first seed of --seed (numpy's seeds are 64-bit)
 
 BOUNDS = (
@@ -65,7 +73,8 @@ BOUNDS = (
         "MAX_CAMERA_PIXELS",
         MAX_CAMERA_PIXELS,
         "px",
-        "cameras and perspective cameras together, a perspective pixel counted "
+        "cameras and perspective cameras of one env together (every car's), a perspective "
+        "pixel counted "
         f"{PERSPECTIVE_PIXEL_WEIGHT} times (PERSPECTIVE_PIXEL_WEIGHT: it keeps a ray each)",
     ),
     Bound("MAX_ENVS", MAX_ENVS, "envs", "num_envs of make_vec / make_batch"),
@@ -73,4 +82,30 @@ BOUNDS = (
     Bound("MAX_RUN_FILE_BYTES", MAX_RUN_FILE_BYTES, "bytes", "a run file read by report"),
     Bound("MAX_CSV_FIELD", MAX_CSV_FIELD, "characters", "a field of a run's CSV files"),
     Bound("MAX_EPISODES", MAX_EPISODES, "episodes", "episodes of one run"),
+    Bound(
+        "MAX_ID_LENGTH",
+        MAX_ID_LENGTH,
+        "characters",
+        f"a car id (race.cars[i].id) of {ID_CHARACTERS} (ID_CHARACTERS)",
+    ),
+    Bound("MAX_TRAIN_ENVS", MAX_TRAIN_ENVS, "envs", "tinyrace train --envs (a process each)"),
+    Bound(
+        "MAX_LOCK_WAIT",
+        MAX_LOCK_WAIT,
+        "s",
+        "a wait for a cache entry another process builds; then it is built privately",
+    ),
+    Bound("MAX_INTRINSIC", MAX_INTRINSIC, "px", "a perspective camera's fx, fy, cx, cy"),
 )
+
+
+def id_problem(text: object) -> str | None:
+    """Why ``text`` is no car id (None when it is one): 1 to MAX_ID_LENGTH characters of
+    ID_CHARACTERS."""
+    if not isinstance(text, str) or not text:
+        return "expected a non-empty string"
+    if len(text) > MAX_ID_LENGTH:
+        return f"expected at most {MAX_ID_LENGTH} characters (it has {len(text)})"
+    if not text.isprintable() or " " in text:
+        return f"expected {ID_CHARACTERS}"
+    return None

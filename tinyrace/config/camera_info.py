@@ -22,7 +22,7 @@ from typing import Any
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import EnvConfig
 from tinyrace.config.sensors import PerspectiveCameraConfig, SensorConfig
-from tinyrace.config.yaml_file import parse_yaml
+from tinyrace.config.yaml_file import parse_yaml, read_bytes
 from tinyrace.errors import ConfigError, Problem
 
 MODELS = ("plumb_bob", "rational_polynomial")  # accepted names; only 5 coefficients used
@@ -31,25 +31,7 @@ MAX_BYTES = 1 << 20  # [bytes] a camera_info file at most
 
 def intrinsics_problems(camera: PerspectiveCameraConfig) -> list[tuple[str, Any, str]]:
     """(key, value, allowed) of each inconsistency of a camera entry's calibration knobs."""
-    found: list[tuple[str, Any, str]] = []
-    if camera.camera_info is not None:
-        for key in ("fov", "intrinsics", "distortion"):
-            if getattr(camera, key) is not None:
-                allowed = f"give camera_info or {key}, not both (camera_info sets the intrinsics)"
-                found.append((key, getattr(camera, key), allowed))
-    if camera.intrinsics is not None and camera.fov is not None:
-        allowed = "give fov or intrinsics, not both (intrinsics set the field of view)"
-        found.append(("fov", camera.fov, allowed))
-    if camera.distortion is not None and camera.intrinsics is None and camera.camera_info is None:
-        found.append(("distortion", list(camera.distortion), "distortion needs intrinsics"))
-    if camera.intrinsics is not None:
-        fx, fy = camera.intrinsics[:2]
-        if not (fx > 0 and fy > 0 and all(map(math.isfinite, camera.intrinsics))):
-            allowed = "expected [fx, fy, cx, cy] with focal lengths fx, fy > 0 [px]"
-            found.append(("intrinsics", list(camera.intrinsics), allowed))
-    if camera.distortion is not None and not all(map(math.isfinite, camera.distortion)):
-        found.append(("distortion", list(camera.distortion), "expected finite numbers"))
-    return found
+    return camera.calibration_problems()
 
 
 def read_camera_info(
@@ -59,14 +41,13 @@ def read_camera_info(
 ]:
     """((width, height) [px], (fx, fy, cx, cy) [px], (k1, k2, p1, p2, k3)) of a camera_info
     YAML; every problem names the file and key."""
-    try:
-        if path.stat().st_size > MAX_BYTES:
-            raise ConfigError(
-                Problem(source, where, str(path), f"expected at most {MAX_BYTES} bytes")
-            )
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        allowed = f"expected a readable camera_info YAML ({error})"
+    try:  # a regular file only, checked before a byte is read (a FIFO would block)
+        text = read_bytes(path, MAX_BYTES, "a camera_info YAML").decode("utf-8")
+    except ConfigError as error:
+        allowed = f"expected a readable camera_info YAML: {error.problems[0].allowed}"
+        raise ConfigError(Problem(source, where, str(path), allowed)) from None
+    except UnicodeDecodeError as error:
+        allowed = f"expected a camera_info YAML of UTF-8 text (byte {error.start} is not)"
         raise ConfigError(Problem(source, where, str(path), allowed)) from None
     data = parse_yaml(text, str(path))
     if not isinstance(data, dict):

@@ -134,8 +134,8 @@ class Parser:
             return self.problem(path, raw, f"expected {_describe(members[0], meta)}")
         if all(dataclasses.is_dataclass(m) for m in members):
             return self.union_of_dataclasses(tuple(members), raw, path)
-        if len(members) == 1 and _list_of_sections(members[0]):  # each entry's own problems
-            return self.value(members[0], raw, path, meta)
+        if len(members) == 1 and typing.get_origin(members[0]) is tuple:
+            return self.value(members[0], raw, path, meta)  # its own count, each entry's problems
         for member in members:  # try each member quietly, keep the first that fits
             trial = Parser(self.source)
             value = trial.value(member, raw, path, meta)
@@ -180,8 +180,9 @@ class Parser:
             return self.problem(path, raw, allowed)
         if isinstance(raw, float) and not math.isfinite(raw):
             return self.problem(path, raw, allowed)
-        if hint is float and abs(raw) > MAX_MAGNITUDE:  # an int may be too big for a float
-            return self.problem(path, raw, f"{allowed}, at most {MAX_MAGNITUDE:g} in magnitude")
+        magnitude = meta.get("magnitude", MAX_MAGNITUDE)
+        if hint is float and abs(raw) > magnitude:  # an int may be too big for a float
+            return self.problem(path, raw, f"{allowed}, at most {magnitude:g} in magnitude")
         if hint is int:
             if isinstance(raw, float) and not raw.is_integer():
                 return self.problem(path, raw, allowed)
@@ -193,21 +194,6 @@ class Parser:
         if too_low or (high is not None and raw > high):
             return self.problem(path, raw, allowed)
         return hint(raw)
-
-
-def _list_of_sections(hint: Any) -> bool:
-    """Whether ``hint`` is a list of mappings (``tuple[SomeConfig, ...]``, also of a union of
-    them): a bad entry is told by its own keys, not as a whole."""
-    args = typing.get_args(hint)
-    if typing.get_origin(hint) is not tuple or len(args) != 2 or args[1] is not Ellipsis:
-        return False
-    item = args[0]
-    if families.members(item) is not None:
-        return True
-    members = typing.get_args(item) if typing.get_origin(item) in (Union, types.UnionType) else ()
-    return dataclasses.is_dataclass(item) or (
-        bool(members) and all(dataclasses.is_dataclass(m) for m in members)
-    )
 
 
 def _key_ok(key: object, numbers: bool) -> bool:

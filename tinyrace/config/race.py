@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT, id_problem
 from tinyrace.config.colors import Color, palette_color
 from tinyrace.config.loader import deep_merge
 from tinyrace.config.schema import MAX_RACE_CARS, CameraConfig, CarConfig, EnvConfig
@@ -145,6 +146,9 @@ def race_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
     cars = race_cars(config)
     seen: dict[str, int] = {}
     for car in cars:
+        wrong = id_problem(car.id) if car.own_car else None
+        if wrong is not None:
+            problem(f"cars[{car.index}].id", car.id, f"{wrong} (it names the car in files)")
         if car.id in seen:
             allowed = f"expected a unique car id; car {seen[car.id]} is called {car.id!r} too"
             problem(f"cars[{car.index}].id", car.id, allowed)
@@ -158,3 +162,44 @@ def race_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
         allowed = f"poses are read with start: poses only (start is {race.start})"
         problem("poses", [list(p) for p in race.poses], allowed)
     return problems
+
+
+def car_colors(config: EnvConfig) -> list[Color]:
+    """Each car's colour, in car order (what cameras, the overview and videos draw): its
+    ``race.cars[i].colour``, else the palette's colour of its index."""
+    return [car.colour for car in race_cars(config)]
+
+
+def car_names(config: EnvConfig) -> list[str]:
+    """Each car's name, in car order: its agent name in a race (its ``race.cars[i].id``, else
+    ``car_<i>``), the label the overview and videos write beside it."""
+    return [car.id for car in race_cars(config)]
+
+
+def car_pixels(car: RaceCar) -> int:
+    """[px] the pixels of one car's cameras: each bird's-eye camera's, and each sensor's
+    ``camera_pixels()`` by its weight (a perspective camera's count PERSPECTIVE_PIXEL_WEIGHT)."""
+    total = sum(h * w for h, w in (camera.resolution for camera in car.cameras))
+    for sensor in car.written_sensors:
+        pixels = sensor.camera_pixels()
+        if pixels is not None:
+            (height, width), weight = pixels
+            total += height * width * weight
+    return total
+
+
+def race_pixel_problems(config: EnvConfig, at: str, source: str) -> list[Problem]:
+    """The cameras of every car of the env together within MAX_CAMERA_PIXELS (each car's own
+    are checked with its sensors; this bounds the env, which draws them all)."""
+    cars = race_cars(config)
+    pixels = {car.id: car_pixels(car) for car in cars}
+    total = sum(pixels.values())
+    if len(cars) < 2 or total <= MAX_CAMERA_PIXELS or max(pixels.values()) > MAX_CAMERA_PIXELS:
+        return []  # one car's own excess is told at its cameras and sensors
+    allowed = (
+        f"expected the cameras of all {len(cars)} cars of one env to have at most "
+        f"{MAX_CAMERA_PIXELS:,} px together, a perspective_camera pixel counted "
+        f"{PERSPECTIVE_PIXEL_WEIGHT} times (here {total:,}: fewer cars or smaller cameras)"
+    )
+    where = "race.cars" if config.race.cars else "race.num_agents"
+    return [Problem(source, f"{at}{where}", f"{len(cars)} cars", allowed)]

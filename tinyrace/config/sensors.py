@@ -12,6 +12,8 @@ from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 from tinyrace.config import families
+from tinyrace.config.bounds import MAX_INTRINSIC, PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.calibration import Found, calibration_problems
 from tinyrace.config.colors import Color
 from tinyrace.config.knobs import REQUIRED, knob
 
@@ -28,8 +30,29 @@ def _type(name: str) -> Any:
     return knob(name, "sensor type")
 
 
+class SensorDefaults:
+    """What a sensor entry says of itself (``SensorConfig``), as a sensor of one array that
+    draws no camera pixels says it: a sensor config subclasses this and overrides what
+    differs."""
+
+    @property
+    def dict_observation(self) -> bool:
+        """Whether its observation is a Dict of arrays (then ``observation: box`` cannot be
+        it), not one array."""
+        return False
+
+    def problems(self) -> list[Found]:
+        """(key, value, allowed) of each inconsistency between its own knobs."""
+        return []
+
+    def camera_pixels(self) -> tuple[tuple[int, int], int] | None:
+        """Its image's [y, x] size and the weight of each pixel against
+        ``MAX_CAMERA_PIXELS`` (None: no camera pixels to count)."""
+        return None
+
+
 @dataclass(frozen=True)
-class PerspectiveCameraConfig:
+class PerspectiveCameraConfig(SensorDefaults):
     """``sensors[i]`` of ``type: perspective_camera``: a pinhole camera on the car."""
 
     id: str = knob(REQUIRED, _ID)
@@ -64,6 +87,7 @@ class PerspectiveCameraConfig:
         "[fx, fy, cx, cy] focal lengths and principal point, pixel centres on integer "
         "coordinates (OpenCV's camera matrix); instead of fov",
         "px",
+        magnitude=MAX_INTRINSIC,
     )
     distortion: tuple[float, float, float, float, float] | None = knob(
         None,
@@ -88,9 +112,26 @@ class PerspectiveCameraConfig:
         Color.rgb(135, 206, 235), "colour above the horizon and beyond max_range"
     )
 
+    def problems(self) -> list[Found]:
+        """Its calibration knobs' inconsistencies, and a camera below the ground."""
+        found = self.calibration_problems()
+        if self.position and not self.position[2] > 0:
+            allowed = "expected a camera above the ground: position [x, y, z] with z > 0"
+            found.append(("position", list(self.position), allowed))
+        return found
+
+    def calibration_problems(self) -> list[Found]:
+        """(key, value, allowed) of each inconsistency of its calibration knobs."""
+        return calibration_problems(self)
+
+    def camera_pixels(self) -> tuple[tuple[int, int], int] | None:
+        """Each pixel counts PERSPECTIVE_PIXEL_WEIGHT times: it keeps a ray and its ground
+        point."""
+        return self.resolution, PERSPECTIVE_PIXEL_WEIGHT
+
 
 @dataclass(frozen=True)
-class LidarConfig:
+class LidarConfig(SensorDefaults):
     """``sensors[i]`` of ``type: lidar``: a planar scanner; float32 ranges, rightmost beam first."""
 
     id: str = knob(REQUIRED, _ID)
@@ -138,9 +179,14 @@ class LidarConfig:
         low_open=True,
     )
 
+    @property
+    def dict_observation(self) -> bool:
+        """With ``hit_classes``: a Dict of ranges and classes."""
+        return self.hit_classes
+
 
 @dataclass(frozen=True)
-class StateConfig:
+class StateConfig(SensorDefaults):
     """``sensors[i]`` of ``type: state``: the car's motion in its own frame, float32."""
 
     id: str = knob(REQUIRED, _ID)
@@ -153,7 +199,7 @@ class StateConfig:
 
 
 @dataclass(frozen=True)
-class LookaheadConfig:
+class LookaheadConfig(SensorDefaults):
     """``sensors[i]`` of ``type: lookahead``: next points of the reference line, car frame."""
 
     id: str = knob(REQUIRED, _ID)
@@ -169,7 +215,7 @@ class LookaheadConfig:
 
 
 @dataclass(frozen=True)
-class ConesConfig:
+class ConesConfig(SensorDefaults):
     """``sensors[i]`` of ``type: cones``: cones in range, car frame, nearest first."""
 
     id: str = knob(REQUIRED, _ID)
@@ -194,9 +240,14 @@ class ConesConfig:
         None, "picture tracks: colour of orange cones (null: none)", binary=True
     )
 
+    @property
+    def dict_observation(self) -> bool:
+        """A Dict of the cones' rows and their count."""
+        return True
+
 
 @dataclass(frozen=True)
-class CameraConfig:
+class CameraConfig(SensorDefaults):
     """``cameras[i]`` (or ``sensors[i]`` of ``type: birdseye_camera``): a bird's-eye camera
     fixed to the car."""
 
@@ -227,7 +278,7 @@ class CameraConfig:
 
 
 @dataclass(frozen=True)
-class ChaseViewConfig:
+class ChaseViewConfig(SensorDefaults):
     """``sensors[i]`` of ``type: chase_view``: CarRacing's view (procedural tracks), uint8 RGB.
 
     The camera follows the car and turns with it (the car near the bottom, nose up), zooms
@@ -243,7 +294,7 @@ class ChaseViewConfig:
 
 
 @dataclass(frozen=True)
-class TopViewConfig:
+class TopViewConfig(SensorDefaults):
     """``sensors[i]`` of ``type: top_view``: the road ahead from above with the car drawn in,
     uint8 RGB (tracks in metres; their default observation)."""
 
@@ -260,7 +311,7 @@ class TopViewConfig:
 
 
 @dataclass(frozen=True)
-class OpponentsConfig:
+class OpponentsConfig(SensorDefaults):
     """``sensors[i]`` of ``type: opponents``: the nearest other cars of a race, car frame,
     nearest first; float32 rows (present, x, y, vx, vy, heading), zeros past the last car."""
 
@@ -281,13 +332,27 @@ class OpponentsConfig:
 
 class SensorConfig(Protocol):
     """A ``sensors:`` entry: the dataclass its ``type`` names (the family of sensor configs:
-    a sensor type's registry entry adds its config, see ``tinyrace.sensors.registry``)."""
+    a sensor type's registry entry adds its config, see ``tinyrace.sensors.registry``), and
+    what the config checks ask of it (``SensorDefaults`` gives a sensor of one array's)."""
 
     @property
     def id(self) -> str: ...
 
     @property
     def type(self) -> str: ...
+
+    @property
+    def dict_observation(self) -> bool:
+        """Whether its observation is a Dict of arrays, not one array."""
+        ...
+
+    def problems(self) -> list[Found]:
+        """(key, value, allowed) of each inconsistency between its own knobs."""
+        ...
+
+    def camera_pixels(self) -> tuple[tuple[int, int], int] | None:
+        """Its image's [y, x] size and each pixel's weight against ``MAX_CAMERA_PIXELS``."""
+        ...
 
 
 for _config in (

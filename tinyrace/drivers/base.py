@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import math
 from typing import Any, Protocol, cast, runtime_checkable
 
 import gymnasium as gym
@@ -13,6 +14,35 @@ from tinyrace.actions import DISCRETE_CONTROLS
 from tinyrace.cars import CarRacingCar
 
 Controls = tuple[float, float, float]  # (steer -1..1, +1 right; gas 0..1; brake 0..1)
+CONTROLS_EXPECTED = (
+    "expected (steer, gas, brake): three finite numbers (steer -1..1, gas and brake 0..1)"
+)
+
+
+def checked_controls(value: object, who: str) -> Controls:
+    """``value`` as controls ``(steer, gas, brake)``: three finite real numbers (not true or
+    false, not text); anything else is a ValueError naming ``who`` and the value."""
+    items: list[object] | None = None
+    if isinstance(value, np.ndarray) and value.ndim == 1:
+        items = value.tolist()
+    elif isinstance(value, (tuple, list)):
+        items = list(value)
+    numbers = [
+        float(x)
+        for x in items or ()
+        if isinstance(x, (int, float, np.integer, np.floating))
+        and not isinstance(x, (bool, np.bool_))
+    ]
+    if (
+        items is None
+        or len(items) != 3
+        or len(numbers) != 3
+        or not all(map(math.isfinite, numbers))
+    ):
+        text = repr(value)
+        text = text if len(text) <= 60 else text[:57] + "..."
+        raise ValueError(f"{who}: controls(pose, speed) returned {text}; {CONTROLS_EXPECTED}")
+    return numbers[0], numbers[1], numbers[2]
 
 
 @runtime_checkable

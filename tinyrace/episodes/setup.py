@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 from tinyrace.cars.registry import CarModel, car_model_problems, choose_car_model
 from tinyrace.config import EnvConfig, LoadedConfig, RaceCar, race_cars
-from tinyrace.episodes.episode import Course, Racer
+from tinyrace.episodes.course import Course
+from tinyrace.episodes.episode import Racer
 from tinyrace.episodes.start_pose import start_fits, start_problems
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource

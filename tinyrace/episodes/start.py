@@ -27,7 +27,8 @@ def grid_poses(
 ) -> list[Pose]:
     """``count`` start poses: ``spawn`` first (unchanged for one car), then each car
     ``spacing`` car lengths behind the one before, ``offset`` car widths to the left
-    (even places) or right (odd places) of the line. ``size``: (length, width) [track units]."""
+    (even places) or right (odd places) of the line. ``size``: (length, width) [track units].
+    Raises ValueError when the grid is longer than the reference line (it would wrap)."""
     if count == 1:
         return [spawn]
     length, width = size
@@ -35,6 +36,12 @@ def grid_poses(
     sides = [offset * width * (1.0 if k % 2 == 0 else -1.0) for k in range(count)]
     if has_line(track):
         assert track.centerline is not None
+        loop = line_length(track.centerline)
+        if distances[-1] >= loop:  # the last car would wrap round onto the cars ahead
+            raise ValueError(
+                f"{count} cars {spacing:g} car lengths apart need {distances[-1]:.1f} track "
+                f"units of the reference line behind the pole; it is {loop:.1f} long"
+            )
         behind = [spawn, *_along_line(track.centerline, spawn, distances)[1:]]  # pole at spawn
     else:
         x, y, heading = spawn

@@ -20,11 +20,6 @@ class Interrupted(BaseException):
         super().__init__(signal.Signals(signum).name)
         self.signum = signum
 
-    @property
-    def exit_code(self) -> int:
-        """The shell's convention: 128 + the signal number (130 SIGINT, 143 SIGTERM)."""
-        return 128 + self.signum
-
 
 class StopSignals:
     """A context that turns SIGINT and SIGTERM into a stop request, checked by ``check()``.

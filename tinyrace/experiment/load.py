@@ -172,13 +172,6 @@ def view_problems(config: ExperimentConfig, env_config: EnvConfig, source: str) 
     return [Problem(source, "output.view", view, allowed)]
 
 
-def check_driver(spec: str, folder: Path, source: str) -> None:
-    """A built-in driver name, or ``module:callable`` with the module found from ``folder``."""
-    problems = driver_problems(spec, folder, source)
-    if problems:
-        raise ConfigError(problems)
-
-
 def driver_problems(
     spec: str, folder: Path, source: str, key: str = "driver", car: str | None = None
 ) -> list[Problem]:

@@ -10,6 +10,7 @@ track without one), then by who got that far first, then by its place on the gri
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -17,6 +18,7 @@ from typing import Any
 
 from gymnasium import spaces
 
+from tinyrace.experiment.files import write_text
 from tinyrace.experiment.race_results import RACE_TRACE_COLUMNS
 from tinyrace.experiment.record import EpisodeRecorder
 from tinyrace.experiment.route import RouteWatch, route_watch
@@ -101,12 +103,13 @@ class CarRecorder(EpisodeRecorder):
         return float(self.info.get("tiles_visited") or 0)
 
     def write_trace(self, path: Path) -> None:
-        with path.open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(RACE_TRACE_COLUMNS)
-            for row, extra in zip(self.rows, self.extras, strict=True):
-                cells = (round(v, 6) if isinstance(v, float) else v for v in row)
-                writer.writerow((*cells, *extra))
+        handle = io.StringIO(newline="")
+        writer = csv.writer(handle)
+        writer.writerow(RACE_TRACE_COLUMNS)
+        for row, extra in zip(self.rows, self.extras, strict=True):
+            cells = (round(v, 6) if isinstance(v, float) else v for v in row)
+            writer.writerow((*cells, *extra))
+        write_text(path, handle.getvalue())
 
 
 def _number(value: object) -> bool:

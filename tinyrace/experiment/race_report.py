@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from tinyrace.experiment.files import write_text
 from tinyrace.experiment.race_results import (
     RACE_TRACE_COLUMNS,
     CarResult,
@@ -54,7 +55,7 @@ def write_race_report(run_dir: Path, header: dict[str, Any], rows: Sequence[CarR
         pictures += _episode_pictures(run_dir, header, episode, mine, traces, colors)
     blobs = save_pictures(run_dir, pictures)
     path = run_dir / REPORT_FILE
-    path.write_text(_html(header, rows, blobs), encoding="utf-8")
+    write_text(path, _html(header, rows, blobs))
     return path
 
 

@@ -97,11 +97,6 @@ class RaceEpisode:
         return self.order[0] if self.order else ""
 
 
-def finishing_order(standings: dict[str, tuple[float, ...]]) -> list[str]:
-    """The cars by their standings keys (smaller first; ``Standings.key``)."""
-    return sorted(standings, key=lambda agent: standings[agent])
-
-
 def car_rows(episodes: Sequence[RaceEpisode]) -> list[CarResult]:
     """Every car's row of every episode, in order."""
     return [car for episode in episodes for car in episode.cars]

@@ -9,6 +9,7 @@ video.
 
 from __future__ import annotations
 
+import hashlib
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,8 +50,17 @@ class RaceRunResult:
 
 
 def file_part(agent: str) -> str:
-    """A car's name as part of a file name."""
-    return re.sub(r"[^A-Za-z0-9_.-]", "_", agent)[:64]
+    """A car's name as part of a file name, one to one: a name of lowercase letters, digits,
+    '_', '.' and '-' (up to 40 characters) is itself; any other is those characters of it
+    (others '_', at most 24), '+' and 12 hex digits of its sha256, so two names never share a
+    file, even on a file system that ignores case."""
+    if _PLAIN.fullmatch(agent):
+        return agent
+    kept = re.sub(r"[^a-z0-9_.-]", "_", agent.lower())[:24]
+    return f"{kept}+{hashlib.sha256(agent.encode()).hexdigest()[:12]}"
+
+
+_PLAIN = re.compile(r"[a-z0-9_.-]{1,40}")
 
 
 class RaceRun(RunLoop[RaceEpisode]):

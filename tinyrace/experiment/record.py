@@ -4,6 +4,7 @@ report) and its video, all taken from what the episode loop shows the observer."
 from __future__ import annotations
 
 import csv
+import io
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -12,6 +13,9 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.actions import DISCRETE_CONTROLS
+from tinyrace.config.bounds import MAX_RUN_FILE_BYTES
+from tinyrace.config.yaml_file import read_bytes
+from tinyrace.experiment.files import write_text
 from tinyrace.experiment.route import RouteWatch
 from tinyrace.experiment.video import VideoWriter
 
@@ -151,10 +155,11 @@ class EpisodeRecorder:
             self.video.close()
 
     def write_trace(self, path: Path) -> None:
-        with path.open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(TRACE_COLUMNS)
-            writer.writerows(_rounded(row) for row in self.rows)
+        handle = io.StringIO(newline="")
+        writer = csv.writer(handle)
+        writer.writerow(TRACE_COLUMNS)
+        writer.writerows(_rounded(row) for row in self.rows)
+        write_text(path, handle.getvalue())
 
 
 def _rounded(row: tuple[Any, ...]) -> tuple[Any, ...]:
@@ -163,8 +168,8 @@ def _rounded(row: tuple[Any, ...]) -> tuple[Any, ...]:
 
 def read_trace(path: Path) -> dict[str, np.ndarray]:
     """A trace file as columns of floats (NaN where a value is missing)."""
-    with path.open(newline="") as handle:
-        rows = list(csv.DictReader(handle))
+    data = read_bytes(path, MAX_RUN_FILE_BYTES, "a trace")  # a regular file only
+    rows = list(csv.DictReader(io.StringIO(data.decode("utf-8"), newline="")))
     return {
         key: np.array([float(r[key]) if r.get(key) not in ("", None) else np.nan for r in rows])
         for key in TRACE_COLUMNS

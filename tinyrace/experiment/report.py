@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS, read_image_bgr
+from tinyrace.experiment.files import write_file, write_text
 from tinyrace.experiment.results import (
     EPISODES_FILE,
     RESULTS_FILE,
@@ -102,7 +103,7 @@ def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[Episod
         pictures.append(Picture("report_time_series.png", caption, figure, True, "Over time"))
     blobs = save_pictures(run_dir, pictures)
     path = run_dir / REPORT_FILE
-    path.write_text(_html(header, results, blobs, notes, unit), encoding="utf-8")
+    write_text(path, _html(header, results, blobs, notes, unit))
     return path
 
 
@@ -113,7 +114,7 @@ def save_pictures(run_dir: Path, pictures: Sequence[Picture]) -> list[tuple[Pict
     blobs = []
     for picture in pictures:
         data = png(picture.figure)
-        (run_dir / picture.name).write_bytes(data)
+        write_file(run_dir / picture.name, data)
         blobs.append((picture, data))
     return blobs
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from collections.abc import Iterable, Sequence
@@ -10,6 +11,8 @@ from dataclasses import asdict, dataclass
 from dataclasses import fields as fields_of
 from pathlib import Path
 from typing import Any
+
+from tinyrace.experiment.files import write_text
 
 RESULTS_FILE = "results.json"
 EPISODES_FILE = "episodes.csv"
@@ -156,8 +159,9 @@ def write_results(
 ) -> None:
     """results.json (``payload``) and episodes.csv (``rows`` under ``columns``) into
     ``run_dir``: one car's runs and races alike."""
-    (run_dir / RESULTS_FILE).write_text(json.dumps(payload, indent=2, default=str) + "\n")
-    with (run_dir / EPISODES_FILE).open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=columns)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_text(run_dir / RESULTS_FILE, json.dumps(payload, indent=2, default=str) + "\n")
+    handle = io.StringIO(newline="")
+    writer = csv.DictWriter(handle, fieldnames=columns)
+    writer.writeheader()
+    writer.writerows(rows)
+    write_text(run_dir / EPISODES_FILE, handle.getvalue())

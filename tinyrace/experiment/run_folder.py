@@ -19,15 +19,16 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.config.bounds import MAX_CSV_FIELD, MAX_RUN_FILE_BYTES
+from tinyrace.config.bounds import MAX_CSV_FIELD, MAX_RUN_FILE_BYTES, id_problem
 from tinyrace.config.yaml_file import read_bytes
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.experiment.files import check_writable
 from tinyrace.experiment.race_results import CarResult
 from tinyrace.experiment.record import TRACE_COLUMNS
 from tinyrace.experiment.results import EPISODES_FILE, RESULTS_FILE, EpisodeResult
 
 KEY = re.compile(r"[A-Za-z0-9_.-]{1,64}")  # a track key, also part of a picture's file name
-FILE_NAME = re.compile(r"[A-Za-z0-9_.-]{1,128}")  # a file the run folder holds (no folders)
+FILE_NAME = re.compile(r"[A-Za-z0-9_.+-]{1,128}")  # a file the run folder holds (no folders)
 
 
 def _problem(path: Path, field: str, value: object, allowed: str) -> ConfigError:
@@ -98,15 +99,16 @@ def _check_cars(path: Path, cars: object) -> list[str]:
         if not isinstance(car, dict):
             raise _problem(path, where, car, expected)
         name = car.get("id")
-        if not (isinstance(name, str) and KEY.fullmatch(name)) or name in names:
-            allowed = "expected a car name of letters, digits, '_', '.' or '-', each car once"
+        wrong = id_problem(name)
+        if wrong is not None or name in names:
+            allowed = f"{wrong or 'expected each car once'} (a car id of race.cars)"
             raise _problem(path, f"{where}.id", name, allowed)
         color = car.get("color")
         if not (isinstance(color, str) and COLOR.fullmatch(color)):
             raise _problem(path, f"{where}.color", color, "expected a colour '#rrggbb'")
         if not isinstance(car.get("driver", ""), str):
             raise _problem(path, f"{where}.driver", car.get("driver"), "expected a driver name")
-        names.append(name)
+        names.append(str(name))
     return names
 
 
@@ -274,6 +276,4 @@ def check_outputs(run_dir: Path, outputs: list[str], inputs: dict[str, str]) -> 
         if target.resolve() in read:
             allowed = f"expected a run file apart from the report's own ({name} is written by it)"
             raise _problem(run_dir / read[target.resolve()], "", name, allowed)
-        if target.is_dir() or (target.exists() and not target.is_file()):
-            allowed = "expected a file the report may replace, not a folder or special file"
-            raise _problem(target, "", name, allowed)
+        check_writable(target)  # not a link, folder or special file

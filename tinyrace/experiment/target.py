@@ -34,6 +34,9 @@ SHOWN = 5  # names listed of a folder's YAML files or track folders
 def load_target(value: str | Path, key: str = "experiment") -> tuple[Experiment, bool]:
     """The experiment that ``value`` names (see the module's docstring), and whether it is a
     track's default experiment (True) or an experiment file's (False)."""
+    if not str(value).strip():
+        allowed = f"{EXPECTED}, not an empty name"
+        raise ConfigError(Problem(COMMAND_LINE, key, str(value), allowed))
     path = find_example(value, key)
     if _is_dir(path):
         track_file = path / TRACK_FILE
@@ -41,9 +44,12 @@ def load_target(value: str | Path, key: str = "experiment") -> tuple[Experiment,
             raise ConfigError(Problem(COMMAND_LINE, key, str(value), not_runnable(path)))
         return track_experiment(track_file), True
     raw = read_yaml(path)  # a missing or unreadable file: its own message
+    if raw is None or raw == {}:  # never the defaults in its stead: an empty file is a mistake
+        allowed = f"{EXPECTED}; this file is empty (an experiment names at least its env)"
+        raise ConfigError(Problem(str(path), "", "an empty file", allowed))
     if isinstance(raw, Mapping) and raw and not is_experiment(raw):
         return track_experiment(path), True  # track sections: a track.yaml or env config
-    return experiment_from_dict(raw if raw is not None else {}, str(path), path.parent), False
+    return experiment_from_dict(raw, str(path), path.parent), False
 
 
 def track_experiment(track_file: Path) -> Experiment:

@@ -9,6 +9,7 @@ from typing import Any
 import cv2
 
 from tinyrace.env import TinyRaceEnv
+from tinyrace.experiment.files import write_file
 from tinyrace.render.track_picture import ground_picture
 
 
@@ -33,7 +34,10 @@ def save_track_picture(
     tiles = track.tiles
     lap_line = None if tiles is None or not len(tiles) else tiles[0][:2].tolist()
     name = f"track_{key}.png"
-    cv2.imwrite(str(run_dir / name), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    ok, data = cv2.imencode(".png", cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    if not ok:  # pragma: no cover - OpenCV encodes any uint8 picture
+        raise ValueError(f"cannot encode the track picture {name}")
+    write_file(run_dir / name, data.tobytes())
     entry = {
         "image": name,
         "frame": [frame.sx, frame.ox, frame.sy, frame.oy],

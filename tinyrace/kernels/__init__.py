@@ -8,7 +8,7 @@ serves where it does not install or import), ``numba`` requires
 it, and the plain path's name forces that.
 
 The compiled twins live in a ``kernels/`` folder of the layer whose plain twin they match
-(``tracks/kernels/``, ``cars/kernels/``, ``sensors/kernels/``), each
+(``tracks/kernels/``, ``cars/kernels/``, ``ground/kernels/``, ``sensors/kernels/``), each
 module named as its plain twin; this bottom-layer package holds what they share: this
 choice and numba's compiler (``compiled.py``).
 """
@@ -19,8 +19,8 @@ import importlib
 import os
 from types import ModuleType
 
-# The drawing kernels span two layers (sensors.texture's affine composition, sensors.drawing's
-# car and dashboard), so their one variable lives here: auto | numba | numpy
+# The drawing kernels span two layers (ground.texture's affine composition, the sensors'
+# machinery.drawing's car and dashboard), so their one variable lives here: auto | numba | numpy
 DRAWING_VARIABLE = "TINYRACE_DRAWING"
 
 

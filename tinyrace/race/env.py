@@ -22,16 +22,16 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from tinyrace.actions import ActionSpec
 from tinyrace.config import car_names
-from tinyrace.env import RESET_OPTIONS, TinyRaceEnv
+from tinyrace.env import TinyRaceEnv
 from tinyrace.episodes.episode import Episode
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.race.checks import read_actions, reset_options
 from tinyrace.sensors.base import Sensor
 from tinyrace.world.snapshot import Snapshot
 
@@ -130,7 +130,7 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, Any], dict[str, Any]]:
         core = self.core
-        _, first_info = core.reset(seed=seed, options=_known_options(options))
+        _, first_info = core.reset(seed=seed, options=reset_options(options))
         episode = core.episode
         assert episode is not None
         self.agents = list(self.possible_agents)
@@ -154,8 +154,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         self._check_agents(actions)
         world = episode.world
         live = self._live()
-        for agent, i in live:
-            world.control(self.seats[i].actions.read(actions[agent]), car=i)
+        for i, controls in read_actions(self.seats, actions, live):
+            world.control(controls, car=i)
         cars = episode.step()  # every car judged; a car out of the race: None
         rewards, terminations, truncations, infos = {}, {}, {}, {}
         snapshot = core.snapshot()
@@ -249,17 +249,6 @@ def race_info(
         "lap_times": laps,
         "best_lap": min(laps) if laps else None,
     }
-
-
-def _known_options(options: Mapping[str, Any] | None) -> dict[str, Any] | None:
-    """The reset options tinyrace knows; others are left out with a warning (PettingZoo's
-    API test resets with an option no env knows)."""
-    if options is None:
-        return None
-    unknown = [key for key in options if key not in RESET_OPTIONS]
-    if unknown:
-        gym.logger.warn(f"RaceEnv.reset ignores unknown options {unknown}; known: {RESET_OPTIONS}")
-    return {key: value for key, value in options.items() if key in RESET_OPTIONS}
 
 
 def _not_racing(agent: object, env: RaceEnv) -> str:

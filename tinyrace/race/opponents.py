@@ -17,6 +17,7 @@ and, optionally, ``follow(route, action_space, dt)`` (called at every reset).
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -24,6 +25,7 @@ import gymnasium as gym
 
 from tinyrace.cars import CARRACING_WHEELBASE
 from tinyrace.drivers import DRIVERS, ActionAdapter, CenterlineDriver
+from tinyrace.drivers.base import CONTROLS_EXPECTED, checked_controls
 from tinyrace.drivers.centerline import Route, route_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
@@ -114,7 +116,9 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
             if hasattr(driver, "follow"):
                 route = route or route_of(self.core)
                 spec = self.specs[i]
-                driver.follow(self._route_for(route, i), spec.space, self.core.dt, spec.kind)
+                follow(
+                    driver, i - 1, (self._route_for(route, i), spec.space, self.core.dt), spec.kind
+                )
         return observation, self._race_info(info)
 
     def step(self, action: Any) -> tuple[Any, Any, bool, bool, dict[str, Any]]:
@@ -156,13 +160,41 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         driver's own ``act`` (it knows the car model's actions), else its controls adapted."""
         if isinstance(driver, CenterlineDriver):
             return driver.act(None, {"pose": car.pose, "speed": car.speed})
-        return self.adapt[index](driver.controls(car.pose, car.speed))
+        value = driver.controls(car.pose, car.speed)
+        try:
+            controls = checked_controls(value, f"opponents[{index - 1}]")
+        except ValueError:
+            path = f"opponents[{index - 1}].driver.controls"
+            allowed = f"car {self.names[index]!r}: controls(pose, speed) {CONTROLS_EXPECTED}"
+            raise ConfigError(Problem(SOURCE, path, value, allowed)) from None
+        return self.adapt[index](controls)
 
     def _race_info(self, info: dict[str, Any]) -> dict[str, Any]:
         episode = self.core.episode
         assert episode is not None
         info.update(race_info(episode, 0, self.names, self.core.dt))
         return info
+
+
+def follow(driver: Any, index: int, args: tuple[Route, Any, float], kind: str | None) -> None:
+    """Call an opponent driver's ``follow(route, action_space, dt)``, with the action kind as
+    a fourth argument only when it takes one (the racing page's three-argument example, or
+    tinyrace's drivers); a signature that takes neither is a ConfigError."""
+    method = driver.follow
+    try:
+        signature = inspect.signature(method)
+    except (TypeError, ValueError):  # a builtin without one: call as documented
+        method(*args)
+        return
+    for call in ((*args, kind), args):
+        try:
+            signature.bind(*call)
+        except TypeError:
+            continue
+        method(*call)
+        return
+    allowed = f"expected a method follow(route, action_space, dt), got follow{signature}"
+    raise ConfigError(Problem(SOURCE, f"opponents[{index}].driver.follow", _short(driver), allowed))
 
 
 def _short(value: object) -> str:

@@ -8,10 +8,10 @@ import numpy as np
 
 from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
+from tinyrace.ground.grounds import EpisodeGround
 from tinyrace.render.overview import Overview
 from tinyrace.render.pictures import CameraViews
-from tinyrace.sensors.draw_cars import CarLooks
-from tinyrace.sensors.ground import ImageGround
+from tinyrace.sensors.machinery.draw_cars import CarLooks
 from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
 
@@ -19,7 +19,7 @@ from tinyrace.world.snapshot import Snapshot
 class ImagePictures:
     """Every track's overview (made when first drawn)."""
 
-    def __init__(self, config: EnvConfig, ground: ImageGround):
+    def __init__(self, config: EnvConfig, ground: EpisodeGround):
         self.config = config
         self.tracks: Sequence[Track] = ground.tracks
         self.overviews: list[Overview | None] = [None] * len(self.tracks)

@@ -1,5 +1,5 @@
 """The pictures of a track in metres: the overview, with the default top view when no image
-sensor drew one (its ground is the episode's, ``tinyrace.sensors.ground``)."""
+sensor drew one (its ground is the episode's, ``tinyrace.ground.grounds``)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import numpy as np
 from tinyrace.cars.state import footprint_corners
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import TopViewConfig
+from tinyrace.ground.grounds import EpisodeGround
+from tinyrace.ground.texture import GroundTexture, transform_points
 from tinyrace.render.pictures import CameraViews
-from tinyrace.sensors.draw_cars import CarLooks, draw_race
-from tinyrace.sensors.ground import MetricGround
-from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.top_view import TopView
 from tinyrace.tracks.base import Track, TrackDraw
 from tinyrace.world.snapshot import Snapshot
@@ -25,7 +25,7 @@ _OVERVIEW_BITS = 4  # cv2 fixed-point vertices: 1/16 px
 class MetricPictures:
     """Every track's overview, made when first drawn."""
 
-    def __init__(self, config: EnvConfig, ground: MetricGround):
+    def __init__(self, config: EnvConfig, ground: EpisodeGround):
         self.ground = ground
         self.tracks: Sequence[Track] = ground.tracks
         self.overviews: list[MetricOverview | None] = [None] * len(self.tracks)

@@ -14,7 +14,7 @@ import numpy as np
 
 from tinyrace.config import Color
 from tinyrace.config.schema import MAX_FRAME_PIXELS
-from tinyrace.sensors.draw_cars import CarLooks, draw_race
+from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_race
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 

@@ -2,7 +2,7 @@
 
 A ``Pictures`` object lasts across resets (it keeps what is dear to redraw: dashboards,
 car patches, overviews); ``reset`` points it at a new episode's track. It draws the render
-modes' frames; the ground it shows is the episode's (``tinyrace.sensors.ground``), the
+modes' frames; the ground it shows is the episode's (``tinyrace.ground.grounds``), the
 one the sensors see. It never touches the world: it reads the ``Snapshot``, the ``Track``
 and the views the sensors drew this step.
 """

@@ -1,5 +1,5 @@
 """CarRacing's pictures of a procedural track: the chase view at each render size, on the
-episode's ground (``tinyrace.sensors.ground``) at the size's resolution."""
+episode's ground (``tinyrace.ground.grounds``) at the size's resolution."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ from typing import Any
 import numpy as np
 
 from tinyrace.config import MAX_TEXTURE_SIDE
+from tinyrace.ground.grounds import Rescalable
 from tinyrace.render.pictures import CameraViews
-from tinyrace.sensors.car_sprite import Patches
 from tinyrace.sensors.chase_view import SMALL_VIEW, ChaseView, small_dashboard
-from tinyrace.sensors.dashboard import Dashboard
-from tinyrace.sensors.draw_cars import CarLooks
-from tinyrace.sensors.ground import ProceduralGround
+from tinyrace.sensors.machinery.car_sprite import Patches
+from tinyrace.sensors.machinery.dashboard import Dashboard
+from tinyrace.sensors.machinery.draw_cars import CarLooks
 from tinyrace.tracks.base import TrackDraw
 from tinyrace.world.snapshot import Snapshot
 
@@ -25,7 +25,7 @@ RENDER_SIZES = {"state_pixels": OBSERVATION_SIZE, "rgb_array": (600, 400), "huma
 class ProceduralPictures:
     """CarRacing's views of the current episode; views are made when first asked."""
 
-    def __init__(self, ground: ProceduralGround, looks: CarLooks | None = None):
+    def __init__(self, ground: Rescalable, looks: CarLooks | None = None):
         self.painted = ground.painted  # the playfield and the cameras' pixels_per_unit
         self.ground = ground
         self._cache: dict[tuple[int, int], tuple[Dashboard, Patches]] = {}  # across episodes

@@ -12,8 +12,8 @@ import numpy as np
 from gymnasium.utils import seeding
 
 from tinyrace.config import EnvConfig
-from tinyrace.sensors.procedural_ground import GroundPainter
-from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.ground.procedural import GroundPainter
+from tinyrace.ground.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.procedural_source import GroundColors, ProceduralSource
 

@@ -5,10 +5,13 @@ A sensor reads a ``Snapshot`` (``tinyrace.world.snapshot``) and the episode's ``
 dropouts) comes from the ``rng`` it is given: the env's ``np_random``.
 
 How to add a sensor type:
-1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor``, a builder
+1. Write ``tinyrace/sensors/<type>.py`` with a class satisfying ``Sensor`` (it describes
+   itself, and says whether its image is a picture from above), a builder
    ``build(entry, context) -> Sensor`` and its config entry: a dataclass of ``knob()``
-   fields (units, bounds, docs) with ``id`` and ``type: Literal["<type>"]``. The
-   ``SensorContext`` gives the env config, the ground and the car's facts.
+   fields (units, bounds, docs) with ``id`` and ``type: Literal["<type>"]``, subclassing
+   ``SensorDefaults`` (``tinyrace.config.sensors``). The ``SensorContext`` gives the env
+   config, the ground and the car's facts; what sensor types share is in
+   ``sensors/machinery/``.
    ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
    name (the entry's ``type``), config class, builder and what its tracks must hold; the
@@ -28,7 +31,7 @@ from gymnasium import spaces
 if TYPE_CHECKING:
     from tinyrace.cars.state import CarFacts
     from tinyrace.config import EnvConfig
-    from tinyrace.sensors.texture import GroundTexture
+    from tinyrace.ground.texture import GroundTexture
     from tinyrace.tracks.base import Track
     from tinyrace.world.snapshot import Snapshot
 
@@ -52,6 +55,24 @@ class Sensor(Protocol):
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> Any:
         """The observation now; noise from ``rng`` only."""
         ...
+
+    def describe(self) -> str:
+        """What it observes, in a few words (``tinyrace validate`` prints it beside its id
+        and the shapes of its space)."""
+        ...
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        """Its image as a top-down picture of the ground around the car, for ``render()``'s
+        overview, or None: its observation is no such picture."""
+        ...
+
+
+@dataclass(frozen=True)
+class TopDown:
+    """A sensor's image seen as a top-down picture: the track window it shows (its corners,
+    drawn on the overview), or None for a view whose window is not drawn."""
+
+    window: np.ndarray | None = None
 
 
 @runtime_checkable

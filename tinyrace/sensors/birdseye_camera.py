@@ -21,8 +21,9 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config import CameraConfig
-from tinyrace.sensors.base import Ground, SensorContext
-from tinyrace.sensors.common import (
+from tinyrace.ground.texture import GroundTexture, compose
+from tinyrace.sensors.base import Ground, SensorContext, TopDown
+from tinyrace.sensors.machinery.common import (
     GroundImage,
     PerTrack,
     label_names,
@@ -30,8 +31,7 @@ from tinyrace.sensors.common import (
     paint_labels,
     shared_ground,
 )
-from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, Paint, fill_footprints
-from tinyrace.sensors.texture import GroundTexture, compose
+from tinyrace.sensors.machinery.draw_cars import CAR_LABEL, CarLooks, Paint, fill_footprints
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -96,7 +96,7 @@ class RoiCamera:
 class BirdseyeCamera:
     """The ``birdseye_camera`` sensor: the ground ahead of the car as an RGB, gray or class
     label image (``format``; labels as the perspective camera's, without a sky); the other
-    cars of a race on the ground, each in its colour (``sensors/draw_cars.py``)."""
+    cars of a race on the ground, each in its colour (``sensors/machinery/draw_cars.py``)."""
 
     def __init__(self, config: CameraConfig, ground: Ground, paints: tuple[Paint, ...] = ()):
         self.config = config
@@ -117,6 +117,13 @@ class BirdseyeCamera:
         """The name of each label value of a ``classes`` image on the current track (a new
         dict each time: infos never share it)."""
         return dict(self._names)
+
+    def describe(self) -> str:
+        c = self.config
+        return f"bird's-eye camera, {c.format}, a {c.roi[0]:g} x {c.roi[1]:g} window ahead"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return TopDown(self.window(snapshot, track))
 
     def reset(self, track: Track) -> None:
         self._camera = None  # a new episode may have a new ground

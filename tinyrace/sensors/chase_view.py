@@ -17,11 +17,11 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config.sensors import ChaseViewConfig
-from tinyrace.sensors.base import Ground, SensorContext
-from tinyrace.sensors.car_sprite import CarSprite, Patches
-from tinyrace.sensors.dashboard import Dashboard
-from tinyrace.sensors.draw_cars import CarLooks, draw_names, fill_footprints
-from tinyrace.sensors.texture import Affine, GroundTexture, as_matrix
+from tinyrace.ground.texture import Affine, GroundTexture, as_matrix
+from tinyrace.sensors.base import Ground, SensorContext, TopDown
+from tinyrace.sensors.machinery.car_sprite import CarSprite, Patches
+from tinyrace.sensors.machinery.dashboard import Dashboard
+from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_names, fill_footprints
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -98,7 +98,7 @@ class ChaseView:
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
         looks = self.looks if len(snapshot.cars) > 1 else None  # a race's
-        if looks is not None:  # the other cars on the ground (sensors/draw_cars.py)
+        if looks is not None:  # the other cars on the ground (sensors/machinery/draw_cars.py)
             fill_footprints(frame[:top], as_matrix(world_to_out), snapshot, looks.colors)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
@@ -133,6 +133,12 @@ class ChaseViewSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        return "CarRacing's chase view with its dashboard"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         self.view = None  # a new episode has a new ground

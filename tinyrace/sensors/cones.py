@@ -28,8 +28,8 @@ from gymnasium import spaces
 
 from tinyrace import kernels
 from tinyrace.config.sensors import ConesConfig
-from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack
+from tinyrace.sensors.base import SensorContext, TopDown
+from tinyrace.sensors.machinery.common import PerTrack
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
@@ -273,6 +273,13 @@ class ConesSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        c = self.config
+        return f"up to {c.max_cones} cones within {self.max_range:g} over {c.fov:g} deg"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         self.cones = self._cones.get(track, self._track_cones)

@@ -1,7 +1,7 @@
 """``type: lidar``: ranges of a fan of beams against the track's blocking layers.
 
 ``lidar_map.blocking_map`` draws what ``blocks`` names (off-road, walls, obstacle colours,
-cones) into a grid of cells once per track; ``tinyrace.sensors.raycast_numpy`` casts the
+cones) into a grid of cells once per track; ``tinyrace.sensors.machinery.raycast_numpy`` casts the
 beams on it (sample tables and two vectorised passes, no loop over beams), or, when numba imports
 (a dependency of tinyrace), ``tinyrace.sensors.kernels.raycast``'s compiled kernel: the
 same float32 ranges bit for bit, several times faster and without the sample tables (about
@@ -27,24 +27,31 @@ from tinyrace import cache, kernels
 from tinyrace.cache.codec import DataclassCodec
 from tinyrace.config import cache_settings
 from tinyrace.config.sensors import LidarConfig
-from tinyrace.sensors import common, lidar_map, other_cars, raycast, raycast_exact, raycast_numpy
-from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import (
+from tinyrace.sensors.base import SensorContext, TopDown
+from tinyrace.sensors.machinery import (
+    common,
+    lidar_map,
+    other_cars,
+    raycast,
+    raycast_exact,
+    raycast_numpy,
+)
+from tinyrace.sensors.machinery.common import (
     RGB,
     PerTrack,
     Unsupported,
     mount,
 )
-from tinyrace.sensors.lidar_map import NO_HIT, WALL_CLASS, blocking_map, occupancy_map
-from tinyrace.sensors.raycast import (
+from tinyrace.sensors.machinery.lidar_map import NO_HIT, WALL_CLASS, blocking_map, occupancy_map
+from tinyrace.sensors.machinery.raycast import (
     DistanceField,
     Fan,
     beam_fan,
     fan_angle,
     table_bytes,
 )
-from tinyrace.sensors.raycast_exact import ExactField, exact_fan, exact_turn
-from tinyrace.sensors.raycast_numpy import cast
+from tinyrace.sensors.machinery.raycast_exact import ExactField, exact_fan, exact_turn
+from tinyrace.sensors.machinery.raycast_numpy import cast
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES
 from tinyrace.world.snapshot import Snapshot
@@ -202,6 +209,14 @@ class LidarSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        c = self.config
+        hits = ", and what each beam hit" if c.hit_classes else ""
+        return f"lidar, {c.beams} beams over {c.fov:g} deg, ranges up to {self.max_range:g}{hits}"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         made = self._fields.get(track, self._tables)

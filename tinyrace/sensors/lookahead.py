@@ -26,8 +26,8 @@ from gymnasium import spaces
 from tinyrace.config.bounds import MAX_LOOKAHEAD_GRID
 from tinyrace.config.sensors import LookaheadConfig
 from tinyrace.errors import ConfigError, Problem
-from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import PerTrack, PlanePoints, Unsupported
+from tinyrace.sensors.base import SensorContext, TopDown
+from tinyrace.sensors.machinery.common import PerTrack, PlanePoints, Unsupported
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -250,6 +250,13 @@ class LookaheadSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        c = self.config
+        return f"{c.points} points of the reference line ahead, {self.spacing:g} apart"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         try:

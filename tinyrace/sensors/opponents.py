@@ -26,7 +26,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config.sensors import OpponentsConfig
-from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.base import SensorContext, TopDown
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -80,6 +80,12 @@ class OpponentsSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        return f"the {self.config.count} nearest other cars within {self.max_range:g}"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         self.y_down = track.y_down

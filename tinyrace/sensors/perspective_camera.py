@@ -1,4 +1,4 @@
-"""``type: perspective_camera``: a pinhole camera on the car (see ``sensors/pinhole.py``).
+"""``type: perspective_camera``: a pinhole camera on the car (see ``sensors/machinery/pinhole.py``).
 
 Formats: ``rgb`` (H, W, 3) uint8; ``gray`` (H, W) uint8; ``classes`` (H, W) uint8 labels
 of the track's ground, sampled without interpolation so that no pixel blends two labels.
@@ -19,8 +19,8 @@ from gymnasium import spaces
 
 from tinyrace.config.sensors import PerspectiveCameraConfig
 from tinyrace.sensors.base import Ground as EpisodeGround
-from tinyrace.sensors.base import SensorContext
-from tinyrace.sensors.common import (
+from tinyrace.sensors.base import SensorContext, TopDown
+from tinyrace.sensors.machinery.common import (
     GroundImage,
     PerTrack,
     Unsupported,
@@ -29,8 +29,14 @@ from tinyrace.sensors.common import (
     paint_labels,
     shared_ground,
 )
-from tinyrace.sensors.draw_cars import CAR_LABEL, CarLooks, Paint, fill_footprints_seen
-from tinyrace.sensors.pinhole import Pinhole, car_to_world, render, warp_below_sky, world_to_car
+from tinyrace.sensors.machinery.draw_cars import CAR_LABEL, CarLooks, Paint, fill_footprints_seen
+from tinyrace.sensors.machinery.pinhole import (
+    Pinhole,
+    car_to_world,
+    render,
+    warp_below_sky,
+    world_to_car,
+)
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -94,6 +100,12 @@ class PerspectiveCamera:
         dict each time: infos never share it)."""
         return dict(self._names)
 
+    def describe(self) -> str:
+        return f"perspective camera, {self.config.format}, pitched {self.config.pitch:g} deg"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
+
     def reset(self, track: Track) -> None:
         if self.config.format == "classes":
             self.ground, self._names = self._grounds.get(track, self._paint_labels)
@@ -132,7 +144,7 @@ class PerspectiveCamera:
     def _draw_others(
         self, image: np.ndarray, snapshot: Snapshot, track: Track, antialias: bool = True
     ) -> None:
-        """The other cars of a race on the ground (``sensors/draw_cars.py``)."""
+        """The other cars of a race on the ground (``sensors/machinery/draw_cars.py``)."""
         car = snapshot.car
         to_car = world_to_car(car.front_axle, car.pose[2], track.y_down)
         fill_footprints_seen(image, self.pinhole, to_car, snapshot, self.paints, antialias)

@@ -11,7 +11,7 @@ from tinyrace.config.sensors import SensorConfig
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.sensors import birdseye_camera
 from tinyrace.sensors.base import Sensor, SensorContext, SensorType
-from tinyrace.sensors.common import Unsupported
+from tinyrace.sensors.machinery.common import Unsupported
 
 SENSOR_TYPES: dict[str, SensorType] = {}
 

@@ -31,7 +31,7 @@ from gymnasium import spaces
 from tinyrace.cars.state import CarFacts, CarState
 from tinyrace.config import EnvConfig
 from tinyrace.config.sensors import StateConfig
-from tinyrace.sensors.base import SensorContext
+from tinyrace.sensors.base import SensorContext, TopDown
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -115,6 +115,12 @@ class StateSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        return "the car's " + ", ".join(self.fields)
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return None  # its observation is no picture from above
 
     def reset(self, track: Track) -> None:
         self.y_down = track.y_down

@@ -3,7 +3,8 @@ metres (the sensor type ``top_view``).
 
 The window is a square of ``span`` wheelbases, a quarter of it behind the front axle, turned
 with the car; the ground is sampled by one affine warp, the other cars of a race are filled
-in their colours (``sensors/draw_cars.py``) and the car's footprint on top in CarRacing's red.
+in their colours (``sensors/machinery/draw_cars.py``) and the car's footprint on top in
+CarRacing's red.
 """
 
 from __future__ import annotations
@@ -17,10 +18,10 @@ from gymnasium import spaces
 from tinyrace.cars.state import footprint_corners
 from tinyrace.config import CameraConfig
 from tinyrace.config.sensors import TopViewConfig
-from tinyrace.sensors.base import Ground, SensorContext
+from tinyrace.ground.texture import GroundTexture, transform_points
+from tinyrace.sensors.base import Ground, SensorContext, TopDown
 from tinyrace.sensors.birdseye_camera import RoiCamera
-from tinyrace.sensors.draw_cars import CarLooks, Paint, fill_footprints
-from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.sensors.machinery.draw_cars import CarLooks, Paint, fill_footprints
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
 
@@ -79,6 +80,12 @@ class TopViewSensor:
     @property
     def id(self) -> str:
         return self.config.id
+
+    def describe(self) -> str:
+        return f"the road from above, {self.config.span:g} wheelbases across, the car drawn in"
+
+    def top_down(self, snapshot: Snapshot, track: Track) -> TopDown | None:
+        return TopDown()  # turned with the car: no window drawn on the overview
 
     def reset(self, track: Track) -> None:
         self._view = None  # a new episode may have a new ground

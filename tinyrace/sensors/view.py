@@ -3,7 +3,7 @@ the detected cones and the lookahead points drawn on it, and every camera-like s
 image beside it (perspective views; ``classes`` images in false colours).
 
 It reads the snapshot, the track and the observation only; the map is the track's ground
-drawn once per track (``tinyrace.sensors.common``), turned so that the car points up.
+drawn once per track (``tinyrace.sensors.machinery.common``), turned so that the car points up.
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ import numpy as np
 from tinyrace.cars.state import CarFacts
 from tinyrace.config import EnvConfig
 from tinyrace.sensors.base import Sensor
-from tinyrace.sensors.common import GroundImage, PerTrack, paint_colors, shared_ground
 from tinyrace.sensors.cones import ConesSensor
-from tinyrace.sensors.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.lidar import LidarSensor
 from tinyrace.sensors.lookahead import LookaheadSensor
+from tinyrace.sensors.machinery.common import GroundImage, PerTrack, paint_colors, shared_ground
+from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_race
 from tinyrace.sensors.perspective_camera import PerspectiveCamera
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot

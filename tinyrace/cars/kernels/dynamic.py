@@ -25,8 +25,6 @@ import math
 import sys
 from typing import Any
 
-import numpy as np
-
 from tinyrace.cars.dynamic_layout import (
     BRAKE,
     BRAKE_LOCK,
@@ -307,8 +305,3 @@ def batch_control(state: Any, consts: Any, gas: Any, brake: Any) -> None:
 def compiled_hypot(x: float, y: float) -> float:
     """The kernel's hypot, callable from Python (for tests)."""
     return float(hypot(x, y))
-
-
-def empty_out(size: int) -> np.ndarray:
-    """The (3, size) array ``batch_forces`` writes velocities into."""
-    return np.zeros((3, size))

@@ -1,7 +1,8 @@
 """Compiled drawing of CarRacing's view (numba): the dashboard's bars and the car's blend.
 
 Imported only when numba imports (a dependency of tinyrace); see
-``tinyrace.sensors.drawing.kernel``. Each function gives the numpy path's pixels, bit for bit:
+``tinyrace.sensors.machinery.drawing.kernel``. Each function gives the numpy path's pixels,
+bit for bit:
 
 - ``draw_bars``: the strip of ``Dashboard`` from its instruments' values. The numpy path
   draws each bar at ``factor`` x and area-averages it (cv2's ``INTER_AREA``), one layer
@@ -20,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from tinyrace.kernels.compiled import compiler
-from tinyrace.sensors.dashboard import (
+from tinyrace.sensors.machinery.dashboard import (
     BAR_COLORS,
     BAR_PLACES,
     BAR_STEPS,

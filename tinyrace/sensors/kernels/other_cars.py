@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from tinyrace.kernels.compiled import compiler
-from tinyrace.sensors import other_cars
+from tinyrace.sensors.machinery import other_cars
 
 compiled = compiler("lidar")
 

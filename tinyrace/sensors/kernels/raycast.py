@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from tinyrace.kernels.compiled import compiler
-from tinyrace.sensors import raycast
-from tinyrace.sensors.raycast import (
+from tinyrace.sensors.machinery import raycast
+from tinyrace.sensors.machinery.raycast import (
     BISECTIONS,
     CHECK_EVERY,
     COARSE_STEP,
@@ -48,7 +48,7 @@ from tinyrace.sensors.raycast import (
     DistanceField,
     Fan,
 )
-from tinyrace.sensors.raycast_exact import EXACT_BLOCKED, LEAP_UNIT
+from tinyrace.sensors.machinery.raycast_exact import EXACT_BLOCKED, LEAP_UNIT
 
 INT16 = (-32768, 32767)  # cv2.remap saturates map coordinates to int16
 # numba's cache is keyed by this file alone, and the compiled code holds raycast's constants:

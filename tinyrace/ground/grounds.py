@@ -16,9 +16,9 @@ import numpy as np
 
 from tinyrace import cache
 from tinyrace.config import EnvConfig, cache_settings
-from tinyrace.sensors.metric_ground import shared_ground
-from tinyrace.sensors.procedural_ground import GroundPainter, repaint_tile
-from tinyrace.sensors.texture import GroundTexture
+from tinyrace.ground.metric import shared_ground
+from tinyrace.ground.procedural import GroundPainter, repaint_tile
+from tinyrace.ground.texture import GroundTexture
 from tinyrace.tracks.base import PaintedGround, Track, TrackDraw, TrackSource
 from tinyrace.tracks.procedural_source import GroundColors
 
@@ -34,10 +34,44 @@ class EpisodeGround(Protocol):
         """The ground of ``track`` in the current episode (as the cameras sample it)."""
         ...
 
+    @property
+    def tracks(self) -> Sequence[Track]:
+        """The fixed tracks it serves, a texture each (none: a track drawn at each reset)."""
+        ...
+
+    @property
+    def carries_pictures(self) -> bool:
+        """Whether its textures are the tracks' own pictures (an overview shows them as
+        they are, not a ground drawn from what the tracks hold)."""
+        ...
+
+    def rescalable(self) -> Rescalable | None:
+        """The ground painted anew at any resolution (render's views at their own sizes),
+        or None: one texture per track."""
+        ...
+
+
+class Rescalable(Protocol):
+    """A ground painted at any resolution: CarRacing's, painted at each reset."""
+
+    @property
+    def painted(self) -> PaintedGround:
+        """The playfield and the cameras' pixels_per_unit."""
+        ...
+
+    def texture_at(self, pixels_per_unit: float) -> GroundTexture:
+        """The ground at ``pixels_per_unit`` now (every tile visited so far repainted)."""
+        ...
+
 
 class ProceduralGround:
     """CarRacing's ground, painted at each reset in the episode's colours, at any number of
     resolutions (the observation's, the videos'), each made when first asked."""
+
+    @classmethod
+    def serving(cls, config: EnvConfig, source: TrackSource) -> ProceduralGround | None:
+        """CarRacing's ground, for a source that paints each track it makes."""
+        return cls(source.painted) if source.painted is not None else None
 
     def __init__(self, painted: PaintedGround):
         self.painted = painted  # the playfield and the cameras' pixels_per_unit
@@ -48,6 +82,12 @@ class ProceduralGround:
         self.visited: Sequence[int] = ()
         self._textures: dict[float, GroundTexture] = {}  # by pixels per unit
         self._painted = 0  # visited tiles repainted on every texture
+
+    tracks: Sequence[Track] = ()  # a new track at each reset
+    carries_pictures = False
+
+    def rescalable(self) -> Rescalable | None:
+        return self
 
     def reset(self, draw: TrackDraw, visited: Sequence[int]) -> None:
         self.track, self.colors, self.visited = draw.track, GroundColors.of(draw.track), visited
@@ -89,6 +129,12 @@ class ProceduralGround:
 class ImageGround:
     """The picture each fixed track carries, as a texture (made once per env)."""
 
+    @classmethod
+    def serving(cls, config: EnvConfig, source: TrackSource) -> ImageGround | None:
+        """The pictures, for a source whose fixed tracks all carry one."""
+        tracks = source.tracks
+        return cls(tracks) if tracks and all(t.picture is not None for t in tracks) else None
+
     def __init__(self, tracks: Sequence[Track]):
         self.tracks = tracks
         self.textures = [
@@ -102,11 +148,21 @@ class ImageGround:
     def texture(self, track: Track) -> GroundTexture:
         return self.textures[self.index]
 
+    carries_pictures = True
+
+    def rescalable(self) -> Rescalable | None:
+        return None
+
 
 class MetricGround:
     """Every fixed track's ground drawn from what it holds (road, cones, a map's cells) at
     its ``ground_pixels_per_unit``, made at its first read and shared with the other envs of
     the track (``shared_ground``)."""
+
+    @classmethod
+    def serving(cls, config: EnvConfig, source: TrackSource) -> MetricGround | None:
+        """A ground drawn from what the tracks hold: any source's fixed tracks."""
+        return cls(config, source.tracks)
 
     def __init__(self, config: EnvConfig, tracks: Sequence[Track]):
         self.tracks = tracks
@@ -125,18 +181,33 @@ class MetricGround:
             self.textures[self.index] = texture
         return texture
 
+    carries_pictures = False
+
+    def rescalable(self) -> Rescalable | None:
+        return None
+
+
+class GroundType(Protocol):
+    """A kind of ground: made for a track source it serves (else None)."""
+
+    def serving(self, config: EnvConfig, source: TrackSource) -> EpisodeGround | None: ...
+
+
+# The kinds of ground, the first that serves a source is its ground (the last serves all).
+GROUND_TYPES: list[GroundType] = [ProceduralGround, ImageGround, MetricGround]
+
 
 def make_ground(config: EnvConfig, source: TrackSource) -> EpisodeGround:
-    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode), chosen
-    by what the tracks hold, never by their kind: a ground painted anew for each track from
-    its tiles and kerbs (``source.painted``), the picture each fixed track carries
-    (``Track.picture``), or else a ground drawn once per track from what it holds (road,
-    cones, a map's cells)."""
-    if source.painted is not None:
-        return ProceduralGround(source.painted)
-    if source.tracks and all(track.picture is not None for track in source.tracks):
-        return ImageGround(source.tracks)
-    return MetricGround(config, source.tracks)
+    """The ground of ``source``'s tracks (made once per env; ``reset`` per episode): the
+    first of ``GROUND_TYPES`` that serves the source, by what it offers, never by its kind:
+    a ground painted anew for each track from its tiles and kerbs (``source.painted``), the
+    picture each fixed track carries (``Track.picture``), or else a ground drawn once per
+    track from what it holds (road, cones, a map's cells)."""
+    for ground_type in GROUND_TYPES:
+        ground = ground_type.serving(config, source)
+        if ground is not None:
+            return ground
+    raise ValueError(f"no ground serves a {source.kind} source")
 
 
 def _picture(track: Track) -> np.ndarray:

@@ -27,8 +27,8 @@ import numpy as np
 from tinyrace.cars.state import CarState, footprint_corners, footprint_points
 from tinyrace.config import EnvConfig, car_colors, car_names
 from tinyrace.config.colors import palette_color
-from tinyrace.sensors.pinhole import Pinhole
-from tinyrace.sensors.texture import transform_points
+from tinyrace.ground.texture import transform_points
+from tinyrace.sensors.machinery.pinhole import Pinhole
 from tinyrace.world.snapshot import Snapshot
 
 CAR_LABEL = 254  # the ``classes`` label of another car's footprint

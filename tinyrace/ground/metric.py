@@ -14,8 +14,8 @@ import numpy as np
 
 from tinyrace import cache
 from tinyrace.cache.codec import DataclassCodec
-from tinyrace.sensors import texture
-from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.ground import texture
+from tinyrace.ground.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
 
 MAX_SIDE = 8192  # [px] the texture's longest side

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from tinyrace.cars.state import CarState
-from tinyrace.sensors.drawing import kernel
+from tinyrace.sensors.machinery.drawing import kernel
 
 RGB = tuple[int, int, int]
 _WHITE, _BLUE, _PURPLE = (255, 255, 255), (0, 0, 255), (51, 0, 255)

@@ -13,9 +13,9 @@ import math
 import cv2
 import numpy as np
 
-from tinyrace.sensors.common import RGB, color_mask, fill_boxes, fill_quads, grid
-from tinyrace.sensors.raycast import DistanceField, distance_field
-from tinyrace.sensors.raycast_exact import ExactField, exact_field
+from tinyrace.sensors.machinery.common import RGB, color_mask, fill_boxes, fill_quads, grid
+from tinyrace.sensors.machinery.raycast import DistanceField, distance_field
+from tinyrace.sensors.machinery.raycast_exact import ExactField, exact_field
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.cone_map import CLASSES, RADII
 

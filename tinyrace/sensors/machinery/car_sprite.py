@@ -17,9 +17,9 @@ import numpy as np
 
 from tinyrace.cars.dynamic_shape import HULL_POLYGONS, SIZE, WHEEL_HALF_WIDTH, WHEEL_RADIUS
 from tinyrace.cars.state import CarState, SkidView
-from tinyrace.sensors.drawing import blend as numpy_blend
-from tinyrace.sensors.drawing import kernel as drawing_kernel
-from tinyrace.sensors.texture import Affine, as_matrix, compose, transform_points
+from tinyrace.ground.texture import Affine, as_matrix, compose, transform_points
+from tinyrace.sensors.machinery.drawing import blend as numpy_blend
+from tinyrace.sensors.machinery.drawing import kernel as drawing_kernel
 
 HULL_COLOR = (204, 0, 0)  # RGB
 WHEEL_COLOR = (0, 0, 0)

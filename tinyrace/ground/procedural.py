@@ -7,7 +7,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from tinyrace.sensors.texture import GroundTexture, transform_points
+from tinyrace.ground.texture import GroundTexture, transform_points
 from tinyrace.tracks.base import Track
 from tinyrace.tracks.procedural_source import GroundColors
 

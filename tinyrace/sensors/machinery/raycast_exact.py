@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from tinyrace.sensors.raycast import PAD, distance_map
+from tinyrace.sensors.machinery.raycast import PAD, distance_map
 
 # Exact traversal (ROS maps): beams cross the map's cells as squares, edges on half-integer
 # cell coordinates, and stop where they enter the first blocking one

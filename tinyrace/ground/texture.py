@@ -90,7 +90,7 @@ def compose_kernel(wanted: str | None = None) -> tuple[str, Callable[[Affine, Af
     numpy; None: ``TINYRACE_DRAWING``'s value, else auto): numba's compiled one
     (``kernels/texture.py``) when numba imports, else the plain one. Same bits."""
     name, module = kernels.choose(
-        kernels.DRAWING_VARIABLE, "numpy", "tinyrace.sensors.kernels.texture", wanted
+        kernels.DRAWING_VARIABLE, "numpy", "tinyrace.ground.kernels.texture", wanted
     )
     return name, shift_scale_matrix if module is None else module.shift_scale_matrix
 

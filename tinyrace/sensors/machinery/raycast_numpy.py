@@ -17,7 +17,7 @@ import math
 import cv2
 import numpy as np
 
-from tinyrace.sensors.raycast import (
+from tinyrace.sensors.machinery.raycast import (
     BISECTIONS,
     CHECK_EVERY,
     FINE_SAMPLES,
@@ -28,7 +28,7 @@ from tinyrace.sensors.raycast import (
     Fan,
     start,
 )
-from tinyrace.sensors.raycast_exact import EXACT_BLOCKED, LEAP_UNIT
+from tinyrace.sensors.machinery.raycast_exact import EXACT_BLOCKED, LEAP_UNIT
 
 FEW = 48  # beams with false alarms so few that sampling their whole rows is cheaper
 # (b0 + b1 * 2^8 + ... + b7 * 2^56) * PACK >> 56 has bit i = b_i when every b_i is 0 or 1

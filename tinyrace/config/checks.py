@@ -1,0 +1,128 @@
+"""Rules that span sections of a parsed config (tracks of one type, the cameras a track
+needs, ``observation: box``, pixels, the race, obstacle colours); each problem is
+reported on the parser, with the key path it names."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from tinyrace.cache import folder_problems
+from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.loader import Parser
+from tinyrace.config.race import race_cars, race_pixel_problems, race_problems
+from tinyrace.config.schema import MAX_RACE_CARS, EnvConfig, RewardConfig
+
+
+def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
+    """Rules that span sections; ``at`` prefixes key paths."""
+    kinds = {t.type for t in config.tracks}
+    if len(kinds) > 1:
+        parser.problem(f"{at}tracks", sorted(kinds), "all tracks of one env must be of one type")
+    if not config.tracks:
+        parser.problem(f"{at}tracks", [], "expected at least one track")
+    facts = config.facts if config.tracks else None
+    seen = facts is None or facts.default_view  # a view without cameras (96x96)
+    if not seen and not config.cameras and not config.sensors:
+        allowed = (
+            f"an {config.kind} track needs at least one camera (id, resolution, roi, position)"
+        )
+        parser.problem(f"{at}cameras", [], allowed)
+    _check_observation(config, parser, at, f"{at}observation")
+    # the car model and its actions are checked by tinyrace.cars.registry
+    picture = facts is not None and facts.colour_picture
+    if not picture and config.reward_design.color_obstacles:
+        obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
+        allowed = "colour obstacles need an image track"
+        parser.problem(f"{at}reward_design.color_obstacles", obstacles, allowed)
+    _check_obstacle_colors(config.reward_design, parser, at)
+    for i, track in enumerate(config.tracks):
+        for key, value, allowed in track.problems(config.files):
+            parser.problem(f"{at}tracks[{i}].{key}", value, allowed)
+    _check_race(config, parser, at, not seen)
+    if config.cache.dir is not None:
+        parser.problems += folder_problems(config.cache.dir, parser.source, f"{at}cache.dir")
+
+
+def _check_observation(config: EnvConfig, parser: Parser, at: str, observation_at: str) -> None:
+    """One car's cameras and sensors: unique ids, ``observation: box``, pixels, intrinsics."""
+    _check_box(config, parser, observation_at)
+    ids = [c.id for c in config.cameras] + [sensor.id for sensor in config.sensors]
+    cameras = len(config.cameras)
+    for i, cam_id in enumerate(ids):
+        if cam_id in ids[:i]:
+            where = f"cameras[{i}].id" if i < cameras else f"sensors[{i - cameras}].id"
+            parser.problem(f"{at}{where}", cam_id, "camera and sensor ids must be unique")
+    _check_camera_pixels(config, parser, at)
+    for i, sensor in enumerate(config.sensors):
+        for key, value, allowed in sensor.problems():
+            parser.problem(f"{at}sensors[{i}].{key}", value, allowed)
+
+
+def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) -> None:
+    """The race as a whole (count, ids, poses), and each car's own cameras and sensors."""
+    cars = config.race.cars
+    if len(cars) > MAX_RACE_CARS:
+        allowed = f"expected at most {MAX_RACE_CARS} cars (one world holds {MAX_RACE_CARS})"
+        parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
+        return
+    parser.problems += race_problems(config, at, parser.source)
+    parser.problems += race_pixel_problems(config, at, parser.source)
+    for i, entry in enumerate(cars):
+        if entry.cameras is None and entry.sensors is None:
+            continue  # the shared ones, checked above
+        car = race_cars(config)[i]
+        own = dataclasses.replace(config, cameras=car.cameras, sensors=car.written_sensors)
+        car_at = f"{at}race.cars[{i}]."
+        if needs_camera and not own.cameras and not own.sensors:
+            allowed = f"car {car.id!r} on an {config.kind} track needs at least one camera"
+            parser.problem(f"{car_at}cameras", [], allowed)
+        _check_observation(own, parser, car_at, f"{car_at}sensors")
+
+
+def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:
+    """``observation: box`` is one camera's image: exactly one camera or image sensor (a
+    problem names ``where``)."""
+    if config.observation != "box":
+        return
+    ids = [c.id for c in config.cameras] + [s.id for s in config.sensors]
+    allowed = ""
+    if len(ids) > 1:
+        allowed = f"box needs exactly one camera or sensor, not {ids} (use dict)"
+    elif config.sensors and config.sensors[0].dict_observation:
+        allowed = (
+            f"box needs a camera or a sensor of one array, not a {config.sensors[0].type} "
+            "sensor whose observation is a Dict (cones; lidar with hit_classes): use dict"
+        )
+    if allowed:
+        parser.problem(where, "box", allowed)
+
+
+def _check_obstacle_colors(reward: RewardConfig, parser: Parser, at: str) -> None:
+    """An obstacle in the trajectory's colour could never be hit: its pixels are taken out."""
+    cte = reward.cross_track_error
+    for i, obstacle in enumerate(reward.color_obstacles):
+        if cte.use_cte and obstacle.color == cte.trajectory_color:
+            allowed = (
+                "expected a colour other than cross_track_error.trajectory_color (trajectory "
+                "pixels are taken out of the picture, so this obstacle could never be hit)"
+            )
+            parser.problem(f"{at}reward_design.color_obstacles[{i}].color", obstacle.color, allowed)
+
+
+def _check_camera_pixels(config: EnvConfig, parser: Parser, at: str) -> None:
+    """Every camera's pixels together: the ``cameras`` and the ``sensors`` that count camera
+    pixels (a perspective camera's count PERSPECTIVE_PIXEL_WEIGHT times: each keeps a ray
+    and its ground point)."""
+    sizes = [(f"cameras[{i}]", c.resolution, 1) for i, c in enumerate(config.cameras)]
+    for i, sensor in enumerate(config.sensors):
+        pixels = sensor.camera_pixels()
+        if pixels is not None:
+            sizes.append((f"sensors[{i}]", *pixels))
+    total = sum(height * width * weight for _, (height, width), weight in sizes)  # [px]
+    if total > MAX_CAMERA_PIXELS:
+        allowed = (
+            f"expected cameras of at most {MAX_CAMERA_PIXELS:,} px together, a perspective_camera "
+            f"pixel counted {PERSPECTIVE_PIXEL_WEIGHT} times (here {total:,})"
+        )
+        where = "cameras" if not config.sensors else "sensors"
+        parser.problem(f"{at}{where}", {k: list(r) for k, r, _ in sizes}, allowed)

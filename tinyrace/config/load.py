@@ -1,0 +1,143 @@
+"""Reading a config: a track folder, a YAML path, a dict or ``gym.make``'s keywords, with
+overrides laid over it, parsed and checked into a ``LoadedConfig``."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, cast
+
+from tinyrace.config.camera_info import with_camera_info
+from tinyrace.config.checks import check_consistency
+from tinyrace.config.defaults import resolve_defaults
+from tinyrace.config.loader import Parser, deep_merge, read_yaml
+from tinyrace.config.overrides import DEFAULTS, KWARGS, Overrides, blame, spelled_as
+from tinyrace.config.race import inherited, lay_cars_over_car, resolve_race_cars
+from tinyrace.config.schema import EnvConfig
+from tinyrace.errors import ConfigError, Problem, did_you_mean
+from tinyrace.examples import find_track, track_names
+
+TRACK_FILE = "track.yaml"
+
+
+@dataclass(frozen=True)
+class LoadedConfig:
+    """A validated config, with where it came from (for errors) and where its images live."""
+
+    config: EnvConfig
+    source: str  # file path or "<dict>", used in error messages
+    base_dir: Path  # images are relative to this
+    overrides: Overrides = dataclasses.field(default_factory=Overrides)  # laid over ``source``
+
+    def blame(self, problems: list[Problem]) -> list[Problem]:
+        """Each problem named where its value came from: a key given as an override names
+        the overrides' source (a keyword argument, the experiment file), not the track file."""
+        return blame(problems, self.source, self.overrides)
+
+
+def load_env_config(
+    config: str | Path | Mapping[str, Any] | LoadedConfig | None = None,
+    environment: str | Path | None = None,
+    overrides: Mapping[str, Any] | Overrides | None = None,
+) -> LoadedConfig:
+    """Read a track folder (``environment``), a YAML path or a dict, apply overrides, validate.
+
+    With neither ``config`` nor ``environment``, the result is the default procedural track.
+    Raises ConfigError listing every problem found, each named where it came from: the file
+    and key path, or the keyword argument (plain ``overrides`` are ``gym.make``'s).
+    """
+    laid = overrides if isinstance(overrides, Overrides) else Overrides(overrides or {})
+    if isinstance(config, LoadedConfig) and not laid.keys and environment is None:
+        return config  # already validated (e.g. by ``tinyrace play``)
+    if config is not None and environment is not None:
+        raise ConfigError(
+            Problem(
+                KWARGS,
+                "environment",
+                str(environment),
+                "give either config= or environment=, not both",
+            )
+        )
+    raw, source, base_dir = _read_source(cast(_Source, config), environment)
+    if laid.keys:
+        raw = deep_merge(raw, spelled_as(laid.keys, raw))
+    if environment is not None and "tracks" not in raw and "track" not in raw:
+        raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
+    try:
+        parsed = with_camera_info(parse_env_config(raw, source), source, base_dir)
+    except ConfigError as exc:
+        raise ConfigError(blame(exc.problems, source, laid)) from None
+    return LoadedConfig(parsed, source, base_dir, laid)
+
+
+_Source = str | Path | Mapping[str, Any] | None  # what _read_source reads
+
+
+def _read_source(
+    config: str | Path | Mapping[str, Any] | None, environment: str | Path | None
+) -> tuple[dict[str, Any], str, Path]:
+    if environment is not None:
+        if not isinstance(environment, (str, Path)):
+            allowed = "expected a track folder (a path)"
+            raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
+        folder = find_track(environment)  # a path that exists wins over a shipped track's name
+        config = folder / TRACK_FILE
+        if not _safely(lambda: os.path.lexists(config)):  # a FIFO or a folder: read_yaml says
+            raise ConfigError(Problem(KWARGS, "environment", str(environment), _no_track(folder)))
+    if config is None:
+        return {}, DEFAULTS, Path.cwd()
+    if isinstance(config, Mapping):
+        return dict(config), "<dict>", Path.cwd()
+    if not isinstance(config, (str, Path)):
+        raise ConfigError(Problem(KWARGS, "config", config, "expected a YAML path or a dict"))
+    path = Path(config)
+    if _safely(path.is_dir):
+        path = path / TRACK_FILE
+    raw = read_yaml(path)
+    if raw is None:
+        raw = {}
+    if not isinstance(raw, Mapping):
+        raise ConfigError(
+            Problem(
+                str(path), "", raw, "expected a YAML mapping of sections (sim, track, car, ...)"
+            )
+        )
+    return dict(raw), str(path), path.parent
+
+
+def _no_track(folder: Path) -> str:
+    """What ``environment=`` expected, and what ``folder`` is instead."""
+    expected = f"expected a track folder holding {TRACK_FILE}"
+    if _safely(folder.is_file):
+        return f"{expected}; this is a file: give a YAML config file as config= instead"
+    if _safely(folder.is_dir):
+        return f"{expected}; this folder holds no {TRACK_FILE}"
+    names = track_names()
+    return f"{did_you_mean(str(folder), names)}{expected} or a shipped track: {', '.join(names)}"
+
+
+def _safely(check: Callable[[], bool]) -> bool:
+    """A path check that is False, not an OSError, for names the OS refuses (too long, ...)."""
+    try:
+        return check()
+    except (OSError, ValueError):
+        return False
+
+
+def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> EnvConfig:
+    """Validate a raw mapping into an EnvConfig with every kind-dependent default resolved.
+
+    ``prefix`` is put before key paths in messages (e.g. "env" inside an experiment file).
+    """
+    parser = Parser(source)
+    raw, given = lay_cars_over_car(raw)  # each race car's knobs over the car section
+    config = parser.dataclass(EnvConfig, raw, prefix)
+    at = f"{prefix}." if prefix else ""
+    parser.problems = inherited(parser.problems, given, at)  # reported at car.<key> once
+    if parser.parsed(config):  # also when some keys were bad: report every problem at once
+        check_consistency(config, parser, at)
+    parser.check()
+    return resolve_race_cars(resolve_defaults(config))

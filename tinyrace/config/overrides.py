@@ -1,0 +1,71 @@
+"""Keys laid over a config file (``gym.make``'s keyword arguments, an experiment's ``env:``)
+and the blame that names each problem where its value came from."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from tinyrace.errors import Problem
+
+KWARGS = "<kwargs>"  # the source named by problems of ``gym.make``'s keyword arguments
+
+
+DEFAULTS = "<defaults>"  # the source of a config made of defaults and overrides only
+
+
+@dataclass(frozen=True)
+class Overrides:
+    """Keys laid over a config file (``gym.make``'s keyword arguments, an experiment's
+    ``env:``), and what a problem in one of them names: their source and a key prefix."""
+
+    keys: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    source: str = KWARGS
+    prefix: str = ""  # e.g. "env." inside an experiment file
+
+
+def blame(problems: list[Problem], source: str, overrides: Overrides) -> list[Problem]:
+    """``problems`` found in ``source`` merged with ``overrides``, each renamed to the
+    overrides' source when its key path lies in an override (or no file was read)."""
+    renamed = []
+    for p in problems:
+        if p.source == source and (source == DEFAULTS or _overridden(p.path, overrides.keys)):
+            p = Problem(overrides.source, f"{overrides.prefix}{p.path}", p.value, p.allowed)
+        renamed.append(p)
+    return renamed
+
+
+_SINGULAR = {"tracks": "track", "cameras": "camera", "sensors": "sensor"}  # key aliases
+
+
+def spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[str, Any]:
+    """``overrides`` with a section named as the file names it (``track=`` over a file's
+    ``tracks:`` replaces it, rather than being the same key given twice)."""
+    renamed = dict(overrides)
+    for plural, singular in _SINGULAR.items():
+        for given, written in ((plural, singular), (singular, plural)):
+            if given in renamed and written in raw and written not in renamed:
+                renamed[written] = renamed.pop(given)
+    return renamed
+
+
+def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
+    """Whether the value at ``path`` (``cameras[0].roi``) came from ``keys``: mappings merge
+    key by key, anything else an override gives replaces the file's value whole."""
+    tokens = re.findall(r"\[\d+\]|[^.\[\]]+", path)
+    if not tokens:  # a top-level key of brackets and dots alone (``[``): itself or not
+        return path in keys
+    node: Any = keys
+    for token in tokens:
+        if not isinstance(node, Mapping):
+            return True  # inside a list or value the override replaced
+        if token.startswith("["):
+            continue  # a mapping standing for a list of one (``track:``)
+        token = token if token in node else _SINGULAR.get(token, token)  # tracks: track:
+        if token not in node:
+            return False
+        node = node[token]
+    return bool(path)

@@ -1,0 +1,71 @@
+"""Writing the files of a run folder: never through a link, never into what is not a file.
+
+A run's files (results.json, episodes.csv, traces, pictures, report.html) are written whole
+to a temporary file beside the target and renamed over it (``os.replace``): a symbolic or
+hard link at the target's name is never followed, so the file it points to is never
+changed. A target that is a symbolic link, a folder, a FIFO or a device is refused with a
+ConfigError naming it (tinyrace removes nothing it did not write).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import stat
+import tempfile
+from pathlib import Path
+
+from tinyrace.errors import ConfigError, Problem
+
+TEMP_PREFIX = ".tinyrace-"
+
+
+def write_file(path: Path, data: bytes) -> Path:
+    """Write ``data`` as ``path`` (a new file, or one replacing the regular file there)."""
+    check_writable(path)
+    handle, temp = tempfile.mkstemp(prefix=TEMP_PREFIX, dir=path.parent)
+    try:
+        with os.fdopen(handle, "wb") as file:
+            file.write(data)
+        os.chmod(temp, 0o644 & ~_umask())
+        os.replace(temp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(temp)
+        raise
+    return path
+
+
+def write_text(path: Path, text: str) -> Path:
+    """``write_file`` of UTF-8 text."""
+    return write_file(path, text.encode("utf-8"))
+
+
+def check_writable(path: Path) -> None:
+    """A ConfigError when ``path`` exists as anything but a regular file of its own."""
+    try:
+        info = os.lstat(path)
+    except FileNotFoundError:
+        return
+    if stat.S_ISREG(info.st_mode):
+        return
+    kind = "a symbolic link" if stat.S_ISLNK(info.st_mode) else _kind(info.st_mode)
+    allowed = (
+        f"expected a regular file or no file there, not {kind}: tinyrace never writes "
+        "through a link nor removes what it did not write (move it away, or use another folder)"
+    )
+    raise ConfigError(Problem(str(path), "", path.name, allowed))
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO"
+    return "a device or socket"
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
