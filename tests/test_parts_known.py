@@ -25,12 +25,13 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.sensors import SensorDefaults
 from tinyrace.sensors.base import SensorType
 from tinyrace.sensors.registry import register as register_sensor
 
 
 @dataclass(frozen=True)
-class ClockConfig:
+class ClockConfig(SensorDefaults):
     """``sensors[i]`` of ``type: sim_clock``: the episode's sim time."""
 
     id: str = knob(REQUIRED, "observation key of this sensor")
@@ -48,6 +49,12 @@ class Clock:
 
     def observe(self, snapshot, track, rng):
         return np.array([snapshot.t * self.scale])
+
+    def describe(self):
+        return "the sim time"
+
+    def top_down(self, snapshot, track):
+        return None
 
 
 def register():
