@@ -49,6 +49,10 @@ CASES = {
         # a bare name: the shipped track wherever the ref keeps it (refs since 70ff527)
         {"environment": "formula_student", "sim": {"step_limit": 10**9}},
     ),
+    "f1tenth_loop": (  # a ROS map: walls from its pixels, a car that keeps running into them
+        "tinyrace/TinyRace-v0",
+        {"environment": "f1tenth_loop", "sim": {"step_limit": 10**9}},
+    ),
 }
 
 
@@ -81,13 +85,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("new", help="git ref to compare")
     parser.add_argument("--rounds", type=int, default=5, help="rounds per ref and case")
     parser.add_argument("--steps", type=int, default=5000, help="timed steps per round")
+    parser.add_argument("--case", action="append", choices=sorted(CASES), help="(default: all)")
     args = parser.parse_args(argv)
+    cases = args.case or list(CASES)
     with tempfile.TemporaryDirectory(prefix="tinyrace-compare-") as tmp:
         trees = {ref: checkout(ref, Path(tmp)) for ref in (args.old, args.new)}
         try:
             rates: dict[tuple[str, str], list[float]] = {}
             for _ in range(args.rounds):
-                for case in CASES:
+                for case in cases:
                     for ref, tree in trees.items():
                         rate = one_round(tree, case, args.steps)
                         rates.setdefault((case, ref), []).append(rate)
@@ -101,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"{'case':<16} {args.old:>12} {args.new:>12}  new/old   (median steps/s of {args.rounds})"
     )
-    for case in CASES:
+    for case in cases:
         old = statistics.median(rates[(case, args.old)])
         new = statistics.median(rates[(case, args.new)])
         print(f"{case:<16} {old:>12,.0f} {new:>12,.0f}  {new / old:.3f}")

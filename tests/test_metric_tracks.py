@@ -189,7 +189,7 @@ def test_a_car_model_on_a_track_kind_it_cannot_drive_is_a_config_error(kind, mod
     assert error.value.problems[0].path == "car.model"
 
 
-def test_the_throttle_car_accelerates_brakes_caps_speed_and_turns_right_on_positive_steer():
+def test_the_throttle_car_accelerates_brakes_caps_speed_and_turns_left_on_positive_steer():
     env = make("centerline", car={"velocity": 10.0, "max_steering_change": None})
     env.reset(seed=0)
     car = env.unwrapped.car
@@ -201,7 +201,7 @@ def test_the_throttle_car_accelerates_brakes_caps_speed_and_turns_right_on_posit
     assert car.speed == pytest.approx(5.0)
     heading = car.pose[2]
     env.step(np.array([1.0, 0.0], np.float32))
-    assert car.pose[2] < heading  # y up: a right turn lowers the heading
+    assert car.pose[2] > heading  # + left on tracks in metres: y up, the heading grows
     for _ in range(100):
         env.step(np.array([0.0, -1.0], np.float32))
     assert car.speed == 0.0  # no reverse
@@ -257,8 +257,9 @@ def test_play_drives_the_throttle_car_with_the_arrow_keys():
 
     keys_of = SimpleNamespace(K_LEFT=0, K_RIGHT=1, K_UP=2, K_DOWN=3)
     env = make("cone_map").unwrapped
-    assert _action(env, [0, 1, 1, 0], keys_of).tolist() == [1.0, 1.0]  # right, throttle
-    assert _action(env, [1, 0, 0, 1], keys_of).tolist() == [-1.0, -1.0]  # left, brake
+    # + left on tracks in metres: the right arrow is a negative steer
+    assert _action(env, [0, 1, 1, 0], keys_of).tolist() == [-1.0, 1.0]  # right, throttle
+    assert _action(env, [1, 0, 0, 1], keys_of).tolist() == [1.0, -1.0]  # left, brake
     assert env.action_space.contains(_action(env, [0, 0, 0, 0], keys_of))
 
 

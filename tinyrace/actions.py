@@ -31,9 +31,9 @@ DISCRETE_CONTROLS = (
 _FLOAT32 = np.dtype(np.float32)
 ACTION_KINDS = {  # ActionSpec.kind -> what the action's controls are
     "discrete": "CarRacing's Discrete(5): nothing, right, left, gas, brake",
-    "pedals": "[steer -1..1 (+ right), gas 0..1, brake 0..1]",
+    "pedals": "[steer -1..1 (+ right; + left on tracks in metres), gas 0..1, brake 0..1]",
     "steer": "[steer -1..1 (+ right)]",
-    "steer_throttle": "[steer -1..1 (+ right), throttle -1..1 (< 0 brakes)]",
+    "steer_throttle": "[steer -1..1 (+ left on tracks in metres), throttle -1..1 (< 0 brakes)]",
     "angle_speed": "[steering angle rad (+ left), speed m/s]",
     "rate_accel": "[steering velocity rad/s (+ left), acceleration m/s^2]",
 }

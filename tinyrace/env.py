@@ -51,7 +51,9 @@ class TinyRaceEnv(gym.Env):
     ## Action Space
     The car model's (``env.unwrapped.action_spec``): ``dynamic``: Box [steer, gas, brake] or
     CarRacing's Discrete(5); ``kinematic``: Box [steer]; ``kinematic_throttle``: Box [steer,
-    throttle]; ``single_track``: Box [steering angle, speed], or raw rates.
+    throttle]; ``single_track``: Box [steering angle, speed], or raw rates. A positive steer
+    turns right on procedural and image tracks, left on tracks in metres
+    (docs/conventions.md).
 
     ## Observation Space
     Every observation is a sensor's (``tinyrace.sensors``; tinycarlo's ``cameras:`` are

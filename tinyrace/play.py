@@ -65,11 +65,12 @@ def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
     kind = model_of(env.config).actions(env.config.car).kind
     if kind in ("angle_speed", "rate_accel"):  # the single-track car
         return _single_track_action(env, kind, steer, keys[pygame.K_UP], keys[pygame.K_DOWN])
+    right = 1.0 if env.car_facts.steer_per_rad > 0 else -1.0  # the action's sign of a right turn
     if env.action_space.shape == (1,):
-        return np.array([steer], np.float32)
+        return np.array([right * steer], np.float32)
     gas, brake = float(keys[pygame.K_UP]), 0.8 * float(keys[pygame.K_DOWN])
     if env.action_space.shape == (2,):  # the kinematic car with throttle: [steer, throttle]
-        return np.array([steer, gas - float(keys[pygame.K_DOWN])], np.float32)
+        return np.array([right * steer, gas - float(keys[pygame.K_DOWN])], np.float32)
     if env.config.car.actions == "discrete":
         return (
             GAS
@@ -82,7 +83,7 @@ def _action(env: TinyRaceEnv, keys: Any, pygame: Any) -> np.ndarray | int:
             if steer < 0
             else NOTHING
         )
-    return np.array([steer, gas, brake], np.float32)
+    return np.array([right * steer, gas, brake], np.float32)
 
 
 def _single_track_action(

@@ -171,6 +171,7 @@ class DynamicCar:
     spec: DynamicCarSpec
     scale: float  # [track units per u]
     steer_sign: float  # +1 in CarRacing's y-up frame, -1 on a y-down image
+    steer_action: float = -1.0  # [rad per action unit] steer_target of a steer action of 1
     steer_target: float = 0.0  # [rad] internal sign (positive: counter-clockwise)
     skids: SkidMarks = field(default_factory=SkidMarks)
     wheel_state: np.ndarray = field(default_factory=lambda: new_state(1))
@@ -186,8 +187,10 @@ class DynamicCar:
         scale: float = 1.0,
         y_down: bool = False,
         spec: DynamicCarSpec = DynamicCarSpec(),
+        steer_left: bool = False,
     ) -> DynamicCar:
-        """Add a car at ``pose`` (x, y, heading: the forward direction's angle from +x)."""
+        """Add a car at ``pose`` (x, y, heading: the forward direction's angle from +x); a
+        positive steer action turns it right (CarRacing's), or left with ``steer_left``."""
         body = pymunk.Body()
         x, y, heading = pose
         body.position = (x, y)
@@ -205,12 +208,14 @@ class DynamicCar:
         shapes.append(footprint_sensor(body, (-width / 2, rear), (width / 2, rear + base)))
         space.add(body, *shapes)
         sign = -1.0 if y_down else 1.0
-        return cls(body, wheels, spec, scale, steer_sign=sign, wheel_state=state)
+        action = sign if steer_left else -sign  # a right turn: clockwise on screen
+        return cls(body, wheels, spec, scale, sign, action, wheel_state=state)
 
     # -- controls ----------------------------------------------------------------------------
     def control(self, steer: float, gas: float, brake: float) -> None:
-        """steer -1 (left) .. 1 (right), gas 0..1, brake 0..1, as CarRacing's action."""
-        self.steer_target = -steer * self.steer_sign
+        """steer -1..1 (+ right as CarRacing's action, or + left: ``build``'s ``steer_left``),
+        gas 0..1, brake 0..1."""
+        self.steer_target = steer * self.steer_action
         gas, rise = min(max(gas, 0.0), 1.0), self.spec.gas_rise
         state = self.wheel_state  # (Python here: cheaper than a compiled call's arguments)
         left, right = state[GAS, 2:].tolist()  # the rear wheels

@@ -104,6 +104,7 @@ class DynamicBatch:
     moment: np.ndarray
     translation: np.ndarray  # [track units per step] Box2D's speed cap
     steer_sign: np.ndarray
+    steer_action: np.ndarray
 
     def __init__(self, size: int) -> None:
         self.size = n = size
@@ -178,6 +179,7 @@ class DynamicBatch:
             "moment": car._moment,
             "translation": spec.max_translation * car.scale,  # [track units per step]
             "steer_sign": car.steer_sign,
+            "steer_action": car.steer_action,
         }
         for name, value in per_car.items():
             getattr(self, name)[row] = value
@@ -204,7 +206,7 @@ class DynamicBatch:
     # -- controls ----------------------------------------------------------------------------
     def control(self, steer: np.ndarray, gas: np.ndarray, brake: np.ndarray) -> None:
         """Every row's action (``DynamicCar.control``): steer -1..1, gas 0..1, brake 0..1."""
-        self.steer_target = -steer * self.steer_sign
+        self.steer_target = steer * self.steer_action
         if self._compiled is not None:
             self._compiled.batch_control(self.state, self.consts, gas, brake)
             return
@@ -370,4 +372,4 @@ _WHEEL_CONSTANTS = (
     *("slip_gain", "engine_power", "wheel_moment", "spin_floor", "brake_lock", "brake_rate"),
     *("gas_rise", "steer_gain", "steer_speed", "steer_limit", "neg_steer_limit"),
 )
-_CAR_CONSTANTS = ("mass", "moment", "translation", "steer_sign")
+_CAR_CONSTANTS = ("mass", "moment", "translation", "steer_sign", "steer_action")

@@ -1,7 +1,8 @@
 """A kinematic bicycle with throttle, in metres (tinycarlo 2's car): no slip, speed from pedals.
 
-Action [steer, throttle], each -1..1: steer +1 turns right at full lock (rate-limited
-when ``max_rate`` is set); throttle > 0 accelerates at up to ``max_acceleration``,
+Action [steer, throttle], each -1..1: steer +1 turns at full lock (rate-limited when
+``max_rate`` is set), left on the metre tracks (``steer_left``, the registry's convention;
+tinycarlo 2 turned right); throttle > 0 accelerates at up to ``max_acceleration``,
 throttle < 0 brakes at up to ``max_deceleration`` down to a standstill (no reverse);
 the speed never exceeds ``max_velocity``. The body's origin is the middle of the rear
 axle and ``body.angle`` is the heading.
@@ -31,9 +32,9 @@ class KinematicThrottleCar(RearAxleBicycle):
     max_deceleration: float  # [m/s^2]
     max_angle: float  # [rad] full lock
     max_rate: float | None  # [rad/s] steering rate limit, None: unlimited
-    right_sign: float  # heading change of a right turn: -1 with y up, +1 on a y-down image
+    turn_sign: float  # the heading change's sign under a positive steer
     velocity: float = 0.0  # [m/s] current speed along the heading
-    steer: float = 0.0  # [rad] current wheel angle, + right
+    steer: float = 0.0  # [rad] current wheel angle, + as a positive steer action
     steer_target: float = 0.0  # [rad]
     throttle: float = 0.0  # -1..1
 
@@ -46,10 +47,12 @@ class KinematicThrottleCar(RearAxleBicycle):
         limits: tuple[float, float, float],
         steering: tuple[float, float | None],
         y_down: bool = False,
+        steer_left: bool = False,
     ) -> KinematicThrottleCar:
         """A car at ``pose`` (x, y, heading); ``sizes`` (wheelbase, track width) [m],
         ``limits`` (max velocity [m/s], acceleration, deceleration [m/s^2]), ``steering``
-        (full lock [deg], rate limit [deg/s] or None)."""
+        (full lock [deg], rate limit [deg/s] or None); a positive steer turns right, or
+        left with ``steer_left``."""
         body = pymunk.Body(1.0, math.inf)  # driven by its velocity (see KinematicCar)
         x, y, heading = pose
         body.position, body.angle = (x, y), heading
@@ -63,7 +66,7 @@ class KinematicThrottleCar(RearAxleBicycle):
             *limits,
             math.radians(lock),
             None if rate is None else math.radians(rate),
-            1.0 if y_down else -1.0,
+            (1.0 if y_down else -1.0) * (-1.0 if steer_left else 1.0),
         )
 
     def control(self, steer: float, throttle: float) -> None:
@@ -78,7 +81,7 @@ class KinematicThrottleCar(RearAxleBicycle):
         else:
             self.velocity += self.throttle * self.max_deceleration * dt
         self.velocity = min(max(self.velocity, 0.0), self.max_velocity)
-        turn_rate = self.right_sign * self.velocity * math.tan(self.steer) / self.wheelbase
+        turn_rate = self.turn_sign * self.velocity * math.tan(self.steer) / self.wheelbase
         half_turn = turn_rate * dt / 2  # [rad] aim along the chord of this step's arc
         chord = math.sin(half_turn) / half_turn if half_turn else 1.0
         direction = self.body.angle + half_turn

@@ -26,17 +26,29 @@ from tinyrace.cars.base import Car, Pose, TyreBatch
 from tinyrace.cars.dynamic import DynamicCar
 from tinyrace.cars.dynamic_batch import DynamicBatch
 from tinyrace.cars.dynamic_shape import SIZE, WHEEL_POSITIONS, DynamicCarSpec
+from tinyrace.cars.f1tenth_gym import NAME as F1TENTH_GYM
 from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.single_track import SingleTrackCar
 from tinyrace.cars.state import CarFacts
 from tinyrace.config import CarConfig, EnvConfig
-from tinyrace.config.schema import track_types_in
+from tinyrace.config.schema import F1TENTH_GYM_RATE, track_types_in
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.tracks.base import Track
 
 CarBuilder = Callable[[pymunk.Space, Pose, CarConfig, Track], Car]
 CARRACING_UNIT = "u"  # CarRacing's world unit: its car needs no scale there
+# Where a positive steering action turns, by the track's unit, whatever the car model:
+# right on CarRacing's tracks (u) and on image tracks (px), as CarRacing and tinycarlo; left
+# on tracks in metres (m), as ROS (REP 103: y left, angles counter-clockwise), F1TENTH and
+# CommonRoad, whose single-track car is the metre tracks' own (docs/conventions.md).
+POSITIVE_STEER_TURNS = {"u": "right", "px": "right", "m": "left"}
+
+
+def steer_turns_left(unit: str, actions: str = "continuous") -> bool:
+    """Whether a positive steering action turns left on tracks in ``unit`` (CarRacing's
+    Discrete(5) names its turns: its ``right`` turns right everywhere)."""
+    return POSITIVE_STEER_TURNS.get(unit) == "left" and actions != "discrete"
 
 
 @dataclass(frozen=True)
@@ -55,6 +67,7 @@ class CarModel:
     throttle: bool  # its speed follows the actions (False: a constant speed)
     units: str  # the unit of its own parameters: "track" (the track's px, m or u) or "m"
     doc: str
+    compat: frozenset[str] = frozenset()  # accepted ``car.compat`` values (another sim's car)
     # the tyre forces of ``n`` such cars as one computation (a vector env's), if it offers it
     batch: Callable[[int], TyreBatch] | None = None
 
@@ -71,9 +84,11 @@ def _known(value: float | None) -> float:
 
 
 def _build_dynamic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
+    left = steer_turns_left(track.unit, config.actions)
     if track.unit == CARRACING_UNIT:  # CarRacing's own frame and units
-        return DynamicCar.build(space, pose)
-    return DynamicCar.build(space, pose, scale=_known(config.pixels_per_unit), y_down=track.y_down)
+        return DynamicCar.build(space, pose, steer_left=left)
+    scale = _known(config.pixels_per_unit)
+    return DynamicCar.build(space, pose, scale=scale, y_down=track.y_down, steer_left=left)
 
 
 def _build_kinematic(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
@@ -98,6 +113,7 @@ def _build_kinematic_throttle(
         (_known(config.velocity), config.max_acceleration, config.max_deceleration),
         (config.max_steering_angle, config.max_steering_change),
         y_down=track.y_down,
+        steer_left=steer_turns_left(track.unit),
     )
 
 
@@ -128,7 +144,8 @@ def _dynamic_facts(config: EnvConfig) -> CarFacts:
     width = (WHEEL_POSITIONS[1][0] - WHEEL_POSITIONS[0][0]) * SIZE * scale
     # a steer action s asks for s rad, which the servo stops at its lock
     top = spec.max_translation * scale * fps
-    return CarFacts(length, width, top, 2 * math.pi * fps, spec.steer_limit, 1.0)
+    per_rad = -1.0 if steer_turns_left(config.facts.unit, config.car.actions) else 1.0
+    return CarFacts(length, width, top, 2 * math.pi * fps, spec.steer_limit, per_rad)
 
 
 def _kinematic_facts(config: EnvConfig) -> CarFacts:
@@ -136,7 +153,8 @@ def _kinematic_facts(config: EnvConfig) -> CarFacts:
     lock = math.radians(car.max_steering_angle)
     speed, wheelbase = _known(car.velocity), _known(car.wheelbase)
     yaw_rate = speed * math.tan(lock) / wheelbase
-    return CarFacts(wheelbase, _known(car.track_width), speed, yaw_rate, lock, 1.0 / lock)
+    per_rad = (-1.0 if steer_turns_left(config.facts.unit) else 1.0) / lock
+    return CarFacts(wheelbase, _known(car.track_width), speed, yaw_rate, lock, per_rad)
 
 
 def single_track_parameters(car: CarConfig) -> single_track_model.VehicleParameters:
@@ -161,15 +179,17 @@ def _single_track_facts(config: EnvConfig) -> CarFacts:
     top = max(p.v_max, -p.v_min)
     grip = p.mu * single_track_model.G
     # the action's angle turns left (toward growing headings on the y-up metre tracks);
-    # F1TENTH's gym scans from its car's rear axle (lidar_dist 0 m ahead by default)
-    mount = "rear_axle" if config.car.preset == "f1tenth" else "front_axle"
+    # f1tenth_gym scans from its car's pose (lidar_dist 0 m ahead of it by default)
+    f1tenth = config.car.preset == "f1tenth" or config.car.compat is not None
+    mount = "pose" if f1tenth else "front_axle"
     yaw_rate = top * math.tan(lock) / p.wheelbase
     return CarFacts(p.wheelbase, p.width, top, yaw_rate, lock, -1.0, grip, lidar_mount=mount)
 
 
 def _build_single_track(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> Car:
     params = single_track_parameters(config)
-    return SingleTrackCar.build(space, pose, params, config.actions == "raw", config.substeps)
+    raw = config.actions == "raw"
+    return SingleTrackCar.build(space, pose, params, raw, config.substeps, config.compat)
 
 
 CAR_MODELS: dict[str, CarModel] = {}
@@ -239,7 +259,9 @@ register(
         throttle=True,
         units="m",
         doc="CommonRoad's single-track dynamic car (F1TENTH's): [steering angle, speed] or raw "
-        "[steering velocity, acceleration]; car.preset f1tenth or CommonRoad's vehicle1..3",
+        "[steering velocity, acceleration]; car.preset f1tenth or CommonRoad's vehicle1..3; "
+        "car.compat f1tenth_gym: f1tenth_gym's car step by step",
+        compat=frozenset({F1TENTH_GYM}),
     )
 )
 
@@ -269,6 +291,31 @@ def car_model_problems(config: EnvConfig, source: str) -> list[Problem]:
     if config.car.actions not in model.action_kinds:
         allowed = f"car model {name!r} takes car.actions: {', '.join(sorted(model.action_kinds))}"
         problems.append(Problem(source, "car.actions", config.car.actions, allowed))
+    return problems + _compat_problems(config, model, source)
+
+
+def _compat_problems(config: EnvConfig, model: CarModel, source: str) -> list[Problem]:
+    """What ``car.compat`` needs: a model that has it, and that sim's actions and rate."""
+    car, compat = config.car, config.car.compat
+    if compat is None:
+        return []
+    if compat not in model.compat:
+        names = [m.name for m in CAR_MODELS.values() if compat in m.compat]
+        allowed = f"car.compat {compat} is a car of model {', '.join(names)}, not {model.name!r}"
+        return [Problem(source, "car.compat", compat, allowed)]
+    problems = []
+    if car.actions != "continuous":
+        allowed = f"continuous (f1tenth_gym's [steering angle, speed]) under car.compat {compat}"
+        problems.append(Problem(source, "car.actions", car.actions, allowed))
+    if config.sim.fps not in (None, F1TENTH_GYM_RATE):
+        allowed = f"{F1TENTH_GYM_RATE:g} (f1tenth_gym's 0.01 s step) or null under car.compat"
+        problems.append(Problem(source, "sim.fps", config.sim.fps, allowed))
+    if car.substeps not in (None, 1):
+        allowed = "null or 1 under car.compat (f1tenth_gym integrates one RK4 step per step)"
+        problems.append(Problem(source, "car.substeps", car.substeps, allowed))
+    if car.kinematic_below is not None:
+        allowed = "null under car.compat (f1tenth_gym switches models at 0.5 m/s)"
+        problems.append(Problem(source, "car.kinematic_below", car.kinematic_below, allowed))
     return problems
 
 

@@ -8,8 +8,11 @@ a wall the footprint meets puts the body back and ``stop`` halts the car, as for
 kinematic cars.
 
 Actions (``car.actions``): ``continuous`` is F1TENTH's [steering angle rad, speed m/s],
-turned into the model's inputs by F1TENTH's controllers; ``raw`` is the model's own
-[steering velocity rad/s, acceleration m/s^2]. A positive angle turns left.
+turned into the model's inputs before every integration step (the steering at full rate up
+to the angle and no further, the speed by F1TENTH's proportional controller), so a held
+angle is reached and held at any sim rate; ``raw`` is the model's own [steering velocity
+rad/s, acceleration m/s^2]. A positive angle turns left (toward growing headings).
+``car.compat: f1tenth_gym`` steps f1tenth_gym's car instead (``f1tenth_gym.py``).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import pymunk
 
 from tinyrace.cars import single_track_model as model
 from tinyrace.cars.collision import footprint_sensor
+from tinyrace.cars.f1tenth_gym import F1tenthGymMotion
 from tinyrace.cars.state import CarState
 
 
@@ -37,6 +41,7 @@ class SingleTrackCar:
     yaw_rate: float = 0.0  # [rad/s]
     slip: float = 0.0  # [rad] slip angle at the centre of gravity
     action: tuple[float, float] = (0.0, 0.0)
+    compat: F1tenthGymMotion | None = None  # f1tenth_gym's car step by step (car.compat)
 
     @classmethod
     def build(
@@ -46,8 +51,10 @@ class SingleTrackCar:
         params: model.VehicleParameters,
         raw: bool = False,
         substeps: int | None = None,
+        compat: str | None = None,
     ) -> SingleTrackCar:
-        """A car standing at ``pose`` (centre of gravity x, y [m], yaw [rad])."""
+        """A car standing at ``pose`` (centre of gravity x, y [m], yaw [rad]); ``compat``
+        ``"f1tenth_gym"``: f1tenth_gym's car (continuous actions, one step per world step)."""
         body = pymunk.Body(1.0, math.inf)  # driven by its velocity (see KinematicCar)
         x, y, heading = pose
         body.position, body.angle = (x, y), heading
@@ -55,20 +62,11 @@ class SingleTrackCar:
         half = params.width / 2
         box = footprint_sensor(body, (-params.lr - overhang, -half), (params.lf + overhang, half))
         space.add(body, box)
-        return cls(body, params, raw, substeps)
+        motion = F1tenthGymMotion() if compat == "f1tenth_gym" else None
+        return cls(body, params, raw, substeps, compat=motion)
 
     def control(self, first: float, second: float) -> None:
         self.action = (first, second)
-
-    def inputs(self) -> tuple[float, float]:
-        """(steering velocity [rad/s], acceleration [m/s^2]) for the coming step."""
-        if self.raw:
-            return self.action
-        p = self.params
-        return (
-            model.steering_controller(self.action[0], self.delta, p),
-            model.speed_controller(self.action[1], self.v, p),
-        )
 
     def apply_forces(self, dt: float, on_road: object = None) -> None:
         """Integrate the model over ``dt`` from the body's pose; aim the body at the result."""
@@ -76,7 +74,12 @@ class SingleTrackCar:
         x, y = body.position
         psi = body.angle
         state = (x, y, self.delta, self.v, psi, self.yaw_rate, self.slip)
-        end = model.step(state, self.inputs(), self.params, dt, self.steps_per(dt))
+        if self.compat is not None:
+            end = self.compat.advance(state, self.action, self.params, dt)
+        elif self.raw:
+            end = model.step(state, self.action, self.params, dt, self.steps_per(dt))
+        else:
+            end = model.step_toward(state, self.action, self.params, dt, self.steps_per(dt))
         _, _, self.delta, self.v, _, self.yaw_rate, self.slip = end
         body.velocity = ((end[0] - x) / dt, (end[1] - y) / dt)
         body.angular_velocity = (end[4] - psi) / dt

@@ -11,10 +11,14 @@ toward growing yaw, i.e. left with y up); ``v`` [m/s] speed; ``psi`` [rad] yaw; 
 Inputs (2): steering velocity [rad/s], longitudinal acceleration [m/s^2].
 
 The derivatives follow CommonRoad's ``vehicle_dynamics_st`` (commonroad-vehicle-models 3.0,
-"CommonRoad: Vehicle Models", Althoff and Würsching 2020): below ``kinematic_below`` the
-kinematic single-track model about the centre of gravity (``vehicle_dynamics_ks_cog``) moves
-the car, with the yaw rate and slip derivatives of that model; above it the linear-tyre
-single-track model. The inputs are limited first: the steering velocity to its range and to
+"CommonRoad: Vehicle Models", Althoff and Würsching 2020): above ``kinematic_below`` the
+linear-tyre single-track model moves the car; below it, reversing included, the kinematic
+single-track model about the centre of gravity (``vehicle_dynamics_ks_cog``), with the yaw
+rate and slip derivatives of that model. CommonRoad goes kinematic only for |v| below the
+switch speed, but its tyre equations hold for forward motion only: their 1/v terms turn
+the yaw and slip damping into growth when v < 0 (a reversing car spun up and overflowed in a
+few steps), so tinyrace reverses with the kinematic model, whose motion is defined at
+every speed. The inputs are limited first: the steering velocity to its range and to
 0 at full lock (pushing further), the acceleration to +-``a_max``, to ``a_max * v_switch / v``
 above ``v_switch`` (the engine's power) and to 0 at ``v_min``/``v_max`` (pushing further).
 """
@@ -23,11 +27,18 @@ from __future__ import annotations
 
 import cmath
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 G = 9.81  # [m/s^2] gravity, as CommonRoad and F1TENTH take it
+# A tyre's lateral force is held at this many times its friction limit (mu times its load):
+# far beyond what a tyre gives, so driving within the tyres' grip (and well past it) is
+# CommonRoad's linear-tyre model, while the runaway of that model stays bounded (see
+# ``tyre_derivatives``).
+RUNAWAY = 2.0
 
 State = tuple[float, float, float, float, float, float, float]  # see the module's doc
+Inputs = tuple[float, float]  # (steering velocity [rad/s], acceleration [m/s^2])
 
 
 @dataclass(frozen=True)
@@ -116,28 +127,46 @@ def limit_acceleration(v: float, accel: float, p: VehicleParameters) -> float:
 
 def derivatives(x: State, inputs: tuple[float, float], p: VehicleParameters) -> State:
     """d(state)/dt at state ``x`` under (steering velocity, acceleration), limited."""
-    delta, v, psi, psi_dot, beta = x[2], x[3], x[4], x[5], x[6]
-    sv = limit_steering_rate(delta, inputs[0], p)
+    v = x[3]
+    sv = limit_steering_rate(x[2], inputs[0], p)
     acc = limit_acceleration(v, inputs[1], p)
+    if v < p.kinematic_below:  # slow, stopped or reversing (see the module's doc)
+        return _kinematic(x, sv, acc, p)
+    return tyre_derivatives(x, sv, acc, p)
+
+
+def tyre_derivatives(
+    x: State, sv: float, acc: float, p: VehicleParameters, guard: bool = True
+) -> State:
+    """The linear-tyre single-track model under limited inputs (valid for v > 0 only),
+    written with each axle's lateral force (CommonRoad's equations rearranged): load
+    ``m (g lr - a h) / l`` in front (``lf`` and ``+`` behind), slip angle ``delta - beta -
+    lf psi_dot / v`` in front and ``lr psi_dot / v - beta`` behind, force ``mu C_S load
+    slip``. A linear tyre's force grows with its slip without bound: a car braking hard at
+    speed with its wheels turned oversteers, spins up and its state overflows (random
+    actions did this within a second). With ``guard`` a force stops at ``RUNAWAY`` times the
+    friction limit, against the wheel's sliding, which bounds the spin; CommonRoad's and
+    f1tenth_gym's model (``guard`` False) is left below it."""
+    delta, v, psi, psi_dot, beta = x[2], x[3], x[4], x[5], x[6]
     lf, lr = p.lf, p.lr
     wheelbase = lf + lr
-    if abs(v) < p.kinematic_below:
-        return _kinematic(x, sv, acc, p)
-    front = p.c_sf * (G * lr - acc * p.h)  # load-weighted cornering stiffness, front
-    rear = p.c_sr * (G * lf + acc * p.h)
-    yaw_gain = p.mu * p.m / (p.i_z * wheelbase)
+    grip_front = p.mu * p.m * (G * lr - acc * p.h) / wheelbase  # [N] mu times the load
+    grip_rear = p.mu * p.m * (G * lf + acc * p.h) / wheelbase
+    front = grip_front * p.c_sf * (delta - beta - lf * psi_dot / v)  # [N] lateral forces
+    rear = grip_rear * p.c_sr * (lr * psi_dot / v - beta)
+    if guard and abs(front) > RUNAWAY * grip_front:  # against the wheel's lateral motion
+        slide = v * math.sin(delta - beta) - lf * psi_dot * math.cos(delta)
+        front = math.copysign(RUNAWAY * grip_front, slide)
+    if guard and abs(rear) > RUNAWAY * grip_rear:
+        rear = math.copysign(RUNAWAY * grip_rear, lr * psi_dot - v * math.sin(beta))
     return (
         v * math.cos(beta + psi),
         v * math.sin(beta + psi),
         sv,
         acc,
         psi_dot,
-        -p.mu * p.m / (v * p.i_z * wheelbase) * (lf**2 * front + lr**2 * rear) * psi_dot
-        + yaw_gain * (lr * rear - lf * front) * beta
-        + yaw_gain * lf * front * delta,
-        (p.mu / (v**2 * wheelbase) * (rear * lr - front * lf) - 1) * psi_dot
-        - p.mu / (v * wheelbase) * (rear + front) * beta
-        + p.mu / (v * wheelbase) * front * delta,
+        (lf * front - lr * rear) / p.i_z,
+        (front + rear) / (p.m * v) - psi_dot,
     )
 
 
@@ -177,12 +206,19 @@ def _moved(x: State, k: State, h: float) -> State:
     )  # fmt: skip
 
 
-def rk4_step(x: State, inputs: tuple[float, float], p: VehicleParameters, dt: float) -> State:
-    """The state ``dt`` [s] later, the inputs held (classic fourth-order Runge-Kutta)."""
-    k1 = derivatives(x, inputs, p)
-    k2 = derivatives(_moved(x, k1, dt / 2), inputs, p)
-    k3 = derivatives(_moved(x, k2, dt / 2), inputs, p)
-    k4 = derivatives(_moved(x, k3, dt), inputs, p)
+Derivatives = Callable[[State, Inputs, "VehicleParameters"], State]
+
+
+def rk4_step(
+    x: State, inputs: Inputs, p: VehicleParameters, dt: float, f: Derivatives | None = None
+) -> State:
+    """The state ``dt`` [s] later, the inputs held (classic fourth-order Runge-Kutta) on the
+    derivatives ``f`` (None: ``derivatives``)."""
+    f = derivatives if f is None else f
+    k1 = f(x, inputs, p)
+    k2 = f(_moved(x, k1, dt / 2), inputs, p)
+    k3 = f(_moved(x, k2, dt / 2), inputs, p)
+    k4 = f(_moved(x, k3, dt), inputs, p)
     sixth = dt / 6
     return (
         x[0] + sixth * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]),
@@ -197,11 +233,20 @@ def rk4_step(x: State, inputs: tuple[float, float], p: VehicleParameters, dt: fl
 
 def steering_controller(target: float, delta: float, p: VehicleParameters) -> float:
     """F1TENTH's steering controller: [rad/s] full steering velocity toward ``target`` [rad]
-    (bang-bang, dead band 1e-4 rad)."""
+    (bang-bang, dead band 1e-4 rad). Held over a whole step it overshoots by up to a step's
+    worth of turning and chatters about a held target: tinyrace's cars use
+    ``settling_steering``; ``car.compat: f1tenth_gym`` uses this one."""
     error = target - delta
     if abs(error) <= 1e-4:
         return 0.0
     return p.steer_rate_max if error > 0 else p.steer_rate_min
+
+
+def settling_steering(target: float, delta: float, p: VehicleParameters, h: float) -> float:
+    """[rad/s] full steering velocity toward ``target`` [rad], but no faster than reaching it
+    in ``h`` [s]: held over an integration step of ``h`` the wheels land on the target
+    (the steering angle's derivative is this rate alone) and stay there."""
+    return min(max((target - delta) / h, p.steer_rate_min), p.steer_rate_max)
 
 
 def speed_controller(target: float, v: float, p: VehicleParameters) -> float:
@@ -213,19 +258,41 @@ def speed_controller(target: float, v: float, p: VehicleParameters) -> float:
     return gain * p.a_max / reach * error
 
 
+def _substep(x: State, inputs: tuple[float, float], p: VehicleParameters, h: float) -> State:
+    """One RK4 step of ``h``; the steering angle and the speed put back inside their limits
+    (a step that reaches a limit part way overshoots it by up to a step's worth of motion)."""
+    x = rk4_step(x, inputs, p, h)
+    delta = min(max(x[2], p.steer_min), p.steer_max)
+    v = min(max(x[3], p.v_min), p.v_max)
+    beta = x[6] if -math.pi <= x[6] <= math.pi else math.remainder(x[6], math.tau)  # a spin
+    if delta != x[2] or v != x[3] or beta != x[6]:
+        x = (x[0], x[1], delta, v, x[4], x[5], beta)
+    return x
+
+
 def step(
     x: State, inputs: tuple[float, float], p: VehicleParameters, dt: float, substeps: int = 1
 ) -> State:
-    """The state ``dt`` [s] later: ``substeps`` RK4 steps, the inputs held; after each, the
-    steering angle and the speed are put back inside their limits (a step that reaches a
-    limit part way overshoots it by up to a step's worth of motion)."""
+    """The state ``dt`` [s] later: ``substeps`` RK4 steps, the inputs (steering velocity,
+    acceleration) held, each step's end kept inside the limits."""
     h = dt / substeps
     for _ in range(substeps):
-        x = rk4_step(x, inputs, p, h)
-        delta = min(max(x[2], p.steer_min), p.steer_max)
-        v = min(max(x[3], p.v_min), p.v_max)
-        if delta != x[2] or v != x[3]:
-            x = (x[0], x[1], delta, v, x[4], x[5], x[6])
+        x = _substep(x, inputs, p, h)
+    return x
+
+
+def step_toward(
+    x: State, target: tuple[float, float], p: VehicleParameters, dt: float, substeps: int = 1
+) -> State:
+    """The state ``dt`` [s] later under a target (steering angle [rad], speed [m/s]): before
+    each of the ``substeps`` RK4 steps the controllers (``settling_steering``,
+    ``speed_controller``) turn the target into the step's inputs, so a held target is reached
+    and held at any sim rate."""
+    h = dt / substeps
+    angle, speed = target
+    for _ in range(substeps):
+        inputs = (settling_steering(angle, x[2], p, h), speed_controller(speed, x[3], p))
+        x = _substep(x, inputs, p, h)
     return x
 
 

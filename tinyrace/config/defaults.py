@@ -6,7 +6,7 @@ from __future__ import annotations
 import dataclasses
 
 from tinyrace.cache import Settings, default_folder, folder_of
-from tinyrace.config.schema import EnvConfig
+from tinyrace.config.schema import F1TENTH_GYM_RATE, EnvConfig
 from tinyrace.config.sensors import SensorConfig, cameras_first
 
 
@@ -26,7 +26,8 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     carracing_rules = facts.carracing_rules  # tiles, laps, time penalty
     sim = config.sim
     if sim.fps is None:
-        sim = dataclasses.replace(sim, fps=50.0 if carracing_rules else 30.0)
+        fps = 50.0 if carracing_rules else 30.0
+        sim = dataclasses.replace(sim, fps=F1TENTH_GYM_RATE if config.car.compat else fps)
     sizes = facts.car_sizes
     car = config.car
     car = dataclasses.replace(

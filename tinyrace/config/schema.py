@@ -59,6 +59,7 @@ from tinyrace.config.tracks import (
     track_types_in as track_types_in,
 )
 
+F1TENTH_GYM_RATE = 100.0  # [Hz] sim.fps under car.compat: f1tenth_gym (its 0.01 s step)
 MAX_FRAME_PIXELS = 32 << 20  # [px] an overview frame; a larger one is downscaled further
 
 
@@ -120,6 +121,13 @@ class CarConfig:
         "m/s",
         low=0.01,
         high=10,
+    )
+    compat: Literal["f1tenth_gym"] | None = knob(
+        None,
+        "single_track: f1tenth_gym's car step by step (its 2-step steering delay, bang-bang "
+        "steering controller, kinematic model about the rear axle below 0.5 m/s, one RK4 "
+        "step per sim step at its 100 Hz, the lidar at the pose), to port results; null: "
+        "tinyrace's car (see docs/tracks.md)",
     )
     wheelbase: float | None = knob(
         None,

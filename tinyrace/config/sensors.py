@@ -146,14 +146,15 @@ class LidarConfig(SensorDefaults):
         low_open=True,
     )
     position: tuple[float, float] = knob(
-        (0.0, 0.0), "[x, y] from the middle of the axle that mount names: ahead, left", LENGTH
+        (0.0, 0.0), "[x, y] from the point that mount names: ahead, left", LENGTH
     )
-    mount: Literal["front_axle", "rear_axle"] | None = knob(
+    mount: Literal["front_axle", "rear_axle", "pose"] | None = knob(
         None,
-        "the point position is measured from: the middle of the front or the rear axle (null: "
-        "the car model's: the front axle, or the rear axle on single_track's f1tenth preset, as "
-        "f1tenth_gym scans from its car's rear axle plus lidar_dist, 0 m by default; a lidar "
-        "0.275 m ahead of the rear axle: mount: rear_axle, position: [0.275, 0])",
+        "the point position is measured from: the middle of the front or the rear axle, or the "
+        "car's pose (its reference point: the single-track car's centre of gravity) (null: the "
+        "car model's: the front axle, or the pose on single_track's f1tenth preset and under "
+        "car.compat, as f1tenth_gym scans from its car's pose plus lidar_dist, 0 m by "
+        "default; a lidar 0.275 m ahead of the rear axle: mount: rear_axle, position: [0.275, 0])",
     )
     range_std: float = knob(0.0, "std of Gaussian range noise", LENGTH, low=0)
     dropout: float = knob(0.0, "chance that a beam returns max_range", low=0, high=1)

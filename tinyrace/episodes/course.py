@@ -14,6 +14,7 @@ from tinyrace.config import EnvConfig
 from tinyrace.episodes.episode import Episode, Racer, Start
 from tinyrace.episodes.rules import rule_type
 from tinyrace.episodes.start import grid_poses, random_poses
+from tinyrace.episodes.start_pose import grid_check
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Pose, Track, TrackDraw
 from tinyrace.world.world import World
@@ -84,9 +85,12 @@ class Course:
             except ValueError as exc:
                 raise ConfigError(self._no_room(str(exc))) from None
             return Start(poses, self.source, paths)
+        cars = [(racer.model, racer.car.car) for racer in self.racers]
+        fits = grid_check(draw.track, cars)  # each place clear, else the next one
+        key = tuple((model.name, car) for model, car in cars)  # the grid kept per track
         spacing, offset = race.grid_spacing, race.grid_offset
         try:
-            poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset)
+            poses = grid_poses(draw.track, draw.spawn, count, size, spacing, offset, fits, key)
         except ValueError as exc:
             allowed = f"expected a smaller race.grid_spacing or fewer cars: {exc}"
             problem = Problem(self.source, "race.grid_spacing", race.grid_spacing, allowed)

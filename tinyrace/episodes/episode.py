@@ -86,6 +86,7 @@ class Episode:
                 start.paths,
                 start.hint,
                 start.value,
+                footprints=world.footprints(),
             )
             if problems:
                 raise ConfigError(problems)

@@ -2,25 +2,27 @@
 no wall and no cone, or the config is refused (``prepare``: ``gym.make`` and ``tinyrace
 validate`` alike), naming the pose's file and key.
 
-The footprint is the car's as the world sees it (``cars.state.footprint_corners`` of the car
-built at the spawn: rear to front axle, its width wide); walls are the track's solid boxes
-(what stops the car), cones discs of their base radius.
+The footprint is the car's outline as the world sees it (``World.footprints`` of the car
+built at the spawn: its whole body where the model has one, e.g. the single-track car's
+0.58 m, not only from axle to axle); walls are the track's solid boxes or quads (what
+stops the car), cones discs of their base radius. Touching (an overlap of at most
+``world.TOUCH``) is no hit, in these checks as in the world.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from tinyrace.cars.registry import CarModel
-from tinyrace.cars.state import CarState, footprint_corners
-from tinyrace.config import EnvConfig
+from tinyrace.cars.state import CarState
+from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.errors import Problem
-from tinyrace.tracks.base import Track
-from tinyrace.world.world import World
+from tinyrace.tracks.base import Pose, Track, as_quads
+from tinyrace.world.world import TOUCH, World
 
 
 @dataclass(frozen=True)
@@ -30,13 +32,14 @@ class StartFit:
     track_index: int
     spawn: tuple[float, float, float]  # (x [m], y [m], heading [rad])
     corners: np.ndarray  # (4, 2) [m]
-    size: tuple[float, float]  # (length rear to front axle, width) [m]
-    wall_clearance: float  # [m] to the nearest wall box; < 0: overlapping (inf: no walls)
+    size: tuple[float, float]  # (length, width) [m] of the footprint
+    wall_clearance: float  # [m] to the nearest wall; < 0: overlapping (inf: no walls)
     cone_clearance: float  # [m] to the nearest cone's edge; < 0: overlapping (inf: no cones)
 
     @property
     def free(self) -> bool:
-        return self.wall_clearance > 0 and self.cone_clearance > 0
+        """Clear of walls and cones, or only touching them."""
+        return min(self.wall_clearance, self.cone_clearance) >= -TOUCH
 
 
 def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) -> list[StartFit]:
@@ -48,12 +51,10 @@ def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) 
         for spawn in track.spawns:
             world = World()
             world.add_car(car_model.build(world.space, spawn, config.car, track))
-            state = world.states()[0]
-            corners = footprint_corners(state)
-            walls = _box_clearance(corners, np.asarray(track.walls, np.float64))
+            (corners,) = world.footprints()
+            walls = _wall_clearance(corners, track.wall_quads)
             cones = _cone_clearance(corners, track.cones[:, :2], track.cone_radii)
-            length, width = state.footprint
-            fits.append(StartFit(index, spawn, corners, (length, width), walls, cones))
+            fits.append(StartFit(index, spawn, corners, quad_size(corners), walls, cones))
     return fits
 
 
@@ -76,7 +77,7 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         origin = "" if given else " (the start pose is this file's first point)"
         allowed = (
             f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} m, "
-            f"rear to front axle x width, at {pose} [m, m, rad]) touches no wall or cone; it "
+            f"length x width, at {pose} [m, m, rad]) overlaps no wall or cone; it "
             f"overlaps {what}{origin}: move the spawn (track.spawn) or make the car smaller "
             "(car.wheelbase, car.track_width)"
         )
@@ -93,12 +94,16 @@ def placement_problems(
     paths: Sequence[str],
     hint: str = "",
     value: object = None,
+    *,
+    footprints: Sequence[np.ndarray],
 ) -> list[Problem]:
     """A Problem for each car that starts outside the track's bounds, on a wall or a cone,
-    or on another car (footprints, as the world sees them), named by its id and by the key
-    (``paths[i]``) its pose came from, showing ``value`` (None: the pose)."""
-    corners = [footprint_corners(state) for state in states]
-    walls = np.asarray(track.walls, np.float64)
+    or on another car (``footprints``: each car's outline as the world sees it,
+    ``World.footprints``), named by its id and by the key (``paths[i]``) its pose came
+    from, showing ``value`` (None: the pose). Cars that only touch are no problem."""
+    corners = list(footprints)
+    assert len(corners) == len(states)
+    walls = track.wall_quads
     x0, y0, x1, y1 = track.bounds
     problems = []
     for i, (state, quad) in enumerate(zip(states, corners, strict=True)):
@@ -106,14 +111,14 @@ def placement_problems(
         x, y = state.rear_axle if track.rules.bounds_point == "rear_axle" else state.pose[:2]
         if not (x0 <= x <= x1 and y0 <= y <= y1):
             where.append(f"outside the track's bounds {list(track.bounds)}")
-        if _box_clearance(quad, walls) <= 0:
+        if _overlaps(quad, walls):
             where.append("on a wall")
-        if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) <= 0:
+        if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) < -TOUCH:
             where.append("on a cone")
-        where += [f"on car {names[j]!r}" for j in range(i) if _quads_overlap(quad, corners[j])]
+        where += [f"on car {names[j]!r}" for j in range(i) if quads_overlap(quad, corners[j])]
         if where:
             pose = [round(v, 4) for v in state.pose]
-            length, width = state.footprint
+            length, width = quad_size(quad)
             allowed = (
                 f"car {names[i]!r} would start {' and '.join(where)} (its footprint {length:.2f} "
                 f"x {width:.2f} track units at {pose}): expected a start pose clear of the "
@@ -123,49 +128,130 @@ def placement_problems(
     return problems
 
 
-def _quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two convex quads overlap by more than a touch (no separating axis among their
-    edges' normals)."""
-    for quad in (a, b):
-        edges = np.roll(quad, -1, axis=0) - quad
-        normals = np.column_stack((-edges[:, 1], edges[:, 0]))
-        along_a, along_b = a @ normals.T, b @ normals.T  # (4, 4): corner by axis
-        scale = np.hypot(normals[:, 0], normals[:, 1]) * 1e-9
-        apart = (along_a.max(0) <= along_b.min(0) + scale) | (
-            along_b.max(0) <= along_a.min(0) + scale
+def grid_check(
+    track: Track, cars: Sequence[tuple[CarModel, CarConfig]]
+) -> Callable[[int, Pose], bool]:
+    """``fits(k, pose)`` for the start grid (``start.grid_poses``): whether car ``k``'s
+    footprint (``cars[k]``'s model built as its config says) at ``pose`` lies inside the
+    track's bounds, clear of its walls, cones and obstacle colours and of the cars placed
+    before it; a place that fits is taken (remembered). The pole (car 0) always fits: its
+    place is the spawn's, which the config's own checks judge."""
+    outlines: list[np.ndarray] = []  # built at the first call (a kept grid asks none)
+    placed: list[np.ndarray] = []
+    x0, y0, x1, y1 = track.bounds
+    walls = track.wall_quads
+    cones, radii = track.cones[:, :2], track.cone_radii
+
+    def fits(k: int, pose: Pose) -> bool:
+        if not outlines:
+            outlines.extend(_outlines(track, cars))
+        quad = _at(outlines[k], pose)
+        if k == 0:
+            placed.append(quad)
+            return True
+        inside = bool(((quad >= (x0, y0)) & (quad <= (x1, y1))).all())
+        clear = (
+            inside
+            and not _overlaps(quad, walls)
+            and _cone_clearance(quad, cones, radii) >= -TOUCH
+            and not _on_obstacle(track, quad)
+            and not any(quads_overlap(quad, other) for other in placed)
         )
-        if apart.any():
-            return False
-    return True
+        if clear:
+            placed.append(quad)
+        return clear
+
+    return fits
 
 
-def _box_clearance(corners: np.ndarray, boxes: np.ndarray) -> float:
-    """[m] the smallest distance between the convex polygon ``corners`` and the (M, 4)
-    boxes x0, y0, x1, y1; negative (the overlap along the best separating axis) when one
-    overlaps; inf without boxes."""
-    if len(boxes) == 0:
+def _outlines(track: Track, cars: Sequence[tuple[CarModel, CarConfig]]) -> list[np.ndarray]:
+    """Each car's footprint built at the pose (0, 0, 0), in a scratch world."""
+    world = World()
+    for model, car in cars:
+        world.add_car(model.build(world.space, (0.0, 0.0, 0.0), car, track))
+    return world.footprints()
+
+
+def _at(outline: np.ndarray, pose: Pose) -> np.ndarray:
+    """``outline`` (a footprint at the pose (0, 0, 0)) moved to ``pose``."""
+    x, y, heading = pose
+    c, s = math.cos(heading), math.sin(heading)
+    return np.asarray(outline @ np.array([[c, s], [-s, c]]) + (x, y), np.float64)
+
+
+def _on_obstacle(track: Track, quad: np.ndarray) -> bool:
+    """Whether a pixel of an obstacle colour lies inside ``quad`` (picture tracks)."""
+    test = track.obstacle_test
+    if test is None or len(test.cells) == 0:
+        return False
+    cells = as_quads(test.cells)
+    low, high = quad.min(axis=0), quad.max(axis=0)
+    near = np.flatnonzero(((cells.min(axis=1) <= high) & (cells.max(axis=1) >= low)).all(axis=1))
+    return bool(near.size) and bool(test.touched(quad, near.tolist()))
+
+
+def quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two convex quads overlap by more than a touch (``world.TOUCH``)."""
+    return _overlaps(a, np.asarray(b, np.float64)[None])
+
+
+def _overlaps(polygon: np.ndarray, quads: np.ndarray) -> bool:
+    """Whether the convex ``polygon`` overlaps any of the (M, 4, 2) convex ``quads`` by
+    more than a touch (only the quads whose bounding boxes meet its own are tested)."""
+    if len(quads) == 0:
+        return False
+    polygon = np.asarray(polygon, np.float64)
+    low, high = polygon.min(axis=0) - TOUCH, polygon.max(axis=0) + TOUCH
+    near = ((quads.min(axis=1) <= high) & (quads.max(axis=1) >= low)).all(axis=1)
+    if not near.any():
+        return False
+    return bool(_separations(polygon, quads[near]).min() < -TOUCH)
+
+
+def quad_size(quad: np.ndarray) -> tuple[float, float]:
+    """(length, width) of a rectangle given by its 4 corners in order (its longer side first)."""
+    first, second = (float(np.hypot(*(quad[k + 1] - quad[k]))) for k in (0, 1))
+    return max(first, second), min(first, second)
+
+
+def _wall_clearance(corners: np.ndarray, quads: np.ndarray) -> float:
+    """[m] the smallest distance between the convex polygon ``corners`` and the (M, 4, 2)
+    convex quads; negative (the overlap along the best separating axis) when one
+    overlaps; inf without quads."""
+    if len(quads) == 0:
         return math.inf
     polygon = np.asarray(corners, np.float64)
-    # separating axes: the boxes' (x, y) and the polygon's edge normals
-    edges = np.roll(polygon, -1, axis=0) - polygon
-    normals = np.column_stack((-edges[:, 1], edges[:, 0]))
-    normals /= np.hypot(normals[:, 0], normals[:, 1])[:, None]
-    axes = np.vstack(([1.0, 0.0], [0.0, 1.0], normals))  # (A, 2)
-    box_corners = np.stack(
-        [boxes[:, [0, 1]], boxes[:, [2, 1]], boxes[:, [2, 3]], boxes[:, [0, 3]]], axis=1
-    )  # (M, 4, 2)
-    along_box = box_corners @ axes.T  # (M, 4, A)
-    along_polygon = polygon @ axes.T  # (4, A)
-    gap = np.maximum(
-        along_box.min(axis=1) - along_polygon.max(axis=0),
-        along_polygon.min(axis=0) - along_box.max(axis=1),
-    )  # (M, A): > 0 on an axis that separates
-    separation = gap.max(axis=1)  # per box: > 0 apart (a lower bound of the distance)
+    quads = np.asarray(quads, np.float64)
+    separation = _separations(polygon, quads)  # per quad: > 0 apart (a lower bound)
     overlapping = separation <= 0
     if overlapping.any():
         return float(separation.min())
-    # apart: the exact distance between the polygon and each box (corner to edge, both ways)
-    return float(min(_distance(polygon, box) for box in box_corners[np.argsort(separation)[:8]]))
+    # apart: the exact distance between the polygon and each quad (corner to edge, both ways)
+    return float(min(_distance(polygon, quad) for quad in quads[np.argsort(separation)[:8]]))
+
+
+def _separations(polygon: np.ndarray, quads: np.ndarray) -> np.ndarray:
+    """(M,) per quad, the largest gap along a separating axis between the convex
+    ``polygon`` and the quad: > 0 apart, <= 0 overlapping by that much."""
+    # separating axes: the polygon's edge normals and each quad's
+    axes = np.concatenate(
+        (np.broadcast_to(_normals(polygon), (len(quads), 4, 2)), _normals(quads)), 1
+    )
+    along_quad = np.einsum("mkd,mad->mka", quads, axes)  # (M, 4 corners, A axes)
+    along_polygon = np.einsum("kd,mad->mka", polygon, axes)
+    gap = np.maximum(
+        along_quad.min(axis=1) - along_polygon.max(axis=1),
+        along_polygon.min(axis=1) - along_quad.max(axis=1),
+    )  # (M, A): > 0 on an axis that separates
+    return np.asarray(gap.max(axis=1))
+
+
+def _normals(polygons: np.ndarray) -> np.ndarray:
+    """(..., K, 2) unit normals of the edges of convex polygons (..., K, 2)."""
+    edges = np.roll(polygons, -1, axis=-2) - polygons
+    normals = np.stack((-edges[..., 1], edges[..., 0]), axis=-1)
+    length = np.hypot(normals[..., 0], normals[..., 1])[..., None]
+    return np.asarray(normals / np.where(length > 0, length, 1.0))
 
 
 def _distance(a: np.ndarray, b: np.ndarray) -> float:

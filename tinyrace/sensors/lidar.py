@@ -271,7 +271,10 @@ class LidarSensor:
         """[track units] where the beams start."""
         car = snapshot.car
         ahead, left = self.config.position
-        axle = car.rear_axle if self.mount == "rear_axle" else car.front_axle
+        if self.mount == "pose":
+            axle = car.pose[0], car.pose[1]
+        else:
+            axle = car.rear_axle if self.mount == "rear_axle" else car.front_axle
         return mount(axle, car.pose[2], track.y_down, ahead, left)
 
     def scan(self, origin: tuple[float, float], heading: float, y_down: bool) -> np.ndarray:

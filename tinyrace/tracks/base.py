@@ -37,6 +37,16 @@ def _no_boxes() -> np.ndarray:
     return np.zeros((0, 4))
 
 
+def as_quads(walls: np.ndarray) -> np.ndarray:
+    """(M, 4, 2) corners of walls given as (M, 4) boxes x0, y0, x1, y1 (counter-clockwise
+    from the lower left) or already as (M, 4, 2) quads."""
+    walls = np.asarray(walls, np.float64)
+    if walls.ndim == 3:
+        return walls
+    b = walls.reshape(-1, 4)
+    return np.stack([b[:, [0, 1]], b[:, [2, 1]], b[:, [2, 3]], b[:, [0, 3]]], axis=1)
+
+
 @dataclass(frozen=True, eq=False)
 class Surface:
     """Ground of one grip: convex quads (N, 4, 2) [track units], e.g. the road tiles.
@@ -123,7 +133,8 @@ class Track:
     off_road_friction: float = 1.0  # grip where no surface is (CarRacing's grass: 0.6)
     layers: tuple[ColorLayer, ...] = ()  # colour meanings of a picture track
     picture: np.ndarray | None = None  # (H, W, 4) uint8 RGBx of a picture track
-    walls: np.ndarray = field(default_factory=_no_boxes)  # (M, 4) solid boxes [track units]
+    walls: np.ndarray = field(default_factory=_no_boxes)  # solid walls [track units]: (M, 4)
+    # boxes x0, y0, x1, y1 or (M, 4, 2) convex quads (a ROS map's pixels); see ``wall_quads``
     cones: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (K, 3): x, y, class
     palette: Mapping[str, RGB] = field(default_factory=dict)  # ground colours by name
     rules: TrackRules = TrackRules(())  # the episode's rule parts on this track
@@ -141,6 +152,11 @@ class Track:
     drawn_per_reset: bool = False  # made anew at every reset: nothing keeps or shares it
     attempts: int = 1  # how many tries its generator needed
     path: str = ""  # the file it was read from, for messages ("" when generated)
+
+    @property
+    def wall_quads(self) -> np.ndarray:
+        """(M, 4, 2) [track units] the walls as convex quads, whichever form they came in."""
+        return as_quads(self.walls)
 
     @property
     def obstacles(self) -> tuple[ColorLayer, ...]:

@@ -1,14 +1,15 @@
 """The racetrack-database centreline CSV: ``# x_m,y_m,w_tr_right_m,w_tr_left_m``.
 
-One closed loop in driving order (the last point is not a copy of the first), in
-metres. The same reader takes simpler waypoint files: ``x, y`` only (with a
-default width), or a raceline ``s; x; y; psi; kappa; vx; ax`` whose positions are
-columns 2 and 3. Headings are computed from the points, never read.
+One closed loop in driving order, in metres. The last point is not a copy of the first
+in the database; a file written as a loop (F1TENTH's racelines: the last row repeats the
+first) is read with that last row dropped. The same reader takes simpler waypoint
+files: ``x, y`` only (with a default width), or a raceline ``s; x; y; psi; kappa; vx;
+ax`` whose positions are columns 2 and 3. Headings are computed from the points, never read.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -41,16 +42,17 @@ class Loop:
 def read_loop(path: Path, source: str, key: str, scale: float = 1.0) -> Loop:
     """Read a closed loop of points (and widths when present) from ``path``, times ``scale``.
 
-    Raises ConfigError naming the file, line and column for: a missing file, rows
-    that are not finite numbers, fewer than 4 points, negative widths, a point that
-    repeats the one before, and a loop that crosses itself.
+    A last row that repeats the first (a loop written closed) is dropped. Raises
+    ConfigError naming the file, line and column for: a missing file, rows that are not
+    finite numbers, fewer than 4 points, negative widths, a point that repeats the one
+    before, and a loop that crosses itself.
     """
     table = read_table(path, source, key, tuple(_BY_WIDTH))
+    x, y, right, left = _columns(table)
+    table = _drop_closing_row(table, (x, y))
     problems = _check_count(table)
     if problems:
         raise ConfigError(problems)
-    columns = _columns(table)
-    x, y, right, left = columns
     points = table.values[:, [x, y]] * scale
     widths = None
     if right is not None and left is not None:
@@ -74,6 +76,15 @@ def _columns(table: Table) -> tuple[int, int, int | None, int | None]:
     if found["x"] is not None and found["y"] is not None:
         return found["x"], found["y"], found["right"], found["left"]
     return _BY_WIDTH[table.values.shape[1]]
+
+
+def _drop_closing_row(table: Table, xy: tuple[int, int]) -> Table:
+    """The table without its last row when that row's point repeats the first row's (a
+    closed loop written with its first point again at the end)."""
+    values = table.values
+    if len(values) < 2 or not np.array_equal(values[-1, list(xy)], values[0, list(xy)]):
+        return table
+    return replace(table, values=values[:-1], lines=table.lines[:-1])
 
 
 def _check_count(table: Table) -> list[Problem]:
@@ -113,16 +124,22 @@ def _check_widths(
 
 
 def _check_repeats(table: Table, points: np.ndarray) -> list[Problem]:
+    """A problem on each row that repeats the row before it; the loop's closing segment
+    (last row to first) is blamed on the last row, the later line of the file."""
     repeats = np.flatnonzero(polyline.segment_lengths(points) == 0)
-    return [
-        table.problem(
-            (i + 1) % len(points),
-            None,
-            points[i].tolist(),
-            "expected a point apart from the one before",
-        )
-        for i in repeats[:20]
-    ]
+    last = len(points) - 1
+    problems = []
+    for i in repeats[:20]:
+        if i < last:
+            allowed = f"expected a point apart from the one before (line {table.lines[i]})"
+            problems.append(table.problem(int(i) + 1, None, points[i].tolist(), allowed))
+        else:
+            allowed = (
+                f"expected the loop's last point apart from its first (line {table.lines[0]}); "
+                "one copy of the first point at the end is dropped, a second is refused"
+            )
+            problems.append(table.problem(int(i), None, points[i].tolist(), allowed))
+    return problems
 
 
 def _check_crossing(table: Table, points: np.ndarray) -> list[Problem]:

@@ -51,7 +51,7 @@ class MetricTrack:
     path: str  # the file read, for messages
     cones: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (K, 3) x, y, class id
     cone_radii: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (K,) [m]
-    walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))  # (M, 4) boxes [m]
+    walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 4, 2)))  # (M, 4, 2) quads [m]
     occupancy: OccupancyMap | None = None  # the ROS map's cells
 
     @property
@@ -184,7 +184,7 @@ def _ros_map(
         spawn,
         (float(x0), float(y0), float(x1), float(y1)),
         str(base_dir / config.file),
-        walls=occupancy.wall_boxes(),
+        walls=occupancy.wall_quads(),
         occupancy=occupancy,
     )
 

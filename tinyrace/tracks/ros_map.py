@@ -117,31 +117,45 @@ class OccupancyMap:
             segments.append(np.stack((world, np.roll(world, -1, axis=0)), axis=1))
         return np.concatenate(segments) if segments else np.zeros((0, 2, 2))
 
-    def wall_boxes(self, cell_px: int = 4) -> np.ndarray:
-        """(M, 4) [m] boxes x0, y0, x1, y1 around the occupied cells of each ``cell_px``
-        square of pixels: solid walls for the physics (axis-aligned in the world when the
-        origin's yaw is 0, their bounding boxes otherwise)."""
-        h, w = self.occupied.shape
-        ph, pw = -h % cell_px, -w % cell_px
-        padded = np.pad(self.occupied, ((0, ph), (0, pw)))
-        grid: np.ndarray = padded.reshape(
-            (h + ph) // cell_px, cell_px, (w + pw) // cell_px, cell_px
-        )
-        rows_hit: np.ndarray = np.any(grid, axis=3)
-        cols_hit: np.ndarray = np.any(grid, axis=1)  # (gy, c, gx), (gy, gx, c)
-        gy, gx = np.nonzero(rows_hit.any(axis=1))
-        if len(gy) == 0:
-            return np.zeros((0, 4))
-        r, c = rows_hit[gy, :, gx], cols_hit[gy, gx, :]
-        top = gy * cell_px + r.argmax(axis=1)
-        bottom = gy * cell_px + cell_px - 1 - r[:, ::-1].argmax(axis=1)
-        left = gx * cell_px + c.argmax(axis=1)
-        right = gx * cell_px + cell_px - 1 - c[:, ::-1].argmax(axis=1)
-        corners = [self.to_world(rows, cols) for rows in (top, bottom) for cols in (left, right)]
-        half = 0.5 * self.info.resolution  # from pixel centres to pixel edges
-        stacked = np.stack(corners)  # (4, M, 2)
-        low, high = stacked.min(axis=0) - half, stacked.max(axis=0) + half
-        return np.asarray(np.column_stack((low, high)), float)
+    def wall_quads(self) -> np.ndarray:
+        """(M, 4, 2) [m] the occupied pixels as solid walls for the physics: rectangles of
+        whole pixels (``pixel_rects``), each the four corners of its pixels' outer edges in
+        the world (counter-clockwise; turned with the origin's yaw). Their union is the
+        occupied pixels exactly: no wall reaches past an occupied pixel."""
+        rects = pixel_rects(self.occupied).astype(np.float64)
+        if len(rects) == 0:
+            return np.zeros((0, 4, 2))
+        top, left = rects[:, 0] - 0.5, rects[:, 1] - 0.5  # pixel edges: centres +- 0.5
+        bottom, right = rects[:, 2] + 0.5, rects[:, 3] + 0.5
+        rows = np.stack((bottom, bottom, top, top), axis=1).ravel()  # image rows grow down
+        cols = np.stack((left, right, right, left), axis=1).ravel()
+        return self.to_world(rows, cols).reshape(-1, 4, 2)
+
+
+def pixel_rects(mask: np.ndarray) -> np.ndarray:
+    """(M, 4) int rectangles first row, first column, last row, last column (inclusive)
+    that cover the True pixels of ``mask`` exactly, without overlap: each row's runs of
+    True pixels, a run merged with the same run on the rows below. Runs are taken along
+    rows or along columns, whichever gives fewer rectangles."""
+    by_rows = _merged_runs(mask)
+    by_cols = _merged_runs(mask.T)[:, [1, 0, 3, 2]]
+    return by_rows if len(by_rows) <= len(by_cols) else by_cols
+
+
+def _merged_runs(mask: np.ndarray) -> np.ndarray:
+    h, w = mask.shape
+    padded = np.zeros((h, w + 2), np.int8)
+    padded[:, 1:-1] = mask
+    step = np.diff(padded, axis=1)
+    rows, first = np.nonzero(step == 1)
+    last = np.nonzero(step == -1)[1] - 1  # the same runs, in the same row-major order
+    order = np.lexsort((rows, last, first))  # equal runs together, top to bottom
+    rows, first, last = rows[order], first[order], last[order]
+    new = np.ones(len(rows), bool)  # a run that does not continue the one above it
+    new[1:] = (first[1:] != first[:-1]) | (last[1:] != last[:-1]) | (rows[1:] != rows[:-1] + 1)
+    begin = np.flatnonzero(new)
+    end = np.append(begin[1:], len(rows)) - 1
+    return np.column_stack((rows[begin], first[begin], rows[end], last[end]))
 
 
 def _rotate(points: np.ndarray, angle: float) -> np.ndarray:

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 import pymunk
+from pymunk._chipmunk_cffi import lib as _chipmunk  # pymunk 7's C functions (see _depth)
 
 from tinyrace.cars.base import Car
 from tinyrace.cars.collision import (
@@ -38,10 +39,12 @@ from tinyrace.cars.collision import (
     WHEEL,
 )
 from tinyrace.cars.state import CarState
+from tinyrace.tracks.base import as_quads
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.tile_sensors import tile_sensors
 
 MAX_CARS = 16  # cars one world holds
+TOUCH = 1e-6  # [track units] an overlap this deep or less is a touch, not a hit (rounding)
 
 
 @dataclass
@@ -52,10 +55,10 @@ class Contacts:
     wheel_tiles: list[set[int]] = field(default_factory=lambda: [set() for _ in range(4)])
     new_tile_touches: list[int] = field(default_factory=list)  # tiles a wheel began touching
     obstacle_cells: set[int] = field(default_factory=set)  # cells the footprint overlaps now
-    walls: set[int] = field(default_factory=set)  # wall boxes the footprint overlaps now
+    walls: set[int] = field(default_factory=set)  # walls the footprint runs into now
     cones: set[int] = field(default_factory=set)  # cones the footprint overlaps now
-    cars: set[int] = field(default_factory=set)  # other cars (world indices) touching it now
-    new_cars: list[int] = field(default_factory=list)  # cars it began touching this step
+    cars: set[int] = field(default_factory=set)  # other cars (world indices) it overlaps now
+    new_cars: list[int] = field(default_factory=list)  # cars it began overlapping this step
     crashed: bool = False  # this step ran into a wall: the car was put back and stopped
     # (running into another car puts it back and stops it too, unless it was moving straight
     # away from every car it touches: ``cars``/``new_cars`` say whom it touched)
@@ -66,13 +69,16 @@ class World:
 
     Units are the track's: world units on procedural tracks, pixels on image tracks,
     metres on metric tracks. ``grass_off_tiles``: a wheel touching no road tile grips as
-    on grass (CarRacing); otherwise every wheel grips as on road. Cars are numbered in
+    on grass (CarRacing); otherwise every wheel grips as on road. ``touch`` [track units]:
+    a car whose outline overlaps a wall, a cone or another car by no more than this only
+    touches it (not a hit: it drives on, and the contact is not reported). Cars are numbered in
     the order they were added; ``contacts[i]`` and ``states()[i]`` are car ``i``'s.
     """
 
-    def __init__(self, grass_off_tiles: bool = False) -> None:
+    def __init__(self, grass_off_tiles: bool = False, touch: float = TOUCH) -> None:
         self.space = pymunk.Space()
         self.grass_off_tiles = grass_off_tiles
+        self.touch = touch
         self.cars: list[Car] = []
         self.contacts: list[Contacts] = []  # per car
         self.parked: set[int] = set()  # cars out of the race: they stand still where they are
@@ -81,9 +87,10 @@ class World:
         self._walls = False
         self.space.on_collision(WHEEL, TILE, begin=self._wheel_on, separate=self._wheel_off)
         self.space.on_collision(FOOTPRINT, OBSTACLE, begin=self._cell_on, separate=self._cell_off)
-        self.space.on_collision(FOOTPRINT, WALL, begin=self._wall_on, separate=self._wall_off)
-        self.space.on_collision(FOOTPRINT, CONE, begin=self._cone_on, separate=self._cone_off)
-        self.space.on_collision(CAR, CAR, begin=self._car_on, separate=self._car_off)
+        # walls, cones and cars: judged on every step's overlap (pre_solve): a touch is no hit
+        self.space.on_collision(FOOTPRINT, WALL, pre_solve=self._wall_on, separate=self._wall_off)
+        self.space.on_collision(FOOTPRINT, CONE, pre_solve=self._cone_on, separate=self._cone_off)
+        self.space.on_collision(CAR, CAR, pre_solve=self._car_on, separate=self._car_off)
 
     # -- cars ----------------------------------------------------------------------------------
     def add_car(self, car: Car) -> int:
@@ -139,11 +146,11 @@ class World:
         if shapes:
             self.space.add(*shapes)
 
-    def add_walls(self, boxes: np.ndarray) -> None:
-        """Solid cells of a map (M x 4: x0, y0, x1, y1); the footprint reports touching them."""
+    def add_walls(self, walls: np.ndarray) -> None:
+        """Solid walls (M x 4 boxes x0, y0, x1, y1, or M x 4 x 2 convex quads: a map's
+        pixels); the footprint reports running into them."""
         shapes = []
-        for index, (x0, y0, x1, y1) in enumerate(boxes.tolist()):
-            corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        for index, corners in enumerate(as_quads(walls).tolist()):
             shapes.append(self._static_sensor(corners, WALL, index, OBSTACLE_FILTER))
         if shapes:
             self.space.add(*shapes)
@@ -210,6 +217,17 @@ class World:
         self.space.step(1e-9)
         for body, velocity, spin in saved:
             body.velocity, body.angular_velocity = velocity, spin
+
+    def footprints(self) -> list[np.ndarray]:
+        """Per car, the (4, 2) corners [track units] of the outline that meets walls, cones
+        and other cars, where its body stands now (its whole body on the single-track car,
+        not only from axle to axle)."""
+        quads = []
+        for car in self.cars:
+            body = car.body
+            shape = next(s for s in body.shapes if s.collision_type == FOOTPRINT)
+            quads.append(np.array([tuple(body.local_to_world(v)) for v in shape.get_vertices()]))
+        return quads
 
     # -- stepping ----------------------------------------------------------------------------
     def step(self, dt: float, actions: Sequence[Sequence[Any]] = ()) -> list[Contacts]:
@@ -302,7 +320,11 @@ class World:
 
     def _wall_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, wall = _ordered(arbiter, FOOTPRINT)
-        self.contacts[car.car].walls.add(wall.index)
+        walls = self.contacts[car.car].walls
+        if _depth(arbiter) > self.touch:
+            walls.add(wall.index)
+        else:
+            walls.discard(wall.index)
 
     def _wall_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, wall = _ordered(arbiter, FOOTPRINT)
@@ -310,7 +332,11 @@ class World:
 
     def _cone_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, cone = _ordered(arbiter, FOOTPRINT)
-        self.contacts[car.car].cones.add(cone.index)
+        cones = self.contacts[car.car].cones
+        if _depth(arbiter) > self.touch:
+            cones.add(cone.index)
+        else:
+            cones.discard(cone.index)
 
     def _cone_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         car, cone = _ordered(arbiter, FOOTPRINT)
@@ -318,10 +344,14 @@ class World:
 
     def _car_on(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         a, b = arbiter.shapes
+        deep = _depth(arbiter) > self.touch
         for me, other in ((a.car, b.car), (b.car, a.car)):
             contacts = self.contacts[me]
-            contacts.cars.add(other)
-            contacts.new_cars.append(other)
+            if not deep:
+                contacts.cars.discard(other)
+            elif other not in contacts.cars:
+                contacts.cars.add(other)
+                contacts.new_cars.append(other)
 
     def _car_off(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
         a, b = arbiter.shapes
@@ -372,6 +402,14 @@ def _outline(body: pymunk.Body, index: int) -> pymunk.Poly:
     outline.filter = CAR_FILTER
     outline.car = index
     return outline
+
+
+def _depth(arbiter: pymunk.Arbiter) -> float:
+    """[track units] how deep two shapes overlap (0 when they only touch). Read from
+    Chipmunk's own contact set: ``arbiter.contact_point_set`` builds Python vectors for
+    every point, 4x the time, and this runs on every step a car meets a wall."""
+    points = _chipmunk.cpArbiterGetContactPointSet(arbiter._arbiter)
+    return -min((points.points[i].distance for i in range(points.count)), default=0.0)
 
 
 def _ordered(arbiter: pymunk.Arbiter, first_type: int) -> tuple[pymunk.Shape, pymunk.Shape]:

@@ -99,17 +99,6 @@ def fill_quads(
     cv2.fillPoly(image, list(fixed), value, lineType=cv2.LINE_8, shift=_SUBPIXEL_BITS)
 
 
-def fill_boxes(
-    image: np.ndarray, to_pixels: np.ndarray, boxes: np.ndarray, value: FillValue
-) -> None:
-    """Fill (N, 4) axis-aligned boxes x0, y0, x1, y1 [track units] with ``value``."""
-    if len(boxes) == 0:
-        return
-    b = np.asarray(boxes, np.float64)
-    quads = np.stack([b[:, [0, 1]], b[:, [2, 1]], b[:, [2, 3]], b[:, [0, 3]]], axis=1)
-    fill_quads(image, to_pixels, quads, value)
-
-
 def color_mask(picture: np.ndarray, rgb: tuple[int, int, int]) -> np.ndarray:
     """(H, W) bool: the pixels of an RGBx picture that have colour ``rgb``."""
     packed = picture.view(np.uint32)[:, :, 0] | np.uint32(0xFF000000)

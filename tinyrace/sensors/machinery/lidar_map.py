@@ -13,7 +13,7 @@ import math
 import cv2
 import numpy as np
 
-from tinyrace.sensors.machinery.common import RGB, color_mask, fill_boxes, fill_quads, grid
+from tinyrace.sensors.machinery.common import RGB, color_mask, fill_quads, grid
 from tinyrace.sensors.machinery.raycast import DistanceField, distance_field
 from tinyrace.sensors.machinery.raycast_exact import ExactField, exact_field
 from tinyrace.tracks.base import Track
@@ -47,7 +47,7 @@ def blocking_map(
         for quads in roads:
             fill_quads(labels, to_cells, quads, NO_HIT)
     if "walls" in blocks:
-        fill_boxes(labels, to_cells, track.walls, WALL_CLASS)
+        fill_quads(labels, to_cells, track.wall_quads, WALL_CLASS)
     if "cones" in blocks and len(track.cones):
         _draw_cones(labels, to_cells, track, 1.0 / cell)
     if track.picture is not None:
