@@ -61,7 +61,7 @@ class LeanStep:
         contacts = world.contacts[0]
         self.touches, self.wheel_tiles = contacts.new_tile_touches, contacts.wheel_tiles
         self.dt, self.t, self.steps, self.score = core.dt, core.t, core.steps, core.score
-        self.carried = sum(core._carry.values())  # the reset's tiles, paid by the first step
+        self.carried = sum(episode.carry[0].values())  # the reset's tiles, paid next step
         self.tile_reward = TILES_PAID / len(self.progress.visited)
 
     def __call__(self, action: np.ndarray) -> tuple[np.ndarray, float, dict[str, Any]]:

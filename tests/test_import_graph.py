@@ -36,7 +36,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("experiment",),
     ("validate",),
     ("play",),
-    ("train", "rllib"),
+    ("train", "rllib", "sb3"),
     ("cli", "__main__"),
 )
 

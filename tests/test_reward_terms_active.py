@@ -1,4 +1,5 @@
-"""A step asks only the reward terms its design can pay: the same terms come out."""
+"""A step asks only the reward terms its design can pay: the same terms come out, summed
+in the registry's order (the built-in parts' order is part of every float result)."""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
+import tinyrace.episodes.rules  # noqa: F401  (registers the built-in rule parts' terms)
 from tinyrace.config.colors import Color
 from tinyrace.config.schema import ColorObstacle, RewardConfig
-from tinyrace.rewards import REWARD_TERMS, Shaping, active_terms, reward_terms
+from tinyrace.rewards import TERMS, Design, Shaping, judging, reward_terms
 from tinyrace.world.facts import StepFacts
 
 weights = st.sampled_from([0.0, 0.1, 1.0, 5.0])
@@ -68,14 +70,34 @@ def test_active_terms_give_the_terms_of_all_terms(
         cones_hit=cones_hit,
         wall_hit=wall_hit,
     )
-    active = active_terms(config, shaping)
-    assert list(active) == [name for name in REWARD_TERMS if name in active]  # order kept
-    expected = reward_terms(facts, config, shaping)
-    assert reward_terms(facts, config, shaping, True, active) == expected
-    assert list(reward_terms(facts, config, shaping, True, active)) == list(expected)
+    design = Design(config, shaping)
+    every = [term for term in TERMS.values() if term.alone is None]
+    active = judging(TERMS, (), design).terms
+    assert [t.name for t in active] == [t.name for t in every if t in active]  # order kept
+    expected = reward_terms(facts, design, every)
+    assert reward_terms(facts, design, active) == expected
+    assert list(reward_terms(facts, design, active)[0]) == list(expected[0])
 
 
 def test_terms_with_nothing_to_pay_are_not_asked() -> None:
     config = dataclasses.replace(RewardConfig(), time_penalty=0.1, tile_progress=1000.0)
     # no off-road penalty, no obstacle colours, no cte shaping
-    assert list(active_terms(config, None)) == ["time", "tiles", "cones", "walls"]
+    names = [t.name for t in judging(TERMS, (), Design(config)).terms]
+    assert names == ["time", "tiles", "cones", "walls"]
+
+
+def test_the_built_in_terms_are_summed_in_their_historical_order() -> None:
+    built_in = ["time", "out_of_bounds", "tiles", "off_road", "obstacles", "cones", "walls", "cte"]
+    assert list(TERMS)[: len(built_in)] == built_in
+
+
+def test_out_of_bounds_pays_alone_and_is_left_out_of_the_score() -> None:
+    config = dataclasses.replace(RewardConfig(), time_penalty=0.1, out_of_bounds_penalty=100.0)
+    judge = judging(TERMS, (), Design(config))
+    facts = StepFacts(out_of_bounds=True, new_tiles=1, tiles_total=10)
+    assert reward_terms(facts, Design(config), judge.terms, judge.alone) == (
+        {"out_of_bounds": -100.0},
+        True,
+    )
+    free = Design(dataclasses.replace(config, out_of_bounds_penalty=0.0))
+    assert reward_terms(facts, free, judge.terms, judge.alone) == ({}, True)

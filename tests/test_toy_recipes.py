@@ -1,12 +1,14 @@
 """The recipes of docs/ARCHITECTURE.md, each done once from this file alone: a track source
-(its config and its source, one ``register`` call), a rule part (one ``RULES`` entry) and
-a sensor type (its config and its builder, one ``register`` call). Each toy drives through
-``gym.make``, a sensor and the centreline driver, and is taken away when its test ends.
+(its config and its source, one ``register`` call), rule parts (each its class and its
+``RulePart`` entry, one ``register`` call) and a sensor type (its config and its builder,
+one ``register`` call). Each toy drives through ``gym.make``, and is taken away when its
+test ends.
 
 The toys: a ``ring`` track (a circle of road in metres with a wall box in its middle),
 whose rule parts are the playfield and a ``finish_gate`` (the lap ends when the rear
-axle passes a gate a quarter of the way round), and a ``compass`` sensor (the car's
-heading as a unit vector).
+axle passes a gate a quarter of the way round), a ``speed_limit`` rule part with its own
+knobs (a ``rules:`` entry), facts, reward term (``speeding``) and end reason
+(``speeding``), and a ``compass`` sensor (the car's heading as a unit vector).
 """
 
 from __future__ import annotations
@@ -29,15 +31,18 @@ from tinyrace.config.knobs import REQUIRED, knob
 from tinyrace.config.schema import METRE_CAR, TrackFacts
 from tinyrace.config.sensors import SensorDefaults
 from tinyrace.drivers.centerline import CenterlineDriver
-from tinyrace.episodes.rules import RULES, Info
+from tinyrace.episodes.rules import RULES, Info, RuleBase, RulePart
+from tinyrace.episodes.rules import register as register_rule
+from tinyrace.episodes.rules import unregister as unregister_rule
 from tinyrace.errors import ConfigError
+from tinyrace.rewards import ENDS, TERMS, Design, End, Term
 from tinyrace.sensors import registry as sensor_registry
 from tinyrace.sensors.base import SensorContext, SensorType, TopDown
 from tinyrace.tracks import registry as track_registry
 from tinyrace.tracks.base import PaintedGround, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
-from tinyrace.world.world import Contacts, World
+from tinyrace.world.world import Contacts
 
 # -- a track source: its config dataclass and its source ------------------------------------
 
@@ -92,15 +97,11 @@ def _ring(config: RingTrackConfig) -> Track:
 # -- a rule part ---------------------------------------------------------------------------
 
 
-class FinishGate:
+class FinishGate(RuleBase):
     """The lap ends when the car's rear axle passes the gate: the ray from the ring's
     middle through its centreline point a quarter of the way round."""
 
-    @staticmethod
-    def furnish(world: World, track: Track) -> None:
-        pass  # nothing of its own in the world: it reads the car's state only
-
-    def __init__(self, track: Track) -> None:
+    def __init__(self, track: Track, settings: None) -> None:
         assert track.centerline is not None
         gate = track.centerline[len(track.centerline) // 4]
         self.gate_angle = math.atan2(gate[1], gate[0])  # [rad]
@@ -115,6 +116,52 @@ class FinishGate:
 
     def info(self, info: Info) -> None:
         info["gate_passed"] = self.passed_at is not None
+
+
+# -- a rule part with its own knobs, facts, reward term and end reason ---------------------
+
+
+@dataclass(frozen=True)
+class SpeedLimitConfig:
+    """A ``rules:`` entry of ``type: speed_limit``: a speed not to pass."""
+
+    type: Literal["speed_limit"] = knob("speed_limit", "rule part")
+    limit: float = knob(10.0, "the top speed allowed", "track units/s", low=0.0)
+    penalty: float = knob(0.01, "subtracted per step, per track unit/s over the limit", low=0.0)
+    strikes: int = knob(20, "steps over the limit that end the episode", low=1)
+
+
+class SpeedLimit(RuleBase):
+    """One car's speeding: how far over the limit now, and for how many steps so far."""
+
+    def __init__(self, track: Track, settings: SpeedLimitConfig) -> None:
+        self.limit, self.strikes = settings.limit, 0
+
+    def judge(self, contacts: Contacts, car: CarState, facts: StepFacts) -> None:
+        over = max(0.0, car.speed - self.limit)  # [track units/s]
+        self.strikes += over > 0
+        facts.more["speed_limit"] = (over, self.strikes)
+
+    def info(self, info: Info) -> None:
+        info["speeding_steps"] = self.strikes
+
+
+def _speeding(facts: StepFacts, design: Design) -> float | None:
+    over, _ = facts.more["speed_limit"]
+    return -design.settings["speed_limit"].penalty * over if over else None
+
+
+def _banned(facts: StepFacts, design: Design) -> bool:
+    return bool(facts.more["speed_limit"][1] >= design.settings["speed_limit"].strikes)
+
+
+SPEED_LIMIT = RulePart(
+    "speed_limit",
+    SpeedLimit,
+    terms=(Term("speeding", _speeding),),
+    ends=(End("speeding", _banned),),
+    config=SpeedLimitConfig,
+)
 
 
 # -- a sensor type: its config dataclass and its sensor ------------------------------------
@@ -170,10 +217,17 @@ def compass() -> Iterator[None]:
 @pytest.fixture
 def ring() -> Iterator[None]:
     track_registry.register(RingTrackConfig, RingSource)
-    RULES["finish_gate"] = FinishGate
+    register_rule(RulePart("finish_gate", FinishGate))
     yield
     track_registry.unregister("ring")
-    del RULES["finish_gate"]
+    unregister_rule("finish_gate")
+
+
+@pytest.fixture
+def speed_limit() -> Iterator[None]:
+    register_rule(SPEED_LIMIT)
+    yield
+    unregister_rule("speed_limit")
 
 
 def _ring_env(**kwargs: Any) -> gym.Env[Any, Any]:
@@ -241,11 +295,60 @@ def test_a_registered_sensor_type_is_checked_like_a_built_in_one(compass):
     noisy.close()
 
 
-def test_a_toy_type_is_gone_when_its_test_ends():
+def test_a_rule_part_with_its_own_knobs_term_and_end_drives_through_gym_make(
+    speed_limit: None,
+) -> None:
+    rules = [{"type": "speed_limit", "limit": 10.0, "strikes": 20}]
+    env = gym.make("tinyrace/TinyRace-v0", rules=rules)
+    env.reset(seed=0)
+    rewards, speeding = [], []
+    for _ in range(400):
+        _, reward, terminated, truncated, info = env.step(np.array([0.0, 1.0, 0.0], np.float32))
+        rewards.append(reward)
+        speeding.append(info["reward_terms"].get("speeding", 0.0))
+        if terminated or truncated:
+            break
+    assert terminated and info["termination"] == "speeding" and not truncated
+    assert info["speeding_steps"] == 20  # ended on the 20th step over the limit
+    paid = [value for value in speeding if value]
+    assert len(paid) == 20 and all(value < 0 for value in paid)
+    assert paid[-1] < paid[0]  # faster and faster: more to pay
+    core: Any = env.unwrapped
+    assert core.car.speed > 10.0
+    env.close()
+    slow = gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limit", "limit": 1000.0}])
+    slow.reset(seed=0)
+    for _ in range(100):
+        _, _, terminated, _, info = slow.step(np.array([0.0, 1.0, 0.0], np.float32))
+        assert "speeding" not in info["reward_terms"] and not terminated
+    slow.close()
+
+
+def test_a_rule_parts_knobs_are_checked_like_built_in_ones(speed_limit: None) -> None:
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limit", "strikes": 0}])
+    assert "rules[0].strikes" in str(caught.value) and ">= 1" in str(caught.value)
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limt"}])
+    assert "rules[0].type" in str(caught.value) and "did you mean 'speed_limit'" in str(
+        caught.value
+    )
+
+
+def test_a_rule_parts_term_and_end_come_after_the_built_in_ones(speed_limit: None) -> None:
+    assert list(TERMS)[-1] == "speeding" and list(ENDS)[-1] == "speeding"
+    assert next(iter(TERMS)) == "time" and list(ENDS)[-2] == "lap_finished"
+
+
+def test_a_toy_type_is_gone_when_its_test_ends() -> None:
     with pytest.raises(ConfigError) as caught:
         _ring_env()
     assert "tracks[0].type" in str(caught.value) and "'ring'" in str(caught.value)
-    assert "finish_gate" not in RULES
+    assert "finish_gate" not in RULES and "speed_limit" not in RULES
+    assert "speeding" not in TERMS and "speeding" not in ENDS
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limit"}])
+    assert "rules[0].type" in str(caught.value)
     with pytest.raises(ConfigError) as caught:
         gym.make("tinyrace/TinyRace-v0", sensors=[{"id": "c", "type": "compass"}])
     assert "sensors[0].type" in str(caught.value)

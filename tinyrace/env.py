@@ -6,7 +6,7 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -15,31 +15,22 @@ from gymnasium.error import ResetNeeded
 
 from tinyrace.config import EnvConfig, LoadedConfig, load_env_config
 from tinyrace.episodes.episode import Episode
+from tinyrace.episodes.referee import CarStep, Referee
 from tinyrace.episodes.setup import prepare
 from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.ground.grounds import make_ground
 from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
-from tinyrace.rewards import (
-    REWARD_TERMS,
-    active_terms,
-    ends_episode,
-    reward_terms,
-    shaping_from_config,
-)
 from tinyrace.sensors.base import Labelled, Sensor, SensorContext
 from tinyrace.sensors.registry import build_sensors, default_sensor
 from tinyrace.tracks.base import Track
-from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 from tinyrace.world.world import World
 
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn", "poses")
 RESET_SOURCE = "<reset options>"
-CARRIED_TERMS = ("tiles",)  # reward of the reset step paid by the first step
-CARRIED = {name: REWARD_TERMS[name] for name in CARRIED_TERMS}  # the only terms a reset asks
 
 
 class TinyRaceEnv(gym.Env):
@@ -72,7 +63,8 @@ class TinyRaceEnv(gym.Env):
     observation as a plain Box.
 
     ## Rewards
-    Named terms from ``reward_design`` (see ``tinyrace.rewards``), reported in
+    Named terms of the track's rule parts (``tinyrace.episodes.rules``), weighted by
+    ``reward_design`` (and the ``rules:`` entries' knobs), reported in
     ``info["reward_terms"]``.
 
     ## Episode End
@@ -112,7 +104,6 @@ class TinyRaceEnv(gym.Env):
         self.pictures: Pictures = make_pictures(self.config, self.ground)
         fps = self.config.sim.fps
         assert fps is not None  # resolved by the config loader
-        self.dt = 1.0 / fps  # [s]
         self.metadata = {**self.metadata, "render_fps": round(fps)}
         self.action_spec = parts.car_model.actions(self.config.car)  # reads and checks actions
         self.action_space = self.action_spec.space
@@ -123,15 +114,10 @@ class TinyRaceEnv(gym.Env):
         self.sensors: list[Sensor] = self.make_sensors()
         self.box_camera = self.box_sensor(self.sensors)
         self.observation_space = self._observation_space()
-        self.shaping = (
-            _checked_shaping(cte_shaping)
-            if cte_shaping is not None
-            else shaping_from_config(self.config.reward_design)
-        )
-        self.terms = active_terms(self.config.reward_design, self.shaping)  # asked per step
+        shaping = None if cte_shaping is None else _checked_shaping(cte_shaping)
+        self.referee = Referee(self.config, shaping)  # judges every step of every episode
+        self.dt = self.referee.dt  # [s]
         self.episode: Episode | None = None
-        self.start_facts: list[StepFacts] = []  # every car's facts of the reset's step
-        self.last_facts: list[StepFacts] = []  # every car's facts of the last step
         self.layout: Track = Track("none", "", None, False, (0.0, 0.0, 0.0, 0.0), ())  # at reset
         self._window: Window | None = None
         # the last observation's readings by sensor id, and the episode and step they saw
@@ -188,18 +174,7 @@ class TinyRaceEnv(gym.Env):
         if self.verbose and draw.track.tiles is not None:  # as CarRacing-v3 reports it
             attempts, tiles = draw.track.attempts, len(draw.track.tiles)
             print(f"Track generation: {attempts} attempt(s) -> {tiles}-tiles track")
-        self.t = 0.0  # [s] since reset
-        self.steps = 0
-        self.score = 0.0  # running reward, shown on CarRacing's dashboard
-        self.start_facts = episode.start(self.dt)  # every car's; this env judges the first
-        facts = self.start_facts[0]
-        self.t += self.dt
-        # The reset step is not rewarded; tiles it touched are paid by the first step (as
-        # CarRacing does). Only such events carry over, never states like the cte.
-        design = self.config.reward_design
-        terms = reward_terms(facts, design, self.shaping, False, CARRIED)
-        self._carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
-        self.score += sum(self._carry.values())
+        episode.start(self.referee)  # the reset's step: not rewarded, its tiles carried
         snapshot = self.snapshot()
         observation = self.observe(snapshot)
         if self.render_mode == "human":
@@ -211,14 +186,15 @@ class TinyRaceEnv(gym.Env):
         return observation, info
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        self.control(action)
-        self.last_facts = self._episode().step(self.dt)
-        return self.conclude(self.last_facts[0])
+        episode = self.episode
+        if episode is None:
+            raise ResetNeeded("call reset() before step()")
+        episode.world.control(self.action_spec.read(action))  # checked, to the car
+        return self.conclude(episode.step())  # the episode steps and judges every car
 
-    # The stepping protocol: a step in parts, for a vector env that moves many cars between
-    # them. ``step(a)`` is ``control(a)``; ``world.apply_forces(dt)`` (or a batch sets the
-    # cars' forces); ``facts = advance()``; ``conclude(facts)``, itself ``judge(facts)``,
-    # then ``observe(snapshot())``, then ``report``. Nothing else of the env is used.
+    # A step in parts, for a vector env that sets many cars' forces at once between them:
+    # ``control(a)``; the car's forces (``world.apply_forces(dt)``, or a batch's);
+    # ``cars = advance()``; ``conclude(cars)``: ``observe(snapshot())``, then ``report``.
     def control(self, action: Any) -> None:
         """Check ``action`` and hand it to the car (the first part of a step)."""
         episode = self.episode
@@ -231,58 +207,62 @@ class TinyRaceEnv(gym.Env):
         """The current episode's world (its cars, their contacts and grip)."""
         return self._episode("the world").world
 
-    def advance(self) -> StepFacts:
-        """The rest of a step's physics, once the cars' forces are set (``world.apply_forces``
-        or a batch): the world advanced by ``dt``, the episode's rules' facts."""
-        self.last_facts = self._episode().advance(self.dt)
-        return self.last_facts[0]
+    def advance(self) -> list[CarStep | None]:
+        """The rest of a step once the cars' forces are set (``world.apply_forces`` or a
+        batch): the episode's step, each car judged."""
+        return self._episode().advance()
 
-    def conclude(self, facts: StepFacts) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        """Rewards, episode end, observation and info of a step whose physics is done."""
-        verdict = self.judge(facts)
+    def conclude(self, cars: list[CarStep | None]) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """Observation and results of a step the episode has judged (``cars``: each car's)."""
         snapshot = self.snapshot()
-        return self.report(verdict, snapshot, self.observe(snapshot))
-
-    def judge(self, facts: StepFacts) -> Verdict:
-        """The step's reward terms and episode end; the clock and the score move on."""
-        self.t += self.dt
-        self.steps += 1
-        terms = reward_terms(facts, self.config.reward_design, self.shaping, True, self.terms)
-        carried, self._carry = self._carry, {}
-        if carried:
-            terms = _add_terms(terms, carried)
-        reward = float(sum(terms.values()))
-        if not facts.out_of_bounds:  # CarRacing's score ignores the out-of-bounds penalty
-            self.score += reward - sum(carried.values())
-        reason = ends_episode(facts, self.config.reward_design)
-        limit = self.config.sim.step_limit
-        truncated = reason is None and limit is not None and self.steps >= limit
-        return Verdict(terms, reward, reason, truncated)
+        return self.report(cars[0], snapshot, self.observe(snapshot))
 
     def report(
-        self, verdict: Verdict, snapshot: Snapshot, observation: Any
+        self, car: CarStep | None, snapshot: Snapshot, observation: Any
     ) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        """The step's results from its verdict and its observation of ``snapshot``."""
-        info = self._info(verdict.terms, snapshot)
-        reason = verdict.reason
+        """The step's results from this env's car's judgement and its observation."""
+        assert car is not None  # the env's own car is never taken out of its episode
+        info = self._info(car.terms, snapshot)
+        reason = car.reason
         if reason is not None:
             info["termination"] = reason
             info["lap_finished"] = reason == "lap_finished"
         if self.render_mode == "human":
             self.render()
-        return observation, verdict.reward, reason is not None, verdict.truncated, info
+        return observation, car.reward, reason is not None, car.truncated, info
 
     def observe(self, snapshot: Snapshot) -> Any:
         """The observation of ``snapshot``: every sensor's reading (kept for the pictures of
         this step, which draw no view a second time)."""
         layout, rng = self.layout, self.np_random
         observation = {sensor.id: sensor.observe(snapshot, layout, rng) for sensor in self.sensors}
-        self._observed = (self._episode(), self.steps, observation)
+        episode = self._episode()
+        self._observed = (episode, episode.steps, observation)
         return observation if self.box_camera is None else observation[self.box_camera]
 
     def snapshot(self) -> Snapshot:
         """A copy of the world's state now (what sensors and pictures read)."""
-        return self._episode().world.snapshot(self.t, self.steps, self.score)
+        return self._episode().snapshot()
+
+    @property
+    def steps(self) -> int:
+        """Steps since the reset (the episode's one counter; 0 before a reset)."""
+        return 0 if self.episode is None else self.episode.steps
+
+    @property
+    def t(self) -> float:
+        """[s] of sim time since the reset (its own step counted)."""
+        return 0.0 if self.episode is None else self.episode.t
+
+    @property
+    def score(self) -> float:
+        """The car's running reward, shown on CarRacing's dashboard."""
+        return 0.0 if self.episode is None else self.episode.scores[0]
+
+    @property
+    def shaping(self) -> Callable[[float], float] | None:
+        """The cross-track-error shaping (``cte_shaping``, else ``reward_design``'s)."""
+        return self.referee.design.shaping
 
     def _episode(self, reading: str = "a snapshot") -> Episode:
         if self.episode is None:
@@ -360,16 +340,6 @@ class TinyRaceEnv(gym.Env):
         state["_window"] = None  # a window belongs to this process
         state["_observed"] = None  # the last step's readings: not worth the bytes
         return state
-
-
-class Verdict(NamedTuple):
-    """A step's judgement (``TinyRaceEnv.judge``): its reward terms and their sum, why the
-    episode ends (or None) and whether the step limit truncates it."""
-
-    terms: dict[str, float]
-    reward: float
-    reason: str | None
-    truncated: bool
 
 
 def _rgb(image: np.ndarray) -> np.ndarray:
@@ -450,7 +420,3 @@ class _CheckedShaping:
             allowed = "expected the cte_shaping function to return a finite number"
             raise ConfigError(Problem("<kwargs>", "cte_shaping", value, allowed))
         return float(value)
-
-
-def _add_terms(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:
-    return {key: a.get(key, 0.0) + b.get(key, 0.0) for key in {**a, **b}}

@@ -1,17 +1,20 @@
-"""Rewards are decided here, and only here, from the facts of a step.
+"""How a step's reward and end are made of the rule parts' terms and end reasons: summed,
+and gathered, here; decided nowhere else.
 
-Each term is named; the step's reward is their sum and the terms are reported
-in ``info["reward_terms"]`` so that a reward design can be inspected. A term is a
-function of the step's facts and the ``reward_design`` (the ``RewardTerm`` protocol);
-adding one is a function here plus an entry in ``REWARD_TERMS``.
+A rule part (``tinyrace.episodes.rules``) says which named reward terms it can pay
+(``Term``: a function of the step's facts and the ``Design``) and which end reasons it
+can give (``End``). The parts' registration puts them in ``TERMS`` and ``ENDS``, in the
+order they are summed and asked. This module knows no term by name: the step's reward is
+the sum of its terms, reported in ``info["reward_terms"]`` so that a design can be
+inspected; its end is the first end reason whose test holds.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
-from typing import Protocol
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
 
 from tinyrace.config import RewardConfig
 from tinyrace.world.facts import StepFacts
@@ -44,142 +47,108 @@ def shaping_from_config(config: RewardConfig) -> CteShaping | None:
     return None if cte.shaping == "none" else Shaping(cte.shaping, cte.scale, cte.weight)
 
 
-class RewardTerm(Protocol):
-    """One named reward term: its value for a step's facts, or None when it does not apply."""
+@dataclass(frozen=True)
+class Design:
+    """What terms and ends read besides the facts: ``reward_design``, the cross-track-error
+    shaping, and each ``rules:`` entry by its ``type`` (a rule part's own knobs)."""
 
-    def __call__(
-        self, facts: StepFacts, config: RewardConfig, shaping: CteShaping | None
-    ) -> float | None: ...
-
-
-def time_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
-    """``time``: the per-step cost."""
-    return -config.time_penalty if config.time_penalty else None
+    rewards: RewardConfig = field(default_factory=RewardConfig)
+    shaping: CteShaping | None = None
+    settings: Mapping[str, Any] = field(default_factory=dict)
 
 
-def tiles_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
-    """``tiles``: tile_progress shared out over the tiles, paid per newly visited tile."""
-    if facts.new_tiles and config.tile_progress:
-        return config.tile_progress * facts.new_tiles / facts.tiles_total
-    return None
+def _always(design: Design) -> bool:
+    return True
 
 
-def off_road_term(
-    facts: StepFacts, config: RewardConfig, shaping: CteShaping | None
-) -> float | None:
-    """``off_road``: the penalty per wheel on grass."""
-    if facts.wheels_on_grass and config.off_road_penalty:
-        return -config.off_road_penalty * facts.wheels_on_grass
-    return None
+@dataclass(frozen=True)
+class Term:
+    """One named reward term: ``pay(facts, design)`` is its value, or None when it does not
+    apply. ``can_pay(design)`` False: it pays nothing under that design (it is not asked).
+    ``carried``: the reset's step (which is not rewarded) pays it to the first step.
+    ``alone(facts)`` True: the step pays this term alone (or nothing, when it is None), and
+    the running score leaves the step out (CarRacing's out-of-bounds penalty)."""
+
+    name: str
+    pay: Callable[[StepFacts, Design], float | None]
+    can_pay: Callable[[Design], bool] = _always
+    carried: bool = False
+    alone: Callable[[StepFacts], bool] | None = None
 
 
-def obstacles_term(
-    facts: StepFacts, config: RewardConfig, shaping: CteShaping | None
-) -> float | None:
-    """``obstacles``: the rewards of the obstacle colours touched (``done`` ones end instead)."""
-    total = sum(
-        reward
-        for i in facts.obstacles_hit
-        if (reward := config.color_obstacles[i].reward) != "done"
-    )
-    return float(total) if total else None
+@dataclass(frozen=True)
+class End:
+    """One way an episode ends: ``when(facts, design)`` True ends it, for ``reason``."""
+
+    reason: str
+    when: Callable[[StepFacts, Design], bool]
 
 
-def cte_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
-    """``cte``: the shaping of the cross-track error."""
-    if shaping is not None and facts.cte is not None:
-        return float(shaping(facts.cte))
-    return None
+# Every registered term and end, in the order the terms are summed (the order is part of
+# the float result) and the ends asked (the first that holds is the reason). Filled by the
+# rule parts' registration (``tinyrace.episodes.rules.register``).
+TERMS: dict[str, Term] = {}
+ENDS: dict[str, End] = {}
 
 
-def cones_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
-    """``cones``: the penalty per cone knocked over (cone maps)."""
-    if facts.cones_hit and config.cone_penalty:
-        return -config.cone_penalty * facts.cones_hit
-    return None
+def add_term(term: Term) -> None:
+    """Put ``term`` in ``TERMS`` (after the others); the same name twice must be one term."""
+    known = TERMS.get(term.name)
+    if known is not None and known != term:
+        raise ValueError(f"reward term {term.name!r} is another part's already")
+    TERMS.setdefault(term.name, term)
 
 
-def walls_term(facts: StepFacts, config: RewardConfig, shaping: CteShaping | None) -> float | None:
-    """``walls``: the penalty for a step against a wall (ROS maps)."""
-    if facts.wall_hit and config.wall_penalty:
-        return -config.wall_penalty
-    return None
+def add_end(end: End) -> None:
+    """Put ``end`` in ``ENDS`` (after the others); the same reason twice must be one end."""
+    known = ENDS.get(end.reason)
+    if known is not None and known != end:
+        raise ValueError(f"end reason {end.reason!r} is another part's already")
+    ENDS.setdefault(end.reason, end)
 
 
-# The terms by name, in the order they are summed (the order is part of the float result).
-REWARD_TERMS: dict[str, RewardTerm] = {
-    "time": time_term,
-    "tiles": tiles_term,
-    "off_road": off_road_term,
-    "obstacles": obstacles_term,
-    "cones": cones_term,
-    "walls": walls_term,
-    "cte": cte_term,
-}
-UNCHARGED_AT_RESET = ("time",)  # terms the step that reset takes with no action does not pay
+@dataclass(frozen=True)
+class Judging:
+    """The terms and ends one car's step is judged by (those of its rule parts that can pay
+    under the design), in ``TERMS``'s and ``ENDS``' order."""
 
-# When a term can pay at all, by name: a term whose weight is zero (or that has nothing to
-# pay for) returns None on every step, so ``active_terms`` leaves it out. A term without
-# an entry here is always asked.
-CAN_PAY: dict[str, Callable[[RewardConfig, CteShaping | None], bool]] = {
-    "time": lambda config, shaping: bool(config.time_penalty),
-    "tiles": lambda config, shaping: bool(config.tile_progress),
-    "off_road": lambda config, shaping: bool(config.off_road_penalty),
-    "obstacles": lambda config, shaping: any(
-        o.reward != "done" and o.reward for o in config.color_obstacles
-    ),
-    "cones": lambda config, shaping: bool(config.cone_penalty),
-    "walls": lambda config, shaping: bool(config.wall_penalty),
-    "cte": lambda config, shaping: shaping is not None,
-}
+    terms: tuple[Term, ...]
+    alone: tuple[Term, ...]  # the terms that pay alone when they apply, asked first
+    carried: tuple[Term, ...]  # the terms a reset's step pays to the first step
+    ends: tuple[End, ...]
 
 
-def active_terms(config: RewardConfig, shaping: CteShaping | None) -> dict[str, RewardTerm]:
-    """The terms of ``REWARD_TERMS`` (in its order) that can pay under ``config``."""
-    return {
-        name: term
-        for name, term in REWARD_TERMS.items()
-        if name not in CAN_PAY or CAN_PAY[name](config, shaping)
-    }
+def judging(terms: Iterable[str], ends: Iterable[str], design: Design) -> Judging:
+    """The ``Judging`` of a car whose parts pay ``terms`` and give ``ends`` (names)."""
+    wanted, reasons = set(terms), set(ends)
+    paid = [t for name, t in TERMS.items() if name in wanted and t.can_pay(design)]
+    usual = tuple(t for t in paid if t.alone is None)
+    alone = tuple(t for name, t in TERMS.items() if name in wanted and t.alone is not None)
+    carried = tuple(t for t in usual if t.carried)
+    return Judging(usual, alone, carried, tuple(e for r, e in ENDS.items() if r in reasons))
 
 
 def reward_terms(
-    facts: StepFacts,
-    config: RewardConfig,
-    shaping: CteShaping | None,
-    charge_time: bool = True,
-    terms_to_ask: Mapping[str, RewardTerm] = REWARD_TERMS,
-) -> dict[str, float]:
-    """Named reward terms of one step.
-
-    Leaving the bounds replaces every other term with the penalty, as CarRacing does.
-    ``charge_time`` is False for the step that ``reset`` takes with no action.
-    ``terms_to_ask``: ``active_terms(config, shaping)`` saves asking terms that cannot pay.
-    """
-    if facts.out_of_bounds:
-        return (
-            {"out_of_bounds": -config.out_of_bounds_penalty} if config.out_of_bounds_penalty else {}
-        )
-    terms: dict[str, float] = {}
-    for name, term in terms_to_ask.items():
-        if not charge_time and name in UNCHARGED_AT_RESET:
-            continue
-        value = term(facts, config, shaping)
+    facts: StepFacts, design: Design, terms: Iterable[Term], alone: Iterable[Term] = ()
+) -> tuple[dict[str, float], bool]:
+    """One step's named reward terms, and whether a term of ``alone`` applied (then it is
+    the only one, and the score leaves the step out)."""
+    for term in alone:
+        assert term.alone is not None
+        if term.alone(facts):
+            value = term.pay(facts, design)
+            return ({term.name: value} if value is not None else {}), True
+    paid: dict[str, float] = {}
+    for term in terms:
+        value = term.pay(facts, design)
         if value is not None:
-            terms[name] = value
-    return terms
+            paid[term.name] = value
+    return paid, False
 
 
-def ends_episode(facts: StepFacts, config: RewardConfig) -> str | None:
-    """Why the episode terminates after this step, or None."""
-    if facts.out_of_bounds:
-        return "out_of_bounds"
-    if facts.obstacles_hit and any(
-        config.color_obstacles[i].reward == "done" for i in facts.obstacles_hit
-    ):
-        return "obstacle"
-    if facts.collision_ends:
-        return "collision"
-    if facts.lap_finished:
-        return "lap_finished"
+def end_of(facts: StepFacts, design: Design, ends: Iterable[End]) -> str | None:
+    """Why the episode terminates after this step (the first end that holds), or None."""
+    for end in ends:
+        if end.when(facts, design):
+            return end.reason
     return None

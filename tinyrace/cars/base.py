@@ -20,12 +20,14 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Protocol
 
+import numpy as np
+
 from tinyrace.cars.state import CarState, Point, Pose, WheelState
 
 if TYPE_CHECKING:
     import pymunk
 
-__all__ = ["Car", "CarState", "Point", "Pose", "WheelState"]
+__all__ = ["Car", "CarState", "Point", "Pose", "TyreBatch", "WheelState"]
 
 
 class Car(Protocol):
@@ -64,3 +66,28 @@ class Car(Protocol):
     def state(self) -> CarState:
         """A copy of the car's state now."""
         ...
+
+
+class TyreBatch(Protocol):
+    """The tyre forces of many cars of one model as one computation, one row per car: a
+    capability a car model may offer (``CarModel.batch``), for a vector env that steps
+    many envs' cars together. Controls are (steer, gas, brake) columns."""
+
+    def load(self, row: int, car: Car) -> None:
+        """Copy ``car`` (a car of this model) into ``row`` (after a reset or a change)."""
+
+    def control(self, steer: np.ndarray, gas: np.ndarray, brake: np.ndarray) -> None:
+        """Every row's controls (``Car.control`` for each car)."""
+
+    def apply_forces(self, dt: np.ndarray, rows: Sequence[int], on_road: np.ndarray) -> None:
+        """``Car.apply_forces`` for the cars of ``rows`` (``dt`` [s] and ``on_road`` per
+        wheel, per row)."""
+
+    def store(self, rows: Sequence[int]) -> None:
+        """Copy the rows' state back to their cars (what ``Car.state`` reads)."""
+
+    def track_skids(self, rows: Sequence[int], on_road: np.ndarray) -> None:
+        """The rows' skid marks, as each car draws its own."""
+
+    def stop(self, row: int) -> None:
+        """``Car.stop`` for the car of ``row`` (a crash)."""

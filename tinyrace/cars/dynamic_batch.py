@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import pymunk
 
+from tinyrace.cars.base import Car
 from tinyrace.cars.dynamic import (
     DynamicCar,
     _set_angular_velocity,
@@ -145,8 +146,10 @@ class DynamicBatch:
         return values[row :: self.size]
 
     # -- rows <-> cars -----------------------------------------------------------------------
-    def load(self, row: int, car: DynamicCar) -> None:
-        """Copy ``car``'s constants and wheel state into ``row``."""
+    def load(self, row: int, car: Car) -> None:
+        """Copy ``car`` (a ``DynamicCar``)'s constants and wheel state into ``row``."""
+        if not isinstance(car, DynamicCar):
+            raise TypeError(f"a batch of dynamic cars cannot hold a {type(car).__name__}")
         self.cars[row] = car
         spec, n = car.spec, self.size
         (road, road_skid), (grass, grass_skid) = car._limits

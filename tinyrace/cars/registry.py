@@ -22,8 +22,9 @@ import pymunk
 
 from tinyrace.actions import ActionSpec
 from tinyrace.cars import single_track_model
-from tinyrace.cars.base import Car, Pose
+from tinyrace.cars.base import Car, Pose, TyreBatch
 from tinyrace.cars.dynamic import DynamicCar
+from tinyrace.cars.dynamic_batch import DynamicBatch
 from tinyrace.cars.dynamic_shape import SIZE, WHEEL_POSITIONS, DynamicCarSpec
 from tinyrace.cars.f1tenth_gym import NAME as F1TENTH_GYM
 from tinyrace.cars.kinematic import KinematicCar
@@ -67,6 +68,8 @@ class CarModel:
     units: str  # the unit of its own parameters: "track" (the track's px, m or u) or "m"
     doc: str
     compat: frozenset[str] = frozenset()  # accepted ``car.compat`` values (another sim's car)
+    # the tyre forces of ``n`` such cars as one computation (a vector env's), if it offers it
+    batch: Callable[[int], TyreBatch] | None = None
 
     def describe(self, config: EnvConfig) -> CarFacts:
         """Its facts for ``config``: size and limits, with what it can do."""
@@ -210,6 +213,7 @@ register(
         throttle=True,
         units="track",
         doc="CarRacing-v3's rear-wheel-drive car with tyre slip",
+        batch=DynamicBatch,
     )
 )
 register(

@@ -28,6 +28,11 @@ def add(family: Any, member: T) -> T:
     return member
 
 
+def declare(family: Any) -> None:
+    """Make ``family`` a family, with no member yet (its entries are parsed by ``type``)."""
+    _FAMILIES.setdefault(family, {})
+
+
 def remove(family: Any, name: str) -> None:
     """Take member ``name`` out of ``family`` (a test's toy, when the test ends)."""
     _FAMILIES.get(family, {}).pop(name, None)

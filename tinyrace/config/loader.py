@@ -85,11 +85,11 @@ class Parser:
             for f in dataclasses.fields(cls)
             if f.name == "type"
         }
-        kind = (
-            data.get("type", next(iter(kinds))) if isinstance(data, Mapping) else next(iter(kinds))
-        )
+        first = next(iter(kinds), None)  # None: a family with no member registered yet
+        kind = data.get("type", first) if isinstance(data, Mapping) else first
         if not isinstance(kind, str) or kind not in kinds:  # a list or dict is unhashable
-            allowed = f"{did_you_mean(kind, kinds)}expected one of: {', '.join(kinds)}"
+            known = ", ".join(kinds) or "(none registered)"
+            allowed = f"{did_you_mean(kind, kinds)}expected one of: {known}"
             return self.problem(_join(path, "type"), kind, allowed)
         return self.dataclass(kinds[kind], data, path)
 

@@ -17,6 +17,7 @@ from typing import Any, Literal, Union
 from tinyrace.config.bounds import BOUNDS
 from tinyrace.config.colors import Color
 from tinyrace.config.experiment import ExperimentConfig, OutputConfig
+from tinyrace.config.rules import rule_configs
 from tinyrace.config.schema import (
     CacheConfig,
     CameraConfig,
@@ -56,6 +57,7 @@ def sections() -> list[tuple[str, type, str]]:
             CrossTrackErrorConfig,
             "reward_design.cross_track_error",
         ),
+        *((f"rules[i]: type {name}", c, "rules[i]") for name, c in rule_configs().items()),
         ("files", FilesConfig, "files"),
         ("race", RaceConfig, "race"),
         ("race.cars[i]", RaceCarConfig, "race.cars[i]"),

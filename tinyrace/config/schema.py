@@ -16,6 +16,7 @@ from tinyrace.config.bounds import MAX_CAMERA_PIXELS as MAX_CAMERA_PIXELS  # re-
 from tinyrace.config.colors import Color
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS
 from tinyrace.config.knobs import REQUIRED, knob
+from tinyrace.config.rules import RuleConfig
 from tinyrace.config.sensors import CameraConfig as CameraConfig  # re-exported
 from tinyrace.config.sensors import SensorConfig
 from tinyrace.config.tracks import (  # re-exported: the schema's sections in one place
@@ -392,6 +393,11 @@ class EnvConfig:
         "image wrappers (GrayscaleObservation, ResizeObservation, ...) apply directly",
     )
     reward_design: RewardConfig = knob(RewardConfig(), "reward terms")
+    rules: tuple[RuleConfig, ...] = knob(
+        (),
+        "more rule parts, each with its own knobs (a list of registered rule parts' configs, "
+        "by type): each judges every car, with its reward terms and end reasons",
+    )
     files: FilesConfig = knob(FilesConfig(), "bounds on the files this config reads")
     race: RaceConfig = knob(RaceConfig(), "several cars on the track (tinyrace.race)")
     cache: CacheConfig = knob(CacheConfig(), "where shared track data is kept on disk")

@@ -11,7 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.actions import DISCRETE_CONTROLS
-from tinyrace.cars.dynamic_shape import DynamicCarSpec
+from tinyrace.cars import CarRacingCar
 
 Controls = tuple[float, float, float]  # (steer -1..1, +1 right; gas 0..1; brake 0..1)
 CONTROLS_EXPECTED = (
@@ -120,9 +120,9 @@ class DiscreteChooser:
     average out, and a small steering need still wins against a pedal now and then.
     """
 
-    def __init__(self, dt: float, car: DynamicCarSpec | None = None):
+    def __init__(self, dt: float, car: CarRacingCar | None = None):
         self.dt = dt  # [s]
-        self.car = car or DynamicCarSpec()
+        self.car = car or CarRacingCar()
         self.choices = np.array(DISCRETE_CONTROLS, float)
         self.pedals = self.choices[:, 1:] / self.choices[:, 1:].max(axis=0)  # one action = 1
         self.wheel = 0.0  # [rad] + right: the front wheels' angle, as predicted

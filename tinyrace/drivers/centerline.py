@@ -12,14 +12,12 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from tinyrace.cars.dynamic_shape import SIZE
+from tinyrace.cars import CARRACING_WHEELBASE
 from tinyrace.cars.registry import model_of
 from tinyrace.drivers.base import ActionAdapter, Controls
 
 if TYPE_CHECKING:
     from tinyrace.env import TinyRaceEnv
-
-CARRACING_WHEELBASE = (80 + 82) * SIZE  # [u] axle to axle of CarRacing's car
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,6 @@ from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import Pose, Track, TrackDraw
 from tinyrace.world.world import World
 
-GRASS_PARTS = ("tile_touches", "grass")  # parts whose tiles are also the wheels' road
 RESET_SOURCE = "<reset options>"
 RANDOM_ATTEMPTS = 50  # random starts drawn before a race is refused for want of room
 
@@ -150,15 +149,17 @@ class Course:
         self._worlds = weakref.WeakKeyDictionary(worlds)
 
     def parts(self, track: Track, racer: Racer | None = None) -> tuple[str, ...]:
-        """The track's rule parts that apply to ``racer``'s car (grass only under wheels;
-        without a racer: to any car of the race)."""
+        """The track's rule parts and the config's ``rules:`` entries' that apply to
+        ``racer``'s car (a wheels-only part only to a car with wheels; without a racer: to
+        any car of the race)."""
         wheels = self.wheels if racer is None else racer.model.wheels
-        return tuple(name for name in track.rules.parts if name != "grass" or wheels)
+        named = (*track.rules.parts, *(entry.type for entry in self.config.rules))
+        return tuple(name for name in named if wheels or not rule_type(name).wheels_only)
 
     def furnish(self, track: Track) -> World:
         """A world holding what the track's rule parts need (tiles, cells, walls, cones)."""
         parts = self.parts(track)
-        on_tiles = any(name in GRASS_PARTS for name in parts)
+        on_tiles = any(rule_type(name).road_tiles for name in parts)
         world = World(grass_off_tiles=on_tiles and track.off_road_friction < 1.0)
         for name in parts:
             rule_type(name).furnish(world, track)

@@ -1,10 +1,13 @@
 """One episode: a world with the track's static shapes and the cars, judged by rule parts.
 
-The track says which rule parts its episodes are made of (``Track.rules``); the
-``Course`` (``course.py``, made once per env) furnishes one world per track with what those
-parts need and hands it to each new ``Episode``, which builds the parts for each car and
-turns the world's contacts after a step into each car's ``StepFacts``. Nothing here depends on
-the kind of track.
+The track says which rule parts its episodes are made of (``Track.rules``; the config's
+``rules:`` entries add more); the ``Course`` (``course.py``, made once per env) furnishes
+one world per track with what those parts need and hands it to each new ``Episode``. The
+episode owns the step for all its cars, once: it builds the parts for each car, moves the
+world, turns its contacts into each car's ``StepFacts``, and keeps the clock, the step
+counter, each car's score and carried reward; its ``Referee`` turns the facts into each
+car's ``CarStep`` (reward terms, reward, end, truncation). The envs call it and adapt the
+result. Nothing here depends on the kind of track.
 """
 
 from __future__ import annotations
@@ -14,11 +17,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from tinyrace.cars.registry import CarModel
 from tinyrace.config import EnvConfig, RaceCar
-from tinyrace.episodes.rules import Rule, rule_type
+from tinyrace.episodes.referee import CarStep, Referee
+from tinyrace.episodes.rules import RULES, Rule
 from tinyrace.episodes.start_pose import placement_problems
 from tinyrace.errors import ConfigError
+from tinyrace.rewards import Judging
 from tinyrace.tracks.base import Pose, Track, TrackDraw
 from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
@@ -84,7 +91,13 @@ class Episode:
             if problems:
                 raise ConfigError(problems)
         rules = self.track.rules
-        self.rules: list[list[Rule]] = [[rule_type(name)(self.track) for name in p] for p in parts]
+        settings = {entry.type: entry for entry in config.rules}  # parts' own knobs
+        always = tuple(name for name, part in RULES.items() if part.always)
+        self.parts = [(*always, *names) for names in parts]  # each car's, by name
+        self.rules: list[list[Rule]] = [
+            [make(self.track, settings.get(name)) for name in p if (make := RULES[name].make)]
+            for p in self.parts
+        ]
         self._reset_step = rules.reset_step
         self._labels = {
             "track": self.track_index,
@@ -93,24 +106,34 @@ class Episode:
         }
         self._info_labels = rules.info_labels
         self.laps = config.race.laps
-        self.steps = 0  # steps since the reset (the reset's own not counted)
+        self.steps = 0  # steps since the reset (the reset's own not counted): the one counter
+        self.t = 0.0  # [s] of sim time since the reset (its own step counted)
         self.lap_ends: list[list[int]] = [[] for _ in racers]  # per car: the step of each lap
+        self.scores = [0.0 for _ in racers]  # each car's running reward (CarRacing's score)
+        self.carry: list[dict[str, float]] = [{} for _ in racers]  # the reset's, paid next
+        self.facts: list[StepFacts] = []  # every car's facts of the last step
+        self._judging: list[Judging] = []
+        self.referee: Referee | None = None  # set by ``start``
+        tiles = 0 if self.track.tiles is None else len(self.track.tiles)
+        first = config.race.tile_reward == "first" and len(racers) > 1
+        # ``race.tile_reward: first``: per lap, the tiles paid already
+        self._claimed = np.zeros((self.laps, tiles), bool) if first else None
 
     @property
     def visit_order(self) -> list[int]:
         """The first car's tiles in the order first visited (pictures repaint them)."""
         for rule in self.rules[0]:
-            order: list[int] | None = getattr(rule, "visit_order", None)
-            if order is not None:
-                return order  # the rule's own list, read as it grows
+            progress = rule.tile_progress()
+            if progress is not None:
+                return progress.visit_order  # the rule's own list, read as it grows
         return []
 
     def progress(self, car: int) -> int:
         """Tiles car ``car`` has visited, every finished lap counting all of them (0 on a
         track without tiles)."""
-        rules = self.rules[car]
-        visited = max((getattr(rule, "visited_count", 0) for rule in rules), default=0)
-        total = max((len(getattr(rule, "visited", ())) for rule in rules), default=0)
+        counts = [p for rule in self.rules[car] if (p := rule.tile_progress()) is not None]
+        visited = max((p.visited_count for p in counts), default=0)
+        total = max((len(p.visited) for p in counts), default=0)
         laps = len(self.lap_ends[car])
         return laps * total + (visited if laps < self.laps else 0)
 
@@ -141,27 +164,83 @@ class Episode:
         done = len(ends) - (1 if ends and ends[-1] == self.steps else 0)
         return min(done, self.laps - 1)
 
-    def start(self, dt: float) -> list[StepFacts]:
-        """The reset's step: one physics step with no action (CarRacing), or a look at the
-        spawn (the cars do not move); either way the rules judge it. Each car's facts."""
+    def start(self, referee: Referee) -> list[StepFacts]:
+        """The reset's step, judged by ``referee`` (and every step after it): one physics
+        step with no action (CarRacing), or a look at the spawn (the cars do not move);
+        either way the rules judge it. It is not rewarded: each car carries the terms its
+        first step pays (CarRacing's tiles), which its score starts with. Each car's facts."""
+        self.referee = referee
+        dt = referee.dt
         if self._reset_step:
-            facts = self.step(dt)
+            self.world.apply_forces(dt)
+            self.world.advance(dt)
+            self.steps += 1
+            facts = self._judge()
             self.steps = 0
-            return facts
-        self.world.look(dt)
-        return self._judge()
+        else:
+            self.world.look(dt)
+            facts = self._judge()
+        self.t += dt
+        self._judging = [referee.parts(names) for names in self.parts]
+        self.carry = [referee.carried(f, j) for f, j in zip(facts, self._judging, strict=True)]
+        self.scores = [0.0 + sum(carry.values()) for carry in self.carry]
+        self.facts = facts
+        return facts
 
-    def step(self, dt: float) -> list[StepFacts]:
-        """The world's step with the controls the cars hold; each car's facts."""
-        self.world.apply_forces(dt)
-        return self.advance(dt)
+    def step(self) -> list[CarStep | None]:
+        """One step of every car with the controls it holds: the world moved, the rules'
+        facts, each car judged (None for a car out of the race)."""
+        referee = self.referee
+        if referee is None:
+            raise RuntimeError("an episode steps once started (start(referee))")
+        self.world.apply_forces(referee.dt)
+        return self._moved(referee)
 
-    def advance(self, dt: float) -> list[StepFacts]:
-        """The rest of a step whose forces are set: the world advanced, each car's facts
-        (a parked car's rules judge no more: its facts stay empty)."""
-        self.world.advance(dt)
+    def advance(self) -> list[CarStep | None]:
+        """The rest of a step whose forces are set (a batch set them): as ``step``."""
+        referee = self.referee
+        if referee is None:
+            raise RuntimeError("an episode steps once started (start(referee))")
+        return self._moved(referee)
+
+    def _moved(self, referee: Referee) -> list[CarStep | None]:
+        """The world advanced by the clock's step, every car's facts (a parked car's rules
+        judge no more: its facts stay empty), the clock on, each car judged."""
+        self.world.advance(referee.dt)
         self.steps += 1
-        return self._judge()
+        self.t += referee.dt
+        self.facts = facts = self._judge()
+        if self._claimed is not None:
+            self._pay_first_visits(facts)
+        parked, steps = self.world.parked, self.steps
+        results: list[CarStep | None] = []
+        for car, fact in enumerate(facts):
+            if car in parked:
+                results.append(None)
+                continue
+            carried = self.carry[car]
+            if carried:
+                self.carry[car] = {}
+            result, scored = referee.judge(fact, self._judging[car], carried, steps)
+            if scored:
+                self.scores[car] += result.reward - sum(carried.values())
+            results.append(result)
+        return results
+
+    def _pay_first_visits(self, facts: list[StepFacts]) -> None:
+        """``race.tile_reward: first``: a tile first visited in a lap by several cars pays
+        the first only."""
+        claimed_per_lap = self._claimed
+        assert claimed_per_lap is not None
+        for car, fact in enumerate(facts):
+            claimed = claimed_per_lap[self.lap_of(car)]
+            paid = [tile for tile in fact.tiles if not claimed[tile]]
+            claimed[paid] = True
+            fact.new_tiles = len(paid)
+
+    def snapshot(self) -> Snapshot:
+        """A copy of the world's state now, labelled with the clock and car 0's score."""
+        return self.world.snapshot(self.t, self.steps, self.scores[0])
 
     def leave(self, car: int, reason: str) -> None:
         """Car ``car``'s episode ended for ``reason``: a car that finished its race is taken
@@ -194,9 +273,7 @@ class Episode:
         if len(ends) < self.laps:
             facts.lap_finished = False
             for rule in self.rules[car]:
-                new_lap = getattr(rule, "new_lap", None)
-                if new_lap is not None:
-                    new_lap()
+                rule.new_lap()
 
     def info(self, snapshot: Snapshot, car: int = 0) -> dict[str, Any]:
         """Car ``car``'s info (``snapshot.cars[car]`` is that car): its pose and speed, the

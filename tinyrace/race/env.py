@@ -10,14 +10,15 @@ bounds, on an obstacle or in a collision that ends it, it is parked where it sta
 obstacle the others still meet. The episode ends when every car is out or at
 ``sim.step_limit`` (all truncated).
 
-Rewards per car are the config's reward terms of that car's facts; with
-``race.tile_reward: first`` a tile pays only the first car to visit it.
+Rewards, scores and ends per car are the episode's (``tinyrace.episodes.episode``), which
+steps and judges every car at once; with ``race.tile_reward: first`` a tile pays only the
+first car to visit it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,13 +28,11 @@ from pettingzoo import ParallelEnv
 
 from tinyrace.actions import ActionSpec
 from tinyrace.config import car_names
-from tinyrace.env import CARRIED, CARRIED_TERMS, TinyRaceEnv
+from tinyrace.env import TinyRaceEnv
 from tinyrace.episodes.episode import Episode
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.race.checks import read_actions, reset_options
-from tinyrace.rewards import ends_episode, reward_terms
 from tinyrace.sensors.base import Sensor
-from tinyrace.world.facts import StepFacts
 from tinyrace.world.snapshot import Snapshot
 
 ACTIONS_SOURCE = "<step actions>"
@@ -41,15 +40,12 @@ ACTIONS_SOURCE = "<step actions>"
 
 @dataclass
 class Seat:
-    """What the env keeps for one car: its actions, sensors and observation space, score,
-    and the reset's carried terms."""
+    """What the env keeps for one car: its actions, sensors and observation space."""
 
     actions: ActionSpec
     sensors: list[Sensor]
     observation_space: spaces.Space[Any]
     box_camera: str | None  # ``observation: box``: the id of its one camera
-    score: float = 0.0
-    carry: dict[str, float] = field(default_factory=dict)
 
 
 class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type information
@@ -106,7 +102,6 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
             a: _copy(seat.actions.space)
             for a, seat in zip(self.possible_agents, self.seats, strict=True)
         }
-        self._claimed = np.zeros((1, 0), bool)  # per lap: tiles paid (tile_reward: first)
 
     def _seat(self, car: int) -> Seat:
         """Car ``car``'s seat: car 0 sits in the core env's; each other car gets its own
@@ -139,20 +134,12 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         episode = core.episode
         assert episode is not None
         self.agents = list(self.possible_agents)
-        tiles = core.layout.tiles
-        laps = core.config.race.laps
-        self._claimed = np.zeros((laps, 0 if tiles is None else len(tiles)), bool)
-        facts = core.start_facts
         snapshot = core.snapshot()
-        for i, seat in enumerate(self.seats):
-            if i > 0:
-                for sensor in seat.sensors:
-                    sensor.reset(core.layout)
-            terms = reward_terms(facts[i], core.config.reward_design, core.shaping, False, CARRIED)
-            seat.carry = {key: value for key, value in terms.items() if key in CARRIED_TERMS}
-            seat.score = sum(seat.carry.values())
+        for seat in self.seats[1:]:
+            for sensor in seat.sensors:
+                sensor.reset(core.layout)
         observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
-        infos = {agent: self._info(snapshot, i, {}, facts[i]) for agent, i in self._live()}
+        infos = {agent: self._info(snapshot, i, {}) for agent, i in self._live()}
         first = self.possible_agents[0]
         infos[first] = {**first_info, **infos[first]}
         return observations, infos
@@ -166,40 +153,28 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
             raise ConfigError(Problem(ACTIONS_SOURCE, "", None, "call reset() before step()"))
         self._check_agents(actions)
         world = episode.world
-        for i, controls in read_actions(self.seats, actions, self._live()):
+        live = self._live()
+        for i, controls in read_actions(self.seats, actions, live):
             world.control(controls, car=i)
-        facts = episode.step(core.dt)
-        core.t += core.dt
-        core.steps += 1
-        if core.config.race.tile_reward == "first":
-            self._pay_first_visits(facts)
-        limit = core.config.sim.step_limit
-        truncate = limit is not None and core.steps >= limit
-        rewards, terminations, truncations, ended = {}, {}, {}, []
-        terms_of: dict[str, dict[str, float]] = {}
-        reasons: dict[str, str | None] = {}
-        for agent, i in self._live():
-            terms, reward, reason = self._judge(i, facts[i])
-            rewards[agent], terms_of[agent], reasons[agent] = reward, terms, reason
-            terminations[agent] = reason is not None
-            truncations[agent] = truncate and reason is None
-            if reason is not None or truncate:
-                ended.append(agent)
+        cars = episode.step()  # every car judged; a car out of the race: None
+        rewards, terminations, truncations, infos = {}, {}, {}, {}
         snapshot = core.snapshot()
-        observations = {agent: self._observe(snapshot, i) for agent, i in self._live()}
-        infos = {}
+        observations = {agent: self._observe(snapshot, i) for agent, i in live}
         positions = episode.positions()  # once per step, not per car
-        for agent, i in self._live():
-            info = self._info(snapshot, i, terms_of[agent], facts[i], positions)
-            if reasons[agent] is not None:
-                info["termination"] = reasons[agent]
-                info["lap_finished"] = reasons[agent] == "lap_finished"
+        for agent, i in live:
+            car = cars[i]
+            assert car is not None  # a car in the race
+            rewards[agent], terminations[agent] = car.reward, car.reason is not None
+            truncations[agent] = car.truncated
+            info = self._info(snapshot, i, car.terms, positions)
+            if car.reason is not None:
+                info["termination"] = car.reason
+                info["lap_finished"] = car.reason == "lap_finished"
             infos[agent] = info
-        for agent in ended:
-            reason = reasons[agent]
-            if reason is not None:
-                episode.leave(self._index[agent], reason)
-        self.agents = [agent for agent in self.agents if agent not in ended]
+        for i, car in enumerate(cars):  # after the observations: they saw it still racing
+            if car is not None and car.reason is not None:
+                episode.leave(i, car.reason)
+        self.agents = [a for a, _ in live if not (terminations[a] or truncations[a])]
         return observations, rewards, terminations, truncations, infos
 
     def render(self) -> np.ndarray | None:
@@ -234,33 +209,11 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         if problems:
             raise ConfigError(problems)
 
-    def _judge(self, car: int, facts: StepFacts) -> tuple[dict[str, float], float, str | None]:
-        """One car's reward terms, reward and end (as ``TinyRaceEnv.judge`` for its car)."""
-        core, seat = self.core, self.seats[car]
-        design = core.config.reward_design
-        terms = reward_terms(facts, design, core.shaping, True, core.terms)
-        carried, seat.carry = seat.carry, {}
-        if carried:
-            terms = {k: terms.get(k, 0.0) + carried.get(k, 0.0) for k in {**terms, **carried}}
-        reward = float(sum(terms.values()))
-        if not facts.out_of_bounds:
-            seat.score += reward - sum(carried.values())
-        return terms, reward, ends_episode(facts, design)
-
-    def _pay_first_visits(self, facts: list[StepFacts]) -> None:
-        """``tile_reward: first``: a tile first visited in a lap by several cars pays the
-        first only."""
-        episode = self.core.episode
-        assert episode is not None
-        for car, fact in enumerate(facts):
-            claimed = self._claimed[episode.lap_of(car)]
-            paid = [tile for tile in fact.tiles if not claimed[tile]]
-            claimed[paid] = True
-            fact.new_tiles = len(paid)
-
     def _observe(self, snapshot: Snapshot, car: int) -> Any:
         core = self.core
-        seen = replace(snapshot.seen_from(car), score=self.seats[car].score)
+        episode = core.episode
+        assert episode is not None
+        seen = replace(snapshot.seen_from(car), score=episode.scores[car])
         sensors = self.seats[car].sensors
         observation = {s.id: s.observe(seen, core.layout, core.np_random) for s in sensors}
         box_camera = self.seats[car].box_camera
@@ -271,7 +224,6 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         snapshot: Snapshot,
         car: int,
         terms: dict[str, float],
-        facts: StepFacts,
         positions: list[int] | None = None,
     ) -> dict[str, Any]:
         episode = self.core.episode

@@ -23,13 +23,13 @@ from typing import Any
 
 import gymnasium as gym
 
+from tinyrace.cars import CARRACING_WHEELBASE
 from tinyrace.drivers import DRIVERS, ActionAdapter, CenterlineDriver
 from tinyrace.drivers.base import CONTROLS_EXPECTED, checked_controls
-from tinyrace.drivers.centerline import CARRACING_WHEELBASE, Route, route_of
+from tinyrace.drivers.centerline import Route, route_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.race.env import race_info
-from tinyrace.rewards import ends_episode
 
 SOURCE = "<kwargs>"
 OPPONENT_KEYS = ("driver", "speed")
@@ -128,14 +128,14 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         for i, driver in enumerate(self.drivers, start=1):
             if i not in world.parked:
                 world.control(self.specs[i].read(self._action(i, driver, cars[i])), car=i)
-        observation, reward, terminated, truncated, info = self.env.step(action)
-        design = core.config.reward_design
+        core.control(action)
         episode = core.episode
         assert episode is not None
-        for i, facts in enumerate(core.last_facts[1:], start=1):
-            reason = ends_episode(facts, design) if i not in world.parked else None
-            if reason is not None:
-                episode.leave(i, reason)
+        judged = episode.step()
+        observation, reward, terminated, truncated, info = core.conclude(judged)
+        for i, car in enumerate(judged[1:], start=1):
+            if car is not None and car.reason is not None:
+                episode.leave(i, car.reason)
         return observation, reward, terminated, truncated, self._race_info(info)
 
     def _route_for(self, route: Route, car: int) -> Route:

@@ -197,18 +197,16 @@ def ppo_settings(timesteps: int, envs: int) -> dict[str, Any]:
 
 
 def vector_env(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -> VecEnv:
-    """``envs`` copies of the env as one SB3 VecEnv (a worker process each when
-    ``subprocesses`` and more than one), each env Monitor-wrapped (episode returns)."""
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import SubprocVecEnv
+    """``envs`` copies of the env as one SB3 VecEnv (tinyrace's vector env: in worker
+    processes, one per core, when ``subprocesses`` and more than one, else in this process),
+    episode returns recorded (VecMonitor)."""
+    from stable_baselines3.common.vec_env import VecMonitor
 
-    return make_vec_env(
-        _make,
-        n_envs=envs,
-        seed=seed,
-        env_kwargs={"env_id": env.env_id, "kwargs": env.kwargs},
-        vec_env_cls=SubprocVecEnv if subprocesses and envs > 1 else None,
-    )
+    from tinyrace.sb3 import make_vec_env
+
+    workers = None if subprocesses and envs > 1 else 0
+    kwargs = {"env_id": env.env_id, "kwargs": env.kwargs}
+    return VecMonitor(make_vec_env(_make, envs, seed=seed, workers=workers, env_kwargs=kwargs))
 
 
 def make_envs(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -> VecEnv:

@@ -1,22 +1,25 @@
 """Many envs' steps done together: the cars' tyre forces as one numpy computation.
 
-``BatchStepper`` steps the envs of a slice whose cars are CarRacing's dynamic car. It
-takes each env's step apart (``TinyRaceEnv.step`` is ``control``, the episode's step,
-``conclude``) and does the car parts for all envs at once in a ``DynamicBatch``:
+``BatchStepper`` steps the envs of a slice whose car model offers its tyre forces as one
+computation (``CarModel.batch``, a ``tinyrace.cars.base.TyreBatch``: CarRacing's dynamic
+car does). It takes each env's step apart (``TinyRaceEnv.step`` is ``control``, the
+episode's step, ``conclude``) and does the car parts for all envs at once:
 
-1. the actions are checked in one go and handed to every car (``DynamicBatch.control``);
-2. every car's tyre forces, spin and steering in one numpy computation, the new
-   velocities set on the bodies, skid marks drawn;
+1. the actions are checked in one go and handed to every car (``TyreBatch.control``);
+2. every car's tyre forces, spin and steering in one computation, the new velocities set
+   on the bodies, skid marks drawn;
 3. stage by stage over the envs: every episode's step with those forces
-   (``TinyRaceEnv.advance``: the world steps its pymunk space, the rules find the facts),
-   then every env's ``judge`` (rewards, episode end), every observation, and every
-   ``report`` (info), with ``gym.make``'s ``TimeLimit`` counted here instead of called.
+   (``TinyRaceEnv.advance``: the world steps its pymunk space, the rules find the facts,
+   the episode judges its cars), then every observation, and every ``report`` (info).
    Each stage runs the same code env after env, which keeps it hot in the caches.
+   ``gym.make``'s ``TimeLimit`` truncates at its limit (read from its public ``spec``)
+   counted by the env's own step counter, which counts what the wrapper counts: the
+   steps since the reset.
 
 Results are the envs' own ``step`` results, bit for bit. Only envs made by ``gym.make``
 (wrappers ``TimeLimit``, ``OrderEnforcing``, ``PassiveEnvChecker``, or none) around a
-``TinyRaceEnv`` with the dynamic car qualify (``BatchStepper.fits``); the first step
-goes through the wrappers, so that the env checker makes its one-time checks.
+``TinyRaceEnv`` whose car model has a batch qualify (``BatchStepper.fits``); the first
+step goes through the wrappers, so that the env checker makes its one-time checks.
 """
 
 from __future__ import annotations
@@ -30,12 +33,11 @@ from gymnasium.error import InvalidAction, ResetNeeded
 from gymnasium.wrappers import OrderEnforcing, PassiveEnvChecker, TimeLimit
 
 from tinyrace.actions import DISCRETE_CONTROLS, ActionSpec
-from tinyrace.cars.dynamic import DynamicCar
-from tinyrace.cars.dynamic_batch import DynamicBatch
+from tinyrace.cars.base import TyreBatch
 from tinyrace.env import TinyRaceEnv
 
 KNOWN_WRAPPERS = (TimeLimit, OrderEnforcing, PassiveEnvChecker)  # gym.make's own
-BATCHED_ACTIONS = ("pedals", "discrete")  # action kinds of the dynamic car
+BATCHED_ACTIONS = ("pedals", "discrete")  # actions read as (steer, gas, brake)
 # cars from which the tyre forces are one numpy computation. Measured (callgrind, random
 # actions): the numpy step costs about 900k instructions + 63k per car (mostly the Python
 # per car around it: body reads, velocities, wheel copies, skid marks), the scalar model
@@ -54,9 +56,9 @@ class BatchStepper:
         self.envs = list(envs)
         self.vectorized = len(self.envs) >= numpy_from  # else each car's own tyre model
         self.cores = [_core(env) for env in self.envs]
-        self.limits = [_wrapper(env, TimeLimit) for env in self.envs]
+        self.limits = [_step_limit(env) for env in self.envs]  # [steps] TimeLimit's, or None
         self.checkers = [_wrapper(env, PassiveEnvChecker) for env in self.envs]
-        self.physics = DynamicBatch(len(self.envs))
+        self.physics = _batch(self.cores[0], len(self.envs))
         self.dt = np.array([core.dt for core in self.cores])  # [s] per env
         actions = self.cores[0].action_spec
         self.actions: ActionSpec = actions
@@ -67,19 +69,28 @@ class BatchStepper:
 
     @staticmethod
     def fits(envs: Sequence[gym.Env[Any, Any]]) -> bool:
-        """Whether every env is a ``TinyRaceEnv`` with the dynamic car, made by ``gym.make``
-        (or bare), all with the same action space."""
+        """Whether every env is a ``TinyRaceEnv`` whose one car model offers a batch, made
+        by ``gym.make`` (or bare; a ``TimeLimit`` with its limit in its spec), all with the
+        same car model and action space."""
         cores = []
         for env in envs:
             layer: Any = env
             while isinstance(layer, gym.Wrapper):
                 if type(layer) not in KNOWN_WRAPPERS:
                     return False
+                if type(layer) is TimeLimit and _limit_of(layer) is None:
+                    return False
                 layer = layer.env
             if not isinstance(layer, TinyRaceEnv) or layer.action_spec.kind not in BATCHED_ACTIONS:
                 return False
+            if len(layer.course.racers) != 1 or layer.course.car_model.batch is None:
+                return False
             cores.append(layer)
-        return all(core.action_spec == cores[0].action_spec for core in cores)
+        return all(
+            (core.action_spec, core.course.car_model)
+            == (cores[0].action_spec, cores[0].course.car_model)
+            for core in cores
+        )
 
     def invalidate(self) -> None:
         """The cars may have changed outside this stepper (a reset, a call): reload them."""
@@ -142,34 +153,30 @@ class BatchStepper:
         consistent, the failing one has moved without its rewards, as stepping env by env
         left it."""
         cores, physics = self.cores, self.physics
-        facts = []
+        judged, error = [], None
         for row in rows:
             core = cores[row]
-            facts.append(core.advance())
-            if self.vectorized and core.world.contacts[0].crashed:  # the car stopped its wheels
-                physics.stop(row)  # so do the arrays
-        verdicts, error = [], None
-        for row, fact in zip(rows, facts, strict=True):
             try:
-                verdicts.append(cores[row].judge(fact))
+                judged.append(core.advance()[0])
             except Exception as exc:
                 error = error or exc
+            if self.vectorized and core.world.contacts[0].crashed:  # the car stopped its wheels
+                physics.stop(row)  # so do the arrays
         if error is not None:
             raise error
         snapshots = [cores[row].snapshot() for row in rows]
         observations = [cores[row].observe(s) for row, s in zip(rows, snapshots, strict=True)]
         results: list[Step | None] = [None] * len(self.envs)
-        for row, verdict, snapshot, observation in zip(
-            rows, verdicts, snapshots, observations, strict=True
+        for row, car, snapshot, observation in zip(
+            rows, judged, snapshots, observations, strict=True
         ):
-            observation, reward, terminated, truncated, info = cores[row].report(
-                verdict, snapshot, observation
+            core = cores[row]
+            observation, reward, terminated, truncated, info = core.report(
+                car, snapshot, observation
             )
             limit = self.limits[row]
-            if limit is not None:  # TimeLimit.step, without the call
-                limit._elapsed_steps += 1
-                if limit._elapsed_steps >= limit._max_episode_steps:
-                    truncated = True
+            if limit is not None and core.steps >= limit:  # what TimeLimit.step would say
+                truncated = True
             write(row, observation)
             results[row] = observation, reward, terminated, truncated, info
         return results
@@ -184,9 +191,7 @@ class BatchStepper:
                 continue
             core = self.cores[row]
             if core.episode is not None:
-                car = core.world.cars[0]
-                assert isinstance(car, DynamicCar)  # the dynamic car's actions: its car
-                self.physics.load(row, car)
+                self.physics.load(row, core.world.cars[0])
             stale[row] = False
 
     def _controls(self, actions: Any, rows: list[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -267,6 +272,25 @@ def _core(env: gym.Env[Any, Any]) -> TinyRaceEnv:
         layer = layer.env
     assert isinstance(layer, TinyRaceEnv)
     return layer
+
+
+def _batch(core: TinyRaceEnv, size: int) -> TyreBatch:
+    """The tyre batch of ``size`` cars of ``core``'s car model (``fits`` checked it has one)."""
+    make = core.course.car_model.batch
+    assert make is not None
+    return make(size)
+
+
+def _limit_of(wrapper: TimeLimit[Any, Any]) -> int | None:
+    """A ``TimeLimit``'s limit [steps], read from its public ``spec`` (None: no spec)."""
+    spec = wrapper.spec
+    return None if spec is None else spec.max_episode_steps
+
+
+def _step_limit(env: gym.Env[Any, Any]) -> int | None:
+    """The limit of the ``TimeLimit`` around ``env``'s core [steps], or None."""
+    limit = _wrapper(env, TimeLimit)
+    return None if limit is None else _limit_of(limit)
 
 
 def _wrapper(env: gym.Env[Any, Any], kind: type[Any]) -> Any:

@@ -1,12 +1,14 @@
 """The facts of one step: what the world's contacts and the episode's rules found.
 
-Episodes turn contacts into ``StepFacts``; rewards are decided from those facts alone
-in ``tinyrace.rewards``.
+Episodes turn contacts into ``StepFacts``; the rule parts' reward terms and end reasons
+are decided from those facts alone. The fields are the built-in parts' findings; a part
+of one's own writes its findings under its name in ``more``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 
 @dataclass
@@ -24,3 +26,4 @@ class StepFacts:
     cones_hit: int = 0  # cones knocked over during this step (each counts once per episode)
     wall_hit: bool = False  # the car touched a wall this step (and was stopped)
     collision_ends: bool = False  # the source ends the episode on this step's collision
+    more: dict[str, Any] = field(default_factory=dict)  # other parts' findings, by part

@@ -1,0 +1,187 @@
+"""The vector env against one in-process env, side by side in one run (issue 37's proxies).
+
+``python benchmarks/vector_scale.py [--rounds R] [--seconds S] [--max-workers W]``
+prints, as medians of R interleaved rounds of S seconds each, env-steps per second and
+the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this process:
+
+- ``in_process_8``: 8 envs stepped together in this process (``workers=0``), per env-step
+  (target >= 0.95: an env in a batch costs what it costs alone);
+- ``1x1``: 1 env in 1 worker process (target >= 0.7: the round trip is cheap);
+- ``Wx8``: W workers x 8 envs for W = 1 .. --max-workers (2 x 8 on 2 cores: target >= 1.6);
+- ``standin_2x64``: 2 workers x 64 stand-in envs that cost nothing (CarRacing's spaces, a
+  constant frame): the vector env's own ceiling (target >= 300,000 env-steps/s);
+- ``envpool_W``: EnvPool's CarRacing-v2 with W threads x 8 envs, if ``envpool`` imports.
+
+Every case steps random actions (seeded), after a warm-up. The machine's load
+(``os.getloadavg``) is printed before and after: on a shared machine the figures move.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import os
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+ENV_ID = "tinyrace/CarRacing-v0"
+WARMUP = 50  # [steps] per case and round, before the clock starts
+ACTIONS = 256  # pre-drawn action batches, cycled
+# [s] this thread's CPU time per env-step: one env's, and the last vector case's (with
+# workers=0, the whole work; robust to a loaded machine, unlike wall time)
+CPU: dict[str, list[float]] = {"one_env": [], "last": [], "in_process_8": []}
+
+
+def _actions(num_envs: int) -> list[np.ndarray]:
+    space = gym.spaces.Box(np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32))
+    space.seed(0)
+    return [np.stack([space.sample() for _ in range(num_envs)]) for _ in range(ACTIONS)]
+
+
+def rate_single(seconds: float) -> float:
+    """Env-steps/s of one gym.make env stepped in this process."""
+    import tinyrace  # noqa: F401  (registers the ids)
+
+    env = gym.make(ENV_ID)
+    env.reset(seed=0)
+    actions = [a[0] for a in _actions(1)]
+    steps, start, cpu, deadline = 0, 0.0, 0.0, None
+    while True:
+        _, _, terminated, truncated, _ = env.step(actions[steps % ACTIONS])
+        if terminated or truncated:
+            env.reset()
+        steps += 1
+        if steps == WARMUP:
+            start, cpu = time.perf_counter(), time.thread_time()
+            deadline = start + seconds
+        if deadline is not None and steps % 16 == 0 and time.perf_counter() > deadline:
+            break
+    rate = (steps - WARMUP) / (time.perf_counter() - start)
+    CPU["one_env"].append((time.thread_time() - cpu) / (steps - WARMUP))
+    env.close()
+    return rate
+
+
+def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float) -> float:
+    """Env-steps/s of a vector env made by ``make`` (closed afterwards)."""
+    vector = make()
+    try:
+        vector.reset(seed=0)
+        actions = _actions(num_envs)
+        for index in range(WARMUP):
+            vector.step(actions[index % ACTIONS])
+        steps, start, cpu = 0, time.perf_counter(), time.thread_time()
+        deadline = start + seconds
+        while time.perf_counter() < deadline:
+            vector.step(actions[steps % ACTIONS])
+            steps += 1
+        CPU["last"] = [(time.thread_time() - cpu) / (steps * num_envs)]
+        return steps * num_envs / (time.perf_counter() - start)
+    finally:
+        vector.close()
+
+
+def standin(num_envs: int, workers: int) -> Any:
+    from tinyrace.vector import BatchVectorEnv
+
+    from standin import StandIn
+
+    observation = gym.spaces.Box(0, 255, (96, 96, 3), np.uint8)
+    action = gym.spaces.Box(np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32))
+    return BatchVectorEnv(
+        [functools.partial(StandIn, 0.0, observation, action)] * num_envs, workers
+    )
+
+
+def envpool_case(threads: int) -> tuple[Callable[[], Any], int] | None:
+    try:
+        import envpool
+    except Exception:  # not installed, or its assets are missing
+        return None
+    num_envs = 8 * threads
+
+    def make() -> Any:
+        pool = envpool.make_gymnasium("CarRacing-v2", num_envs=num_envs, num_threads=threads)
+        pool.reset = functools.partial(_envpool_reset, pool.reset)
+        return pool
+
+    return make, num_envs
+
+
+def _envpool_reset(reset: Callable[[], Any], seed: int | None = None) -> Any:
+    return reset()
+
+
+def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
+    """Name -> (seconds -> env-steps/s, envs per step), in the order printed."""
+    from tinyrace.vector import make_batch
+
+    def vector(num_envs: int, workers: int) -> Callable[[float], float]:
+        return functools.partial(
+            rate_vector, functools.partial(make_batch, ENV_ID, num_envs, workers), num_envs
+        )
+
+    table: dict[str, tuple[Callable[[float], float], int]] = {
+        "one_env": (rate_single, 1),
+        "in_process_8": (vector(8, 0), 8),
+        "1x1": (vector(1, 1), 1),
+    }
+    for workers in range(1, max_workers + 1):
+        table[f"{workers}x8"] = (vector(8 * workers, workers), 8 * workers)
+    table["standin_2x64"] = (
+        functools.partial(rate_vector, functools.partial(standin, 64, 2), 64),
+        64,
+    )
+    for threads in range(1, max_workers + 1):
+        found = envpool_case(threads)
+        if found is not None:
+            make, num_envs = found
+            table[f"envpool_{threads}"] = (functools.partial(rate_vector, make, num_envs), num_envs)
+    return table
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--seconds", type=float, default=3.0)
+    parser.add_argument("--max-workers", type=int, default=os.cpu_count() or 2)
+    args = parser.parse_args()
+    gym.logger.min_level = gym.logger.ERROR
+    print(f"load before: {os.getloadavg()}, cores: {os.cpu_count()}", flush=True)
+    table = cases(args.max_workers)
+    if not any(name.startswith("envpool") for name in table):
+        print("envpool: not importable here (not installed, or its assets missing)")
+    rates: dict[str, list[float]] = {name: [] for name in table}
+    for round_ in range(args.rounds):
+        for name, (measure, _) in table.items():
+            rates[name].append(measure(args.seconds))
+            if name == "in_process_8":
+                CPU["in_process_8"] += CPU["last"]
+        print(
+            f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()),
+            flush=True,
+        )
+    one = statistics.median(rates["one_env"])
+    print(f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env):")
+    for name, values in rates.items():
+        median = statistics.median(values)
+        print(f"  {name:>14}: {median:>10,.0f}  {median / one:6.2f}x")
+    one_cpu, batch_cpu = (statistics.median(CPU[k]) for k in ("one_env", "in_process_8"))
+    print(
+        f"  CPU per env-step (thread time): one env {one_cpu * 1e6:.0f} us, 8 in process "
+        f"{batch_cpu * 1e6:.0f} us: {one_cpu / batch_cpu:.2f}x"
+    )
+    print(f"load after: {os.getloadavg()}")
+
+
+if __name__ == "__main__":
+    main()

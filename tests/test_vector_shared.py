@@ -1,0 +1,249 @@
+"""BatchVectorEnv's shared-memory step: infos by record and by exception, step_async and
+step_wait, workers that die or raise (named, never a hang), the memory freed on close.
+
+Every result is compared with SyncVectorEnv's, bit for bit (``assert_same``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import gc
+import os
+import signal
+from collections.abc import Iterator
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.error import AlreadyPendingCallError, NoAsyncCallError
+
+import tinyrace  # noqa: F401  (registers the env ids)
+from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
+from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector.pool import AsyncBatch
+from tinyrace.vector.shared import INFO_BYTES, flatten, merge_columns, record_dtype, records
+
+SHM = Path("/dev/shm")
+BOUND = 60  # [s] a test that waits longer has hung
+
+
+@contextlib.contextmanager
+def bounded(seconds: int = BOUND) -> Iterator[None]:
+    """Fail (instead of hanging) if the block takes longer than ``seconds``."""
+
+    def hung(signum: int, frame: object) -> None:
+        raise TimeoutError(f"hung for {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+class Chatty(gym.Env):
+    """Infos that change shape: nested dicts, tuples, numpy scalars, a rare key, a value
+    of another type, a string, and envs of one worker that disagree."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.zeros(2, np.float32), {"start": True}
+
+    def step(self, action):
+        self.t += 1
+        value = float(self.np_random.random())
+        info = {
+            "pose": (value, 2.0 * value, -value),
+            "speed": value,
+            "steps": self.t,
+            "hit": value > 0.5,
+            "small": np.float32(value),
+            "terms": {"time": -0.1, "tiles": value},
+        }
+        if self.t % 7 == 0:
+            info["rare"] = "a lap"  # not an array: by the pipe
+        if self.t % 11 == 0:
+            info["steps"] = float(self.t)  # another type: another signature
+        if self.t % 5 == 0 and value > 0.7:
+            del info["terms"]  # this env differs from the others of its worker
+        observation = np.full(2, value, np.float32)
+        return observation, value - 0.5, self.t % 17 == 0, self.t % 23 == 0, info
+
+
+@pytest.mark.parametrize(("num_envs", "workers"), [(3, 2), (1, 1), (4, 1)])
+def test_infos_of_every_shape_match_sync_vector_env(num_envs, workers):
+    expected = run(gym.vector.SyncVectorEnv([Chatty] * num_envs), steps=80)
+    got = run(BatchVectorEnv([Chatty] * num_envs, workers=workers), steps=80)
+    for step, (a, b) in enumerate(zip(expected, got, strict=True)):
+        assert_same(a, b, f"step {step}")
+
+
+def test_records_round_trip_the_infos():
+    info = {"pose": (1.5, -2.0), "n": 3, "ok": False, "x": np.float32(0.25), "d": {"a": 1.0}}
+    signature, values = flatten(info)
+    dtype = record_dtype(signature)
+    rows = records(np.zeros((2, INFO_BYTES), np.uint8), dtype)
+    rows[0] = rows[1] = tuple(values)
+    merged = merge_columns(signature, rows)
+    assert list(merged) == ["pose", "_pose", "n", "_n", "ok", "_ok", "x", "_x", "d", "_d"]
+    assert merged["pose"][1] == (1.5, -2.0) and merged["x"].dtype == np.float32
+    assert flatten({"s": "text"}) is None and flatten({"t": (1, 2)}) is None
+    assert record_dtype(tuple((f"k{i}", tuple, 16) for i in range(4))) is not None  # 512 bytes
+    assert record_dtype(tuple((f"k{i}", tuple, 16) for i in range(5))) is None  # 640 bytes
+
+
+def test_actions_that_a_cast_would_change_go_by_pipe():
+    """float64 actions reach the envs as float64, as in SyncVectorEnv."""
+    fns = [FACTORIES["procedural"]] * 2
+    sync, batch = gym.vector.SyncVectorEnv(fns), BatchVectorEnv(fns, workers=1)
+    assert_same(sync.reset(seed=2), batch.reset(seed=2))
+    actions = np.array([[0.1 + 1e-12, 0.5, 0.0], [-0.3, 0.2, 0.1]], np.float64)
+    for _ in range(3):
+        assert_same(sync.step(actions), batch.step(actions))
+    sync.close()
+    batch.close()
+
+
+def test_step_async_and_step_wait():
+    fns = [FACTORIES["procedural"]] * 3
+    sync, batch = gym.vector.SyncVectorEnv(fns), BatchVectorEnv(fns, workers=2)
+    assert_same(sync.reset(seed=4), batch.reset(seed=4))
+    actions = np.tile(np.array([0.2, 0.6, 0.0], np.float32), (3, 1))
+    with pytest.raises(NoAsyncCallError):
+        batch.step_wait()
+    batch.step_async(actions)
+    with pytest.raises(AlreadyPendingCallError):
+        batch.step_async(actions)
+    with pytest.raises(AlreadyPendingCallError):
+        batch.reset()
+    assert_same(sync.step(actions), batch.step_wait())
+    assert_same(sync.step(actions), batch.step(actions))
+    sync.close()
+    batch.close()
+
+
+@pytest.mark.parametrize("context", ["fork", "forkserver", "spawn"])
+def test_start_methods_match_sync_vector_env(context):
+    kwargs = {"max_episode_steps": EPISODE}
+    vector = make_batch("tinyrace/CarRacing-v0", 3, workers=2, context=context, **kwargs)
+    expected = run(gym.vector.SyncVectorEnv([FACTORIES["procedural"]] * 3), steps=50)
+    for step, (a, b) in enumerate(zip(expected, run(vector, steps=50), strict=True)):
+        assert_same(a, b, f"step {step}")
+
+
+# -- failures ---------------------------------------------------------------------------------
+class Doomed(gym.Env):
+    """Env 0 of its kind: raises on action > 0.5, is killed by SIGKILL on action < -0.5."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(2, np.float32), {"t": 0}
+
+    def step(self, action):
+        if action[0] > 0.5:
+            raise KeyError(f"doomed env refused {action[0]:.1f}")
+        if action[0] < -0.5:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return np.full(2, 0.5, np.float32), 1.0, False, False, {"t": 1}
+
+
+def segments() -> set[str]:
+    return {path.name for path in SHM.iterdir()} if SHM.is_dir() else set()
+
+
+def test_a_raising_env_is_named_by_its_index():
+    vector = BatchVectorEnv([Doomed] * 4, workers=2)
+    vector.reset(seed=0)
+    with bounded(), pytest.raises(KeyError, match=r"refused 0\.9") as raised:
+        vector.step(np.array([[0.0], [0.0], [0.0], [0.9]], np.float32))
+    notes = "\n".join(raised.value.__notes__)
+    assert "raised by env 3" in notes and "worker 1 (envs 2-3)" in notes
+    assert vector.step(np.zeros((4, 1), np.float32))[1].tolist() == [1.0] * 4  # still usable
+    vector.close()
+
+
+@pytest.mark.parametrize("context", ["fork", "spawn"])
+def test_a_killed_worker_is_named_never_a_hang(context):
+    before = segments()
+    vector = BatchVectorEnv([Doomed] * 4, workers=2, context=context)
+    assert len({name for name in segments() - before if name.startswith("psm_")}) == 1
+    vector.reset(seed=0)
+    with bounded(), pytest.raises(RuntimeError) as raised:
+        vector.step(np.array([[0.0], [0.0], [-0.9], [0.0]], np.float32))
+    message = str(raised.value)
+    assert "worker 1 (envs 2-3) died" in message and "killed by SIGKILL" in message
+    assert vector.closed and not {n for n in segments() - before if n.startswith("psm_")}
+    del raised  # its traceback holds the semaphores the parent waited on
+    gc.collect()
+    assert segments() <= before  # the semaphores are gone too
+    with pytest.raises(gym.error.ClosedEnvironmentError):
+        vector.step(np.zeros((4, 1), np.float32))
+
+
+def test_closing_frees_the_shared_memory():
+    before = segments()
+    vector = make_batch("tinyrace/CarRacing-v0", 2, workers=2)
+    (name,) = {name for name in segments() - before if name.startswith("psm_")}
+    vector.reset(seed=0)
+    vector.step(np.zeros((2, 3), np.float32))
+    vector.close()
+    assert name not in segments()
+    with pytest.raises(FileNotFoundError):  # a failed construction frees it too
+        BatchVectorEnv([Doomed, functools.partial(open, "/nonexistent/track")], workers=2)
+    assert segments() <= before
+    in_process = make_batch("tinyrace/CarRacing-v0", 2, workers=0)
+    assert segments() <= before  # workers=0 shares nothing
+    in_process.close()
+
+
+# -- EnvPool-style asynchronous stepping ------------------------------------------------------
+def _action(env: int, step: int) -> np.ndarray:
+    """Env ``env``'s action at its ``step``-th step: the same in every stepping order."""
+    rng = np.random.default_rng(1000 * env + step)
+    return np.array([rng.uniform(-1, 1), rng.uniform(0, 1), rng.uniform(0, 0.2)], np.float32)
+
+
+def test_async_batches_give_each_env_its_sync_trajectory():
+    num_envs, steps = 4, 60
+    sync = gym.vector.SyncVectorEnv([FACTORIES["procedural"]] * num_envs)
+    sync.reset(seed=3)
+    expected = [[] for _ in range(num_envs)]
+    for step in range(steps):
+        actions = np.stack([_action(i, step) for i in range(num_envs)])
+        observations, rewards, terminated, truncated, _ = sync.step(actions)
+        for i in range(num_envs):
+            expected[i].append((observations[i], rewards[i], terminated[i], truncated[i]))
+    sync.close()
+    pool = AsyncBatch(BatchVectorEnv([FACTORIES["procedural"]] * num_envs, workers=2), 2)
+    pool.reset(seed=3)
+    got = [[] for _ in range(num_envs)]
+    pool.send(np.stack([_action(i, 0) for i in range(num_envs)]), np.arange(num_envs))
+    with bounded():
+        while min(len(g) for g in got) < steps:
+            observations, rewards, terminated, truncated, infos = pool.recv()
+            ids = infos["env_id"]
+            assert len(ids) == 2 and sorted(ids.tolist()) in ([0, 1], [2, 3])
+            assert infos["speed"].shape == (2,) and infos["_speed"].all()
+            for row, i in enumerate(ids.tolist()):
+                got[i].append((observations[row], rewards[row], terminated[row], truncated[row]))
+            if all(len(got[i]) < steps for i in ids.tolist()):
+                pool.send(np.stack([_action(i, len(got[i])) for i in ids.tolist()]), ids)
+        while pool.in_flight:
+            pool.recv()
+    for i in range(num_envs):
+        for step, (a, b) in enumerate(zip(expected[i], got[i][:steps], strict=True)):
+            assert np.array_equal(a[0], b[0]) and a[1:] == b[1:], (i, step)
+    with pytest.raises(ValueError, match="every env of worker 0"):
+        pool.send(np.zeros((1, 3), np.float32), [0])
+    pool.close()

@@ -1,0 +1,146 @@
+"""tinyrace.sb3.BatchVecEnv against SB3's own DummyVecEnv, SB3's wrappers on it, and the
+id in SB3's SubprocVecEnv workers (forkserver and spawn).
+
+Run by .ci/run's train stage (Stable-Baselines3 and torch installed).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.wrappers import TimeLimit
+from stable_baselines3 import PPO
+from stable_baselines3.common.env_checker import check_env
+from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
+from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.vec_env import (
+    DummyVecEnv,
+    SubprocVecEnv,
+    VecFrameStack,
+    VecMonitor,
+    VecNormalize,
+)
+
+import tinyrace  # noqa: F401  (registers the ids)
+from tinyrace.sb3 import BatchVecEnv, make_vec_env, split_infos
+from tinyrace.vector import BatchVectorEnv
+
+EPISODE = 25  # [steps] so that 60 steps cross two resets
+MAKE = functools.partial(gym.make, "tinyrace/CarRacing-v0", max_episode_steps=EPISODE)
+
+
+def same(a, b, where: str) -> None:
+    """Equal values: arrays by dtype, shape and content, dicts key by key."""
+    if isinstance(a, dict):
+        assert set(a) == set(b), (where, set(a) ^ set(b))
+        for key in a:
+            same(a[key], b[key], f"{where}.{key}")
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape, (where, a.dtype, b.dtype)
+        assert np.array_equal(a, b), where
+    else:
+        assert a == b, (where, a, b)
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_steps_equal_sb3s_dummy_vec_env(workers):
+    dummy = DummyVecEnv([MAKE] * 3)
+    batch = BatchVecEnv(BatchVectorEnv([MAKE] * 3, workers=workers))
+    for vec in (dummy, batch):
+        vec.seed(11)
+    same(dummy.reset(), batch.reset(), "reset")
+    assert [set(i) for i in dummy.reset_infos] == [set(i) for i in batch.reset_infos]
+    space = gym.spaces.Box(-1.0, 1.0, (3, 3), np.float32)
+    space.seed(3)
+    ends = 0
+    for step in range(60):
+        actions = np.clip(space.sample(), [-1, 0, 0], 1).astype(np.float32)
+        a, b = dummy.step(actions), batch.step(actions)
+        for name, x, y in zip(("obs", "rewards", "dones"), a[:3], b[:3], strict=True):
+            same(x, y, f"step {step} {name}")
+        for index, (x, y) in enumerate(zip(a[3], b[3], strict=True)):
+            same(x, y, f"step {step} info {index}")
+        ends += int(b[2].sum())
+    assert ends == 3 * (60 // EPISODE)  # every env crossed its resets
+    dummy.close()
+    batch.close()
+
+
+def test_vec_env_api_with_indices():
+    vec = make_vec_env(MAKE, 3, workers=2, seed=0)
+    vec.reset()
+    assert vec.get_attr("spec", indices=[2])[0].id == "tinyrace/CarRacing-v0"
+    vec.set_attr("marker", 5, indices=[0, 2])
+    vec.set_attr("marker", 7, indices=1)
+    assert vec.get_attr("marker") == [5, 7, 5]
+    assert vec.env_method("get_wrapper_attr", "marker", indices=[2, 0]) == [5, 5]
+    assert vec.env_is_wrapped(TimeLimit) == [True] * 3
+    assert vec.env_is_wrapped(Monitor, indices=[1]) == [False]
+    assert vec.get_images() == [None] * 3  # no render_mode
+    vec.set_options({"randomize": False})
+    vec.reset()
+    vec.close()
+
+
+def test_sb3_wrappers_and_ppo_run_on_it():
+    vec = make_vec_env("tinyrace/CarRacing-v0", 2, workers=1, seed=0, max_episode_steps=20)
+    wrapped = VecNormalize(VecFrameStack(VecMonitor(vec), 4), norm_reward=True)
+    observations = wrapped.reset()
+    assert observations.shape == (2, 96, 96, 12) and observations.dtype == np.float32
+    episodes = []
+    for _ in range(45):
+        *_, infos = wrapped.step(np.tile([0.0, 0.5, 0.0], (2, 1)).astype(np.float32))
+        episodes += [info["episode"]["l"] for info in infos if "episode" in info]
+        assert all(
+            info["terminal_observation"].shape == (96, 96, 12)
+            for info in infos
+            if "terminal_observation" in info
+        )
+    assert episodes == [20, 20, 20, 20]
+    model = PPO(
+        "CnnPolicy",
+        VecFrameStack(make_vec_env(MAKE, 2, workers=2, seed=0), 4),
+        n_steps=32,
+        batch_size=32,
+        n_epochs=1,
+        seed=0,
+    )
+    model.learn(64)
+    assert model.num_timesteps >= 64
+    model.get_env().close()
+    wrapped.close()
+
+
+def test_sb3_env_checker_accepts_the_env():
+    check_env(gym.make("tinyrace/CarRacing-v0"), warn=True)
+
+
+def test_split_infos_keeps_masks():
+    merged = {
+        "a": np.array([1.5, 0.0]),
+        "_a": np.array([True, False]),
+        "d": {"x": np.array([1, 2]), "_x": np.array([True, True])},
+        "_d": np.array([False, True]),
+    }
+    assert split_infos(merged, 2) == [{"a": 1.5}, {"d": {"x": 2}}]
+
+
+@pytest.mark.parametrize("start_method", ["forkserver", "spawn"])
+def test_the_id_works_in_sb3_subprocess_workers(start_method):
+    """Workers that import nothing else make the env by the documented id, which imports
+    tinyrace first (gymnasium's "module:id" form)."""
+    vec = sb3_make_vec_env(
+        "tinyrace:tinyrace/CarRacing-v0",
+        n_envs=2,
+        seed=0,
+        vec_env_cls=SubprocVecEnv,
+        vec_env_kwargs={"start_method": start_method},
+    )
+    observations = vec.reset()
+    assert observations.shape == (2, 96, 96, 3)
+    observations, rewards, _, infos = vec.step(np.zeros((2, 3), np.float32))
+    assert rewards.shape == (2,) and "tiles_total" in infos[0]
+    vec.close()

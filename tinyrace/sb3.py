@@ -1,0 +1,180 @@
+"""Stable-Baselines3's VecEnv over tinyrace's vector env (``BatchVectorEnv``).
+
+SB3's own ``SubprocVecEnv`` runs one env per process and pays a pipe round trip per env
+and step; ``BatchVecEnv`` steps several envs per worker through shared memory
+(``tinyrace.vector``) and speaks SB3's VecEnv API: same-step autoreset (a finished
+env's last observation in ``infos[i]["terminal_observation"]``, the observation
+returned its reset one), ``infos[i]["TimeLimit.truncated"]``, float32 rewards, one
+info dict per env, ``seed``/``set_options`` applied at the next reset. SB3's wrappers
+(``VecFrameStack``, ``VecNormalize``, ``VecMonitor``) go on top. Stable-Baselines3 is an
+extra: importing this module imports it.
+
+Example:
+    >>> from tinyrace.sb3 import make_vec_env
+    >>> from stable_baselines3.common.vec_env import VecFrameStack, VecMonitor
+    >>> envs = VecFrameStack(VecMonitor(make_vec_env("tinyrace/CarRacing-v0", 4, workers=2)), 4)
+    >>> envs.reset().shape
+    (4, 96, 96, 12)
+    >>> envs.close()
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.vec_env.base_vec_env import (
+    VecEnv,
+    VecEnvIndices,
+    VecEnvObs,
+    VecEnvStepReturn,
+)
+
+from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector.make import _workers
+
+
+class BatchVecEnv(VecEnv):  # type: ignore[misc, unused-ignore]  # Any where SB3 is absent
+    """An SB3 ``VecEnv`` that steps a ``BatchVectorEnv`` (which it owns and closes)."""
+
+    def __init__(self, venv: BatchVectorEnv):
+        self.venv = venv
+        super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
+
+    # -- stepping ---------------------------------------------------------------------------
+    def reset(self) -> VecEnvObs:
+        """Reset every env with the seeds and options set since the last reset."""
+        seeds, options = list(self._seeds), self._options
+        if all(o == options[0] for o in options):
+            observations, infos = self.venv.reset(seed=seeds, options=options[0] or None)
+            self.reset_infos = split_infos(infos, self.num_envs)
+        else:  # envs with different options: each group reset on its own
+            for chosen in _groups(options):
+                mask = np.zeros(self.num_envs, dtype=np.bool_)
+                mask[chosen] = True
+                group = {**options[chosen[0]], "reset_mask": mask}
+                observations, infos = self.venv.reset(seed=seeds, options=group)
+                split = split_infos(infos, self.num_envs)
+                for index in chosen:
+                    self.reset_infos[index] = split[index]
+        self._reset_seeds()
+        self._reset_options()
+        return observations  # type: ignore[no-any-return, unused-ignore]  # the batch
+
+    def step_async(self, actions: np.ndarray) -> None:
+        self.venv.step_async(actions)
+
+    def step_wait(self) -> VecEnvStepReturn:
+        observations, rewards, terminated, truncated, merged = self.venv.step_wait()
+        dones = terminated | truncated
+        infos = split_infos(merged, self.num_envs)
+        for index, info in enumerate(infos):
+            info["TimeLimit.truncated"] = bool(truncated[index] and not terminated[index])
+        if dones.any():  # the vector env resets them at the next step; SB3 wants it now
+            done = np.flatnonzero(dones).tolist()
+            for index in done:
+                infos[index]["terminal_observation"] = _row(observations, index)
+            observations, reset_infos = self.venv.reset(options={"reset_mask": dones})
+            after = split_infos(reset_infos, self.num_envs)
+            for index in done:
+                self.reset_infos[index] = after[index]
+        return observations, rewards.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        self.venv.close()
+
+    # -- the envs' attributes and methods ---------------------------------------------------
+    def get_attr(self, attr_name: str, indices: VecEnvIndices = None) -> list[Any]:
+        values = self.venv.get_attr(attr_name)
+        return [values[i] for i in self._get_indices(indices)]
+
+    def set_attr(self, attr_name: str, value: Any, indices: VecEnvIndices = None) -> None:
+        self.venv.set_attr_at(list(self._get_indices(indices)), attr_name, value)
+
+    def env_method(
+        self,
+        method_name: str,
+        *method_args: Any,
+        indices: VecEnvIndices = None,
+        **method_kwargs: Any,
+    ) -> list[Any]:
+        chosen = list(self._get_indices(indices))
+        results = self.venv.call_at(chosen, method_name, *method_args, **method_kwargs)
+        by_index = dict(zip(sorted(set(chosen)), results, strict=True))
+        return [by_index[i] for i in chosen]
+
+    def env_is_wrapped(
+        self, wrapper_class: type[gym.Wrapper], indices: VecEnvIndices = None
+    ) -> list[bool]:
+        wrapped = self.venv.wrapped_by(wrapper_class)
+        return [wrapped[i] for i in self._get_indices(indices)]
+
+    def get_images(self) -> Sequence[np.ndarray | None]:
+        if self.render_mode != "rgb_array":
+            return [None] * self.num_envs
+        return list(self.venv.render())
+
+
+def make_vec_env(
+    env_id: str | Callable[..., gym.Env],
+    n_envs: int = 1,
+    seed: int | None = None,
+    workers: int | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    **batch_kwargs: Any,
+) -> BatchVecEnv:
+    """SB3's ``make_vec_env`` for the fast path: ``n_envs`` envs of ``env_id`` (an id for
+    ``gym.make`` or a function that makes the env) in ``workers`` processes (one per core
+    by default, 0: all in this process), seeded ``seed``, ``seed + 1``, ... at the first
+    reset. Wrap it in ``VecMonitor`` for SB3's episode statistics (per-env ``Monitor``
+    wrappers would take the envs off the batched physics)."""
+    workers = _workers(n_envs, workers)
+    if isinstance(env_id, str):
+        venv = make_batch(env_id, n_envs, workers, **batch_kwargs, **(env_kwargs or {}))
+    else:
+        maker = functools.partial(env_id, **(env_kwargs or {}))
+        venv = BatchVectorEnv([maker] * n_envs, workers=workers, **batch_kwargs)
+    vec = BatchVecEnv(venv)
+    if seed is not None:
+        vec.seed(seed)
+    return vec
+
+
+def split_infos(merged: dict[str, Any], num_envs: int) -> list[dict[str, Any]]:
+    """A vector env's merged infos (arrays and ``_key`` masks) as one dict per env."""
+    infos: list[dict[str, Any]] = [{} for _ in range(num_envs)]
+    for key, values in merged.items():
+        mask = merged.get(f"_{key}")
+        if mask is None:
+            continue  # a mask itself (or a key without one)
+        if isinstance(values, dict):
+            nested = split_infos(values, num_envs)
+            for index in np.flatnonzero(mask):
+                infos[index][key] = nested[index]
+            continue
+        items = values if values.dtype == object else values.tolist()  # Python scalars
+        for index in np.flatnonzero(mask):
+            infos[index][key] = items[index]
+    return infos
+
+
+def _row(observations: Any, index: int) -> Any:
+    if isinstance(observations, dict):
+        return {key: value[index].copy() for key, value in observations.items()}
+    return observations[index].copy()
+
+
+def _groups(options: Sequence[dict[str, Any]]) -> list[list[int]]:
+    """Env indices grouped by equal options."""
+    groups: list[tuple[dict[str, Any], list[int]]] = []
+    for index, option in enumerate(options):
+        for known, members in groups:
+            if known == option:
+                members.append(index)
+                break
+        else:
+            groups.append((option, [index]))
+    return [members for _, members in groups]

@@ -1,0 +1,462 @@
+"""BatchVectorEnv: several envs per worker process, a step through shared memory.
+
+Gymnasium's ``AsyncVectorEnv`` runs one env per process and pays a pipe round trip
+and some pickling per env and step, about as long as a tinyrace step itself. Here,
+as in EnvPool, each worker steps a contiguous slice of the envs, and a step moves
+nothing through a pipe: actions, observations, rewards, terminations, truncations
+and the infos' usual values lie in one shared memory block; a semaphore per worker
+and direction wakes the other side (``tinyrace.vector.worker``). Infos of a new
+shape, and exceptions, go over the worker's pipe.
+
+Results are those of ``gymnasium.vector.SyncVectorEnv(env_fns)``: next-step
+autoreset, ``reset(seed=s)`` seeds env ``i`` with ``s + i``, infos merged with the
+same ``_key`` masks. ``render()`` returns the envs' frames as a tuple, like
+``SyncVectorEnv``. ``step_async(actions)`` and ``step_wait()`` split a step, so that
+the caller can work while the workers step. An exception in a worker is raised again
+in the parent, with the worker's traceback as a note (PEP 678), once every worker has
+answered; the vector env stays usable, with the envs that stepped before the error
+stepped (as in SyncVectorEnv, though here that includes every other worker's envs, and
+the other envs of the failing one's slice when they are stepped together: ``batched``).
+An exception that does not survive pickling arrives as ``RuntimeError("<Type>:
+<message>")``. A worker that dies closes the vector env and raises a RuntimeError
+naming it, its envs and its exit code. Closing frees the shared memory.
+
+Example:
+    >>> from tinyrace.vector import make_batch
+    >>> envs = make_batch("tinyrace/CarRacing-v0", num_envs=8, workers=2)
+    >>> observations, infos = envs.reset(seed=0)
+    >>> observations.shape
+    (8, 96, 96, 3)
+    >>> envs.close()
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import multiprocessing
+import time
+from collections.abc import Callable, Sequence
+from copy import deepcopy
+from multiprocessing.connection import Connection
+from multiprocessing.reduction import ForkingPickler
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.spaces import Box, Discrete, MultiBinary, MultiDiscrete
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import CloudpickleWrapper, batch_space, iterate
+
+from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
+from tinyrace.vector import shared
+from tinyrace.vector.answers import Answers
+from tinyrace.vector.batched import NUMPY_FROM
+from tinyrace.vector.envslice import EnvSlice
+from tinyrace.vector.failures import await_close, check_count, died, rebuild_error
+from tinyrace.vector.infos import merge_infos
+from tinyrace.vector.worker import acquire, work
+
+CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
+# [s] the parent polls for the workers' answers this long before it sleeps (a step of
+# a few envs takes less: the answer comes without a wake-up); after a step that took
+# longer it sleeps at once, leaving the cores to the workers
+PARENT_SPIN = 0.002
+LIVENESS = 0.05  # [s] a sleeping parent looks this often whether the workers live
+StepResult = tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]
+ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
+
+
+class BatchVectorEnv(VectorEnv):
+    """``len(env_fns)`` envs in ``workers`` processes, each stepping a contiguous slice.
+
+    Args:
+        env_fns: functions that make the envs; with ``context="spawn"`` they are sent
+            with cloudpickle, so the env ids they make must be importable there
+            (``"tinyrace:tinyrace/CarRacing-v0"`` or ``make_batch`` do that).
+        workers: processes to run the envs in (at most one per env); 0 runs them all
+            in this process, with no pipe and no pickling.
+        context: ``multiprocessing`` start method; ``None`` for the platform default.
+        copy: return a copy of the observations (else views of the shared memory,
+            overwritten by the next step), as ``SyncVectorEnv``'s ``copy``.
+        batch_physics: step the dynamic cars of a process's envs together (their tyre
+            forces as one numpy computation, ``tinyrace.vector.batched``); False steps
+            each env by its own ``step``. Results are the same.
+        numpy_from: with batched physics, the envs per process from which their cars' tyre
+            forces are one numpy computation; fewer cars each run their own tyre model
+            (numpy's fixed cost per call outweighs it), still stepped together.
+    """
+
+    def __init__(
+        self,
+        env_fns: Sequence[Callable[[], gym.Env]],
+        workers: int = 2,
+        context: str | None = None,
+        copy: bool = True,
+        batch_physics: bool = True,
+        numpy_from: int = NUMPY_FROM,
+    ):
+        env_fns = list(env_fns)
+        check_count("num_envs", len(env_fns), 1, MAX_ENVS, "(len(env_fns))")
+        check_count("workers", workers, 0, MAX_WORKERS, "(0: in this process)")
+        self.env_fns, self.copy = env_fns, copy
+        self.num_envs = len(env_fns)
+        self.autoreset_mode = AutoresetMode.NEXT_STEP
+        self._pipes: list[Connection] = []
+        self._processes: list[multiprocessing.process.BaseProcess] = []
+        self._semaphores: list[tuple[Any, Any]] = []
+        self._local: EnvSlice | None = None  # workers=0: the envs, stepped in this process
+        self._memory: Any = None
+        self._pending = False
+        self._pending_local: StepResult | None = None  # workers=0: step_async's results
+        self._by_pipe = False  # the pending step's actions went over the pipes
+        self._spin = PARENT_SPIN  # [s] how long the parent polls for the next answers
+        # The shared memory must exist before the workers start, so the spaces come from
+        # an env made here (as AsyncVectorEnv does).
+        probe = env_fns[0]()
+        self.metadata = {**probe.metadata, "autoreset_mode": self.autoreset_mode}
+        self.render_mode = probe.render_mode
+        self.single_observation_space = probe.observation_space
+        self.single_action_space = probe.action_space
+        probe.close()
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        if not shared.shareable(self.single_observation_space):
+            raise TypeError(
+                f"BatchVectorEnv shares observations of Box, Discrete, MultiBinary and "
+                f"MultiDiscrete spaces (or Dicts and Tuples of them), not "
+                f"{self.single_observation_space}: use gymnasium.vector.SyncVectorEnv"
+            )
+        bounds = np.linspace(0, self.num_envs, min(max(workers, 1), self.num_envs) + 1)
+        self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds.astype(int))]
+        layout = shared.Layout(
+            self.single_observation_space,
+            self.single_action_space,
+            self.num_envs,
+            len(self._slices),
+        )
+        if workers == 0:
+            self._views = layout.views(bytearray(layout.size))
+            self._local = EnvSlice(env_fns, 0, self._views, batch_physics, numpy_from)
+            self._check_spaces([self._local.spaces()])
+            return
+        self._memory = shared.create_block(layout.size)
+        self._views = layout.views(self._memory.buf)
+        try:
+            self._start(multiprocessing.get_context(context), layout, batch_physics, numpy_from)
+            self._check_spaces(self._receive_all())
+        except BaseException:  # e.g. an env that cannot be made in a worker
+            self.close()
+            raise
+        self._answers = Answers(self._views.infos, self._slices)
+
+    def _start(self, ctx: Any, layout: shared.Layout, batch_physics: bool, numpy_from: int) -> None:
+        block = (self._memory.name, layout)
+        physics = (batch_physics, numpy_from)
+        for number, envs in enumerate(self._slices):
+            parent, child = ctx.Pipe()
+            semaphores = (ctx.Semaphore(0), ctx.Semaphore(0))  # go, done
+            fns = [CloudpickleWrapper(fn) for fn in self.env_fns[envs]]
+            process = ctx.Process(
+                target=work,
+                args=(child, parent, number, fns, envs.start, block, semaphores, *physics),
+                name=f"BatchVectorEnv-worker-{number}",
+                daemon=True,
+            )
+            self._pipes.append(parent)
+            self._semaphores.append(semaphores)
+            process.start()
+            child.close()
+            self._processes.append(process)
+
+    def _check_spaces(self, replies: list[list[tuple[gym.Space[Any], gym.Space[Any]]]]) -> None:
+        """Every env must have the first env's spaces, as in SyncVectorEnv."""
+        expected = (self.single_observation_space, self.single_action_space)
+        for index, spaces in enumerate(_flat(replies)):
+            if spaces != expected:
+                raise RuntimeError(
+                    f"env {index} has the spaces {spaces}, env 0 has {expected}: "
+                    "a BatchVectorEnv's envs must share their observation and action spaces"
+                )
+
+    # -- gymnasium API ----------------------------------------------------------------------
+    def reset(
+        self,
+        *,
+        seed: int | Sequence[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[Any, dict[str, Any]]:
+        """Reset every env (or those in ``options["reset_mask"]``), as SyncVectorEnv does."""
+        if seed is None:
+            seed = [None] * self.num_envs
+        elif isinstance(seed, int):
+            seed = [seed + i for i in range(self.num_envs)]
+        if len(seed) != self.num_envs:
+            raise ValueError(
+                f"If seeds are passed as a list the length must match num_envs={self.num_envs} "
+                f"but got length={len(seed)}."
+            )
+        mask = np.ones(self.num_envs, dtype=np.bool_)
+        if options is not None and "reset_mask" in options:
+            options = dict(options)  # unlike SyncVectorEnv, leave the caller's dict alone
+            mask = _check_reset_mask(options.pop("reset_mask"), self.num_envs)
+        replies = self._exchange("reset", [(seed[s], options, mask[s]) for s in self._slices])
+        # None: not in the reset mask
+        return self._observations_out(), merge_infos(_flat(replies), self.num_envs)
+
+    def step(self, actions: Any) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """Step every env; an env whose episode ended at the last step is reset instead."""
+        if self._local is not None:  # in this process: no messages, no slicing
+            self._check_open()
+            rewards, terminated, truncated, env_infos = self._local.step(self._batch(actions))
+            return (
+                self._observations_out(),
+                np.array(rewards, dtype=np.float64),
+                np.array(terminated, dtype=np.bool_),
+                np.array(truncated, dtype=np.bool_),
+                merge_infos(env_infos, self.num_envs),
+            )
+        self.step_async(actions)
+        return self.step_wait()
+
+    def step_async(self, actions: Any) -> None:
+        """Start a step; ``step_wait`` returns its results."""
+        self._check_open()
+        if self._pending:
+            raise gym.error.AlreadyPendingCallError(
+                "step_async was called again before step_wait", "step"
+            )
+        if self._local is not None:
+            self._pending_local = self.step(actions)
+            self._pending = True
+            return
+        batch = self._batch(actions)
+        target = self._views.actions
+        if target is None or batch.dtype != target.dtype or batch.shape != target.shape:
+            # a Dict action space, or actions that casting would change: over the pipes
+            self._send("step", [(batch[s],) for s in self._slices])
+            self._pending = True
+            self._by_pipe = True
+            return
+        target[:] = batch
+        command = self._views.command
+        for number, (go, _) in enumerate(self._semaphores):
+            command[number] = shared.STEP
+            go.release()
+        self._pending = True
+        self._by_pipe = False
+
+    def step_wait(self) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """The results of the step ``step_async`` started."""
+        self._check_open()
+        if not self._pending:
+            raise gym.error.NoAsyncCallError("step_wait was called before step_async", "step")
+        self._pending = False
+        if self._local is not None:
+            results = self._pending_local
+            assert results is not None
+            self._pending_local = None
+            return results
+        if self._by_pipe:
+            replies = self._receive_all()
+            rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
+            return (
+                self._observations_out(),
+                np.array(rewards, dtype=np.float64),
+                np.array(terminated, dtype=np.bool_),
+                np.array(truncated, dtype=np.bool_),
+                merge_infos(env_infos, self.num_envs),
+            )
+        start = time.perf_counter()
+        for number in range(len(self._slices)):
+            self._await_done(number)
+        # a step that took longer than the spin will likely again: sleep at once next time
+        self._spin = PARENT_SPIN if time.perf_counter() - start < PARENT_SPIN else 0.0
+        try:
+            infos = self._answers.collect(self._views.status, self._pipes)
+        except (EOFError, OSError):  # a worker died after its "done"
+            self.close()
+            raise
+        views = self._views
+        return (
+            self._observations_out(),
+            views.rewards.copy(),
+            views.terminated.copy(),
+            views.truncated.copy(),
+            infos,
+        )
+
+    def _await_done(self, number: int) -> None:
+        """Wait for worker ``number``'s step; if it dies meanwhile, close and say so."""
+        done = self._semaphores[number][1]
+        if acquire(done, self._spin):
+            return
+        process = self._processes[number]
+        try:
+            while not done.acquire(timeout=LIVENESS):
+                if not process.is_alive():
+                    self.close()
+                    raise died(number, self._slices[number], process.exitcode)
+        except BaseException:  # e.g. Ctrl-C: the workers would be out of step
+            if not self.closed:
+                self.close()
+            raise
+
+    def render(self) -> tuple[Any, ...]:
+        """The frames of the envs, as a tuple (``SyncVectorEnv.render``)."""
+        return self.call("render")
+
+    def call(self, name: str, *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+        """Call method ``name`` of every env (or read the attribute); a tuple of results."""
+        replies = self._exchange("call", [(name, args, kwargs)] * len(self._slices))
+        return tuple(_flat(replies))
+
+    def call_at(
+        self, indices: Sequence[int], name: str, *args: Any, **kwargs: Any
+    ) -> tuple[Any, ...]:
+        """``call`` for the envs in ``indices`` only (in increasing order of index)."""
+        only = sorted(set(indices))
+        replies = self._exchange("call", [(name, args, kwargs, only)] * len(self._slices))
+        return tuple(_flat(replies))
+
+    def set_attr_at(self, indices: Sequence[int], name: str, value: Any) -> None:
+        """Set attribute ``name`` of the envs in ``indices`` to ``value``."""
+        only = sorted(set(indices))
+        self._exchange(
+            "set_attr", [(name, [value] * (s.stop - s.start), only) for s in self._slices]
+        )
+
+    def wrapped_by(self, kind: type[Any]) -> tuple[bool, ...]:
+        """Whether each env has a wrapper of type ``kind``."""
+        return tuple(_flat(self._exchange("wrapped_by", [(kind,)] * len(self._slices))))
+
+    def get_attr(self, name: str) -> tuple[Any, ...]:
+        """Attribute ``name`` of every env."""
+        return self.call(name)
+
+    def set_attr(self, name: str, values: Any) -> None:
+        """Set attribute ``name`` of every env: one value for all or a list of one per env."""
+        if not isinstance(values, list | tuple):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(
+                "Values must be a list or tuple with length equal to the number of environments. "
+                f"Got `{len(values)}` values for {self.num_envs} environments."
+            )
+        self._exchange("set_attr", [(name, values[s]) for s in self._slices])
+
+    @property
+    def np_random_seed(self) -> tuple[int, ...]:  # type: ignore[override]
+        """The seeds of the envs' random generators."""
+        return self.get_attr("np_random_seed")
+
+    @property  # type: ignore[misc]  # read-only here: the envs own their generators
+    def np_random(self) -> tuple[np.random.Generator, ...]:  # type: ignore[override]
+        """Copies of the envs' random generators."""
+        return self.get_attr("np_random")
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Close the envs, stop the workers (terminating any that hang), free the memory."""
+        if self._local is not None:
+            self._local.close()
+            self._local = None
+        for number, pipe in enumerate(self._pipes):
+            with contextlib.suppress(OSError, ValueError):  # a worker that is gone already
+                self._signal(number, pipe, ForkingPickler.dumps(("close", ())))
+        for pipe, process in zip(self._pipes, self._processes, strict=True):
+            await_close(pipe, CLOSE_TIMEOUT)
+            pipe.close()
+            process.join(CLOSE_TIMEOUT)
+            if process.is_alive():
+                process.terminate()
+                process.join()
+        self._pipes, self._processes, self._semaphores = [], [], []
+        self._views = self._answers = None  # type: ignore[assignment]  # before the memory
+        memory, self._memory = self._memory, None
+        shared.free_block(memory)
+
+    def __del__(self) -> None:
+        if not getattr(self, "closed", True) and hasattr(self, "_local"):
+            self.close()
+
+    # -- messages ---------------------------------------------------------------------------
+    def _check_open(self) -> None:
+        if self.closed:
+            raise gym.error.ClosedEnvironmentError("BatchVectorEnv was closed")
+
+    def _exchange(self, command: str, args: list[tuple[Any, ...]]) -> list[Any]:
+        """Send each worker its command and arguments; every worker's answer, in order."""
+        self._check_open()
+        if self._pending:
+            raise gym.error.AlreadyPendingCallError(
+                f"{command} was called while a step was pending: call step_wait first", "step"
+            )
+        if self._local is not None:  # in this process: the slice's own exceptions
+            return [getattr(self._local, command)(*args[0])]
+        self._send(command, args)
+        return self._receive_all()
+
+    def _send(self, command: str, args: list[tuple[Any, ...]]) -> None:
+        # all pickled first: an argument that cannot be pickled leaves the pipes in step
+        messages = [ForkingPickler.dumps((command, worker_args)) for worker_args in args]
+        for number, (pipe, message) in enumerate(zip(self._pipes, messages, strict=True)):
+            with contextlib.suppress(OSError):  # a dead worker: reported by _receive_all
+                self._signal(number, pipe, message)
+
+    def _signal(self, number: int, pipe: Connection, message: bytes | memoryview) -> None:
+        """Put ``message`` in worker ``number``'s pipe and wake it to read it."""
+        pipe.send_bytes(message)
+        self._views.command[number] = shared.PIPE
+        self._semaphores[number][0].release()
+
+    def _receive_all(self) -> list[Any]:
+        """Every worker's answer, in order; the first worker's exception is raised here."""
+        replies = []
+        for number, pipe in enumerate(self._pipes):
+            try:
+                replies.append(pipe.recv())
+            except (EOFError, OSError):  # no answer will ever come
+                process = self._processes[number]
+                process.join(CLOSE_TIMEOUT)
+                self.close()
+                raise died(number, self._slices[number], process.exitcode) from None
+            except BaseException:  # e.g. Ctrl-C: the pipes would be out of step
+                self.close()
+                raise
+        for number, (ok, result) in enumerate(replies):
+            if not ok:
+                raise rebuild_error(result, number, self._slices[number])
+        return [result for _, result in replies]
+
+    def _batch(self, actions: Any) -> Any:
+        """The actions as one batch to slice: an array for array spaces, else a list."""
+        if isinstance(self.single_action_space, ARRAY_ACTIONS):
+            batch: Any = np.asarray(actions)
+        else:
+            batch = list(iterate(self.action_space, actions))
+        if len(batch) != self.num_envs:
+            raise ValueError(f"expected actions for {self.num_envs} envs, got {len(batch)}")
+        return batch
+
+    def _observations_out(self) -> Any:
+        observations = self._views.observations
+        if not self.copy:
+            return observations
+        if isinstance(observations, np.ndarray):
+            return observations.copy()  # as deepcopy, without its memo
+        return deepcopy(observations)
+
+
+def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
+    """``options["reset_mask"]``, checked as SyncVectorEnv does."""
+    if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
+        raise TypeError(f"`options['reset_mask']` must be a numpy array of bools, got {mask!r}")
+    if mask.shape != (num_envs,) or not mask.any():
+        raise ValueError(
+            f"`options['reset_mask']` must have shape `({num_envs},)` and a True value, got {mask}"
+        )
+    return mask
+
+
+def _flat(per_worker: Sequence[list[Any]]) -> list[Any]:
+    return list(itertools.chain.from_iterable(per_worker))

@@ -1,0 +1,164 @@
+"""The envs of one slice of a BatchVectorEnv: stepped in this process or in a worker's."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+
+from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
+from tinyrace.vector.shared import Views
+
+Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
+
+
+class EnvSlice:
+    """One worker's envs: envs ``first``, ``first + 1``, ... of the vector env."""
+
+    def __init__(
+        self,
+        env_fns: list[Callable[[], gym.Env[Any, Any]]],
+        first: int,
+        views: Views,
+        batch_physics: bool = True,
+        numpy_from: int = NUMPY_FROM,
+    ):
+        self.envs = [fn() for fn in env_fns]
+        self.first = first
+        # dynamic cars: their tyre forces computed together (else each env's own step)
+        fits = batch_physics and BatchStepper.fits(self.envs)
+        self.batch = BatchStepper(self.envs, numpy_from) if fits else None
+        self.views = views
+        self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
+
+    def spaces(self) -> list[tuple[gym.Space[Any], gym.Space[Any]]]:
+        return [(env.observation_space, env.action_space) for env in self.envs]
+
+    def reset(
+        self, seeds: list[int | None], options: dict[str, Any] | None, mask: np.ndarray
+    ) -> list[dict[str, Any] | None]:
+        infos: list[dict[str, Any] | None] = []
+        for j, env in enumerate(self.envs):
+            if not mask[j]:
+                infos.append(None)
+                continue
+            try:
+                observation, info = env.reset(seed=seeds[j], options=options)
+            except Exception as error:
+                _blame(error, self.first + j)
+                raise
+            self._write(j, observation)
+            self.autoreset[j] = False
+            infos.append(info)
+        self._invalidate()
+        return infos
+
+    def step(
+        self, actions: Any
+    ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
+        """Step every env (an env whose episode ended at the last step is reset instead):
+        rewards, terminations, truncations and infos, as lists (they pickle faster)."""
+        n = len(self.envs)
+        autoreset = self.autoreset
+        results: list[Step | None]
+        if self.batch is not None:
+            results = self.batch.step(actions, autoreset, self._write)
+        else:
+            results = [None] * n
+            for j, env in enumerate(self.envs):
+                if not autoreset[j]:
+                    try:
+                        results[j] = env.step(actions[j])
+                    except Exception as error:
+                        _blame(error, self.first + j)
+                        raise
+        rewards: list[SupportsFloat] = [0.0] * n
+        terminated, truncated = [False] * n, [False] * n
+        infos: list[dict[str, Any]] = [{}] * n
+        for j, result in enumerate(results):
+            if result is None:  # the episode ended at the last step: reset, reward 0, not done
+                try:
+                    observation, infos[j] = self.envs[j].reset()
+                except Exception as error:
+                    _blame(error, self.first + j)
+                    raise
+                self._write(j, observation)
+                continue
+            observation, rewards[j], terminated[j], truncated[j], infos[j] = result
+            if self.batch is None:
+                self._write(j, observation)
+        # cast by numpy as SyncVectorEnv's arrays are (a step may return numpy scalars)
+        ended = np.array(terminated, dtype=np.bool_) | np.array(truncated, dtype=np.bool_)
+        self.autoreset = ended
+        return rewards, terminated, truncated, infos
+
+    def call(
+        self,
+        name: str,
+        args: tuple[Any, ...],
+        kwargs: dict[str, Any],
+        only: Sequence[int] | None = None,
+    ) -> list[Any]:
+        """Call method ``name`` of each env (or read the attribute); ``only``: those envs
+        (vector env indices), the others left alone."""
+        results = []
+        for j, env in enumerate(self.envs):
+            if only is not None and self.first + j not in only:
+                continue
+            attribute = env.get_wrapper_attr(name)
+            results.append(attribute(*args, **kwargs) if callable(attribute) else attribute)
+        self._invalidate()
+        return results
+
+    def wrapped_by(self, kind: type[Any]) -> list[bool]:
+        """Whether each env has a wrapper of type ``kind`` (a subclass counts)."""
+        found = []
+        for env in self.envs:
+            layer: Any = env
+            while isinstance(layer, gym.Wrapper) and not isinstance(layer, kind):
+                layer = layer.env
+            found.append(isinstance(layer, kind))
+        return found
+
+    def set_attr(self, name: str, values: Sequence[Any], only: Sequence[int] | None = None) -> None:
+        """Set attribute ``name`` of each env to its value; ``only``: those envs (vector
+        env indices), the others left alone."""
+        for j, (env, value) in enumerate(zip(self.envs, values, strict=True)):
+            if only is None or self.first + j in only:
+                env.set_wrapper_attr(name, value)
+        self._invalidate()
+
+    def _invalidate(self) -> None:
+        """The envs may have changed (reset, called, set): the batch reloads its cars."""
+        if self.batch is not None:
+            self.batch.invalidate()
+
+    def close(self) -> None:
+        for env in self.envs:
+            env.close()
+
+    def _write(self, j: int, observation: Any) -> None:
+        target = self.views.observations
+        if isinstance(target, np.ndarray):
+            target[self.first + j] = observation  # a Box: one array
+        else:
+            _write_nested(target, self.first + j, observation)
+
+
+def _blame(error: Exception, index: int) -> None:
+    """Add a note naming the env that raised ``error`` (kept when it is pickled)."""
+    if hasattr(error, "add_note"):  # Python >= 3.11
+        error.add_note(f"raised by env {index}")
+
+
+def _write_nested(target: Any, index: int, observation: Any) -> None:
+    if isinstance(target, dict):
+        for key, view in target.items():
+            _write_nested(view, index, observation[key])
+    elif isinstance(target, tuple):
+        for view, part in zip(target, observation, strict=True):
+            _write_nested(view, index, part)
+    else:
+        target[index] = observation

@@ -1,0 +1,66 @@
+"""What a BatchVectorEnv says when its arguments or its workers fail."""
+
+from __future__ import annotations
+
+import contextlib
+import pickle
+import signal
+from multiprocessing.connection import Connection
+
+import numpy as np
+
+from tinyrace.errors import ConfigError, Problem
+from tinyrace.vector.worker import CLOSED
+
+
+def check_count(name: str, value: object, low: int, high: int, note: str = "") -> None:
+    """A whole number from ``low`` to ``high``, else a ConfigError naming the argument."""
+    whole = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if whole and low <= int(value) <= high:  # type: ignore[call-overload]
+        return
+    allowed = f"expected a whole number from {low} to {high} {note}".rstrip()
+    raise ConfigError(Problem("<make_vec arguments>", name, value, allowed))
+
+
+def show(envs: slice) -> str:
+    """A slice of envs as "3" or "3-5"."""
+    return f"{envs.start}-{envs.stop - 1}" if envs.stop - envs.start > 1 else str(envs.start)
+
+
+def died(number: int, envs: slice, exitcode: int | None) -> RuntimeError:
+    """The error for worker ``number`` (stepping ``envs``) that ended without an answer."""
+    how = f"exit code {exitcode}"
+    if exitcode is not None and exitcode < 0:
+        names = {s.value: s.name for s in signal.Signals}
+        how = f"killed by {names.get(-exitcode, f'signal {-exitcode}')}"
+    return RuntimeError(
+        f"BatchVectorEnv worker {number} (envs {show(envs)}) died without an answer ({how}); "
+        "the vector env is closed"
+    )
+
+
+def rebuild_error(error: tuple[str, str, str, bytes | None], number: int, envs: slice) -> Exception:
+    """The worker's exception (or a RuntimeError naming it), its traceback as a note."""
+    name, message, trace, pickled = error
+    rebuilt: Exception | None = None
+    with contextlib.suppress(Exception):
+        rebuilt = pickle.loads(pickled) if pickled is not None else None
+    if rebuilt is None or str(rebuilt) != message:  # exceptions whose args are not the message
+        rebuilt = RuntimeError(f"{name}: {message}")
+    note = f"raised in BatchVectorEnv worker {number} (envs {show(envs)}):\n{trace}"
+    if hasattr(rebuilt, "add_note"):  # Python >= 3.11
+        rebuilt.add_note(note)
+    return rebuilt
+
+
+def await_close(pipe: Connection, timeout: float) -> None:
+    """Read answers until the worker confirms "close" (answers to an interrupted command
+    may come first), it exits, or ``timeout`` passes."""
+    try:
+        while pipe.poll(timeout):
+            message = pipe.recv()
+            closed = isinstance(message, tuple) and len(message) == 2
+            if closed and isinstance(message[1], str) and message[1] == CLOSED:
+                return
+    except (EOFError, OSError):
+        return
