@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -135,6 +136,7 @@ class RaceRecorder:
             for agent in race.possible_agents
         }
         self.steps = 0
+        self.film_seconds = 0.0  # [s] spent drawing and writing video frames
 
     def start(self, observations: dict[str, Any], infos: dict[str, Any]) -> None:
         for agent, recorder in self.cars.items():
@@ -171,10 +173,12 @@ class RaceRecorder:
             hit = " ".join(str(car) for car in info.get("cars_hit") or ())
             self.cars[agent].extras.append((order.index(agent) + 1, hit))
         if self.video is not None:
+            started = time.perf_counter()
             frame = self.race.render()  # the race was made with render_mode rgb_array
             if frame is None:
                 raise RuntimeError("the race rendered no frame for the video")
             self.video.write(frame)
+            self.film_seconds += time.perf_counter() - started
 
     def order(self) -> list[str]:
         """The cars by place, leader first."""

@@ -101,7 +101,7 @@ class RaceRun(RunLoop[RaceEpisode]):
             trace = f"episode_{episode:03d}_{file_part(agent)}_trace.csv"
             car.write_trace(self.run_dir / trace)
             cars.append(self._car_result(episode, seed, agent, car, order, track, video, trace))
-        rate = self.progress.rate(recorder.steps)
+        rate = self.progress.rate(recorder.steps, recorder.film_seconds)  # video left out
         result = RaceEpisode(episode, seed, recorder.steps, order, cars, rate, track, video)
         self._end_line(result)
         return result
