@@ -12,7 +12,9 @@ import gc
 import os
 import signal
 from collections.abc import Iterator
+from multiprocessing import shared_memory, synchronize
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -158,8 +160,36 @@ class Doomed(gym.Env):
         return np.full(2, 0.5, np.float32), 1.0, False, False, {"t": 1}
 
 
+CREATED: set[str] = set()  # the /dev/shm names this test process made
+
+
+@pytest.fixture(autouse=True)
+def _record_created(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Record each shared-memory block and named semaphore this process creates: under
+    pytest-xdist other tests' vector envs make and free theirs at the same time, so a diff of
+    all of /dev/shm would see them."""
+    real_init = shared_memory.SharedMemory.__init__
+
+    def init(self: shared_memory.SharedMemory, *args: Any, **kwargs: Any) -> None:
+        real_init(self, *args, **kwargs)
+        if kwargs.get("create") or (len(args) > 1 and args[1]):
+            CREATED.add(self.name)
+
+    real_make_name = synchronize.SemLock._make_name  # type: ignore[attr-defined]
+
+    def make_name() -> str:
+        name: str = real_make_name()
+        CREATED.add("sem." + name.lstrip("/"))
+        return name
+
+    monkeypatch.setattr(shared_memory.SharedMemory, "__init__", init)
+    monkeypatch.setattr(synchronize.SemLock, "_make_name", staticmethod(make_name))
+
+
 def segments() -> set[str]:
-    return {path.name for path in SHM.iterdir()} if SHM.is_dir() else set()
+    """The entries of /dev/shm that this process created and that are still there."""
+    present = {path.name for path in SHM.iterdir()} if SHM.is_dir() else set()
+    return present & CREATED
 
 
 def test_a_raising_env_is_named_by_its_index():
