@@ -15,6 +15,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -89,29 +90,54 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     cases = args.case or list(CASES)
     with tempfile.TemporaryDirectory(prefix="tinyrace-compare-") as tmp:
-        trees = {ref: checkout(ref, Path(tmp)) for ref in (args.old, args.new)}
-        try:
-            rates: dict[tuple[str, str], list[float]] = {}
-            for _ in range(args.rounds):
-                for case in cases:
-                    for ref, tree in trees.items():
-                        rate = one_round(tree, case, args.steps)
-                        rates.setdefault((case, ref), []).append(rate)
-        finally:
-            for tree in trees.values():
-                subprocess.run(
-                    ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)],
-                    check=False,
-                    capture_output=True,
-                )
-    print(
-        f"{'case':<16} {args.old:>12} {args.new:>12}  new/old   (median steps/s of {args.rounds})"
-    )
-    for case in cases:
-        old = statistics.median(rates[(case, args.old)])
-        new = statistics.median(rates[(case, args.new)])
-        print(f"{case:<16} {old:>12,.0f} {new:>12,.0f}  {new / old:.3f}")
+        rates = side_by_side(
+            args.old,
+            args.new,
+            Path(tmp),
+            cases,
+            args.rounds,
+            lambda tree, case: one_round(tree, case, args.steps),
+        )
+    print_table(args.old, args.new, cases, rates, f"median steps/s of {args.rounds}")
     return 0
+
+
+def side_by_side(
+    old: str,
+    new: str,
+    tmp: Path,
+    cases: list[str],
+    rounds: int,
+    run_round: Callable[[Path, str], float],
+) -> dict[tuple[str, str], list[float]]:
+    """Each case's rate at both refs, ``rounds`` times, alternating refs within each round
+    (so a change of load hits both); the refs' worktrees in ``tmp``, removed after."""
+    trees = {ref: checkout(ref, tmp) for ref in (old, new)}
+    rates: dict[tuple[str, str], list[float]] = {}
+    try:
+        for _ in range(rounds):
+            for case in cases:
+                for ref, tree in trees.items():
+                    rates.setdefault((case, ref), []).append(run_round(tree, case))
+    finally:
+        for tree in trees.values():
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)],
+                check=False,
+                capture_output=True,
+            )
+    return rates
+
+
+def print_table(
+    old: str, new: str, cases: list[str], rates: dict[tuple[str, str], list[float]], what: str
+) -> None:
+    """One row per case: the medians at both refs and their ratio."""
+    print(f"{'case':<16} {old:>12} {new:>12}  new/old   ({what})")
+    for case in cases:
+        before = statistics.median(rates[(case, old)])
+        after = statistics.median(rates[(case, new)])
+        print(f"{case:<16} {before:>12,.0f} {after:>12,.0f}  {after / before:.3f}")
 
 
 if __name__ == "__main__":

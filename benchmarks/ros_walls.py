@@ -16,13 +16,12 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-from compare import checkout
+from compare import print_table, side_by_side
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "tests" / "data" / "f1tenth_example"
@@ -83,31 +82,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=7, help="rounds per ref and case")
     parser.add_argument("--steps", type=int, default=3000, help="timed steps per round")
     args = parser.parse_args(argv)
-    rates: dict[tuple[str, str], list[float]] = {}
     with tempfile.TemporaryDirectory(prefix="tinyrace-ros-walls-") as tmp:
         envs = cases(Path(tmp))
-        trees = {ref: checkout(ref, Path(tmp)) for ref in (args.old, args.new)}
-        try:
-            for _ in range(args.rounds):
-                for case, kwargs in envs.items():
-                    for ref, tree in trees.items():
-                        rate = one_round(tree, kwargs, args.steps)
-                        rates.setdefault((case, ref), []).append(rate)
-        finally:
-            for tree in trees.values():
-                subprocess.run(
-                    ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(tree)],
-                    check=False,
-                    capture_output=True,
-                )
-    print(
-        f"{'case':<16} {args.old:>12} {args.new:>12}  new/old  "
-        f" (median CPU steps/s of {args.rounds})"
-    )
-    for case in envs:
-        old = statistics.median(rates[(case, args.old)])
-        new = statistics.median(rates[(case, args.new)])
-        print(f"{case:<16} {old:>12,.0f} {new:>12,.0f}  {new / old:.3f}")
+        rates = side_by_side(
+            args.old,
+            args.new,
+            Path(tmp),
+            list(envs),
+            args.rounds,
+            lambda tree, case: one_round(tree, envs[case], args.steps),
+        )
+    print_table(args.old, args.new, list(envs), rates, f"median CPU steps/s of {args.rounds}")
     return 0
 
 
