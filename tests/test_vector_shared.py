@@ -9,7 +9,6 @@ from __future__ import annotations
 import contextlib
 import functools
 import gc
-import os
 import signal
 from collections.abc import Iterator
 from multiprocessing import shared_memory, synchronize
@@ -20,6 +19,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.error import AlreadyPendingCallError, NoAsyncCallError
+from vector_doubles import Chatty, Doomed
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
@@ -45,39 +45,6 @@ def bounded(seconds: int = BOUND) -> Iterator[None]:
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, previous)
-
-
-class Chatty(gym.Env):
-    """Infos that change shape: nested dicts, tuples, numpy scalars, a rare key, a value
-    of another type, a string, and envs of one worker that disagree."""
-
-    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
-    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        self.t = 0
-        return np.zeros(2, np.float32), {"start": True}
-
-    def step(self, action):
-        self.t += 1
-        value = float(self.np_random.random())
-        info = {
-            "pose": (value, 2.0 * value, -value),
-            "speed": value,
-            "steps": self.t,
-            "hit": value > 0.5,
-            "small": np.float32(value),
-            "terms": {"time": -0.1, "tiles": value},
-        }
-        if self.t % 7 == 0:
-            info["rare"] = "a lap"  # not an array: by the pipe
-        if self.t % 11 == 0:
-            info["steps"] = float(self.t)  # another type: another signature
-        if self.t % 5 == 0 and value > 0.7:
-            del info["terms"]  # this env differs from the others of its worker
-        observation = np.full(2, value, np.float32)
-        return observation, value - 0.5, self.t % 17 == 0, self.t % 23 == 0, info
 
 
 @pytest.mark.parametrize(("num_envs", "workers"), [(3, 2), (1, 1), (4, 1)])
@@ -142,24 +109,6 @@ def test_start_methods_match_sync_vector_env(context):
 
 
 # -- failures ---------------------------------------------------------------------------------
-class Doomed(gym.Env):
-    """Env 0 of its kind: raises on action > 0.5, is killed by SIGKILL on action < -0.5."""
-
-    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
-    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        return np.zeros(2, np.float32), {"t": 0}
-
-    def step(self, action):
-        if action[0] > 0.5:
-            raise KeyError(f"doomed env refused {action[0]:.1f}")
-        if action[0] < -0.5:
-            os.kill(os.getpid(), signal.SIGKILL)
-        return np.full(2, 0.5, np.float32), 1.0, False, False, {"t": 1}
-
-
 CREATED: set[str] = set()  # the /dev/shm names this test process made
 
 

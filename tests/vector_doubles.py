@@ -1,0 +1,64 @@
+"""Toy envs for the vector env's tests, in a module of their own: a spawn or forkserver worker
+unpickles an env class by importing its module, and a test module run under
+``--import-mode=importlib`` (CI's sdist stage) is not importable by name in a fresh process,
+while this folder is on sys.path (conftest.py) and spawn hands sys.path to its children.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import gymnasium as gym
+import numpy as np
+
+
+class Chatty(gym.Env):
+    """Infos that change shape: nested dicts, tuples, numpy scalars, a rare key, a value
+    of another type, a string, and envs of one worker that disagree."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.zeros(2, np.float32), {"start": True}
+
+    def step(self, action):
+        self.t += 1
+        value = float(self.np_random.random())
+        info = {
+            "pose": (value, 2.0 * value, -value),
+            "speed": value,
+            "steps": self.t,
+            "hit": value > 0.5,
+            "small": np.float32(value),
+            "terms": {"time": -0.1, "tiles": value},
+        }
+        if self.t % 7 == 0:
+            info["rare"] = "a lap"  # not an array: by the pipe
+        if self.t % 11 == 0:
+            info["steps"] = float(self.t)  # another type: another signature
+        if self.t % 5 == 0 and value > 0.7:
+            del info["terms"]  # this env differs from the others of its worker
+        observation = np.full(2, value, np.float32)
+        return observation, value - 0.5, self.t % 17 == 0, self.t % 23 == 0, info
+
+
+class Doomed(gym.Env):
+    """Env 0 of its kind: raises on action > 0.5, is killed by SIGKILL on action < -0.5."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(2, np.float32), {"t": 0}
+
+    def step(self, action):
+        if action[0] > 0.5:
+            raise KeyError(f"doomed env refused {action[0]:.1f}")
+        if action[0] < -0.5:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return np.full(2, 0.5, np.float32), 1.0, False, False, {"t": 1}
