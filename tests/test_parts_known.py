@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 import tinyrace
+from tinyrace.examples import TRACKS_DIR
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -113,6 +114,7 @@ BUILT_IN_SCRIPT = """
 import json, sys
 from pathlib import Path
 import tinyrace
+from tinyrace.examples import TRACKS_DIR
 registries = ["tinyrace.cars.registry", "tinyrace.sensors.registry", "tinyrace.drivers",
               "tinyrace.tracks.registry", "tinyrace.episodes.rules", "tinyrace.config"]
 imported = [name for name in registries if name in sys.modules]
@@ -285,7 +287,7 @@ def test_parts_registered_by_user_code_are_known_to_config_validate_and_referenc
         "rules: [{type: speed_limit, limit: 50.0}]\n"
     )
     experiment = tmp_path / "hopper.yaml"  # the toy car on a shipped track
-    circuit = ROOT / "example_tracks" / "circuit"
+    circuit = TRACKS_DIR / "circuit"
     experiment.write_text(f"env: {{environment: '{circuit}', car: {{model: hopper}}}}\n")
     done = _run(TOYS_SCRIPT, tmp_path, ROOT / "tests", str(track), str(experiment))
     assert done.returncode == 0, done.stderr
