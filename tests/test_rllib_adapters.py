@@ -3,6 +3,7 @@ env creator RLlib's env runners call. tests_train/test_rllib.py runs them under 
 
 from __future__ import annotations
 
+import multiprocessing
 import pickle
 import subprocess
 import sys
@@ -150,6 +151,23 @@ def test_make_env_with_num_envs_gives_the_ids_vector_entry_point_in_float_pixels
     finally:
         vector.close()
         plain.close()
+
+
+def test_the_vector_env_steps_in_the_runners_own_process_unless_workers_says_otherwise():
+    """An RLlib env runner is a process with one CPU: no worker processes by default."""
+    before = set(multiprocessing.active_children())
+    vector = make_env({"num_envs": 2, "max_episode_steps": 3})
+    try:
+        assert set(multiprocessing.active_children()) == before
+        vector.reset(seed=0)
+        vector.step(np.zeros((2, 3), np.float32))
+    finally:
+        vector.close()
+    vector = make_env({"num_envs": 2, "workers": 1, "max_episode_steps": 3})
+    try:
+        assert len(set(multiprocessing.active_children()) - before) == 1
+    finally:
+        vector.close()
 
 
 def test_a_dict_observation_has_its_cameras_in_floats_in_the_vector_env_too():

@@ -1,5 +1,6 @@
 """docs/training.md's RLlib examples, run as printed: PPO on CarRacing-v0 with two env
-runners (each stepping a BatchVectorEnv of two envs), and PPO on the PettingZoo race (two cars, one shared policy).
+runners (each stepping a BatchVectorEnv of two envs), and PPO on the PettingZoo race (two
+cars, one shared policy).
 
 Run by .ci/run's train stage after ``pip install -e ".[train,rllib]"``. Each block runs as
 the page prints it (the very text, found as .ci/readme_examples.py finds it), as a script

@@ -18,8 +18,8 @@ RLlib's ``ParallelPettingZooEnv``; docs/training.md runs both with PPO.
 With ``.env_runners(num_envs_per_env_runner=n, gym_env_vectorize_mode="vector_entry_point")``
 RLlib's ``SingleAgentEnvRunner`` calls the registered creator once, with ``"num_envs": n``
 added to ``env_config``; ``make_env`` then returns the id's vector entry point (tinyrace's
-``BatchVectorEnv``: ``"workers": 0`` steps the envs together in the runner's process) in
-``FloatPixelsVector``, so the runner steps the batch rather than n envs one by one.
+``BatchVectorEnv``, its envs stepped together in the runner's process unless ``"workers"``
+says otherwise) in ``FloatPixelsVector``: the runner steps one batch, not n envs in turn.
 
 Neither Ray nor torch is imported here: ``pip install "tinyrace[rllib]"`` installs Ray.
 """
@@ -168,12 +168,15 @@ def make_vector_env(env_config: Mapping[str, Any]) -> FloatPixelsVector:
     point (tinyrace's ``BatchVectorEnv``), images as float32 in [0, 1].
 
     The other keys go to ``gym.make_vec`` as keywords: the entry point's own (``workers``:
-    processes to step the envs in, 0 for the caller's process) and each env's
-    (``max_episode_steps``, ...).
+    processes to step the envs in) and each env's (``max_episode_steps``, ...). ``workers``
+    defaults to 0, the envs stepped together in the caller's process: an RLlib env runner
+    is a process of its own, given one CPU (``num_cpus_per_env_runner``), and the vector
+    entry point's default (one process per core) in each runner would crowd the cores.
     """
     config = dict(env_config)
     env_id = config.pop("id", CARRACING_ID)
     num_envs = config.pop(NUM_ENVS)
+    config.setdefault(WORKERS, 0)
     vector = gym.make_vec(
         env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **config
     )
