@@ -1,15 +1,15 @@
 """RLlib's env runner on tinyrace: Gymnasium's SyncVectorEnv against the vector entry point.
 
-``python benchmarks/rllib_runner.py [--envs N] [--rounds R] [--steps S]`` builds two of Ray
-2.60's ``SingleAgentEnvRunner`` in this process on ``tinyrace/CarRacing-v0`` through
+``python benchmarks/rllib_runner.py [--envs N] [--rounds R] [--steps S]`` builds Ray 2.60's
+``SingleAgentEnvRunner`` in this process on ``tinyrace/CarRacing-v0`` through
 ``tinyrace.rllib.make_env``, N envs each: ``gym_env_vectorize_mode="sync"`` (RLlib's
 default: N single envs stepped in turn) and ``"vector_entry_point"`` (one
 ``BatchVectorEnv``, ``workers=0``: the envs stepped together in the runner's process),
 one pair for random actions and one for the PPO module's. It samples S env-steps from
-each in turn, R rounds, and prints the medians of env-steps per
-second and of this thread's CPU time per env-step (the whole work: both step in this
-thread), with random actions (the env and RLlib's episode bookkeeping) and with the PPO
-module's actions (plus inference). The machine's load is printed before and after.
+each in turn, R rounds, and prints the medians of env-steps per second and of this
+thread's CPU time per env-step (the whole work: both step in this thread, and torch runs
+on one thread), with random actions (the env and RLlib's episode bookkeeping) and with
+the PPO module's actions (plus inference). The machine's load is printed before and after.
 
 Needs Ray (``pip install ".[rllib]"``); without it the script says so and exits.
 """
@@ -69,6 +69,9 @@ def main() -> None:
     except ImportError as exc:
         print(f"rllib_runner: skipped, Ray's RLlib does not import here ({exc})")
         sys.exit(0)
+    import torch
+
+    torch.set_num_threads(1)  # inference in this thread too: its CPU time is the whole work
     gym.logger.min_level = gym.logger.ERROR
     print(f"load before: {os.getloadavg()}, cores: {os.cpu_count()}", flush=True)
     # a runner per kind of actions: RLlib's ongoing episodes do not take both (an episode
