@@ -127,3 +127,32 @@ def test_ppo_trains_an_iteration_on_remote_env_runners_that_step_batch_vector_en
     assert runners["num_env_steps_sampled"] == 200, runners
     assert runners["num_episodes"] == 4, runners
     assert np.isfinite(runners["episode_return_mean"])
+
+
+def test_rllibs_multi_agent_runner_vectorizes_in_sync_mode_only():
+    """Where RLlib does not allow it (docs/training.md): the PettingZoo race goes through
+    MultiAgentEnvRunner, whose make_vec (ray/rllib/env/vector/registration.py) builds a
+    SyncVectorMultiAgentEnv and refuses every other mode."""
+    from ray.rllib.env.multi_agent_env_runner import MultiAgentEnvRunner
+    from ray.rllib.env.wrappers.pettingzoo_env import ParallelPettingZooEnv
+
+    from tinyrace.race import parallel_env
+    from tinyrace.rllib import FloatPixelsParallel
+
+    register_env(
+        "race", lambda config: ParallelPettingZooEnv(FloatPixelsParallel(parallel_env(**config)))
+    )
+    config = (
+        PPOConfig()
+        .environment("race", env_config={"num_agents": 2})
+        .multi_agent(policies={"shared"}, policy_mapping_fn=lambda agent, episode, **kw: "shared")
+        .env_runners(num_env_runners=0, num_envs_per_env_runner=2)
+        .rl_module(model_config=DefaultModelConfig(conv_filters=CONV_FILTERS))
+    )
+    with pytest.raises(ValueError, match="only synchronous environment vectorization"):
+        MultiAgentEnvRunner(config=config.env_runners(gym_env_vectorize_mode="vector_entry_point"))
+    runner = MultiAgentEnvRunner(config=config.env_runners(gym_env_vectorize_mode="sync"))
+    try:
+        assert runner.num_envs == 2  # two races, stepped one after the other
+    finally:
+        runner.stop()
