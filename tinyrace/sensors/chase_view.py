@@ -19,7 +19,7 @@ from gymnasium import spaces
 from tinyrace.config.sensors import ChaseViewConfig
 from tinyrace.ground.texture import Affine, GroundTexture, as_matrix
 from tinyrace.sensors.base import Ground, SensorContext, TopDown
-from tinyrace.sensors.machinery.car_sprite import CarSprite, Patches
+from tinyrace.sensors.machinery.car_sprite import CarSprite
 from tinyrace.sensors.machinery.dashboard import Dashboard
 from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_names, fill_footprints
 from tinyrace.tracks.base import Track
@@ -67,17 +67,17 @@ class ChaseView:
         size: tuple[int, int],
         texture: GroundTexture,
         dashboard: Dashboard,
-        patches: Patches,
         looks: CarLooks | None = None,
     ):
-        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes;
-        ``looks``: the colours and names of a race's cars (the others drawn on the ground,
-        named in views larger than the observation)."""
+        """``dashboard`` may be shared across episodes; ``looks``: the colours and names of
+        a race's cars (the others drawn on the ground, named in views larger than the
+        observation). The car's cached pictures are shared by every view of the process
+        (``car_sprite``)."""
         self.size = size  # (w, h)
         self.looks = looks
         self.texture = texture
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
-        self.sprite = CarSprite(supersample=small, patches=patches)
+        self.sprite = CarSprite(supersample=small)
         self.dashboard = dashboard
         self._ppu_per_zoom = math.sqrt(size[0] * size[1] / (WINDOW[0] * WINDOW[1]))  # per step
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
@@ -102,11 +102,16 @@ class ChaseView:
             fill_footprints(frame[:top], as_matrix(world_to_out), snapshot, looks.colors)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
-        self.sprite.draw(frame, car, world_to_out, self.skid_width, cache_key=zoom)
+        self.sprite.draw(frame, car, world_to_out, self.skid_width, zoom, self._body_to_out)
         if looks is not None and self.skid_width:  # a video's view: every car's name
             draw_names(frame[:top], as_matrix(world_to_out), snapshot, looks)
         self.dashboard.draw(frame, car, score)
         return frame
+
+    def _body_to_out(self, zoom: float) -> Affine:
+        """The car body frame -> output pixels at ``zoom``: the car sits still in the
+        frame, so this is the view of a car at the origin, turned by 0."""
+        return chase_affine((0.0, 0.0), 0.0, zoom, self.size)
 
 
 def small_dashboard(size: tuple[int, int]) -> Dashboard:
@@ -124,10 +129,9 @@ class ChaseViewSensor:
         height, width = config.resolution
         self.size = (width, height)
         self.space = spaces.Box(0, 255, (height, width, 3), np.uint8)
-        # kept across episodes, as its patches; made at the first observation (the drawing
-        # path's choice imports numba, which gym.make does not)
+        # kept across episodes; made at the first observation (the drawing path's choice
+        # imports numba, which gym.make does not)
         self.dashboard: Dashboard | None = None
-        self.patches: Patches = {}
         self.view: ChaseView | None = None  # on the current episode's ground
 
     @property
@@ -150,12 +154,12 @@ class ChaseViewSensor:
             if self.dashboard is None:
                 self.dashboard = small_dashboard(self.size)
             dashboard = self.dashboard
-            view = self.view = ChaseView(self.size, texture, dashboard, self.patches, self.looks)
+            view = self.view = ChaseView(self.size, texture, dashboard, self.looks)
         return view.render(snapshot, snapshot.score)
 
     def __getstate__(self) -> dict[str, Any]:
-        # the texture belongs to the episode; the cached pictures are redrawn when next asked
-        fresh: dict[str, Any] = {"view": None, "dashboard": None, "patches": {}}
+        # the texture belongs to the episode; the dashboard is redrawn when next asked
+        fresh: dict[str, Any] = {"view": None, "dashboard": None}
         return {**self.__dict__, **fresh}
 
 
