@@ -83,18 +83,19 @@ class ChaseView:
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
-    def render(self, snapshot: Snapshot, score: float) -> np.ndarray:
+    def render(self, snapshot: Snapshot, score: float, out: np.ndarray | None = None) -> np.ndarray:
         """The view of the controlled car at ``snapshot.t`` seconds after reset, with
-        ``score`` on the dashboard. Returns a new array."""
+        ``score`` on the dashboard: drawn into ``out`` ((h, w, 3) uint8, rows contiguous),
+        else into a new array; returns it."""
         car = snapshot.car
         zoom = zoom_at(snapshot.t) / car.scale  # [output px/u] at the reference's window size
         x, y, _ = car.pose
         size = self.size
         world_to_out = chase_affine((x, y), car.hull_angle, zoom, size)
         pixels_per_unit = zoom * self._ppu_per_zoom
-        # a new frame each call (it is returned); the dashboard paints over its bottom rows,
-        # so the ground is sampled above them only
-        frame = np.empty((size[1], size[0], 3), np.uint8)
+        # a new frame each call (it is returned), unless given one; the dashboard paints over
+        # its bottom rows, so the ground is sampled above them only
+        frame = np.empty((size[1], size[0], 3), np.uint8) if out is None else out
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
         looks = self.looks if len(snapshot.cars) > 1 else None  # a race's
@@ -148,14 +149,23 @@ class ChaseViewSensor:
         self.view = None  # a new episode has a new ground
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        return self._view(track).render(snapshot, snapshot.score)
+
+    def _view(self, track: Track) -> ChaseView:
+        """The view on the episode's ground now (a new texture: a new view)."""
         texture = self.ground.texture(track)  # asked each step: visited tiles get repainted
         view = self.view
         if view is None or view.texture is not texture:
             if self.dashboard is None:
                 self.dashboard = small_dashboard(self.size)
-            dashboard = self.dashboard
-            view = self.view = ChaseView(self.size, texture, dashboard, self.looks)
-        return view.render(snapshot, snapshot.score)
+            view = self.view = ChaseView(self.size, texture, self.dashboard, self.looks)
+        return view
+
+    def observe_into(
+        self, snapshot: Snapshot, track: Track, rng: np.random.Generator, out: np.ndarray
+    ) -> np.ndarray:
+        """``observe``'s frame drawn into ``out`` (``DrawsInto``)."""
+        return self._view(track).render(snapshot, snapshot.score, out)
 
     def __getstate__(self) -> dict[str, Any]:
         # the texture belongs to the episode; the dashboard is redrawn when next asked
