@@ -154,10 +154,9 @@ class BatchStepper:
         its rules, then every env's rewards, then every observation (drawn into its row of
         ``out`` when given), then the results (measured: a stage's code and data stay hot;
         8 envs took 104-106 µs per env-step this way against 122-125 env by env). An
-        exception while judging an env (a user's
-        reward shaping) is raised once every other env has been judged: those envs stay
-        consistent, the failing one has moved without its rewards, as stepping env by env
-        left it."""
+        exception while judging an env (a user's reward shaping) is raised once every other
+        env has been judged: those envs stay consistent, the failing one has moved without
+        its rewards, as stepping env by env left it."""
         cores, physics = self.cores, self.physics
         judged, error = [], None
         for row in rows:
