@@ -11,11 +11,14 @@ Each round is a fresh subprocess (cv2 and BLAS on one thread) that makes one
 both up (``--warmup`` steps each: every env's caches full, as in training), then times
 them in alternating blocks: the batch ``--steps`` steps, the one env ``--steps`` x N
 steps, with seeded random actions and resets when an episode ends (the batch's own
-autoreset). It prints the thread CPU time and the wall time per env-step, medians over
-the blocks, and one env / batch (>= 0.95 is issue 37's target: an env in a batch costs
-what it costs alone). With ``--ref``, rounds alternate between this checkout and a
-worktree of the ref, so that the machine's load hits both alike; ``--new REF`` runs a
-worktree of REF instead of this checkout.
+autoreset). It prints the thread CPU time and the wall time per env-step of each round
+(all its blocks), medians over the rounds, and one env / batch (>= 0.95 is issue 37's
+target: an env in a batch costs what it costs alone). The defaults time 1,000 steps per
+env of the batch and 8,000 of the one env after 1,000 each: whole episodes (CarRacing's
+limit), so both count a reset and its zoom-in (new car pictures) per 1,000 env-steps.
+With ``--ref``, rounds alternate between this checkout and a worktree of the ref, so that
+the machine's load hits both alike; ``--new REF`` runs a worktree of REF instead of this
+checkout.
 """
 
 from __future__ import annotations
@@ -97,6 +100,12 @@ def one_round(tree: Path, envs: int, steps: int, blocks: int, warmup: int) -> li
     return rows
 
 
+def _totals(blocks: list[list[float]]) -> list[float]:
+    """A round's blocks as one: [µs] per env-step over all of them (every block has as
+    many env-steps), so that a round of whole episodes counts each zoom-in once."""
+    return [statistics.fmean(block[k] for block in blocks) for k in range(4)]
+
+
 def load() -> str:
     """The machine's 1-minute load average."""
     return Path("/proc/loadavg").read_text().split()[0]
@@ -108,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=5, help="subprocesses per tree")
     parser.add_argument("--blocks", type=int, default=4, help="timed blocks per round")
     parser.add_argument("--steps", type=int, default=250, help="batch steps per block")
-    parser.add_argument("--warmup", type=int, default=300, help="steps of each before timing")
+    parser.add_argument("--warmup", type=int, default=1000, help="steps of each before timing")
     parser.add_argument("--ref", help="a git ref to run beside this checkout (e.g. main)")
     parser.add_argument("--new", help="a git ref to run instead of this checkout")
     args = parser.parse_args(argv)
@@ -133,17 +142,18 @@ def main(argv: list[str] | None = None) -> int:
                     capture_output=True,
                 )
     print(f"{args.envs} envs in one process against one env; load {'-'.join(loads)}")
-    print(f"medians of {args.rounds} rounds x {args.blocks} blocks, [µs] per env-step")
+    print(f"medians of {args.rounds} rounds of {args.blocks} blocks, [µs] per env-step")
     print(
         f"{'tree':<10} {'one CPU':>9} {'batch CPU':>10} {'ratio':>6} {'one wall':>9} "
         f"{'batch wall':>11} {'ratio':>6}"
     )
     for name, rows in blocks.items():
+        rounds = [_totals(rows[k : k + args.blocks]) for k in range(0, len(rows), args.blocks)]
         one_cpu, one_wall, batch_cpu, batch_wall = (
-            statistics.median(row[k] for row in rows) for k in range(4)
+            statistics.median(row[k] for row in rounds) for k in range(4)
         )
-        cpu_ratio = statistics.median(row[0] / row[2] for row in rows)
-        wall_ratio = statistics.median(row[1] / row[3] for row in rows)
+        cpu_ratio = statistics.median(row[0] / row[2] for row in rounds)
+        wall_ratio = statistics.median(row[1] / row[3] for row in rounds)
         print(
             f"{name:<10} {one_cpu:>9.1f} {batch_cpu:>10.1f} {cpu_ratio:>6.3f} "
             f"{one_wall:>9.1f} {batch_wall:>11.1f} {wall_ratio:>6.3f}"
