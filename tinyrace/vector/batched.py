@@ -158,7 +158,7 @@ class BatchStepper:
         env has been judged: those envs stay consistent, the failing one has moved without
         its rewards, as stepping env by env left it."""
         cores, physics = self.cores, self.physics
-        judged, snapshots, error = [], [], None
+        judged, error = [], None
         for row in rows:
             core = cores[row]
             try:
@@ -167,15 +167,23 @@ class BatchStepper:
                 error = error or exc
             if self.vectorized and core.world.contacts[0].crashed:  # the car stopped its wheels
                 physics.stop(row)  # so do the arrays
-            snapshots.append(core.snapshot())  # while its world is in the caches
         if error is not None:
             raise error
+        snapshots = [cores[row].snapshot() for row in rows]
+        if out is None:
+            observations = [cores[row].observe(s) for row, s in zip(rows, snapshots, strict=True)]
+        else:  # each into its row: no frame of its own, nothing to write
+            observations = [
+                cores[row].observe(s, out[row]) for row, s in zip(rows, snapshots, strict=True)
+            ]
         results: list[Step | None] = [None] * len(self.envs)
-        for row, car, snapshot in zip(rows, judged, snapshots, strict=True):
+        for row, car, snapshot, observation in zip(
+            rows, judged, snapshots, observations, strict=True
+        ):
             core = cores[row]
-            # drawn into its row when given: no frame of its own, nothing to write
-            seen = core.observe(snapshot) if out is None else core.observe(snapshot, out[row])
-            observation, reward, terminated, truncated, info = core.report(car, snapshot, seen)
+            observation, reward, terminated, truncated, info = core.report(
+                car, snapshot, observation
+            )
             limit = self.limits[row]
             if limit is not None and core.steps >= limit:  # what TimeLimit.step would say
                 truncated = True
