@@ -64,7 +64,7 @@ class EnvSlice:
         autoreset = self.autoreset
         results: list[Step | None]
         if self.batch is not None:
-            results = self.batch.step(actions, autoreset, self._write)
+            results = self.batch.step(actions, autoreset, self._write, self._rows())
         else:
             results = [None] * n
             for j, env in enumerate(self.envs):
@@ -138,6 +138,14 @@ class EnvSlice:
     def close(self) -> None:
         for env in self.envs:
             env.close()
+
+    def _rows(self) -> np.ndarray | None:
+        """This slice's rows of a Box observation's array (None: a Dict or Tuple space)."""
+        target = self.views.observations
+        if not isinstance(target, np.ndarray):
+            return None
+        rows: np.ndarray = target[self.first : self.first + len(self.envs)]
+        return rows
 
     def _write(self, j: int, observation: Any) -> None:
         target = self.views.observations
