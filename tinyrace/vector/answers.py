@@ -20,6 +20,7 @@ class Answers:
         self.infos, self.slices = infos, slices  # infos: (num_envs, INFO_BYTES) uint8
         self.signatures: list[shared.Signature | None] = [None] * len(slices)
         self.records: list[np.ndarray | None] = [None] * len(slices)
+        self.whole: dict[np.dtype, np.ndarray] = {}  # every env's records, per record dtype
 
     def collect(
         self, status: np.ndarray, pipes: list[Connection], numbers: list[int] | None = None
@@ -51,7 +52,10 @@ class Answers:
             rows = self.records[numbers[0]]
             assert rows is not None
             if len(numbers) == len(pipes):  # every env, in order: one view of all records
-                return shared.merge_columns(first, shared.records(self.infos, rows.dtype))
+                whole = self.whole.get(rows.dtype)
+                if whole is None:
+                    whole = self.whole[rows.dtype] = shared.records(self.infos, rows.dtype)
+                return shared.merge_columns(first, whole)
             parts = [self.records[number] for number in numbers]
             return shared.merge_columns(first, np.concatenate(parts))  # type: ignore[arg-type]
         infos: list[dict[str, Any]] = []

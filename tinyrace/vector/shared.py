@@ -18,6 +18,8 @@ dict ``merge_infos`` makes of the infos themselves, bit for bit.
 from __future__ import annotations
 
 import contextlib
+import functools
+import itertools
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from multiprocessing.shared_memory import SharedMemory
@@ -200,23 +202,41 @@ def records(infos: np.ndarray, dtype: np.dtype) -> np.ndarray:
 
 def merge_columns(signature: Signature, rows: np.ndarray) -> dict[str, Any]:
     """What ``merge_infos`` makes of infos with ``signature`` in every env (``rows``)."""
-    fields = iter(rows.dtype.names or ())
-    return _merge(signature, rows, fields, len(rows))
+    n = len(rows)
+    return _merge(_plan(signature), rows, n, np.ones(n, dtype=np.bool_))
 
 
-def _merge(signature: Signature, rows: np.ndarray, fields: Iterator[str], n: int) -> dict[str, Any]:
+# a signature's entries as (key, record field or None for a dict, is a tuple, inner plan)
+Plan = tuple[tuple[str, str | None, bool, Any], ...]
+
+
+@functools.lru_cache(maxsize=256)
+def _plan(signature: Signature) -> Plan:
+    """Each entry's record field (``f0``, ``f1``, ... depth first, as ``record_dtype``)."""
+    fields = itertools.count()
+
+    def entries(signature: Signature) -> Plan:
+        plan: list[tuple[str, str | None, bool, Any]] = []
+        for entry in signature:
+            if entry[1] is dict:
+                plan.append((entry[0], None, False, entries(entry[2])))
+            else:
+                plan.append((entry[0], f"f{next(fields)}", entry[1] is tuple, None))
+        return tuple(plan)
+
+    return entries(signature)
+
+
+def _merge(plan: Plan, rows: np.ndarray, n: int, every: np.ndarray) -> dict[str, Any]:
     merged: dict[str, Any] = {}
-    for entry in signature:
-        key, kind = entry[0], entry[1]
-        if kind is dict:
-            array: Any = _merge(entry[2], rows, fields, n)
-        elif kind is tuple:
-            array = np.empty(n, dtype=object)
-            for index, row in enumerate(rows[next(fields)].tolist()):
-                array[index] = tuple(row)
+    for key, field, is_tuple, inner in plan:
+        if field is None:
+            array: Any = _merge(inner, rows, n, every)
+        elif is_tuple:
+            array = np.fromiter((tuple(row) for row in rows[field].tolist()), object, n)
         else:
-            array = rows[next(fields)].copy()
-        merged[key], merged[f"_{key}"] = array, np.ones(n, dtype=np.bool_)
+            array = rows[field].copy()
+        merged[key], merged[f"_{key}"] = array, every.copy()  # each mask its own array
     return merged
 
 
