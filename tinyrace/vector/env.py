@@ -5,8 +5,9 @@ and some pickling per env and step, about as long as a tinyrace step itself. Her
 as in EnvPool, each worker steps a contiguous slice of the envs, and a step moves
 nothing through a pipe: actions, observations, rewards, terminations, truncations
 and the infos' usual values lie in one shared memory block; a semaphore per worker
-and direction wakes the other side (``tinyrace.vector.worker``). Infos of a new
-shape, and exceptions, go over the worker's pipe.
+and direction wakes the other side (the parent's end: ``tinyrace.vector.link``; the
+worker's: ``tinyrace.vector.worker``). Infos of a new shape, and exceptions, go over the
+worker's pipe.
 
 Results are those of ``gymnasium.vector.SyncVectorEnv(env_fns)``: next-step
 autoreset, ``reset(seed=s)`` seeds env ``i`` with ``s + i``, infos merged with the
@@ -71,7 +72,8 @@ class BatchVectorEnv(VectorEnv):
             overwritten by the next step), as ``SyncVectorEnv``'s ``copy``.
         batch_physics: step the dynamic cars of a process's envs together (their tyre
             forces as one numpy computation, ``tinyrace.vector.batched``); False steps
-            each env by its own ``step``. Results are the same.
+            each env by its own ``step``, as a process with a single env does either way.
+            Results are the same.
         numpy_from: with batched physics, the envs per process from which their cars' tyre
             forces are one numpy computation; fewer cars each run their own tyre model
             (numpy's fixed cost per call outweighs it), still stepped together.

@@ -13,8 +13,7 @@ from tinyrace.vector.shared import Views
 
 Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 # envs per slice from which their steps go through ``BatchStepper``'s stages: one env
-# alone costs more that way than by its own ``step`` (thread time per env-step, 1 env:
-# 366 against 332 µs; 2 envs: 340 against 347; benchmarks/README.md, issue 37)
+# alone costs more that way than by its own ``step`` (benchmarks/README.md, issue 37)
 BATCH_FROM = 2
 
 
