@@ -18,8 +18,6 @@ dict ``merge_infos`` makes of the infos themselves, bit for bit.
 from __future__ import annotations
 
 import contextlib
-import functools
-import itertools
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from multiprocessing.shared_memory import SharedMemory
@@ -202,41 +200,49 @@ def records(infos: np.ndarray, dtype: np.dtype) -> np.ndarray:
 
 def merge_columns(signature: Signature, rows: np.ndarray) -> dict[str, Any]:
     """What ``merge_infos`` makes of infos with ``signature`` in every env (``rows``)."""
-    n = len(rows)
-    return _merge(_plan(signature), rows, n, np.ones(n, dtype=np.bool_))
+    return merge_bound(bind(signature, rows), len(rows))
 
 
-# a signature's entries as (key, record field or None for a dict, is a tuple, inner plan)
-Plan = tuple[tuple[str, str | None, bool, Any], ...]
+# per signature entry: (key, mask key, the records' column (None: a dict), is a tuple,
+# the dict's entries)
+Bound = tuple[tuple[str, str, np.ndarray | None, bool, Any], ...]
 
 
-@functools.lru_cache(maxsize=256)
-def _plan(signature: Signature) -> Plan:
-    """Each entry's record field (``f0``, ``f1``, ... depth first, as ``record_dtype``)."""
-    fields = itertools.count()
+def bind(signature: Signature, rows: np.ndarray) -> Bound:
+    """``signature``'s entries bound to their columns of ``rows`` (views, made once: a
+    step's merge then copies them)."""
+    fields = iter(rows.dtype.names or ())
 
-    def entries(signature: Signature) -> Plan:
-        plan: list[tuple[str, str | None, bool, Any]] = []
+    def entries(signature: Signature) -> Bound:
+        bound: list[tuple[str, str, np.ndarray | None, bool, Any]] = []
         for entry in signature:
-            if entry[1] is dict:
-                plan.append((entry[0], None, False, entries(entry[2])))
+            key, kind = entry[0], entry[1]
+            if kind is dict:
+                bound.append((key, f"_{key}", None, False, entries(entry[2])))
             else:
-                plan.append((entry[0], f"f{next(fields)}", entry[1] is tuple, None))
-        return tuple(plan)
+                bound.append((key, f"_{key}", rows[next(fields)], kind is tuple, None))
+        return tuple(bound)
 
     return entries(signature)
 
 
-def _merge(plan: Plan, rows: np.ndarray, n: int, every: np.ndarray) -> dict[str, Any]:
+def merge_bound(bound: Bound, n: int) -> dict[str, Any]:
+    """The merged infos of the records ``bound`` views (``n`` envs)."""
+    every = np.empty(n, dtype=np.bool_)
+    every.fill(True)
+    return _merge(bound, n, every)
+
+
+def _merge(bound: Bound, n: int, every: np.ndarray) -> dict[str, Any]:
     merged: dict[str, Any] = {}
-    for key, field, is_tuple, inner in plan:
-        if field is None:
-            array: Any = _merge(inner, rows, n, every)
+    for key, mask, column, is_tuple, inner in bound:
+        if column is None:
+            array: Any = _merge(inner, n, every)
         elif is_tuple:
-            array = np.fromiter((tuple(row) for row in rows[field].tolist()), object, n)
+            array = np.fromiter(map(tuple, column.tolist()), object, n)
         else:
-            array = rows[field].copy()
-        merged[key], merged[f"_{key}"] = array, every.copy()  # each mask its own array
+            array = column.copy()
+        merged[key], merged[mask] = array, every.copy()  # each mask its own array
     return merged
 
 
