@@ -129,7 +129,8 @@ class Worker:
         records = self.records
         assert records is not None
         try:
-            records[:] = [tuple(item[1]) for item in flat]  # type: ignore[index]
+            for j, item in enumerate(flat):  # row by row: at a few envs faster than at once
+                records[j] = tuple(item[1])  # type: ignore[index]
         except (OverflowError, ValueError, TypeError):  # e.g. an int beyond 64 bits
             self.signature = self.records = None
             self.pipe.send(infos)
