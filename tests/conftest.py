@@ -63,3 +63,21 @@ def image_track_env():
     env.reset(seed=0)
     yield env
     env.close()
+
+
+def _uses_budget(module: object) -> bool:
+    """Whether a test module takes its sizes from hypothesis_budget (examples, size)."""
+    return any(
+        getattr(value, "__module__", None) == "hypothesis_budget"
+        or getattr(value, "__name__", None) == "hypothesis_budget"
+        for value in vars(module).values()
+    )
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark ``budget`` every test sized by hypothesis_budget: the tests that CI's profile
+    makes longer, which CI also runs against the built wheel (.ci/run)."""
+    for item in items:
+        module = getattr(item, "module", None)
+        if module is not None and _uses_budget(module):
+            item.add_marker(pytest.mark.budget)
