@@ -29,12 +29,12 @@ from tinyrace.vector.failures import await_close, died, rebuild_error
 from tinyrace.vector.worker import acquire, work
 
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
-# [s] the parent polls for the workers' answers this long before it sleeps: the round
-# trip of a step that costs nothing fits in it on a quiet machine, a real step does not,
-# and a parent that polls through a step takes a core from the workers and their OpenCV
-# threads (measured: benchmarks/README.md, issue 37). After a step that took longer the
-# parent sleeps at once.
-PARENT_SPIN = 0.0001
+# [s] the parent polls for the workers' answers this long before it sleeps (a step of
+# a few envs takes less: the answer comes without a wake-up); after a step that took
+# longer it sleeps at once, leaving the cores to the workers. Measured against 0.5 and
+# 0.1 ms (benchmarks/README.md, issue 37): the same for 1 env in 1 worker, the best for
+# the stand-ins' ceiling
+PARENT_SPIN = 0.002
 LIVENESS = 0.05  # [s] a sleeping parent looks this often whether the workers live
 
 
