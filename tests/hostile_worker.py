@@ -2,8 +2,9 @@
 
 Run as ``python hostile_worker.py MEMORY_BYTES SECONDS``: it limits its address space, then
 reads cases (length-prefixed pickles) from stdin and answers each with an outcome, each case
-under a SIGALRM of SECONDS. Library output to stdout is sent to /dev/null; answers go to a
-copy of the original stdout.
+within SECONDS of the process's CPU time (ITIMER_PROF: a busy loop, whatever the machine's
+load) and WALL_FACTOR times that of wall time (SIGALRM: a case blocked on a lock or a read).
+Library output to stdout is sent to /dev/null; answers go to a copy of the original stdout.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ import sys
 import traceback
 from pathlib import Path
 from typing import Any, BinaryIO
+
+WALL_FACTOR = 6  # a case's wall-time bound over its CPU-time bound: room for a loaded machine
 
 
 class CaseTimeout(BaseException):
@@ -160,7 +163,8 @@ def vector_case(args: dict[str, Any]) -> dict[str, Any]:
 
 
 def probe_case(action: str) -> dict[str, Any]:
-    """Misbehaviour on purpose, to show the campaign sees it: too much memory, a hang, a death."""
+    """Misbehaviour on purpose, to show the campaign sees it: too much memory, a hang (blocked:
+    the wall-time alarm; a busy loop: the CPU-time one), a death."""
     import time
 
     if action == "allocate":
@@ -168,6 +172,9 @@ def probe_case(action: str) -> dict[str, Any]:
         return {"outcome": "ok", "size": len(block)}
     if action == "sleep":
         time.sleep(3600)
+    if action == "spin":
+        while True:
+            pass
     if action == "die":
         os._exit(3)
     return {"outcome": "ok"}
@@ -191,7 +198,8 @@ def _round4() -> dict[str, Any]:
 
 
 def _run(case: dict[str, Any], seconds: int) -> dict[str, Any]:
-    signal.alarm(seconds)
+    signal.setitimer(signal.ITIMER_PROF, seconds)
+    signal.alarm(seconds * WALL_FACTOR)
     try:
         kind = case["kind"]
         run = CASES[kind] if kind in CASES else _round4()[kind]
@@ -204,6 +212,7 @@ def _run(case: dict[str, Any], seconds: int) -> dict[str, Any]:
         return {"outcome": "crash", "error": traceback.format_exc()[-3000:]}
     finally:
         signal.alarm(0)
+        signal.setitimer(signal.ITIMER_PROF, 0)
 
 
 def _read(stream: BinaryIO) -> Any:
@@ -234,6 +243,7 @@ def main() -> None:
 
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     signal.signal(signal.SIGALRM, _alarm)
+    signal.signal(signal.SIGPROF, _alarm)
     _write(answers, {"ready": True})
     while (case := _read(sys.stdin.buffer)) is not None:
         _write(answers, _run(case, seconds))
