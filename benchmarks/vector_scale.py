@@ -43,7 +43,13 @@ WARMUP = 50  # [steps] per case and round, before the clock starts
 ACTIONS = 256  # pre-drawn action batches, cycled
 # [s] this thread's CPU time per env-step: one env's, and the last vector case's (with
 # workers=0, the whole work; robust to a loaded machine, unlike wall time)
-CPU: dict[str, list[float]] = {"one_env": [], "last": [], "in_process_8": []}
+CPU: dict[str, list[float]] = {
+    "one_env": [],
+    "last": [],
+    "in_process_8": [],
+    "1x1": [],
+    "standin_2x64": [],
+}
 
 
 def _actions(num_envs: int) -> list[np.ndarray]:
@@ -190,8 +196,8 @@ def main() -> None:
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
             rates[name].append(measure(args.seconds))
-            if name == "in_process_8":
-                CPU["in_process_8"] += CPU["last"]
+            if name in ("in_process_8", "1x1", "standin_2x64"):
+                CPU[name] += CPU["last"]
         print(
             f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()),
             flush=True,
@@ -206,6 +212,12 @@ def main() -> None:
     print(
         f"  CPU per env-step (thread time): one env {one_cpu * 1e6:.0f} us, 8 in process "
         f"{batch_cpu * 1e6:.0f} us: {one_cpu / batch_cpu:.2f}x"
+    )
+    one_x_one, ceiling = (statistics.median(CPU[k]) for k in ("1x1", "standin_2x64"))
+    print(
+        f"  the parent's CPU per env-step: 1x1 {one_x_one * 1e6:.0f} us, stand-ins 2x64 "
+        f"{ceiling * 1e6:.2f} us (the ceiling: {statistics.median(rates['standin_2x64']):,.0f} "
+        "env-steps/s; issue 37: >= 300,000)"
     )
     print(f"load after: {os.getloadavg()}")
 
