@@ -234,6 +234,23 @@ def test_only_dynamic_cars_in_known_wrappers_are_batched() -> None:
     envs.close()
 
 
+def test_a_slice_of_one_env_steps_by_its_own_step() -> None:
+    """One env alone costs more through the batched stages than by its own step: a
+    process with one env steps it alone, with two it batches them; results equal."""
+    make = functools.partial(gym.make, "tinyrace/CarRacing-v0")
+    alone, pair = BatchVectorEnv([make], workers=0), BatchVectorEnv([make] * 2, workers=0)
+    sync = gym.vector.SyncVectorEnv([make])
+    try:
+        assert alone._local is not None and alone._local.batch is None
+        assert pair._local is not None and pair._local.batch is not None
+        assert_same(sync.reset(seed=5), alone.reset(seed=5), "reset")
+        for step, action in enumerate(driving_actions(sync.action_space, 1, 150, seed=5)):
+            assert_same(sync.step(action), alone.step(action), f"step {step}")
+    finally:
+        for env in (alone, pair, sync):
+            env.close()
+
+
 class ShapingThatFails:
     """A user's cte shaping that returns NaN at its ``fail_at``-th call (a ConfigError)."""
 

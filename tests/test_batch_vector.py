@@ -154,7 +154,7 @@ def test_render_returns_every_envs_frame():
 def test_close_twice_ends_the_workers():
     vector = make_batch("tinyrace/CarRacing-v0", 3, workers=2)
     vector.reset(seed=0)
-    processes = list(vector._processes)
+    processes = list(vector._workers.processes)
     assert len(processes) == 2 and all(p.is_alive() for p in processes)
     vector.close()
     vector.close()
@@ -222,7 +222,7 @@ def test_other_observation_spaces():
 
 def test_more_workers_than_envs():
     vector = BatchVectorEnv([Fragile] * 2, workers=4)
-    assert len(vector._processes) == 2
+    assert len(vector._workers.processes) == 2
     vector.reset(seed=0)
     assert vector.step(np.zeros((2, 1), np.float32))[1].tolist() == [1.0, 1.0]
     vector.close()

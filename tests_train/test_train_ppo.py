@@ -111,7 +111,13 @@ class Breaks(gym.Wrapper):
         return self.env.step(action)
 
 
-gym.register("Breaks-v0", entry_point=Breaks)
+def make_breaks(**kwargs):
+    return Breaks(**kwargs)
+
+
+# a function, not the wrapper class: gymnasium 1.2 (Ray's pin) checks a class entry point's
+# metadata, which a Wrapper subclass only has on an instance
+gym.register("Breaks-v0", entry_point=make_breaks)
 """
 
 

@@ -22,7 +22,7 @@ from tinyrace.ground.grounds import make_ground
 from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
-from tinyrace.sensors.base import Labelled, Sensor, SensorContext
+from tinyrace.sensors.base import DrawsInto, Labelled, Sensor, SensorContext
 from tinyrace.sensors.registry import build_sensors, default_sensor
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -113,6 +113,10 @@ class TinyRaceEnv(gym.Env):
         self._blame = loaded.blame
         self.sensors: list[Sensor] = self.make_sensors()
         self.box_camera = self.box_sensor(self.sensors)
+        # the Box observation's one sensor, when it can draw into a given array (``observe``)
+        first = self.sensors[0]
+        self._into = first if self.box_camera is not None and isinstance(first, DrawsInto) else None
+        self.draws_into = self._into is not None
         self.observation_space = self._observation_space()
         shaping = None if cte_shaping is None else _checked_shaping(cte_shaping)
         self.referee = Referee(self.config, shaping)  # judges every step of every episode
@@ -231,11 +235,17 @@ class TinyRaceEnv(gym.Env):
             self.render()
         return observation, car.reward, reason is not None, car.truncated, info
 
-    def observe(self, snapshot: Snapshot) -> Any:
+    def observe(self, snapshot: Snapshot, out: np.ndarray | None = None) -> Any:
         """The observation of ``snapshot``: every sensor's reading (kept for the pictures of
-        this step, which draw no view a second time)."""
+        this step, which draw no view a second time). ``out``: an array of the observation
+        space's shape that a Box observation's sensor draws into when it can
+        (``DrawsInto``: a vector env's row); then the observation is ``out``."""
         layout, rng = self.layout, self.np_random
-        observation = {sensor.id: sensor.observe(snapshot, layout, rng) for sensor in self.sensors}
+        into = self._into
+        if out is not None and into is not None:
+            observation = {self.sensors[0].id: into.observe_into(snapshot, layout, rng, out)}
+        else:
+            observation = {s.id: s.observe(snapshot, layout, rng) for s in self.sensors}
         episode = self._episode()
         self._observed = (episode, episode.steps, observation)
         return observation if self.box_camera is None else observation[self.box_camera]

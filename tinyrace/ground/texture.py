@@ -27,6 +27,10 @@ Affine = tuple[float, float, float, float, float, float]
 _IDENTITY = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _SPLITTER = 134217729.0  # 2**27 + 1: splits a float64 into two 26-bit halves (Veltkamp)
 _TINY, _HUGE = 2.0**-900, 2.0**900  # where Dekker's exact product holds, with margin
+# 4-channel warp targets by (w, h, thread), shared by every texture of the process: a warp
+# is followed at once by its colour conversion, so one buffer per size and thread serves
+# them all, and envs stepped together in one process keep one in the caches, not one each
+_SCRATCH: dict[tuple[int, int, int], np.ndarray] = {}
 
 
 def compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
@@ -187,9 +191,6 @@ class GroundTexture:
         self._shift_scale: list[Affine | None] = [
             _six(m) if m[0, 1] == 0 and m[1, 0] == 0 else None for m in self.from_pixels
         ]
-        # 4-channel warp targets by size and thread: envs that share a texture may run in
-        # threads of one process
-        self._scratch: dict[tuple[int, int, int], np.ndarray] = {}
         self._border_value = (*self.border, 0)  # the warp's RGBx outside the texture
         self.drawing: str | None = None  # the composition's path (numba | numpy), at first use
         self._compose: Callable[[Affine, Affine], np.ndarray] | None = None
@@ -249,9 +250,9 @@ class GroundTexture:
     ) -> np.ndarray:
         """Sample ``level`` through ``texture_to_out`` into an RGB image of ``size`` (w, h)."""
         key = (*size, threading.get_ident())
-        scratch = self._scratch.get(key)
+        scratch = _SCRATCH.get(key)
         if scratch is None:
-            scratch = self._scratch[key] = np.empty((size[1], size[0], 4), np.uint8)
+            scratch = _SCRATCH[key] = np.empty((size[1], size[0], 4), np.uint8)
         pixels = self.levels[level]
         cv2.warpAffine(
             self.image(level) if pixels is None else pixels,

@@ -12,7 +12,6 @@ from tinyrace.config import MAX_TEXTURE_SIDE
 from tinyrace.ground.grounds import Rescalable
 from tinyrace.render.pictures import CameraViews
 from tinyrace.sensors.chase_view import SMALL_VIEW, ChaseView, small_dashboard
-from tinyrace.sensors.machinery.car_sprite import Patches
 from tinyrace.sensors.machinery.dashboard import Dashboard
 from tinyrace.sensors.machinery.draw_cars import CarLooks
 from tinyrace.tracks.base import TrackDraw
@@ -29,7 +28,7 @@ class ProceduralPictures:
     def __init__(self, ground: Rescalable, looks: CarLooks | None = None):
         self.painted = ground.painted  # the playfield and the cameras' pixels_per_unit
         self.ground = ground
-        self._cache: dict[tuple[int, int], tuple[Dashboard, Patches]] = {}  # across episodes
+        self._cache: dict[tuple[int, int], Dashboard] = {}  # across episodes
         self._views: dict[tuple[int, int], ChaseView] = {}
         self.looks = looks  # the colours and names of a race's cars
 
@@ -47,10 +46,10 @@ class ProceduralPictures:
         texture = self.ground.texture_at(ppu)  # asked each frame: visited tiles get repainted
         view = self._views.get(size)
         if view is None or view.texture is not texture:
-            cached = self._cache.get(size)
-            if cached is None:
-                cached = self._cache[size] = (small_dashboard(size), {})
-            view = self._views[size] = ChaseView(size, texture, *cached, self.looks)
+            dashboard = self._cache.get(size)
+            if dashboard is None:
+                dashboard = self._cache[size] = small_dashboard(size)
+            view = self._views[size] = ChaseView(size, texture, dashboard, self.looks)
         return view
 
     def _video_pixels_per_unit(self) -> float:

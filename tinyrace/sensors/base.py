@@ -67,6 +67,19 @@ class Sensor(Protocol):
         ...
 
 
+@runtime_checkable
+class DrawsInto(Protocol):
+    """A sensor whose reading is one image that it can draw into an array it is given (a
+    row of a vector env's observations): no frame of its own, no copy into the row."""
+
+    def observe_into(
+        self, snapshot: Snapshot, track: Track, rng: np.random.Generator, out: np.ndarray
+    ) -> np.ndarray:
+        """``observe``'s reading, the same pixels, drawn into ``out`` (of the space's shape
+        and dtype, its rows contiguous); returns ``out``."""
+        ...
+
+
 @dataclass(frozen=True)
 class TopDown:
     """A sensor's image seen as a top-down picture: the track window it shows (its corners,

@@ -19,7 +19,7 @@ from gymnasium import spaces
 from tinyrace.config.sensors import ChaseViewConfig
 from tinyrace.ground.texture import Affine, GroundTexture, as_matrix
 from tinyrace.sensors.base import Ground, SensorContext, TopDown
-from tinyrace.sensors.machinery.car_sprite import CarSprite, Patches
+from tinyrace.sensors.machinery.car_sprite import CarSprite
 from tinyrace.sensors.machinery.dashboard import Dashboard
 from tinyrace.sensors.machinery.draw_cars import CarLooks, draw_names, fill_footprints
 from tinyrace.tracks.base import Track
@@ -67,34 +67,35 @@ class ChaseView:
         size: tuple[int, int],
         texture: GroundTexture,
         dashboard: Dashboard,
-        patches: Patches,
         looks: CarLooks | None = None,
     ):
-        """``dashboard`` and ``patches`` (cached car pictures) may be shared across episodes;
-        ``looks``: the colours and names of a race's cars (the others drawn on the ground,
-        named in views larger than the observation)."""
+        """``dashboard`` may be shared across episodes; ``looks``: the colours and names of
+        a race's cars (the others drawn on the ground, named in views larger than the
+        observation). The car's cached pictures are shared by every view of the process
+        (``car_sprite``)."""
         self.size = size  # (w, h)
         self.looks = looks
         self.texture = texture
         small = dashboard.factor > 1  # observation-sized: supersample the car and the instruments
-        self.sprite = CarSprite(supersample=small, patches=patches)
+        self.sprite = CarSprite(supersample=small)
         self.dashboard = dashboard
         self._ppu_per_zoom = math.sqrt(size[0] * size[1] / (WINDOW[0] * WINDOW[1]))  # per step
         # CarRacing draws skid marks (2 window px wide) in its videos, not in the observation
         self.skid_width = 0 if small else max(1, round(2 * size[1] / WINDOW[1]))
 
-    def render(self, snapshot: Snapshot, score: float) -> np.ndarray:
+    def render(self, snapshot: Snapshot, score: float, out: np.ndarray | None = None) -> np.ndarray:
         """The view of the controlled car at ``snapshot.t`` seconds after reset, with
-        ``score`` on the dashboard. Returns a new array."""
+        ``score`` on the dashboard: drawn into ``out`` ((h, w, 3) uint8, rows contiguous),
+        else into a new array; returns it."""
         car = snapshot.car
         zoom = zoom_at(snapshot.t) / car.scale  # [output px/u] at the reference's window size
         x, y, _ = car.pose
         size = self.size
         world_to_out = chase_affine((x, y), car.hull_angle, zoom, size)
         pixels_per_unit = zoom * self._ppu_per_zoom
-        # a new frame each call (it is returned); the dashboard paints over its bottom rows,
-        # so the ground is sampled above them only
-        frame = np.empty((size[1], size[0], 3), np.uint8)
+        # a new frame each call (it is returned), unless given one; the dashboard paints over
+        # its bottom rows, so the ground is sampled above them only
+        frame = np.empty((size[1], size[0], 3), np.uint8) if out is None else out
         top = self.dashboard.top
         self.texture.warp_affine(world_to_out, (size[0], top), frame[:top], pixels_per_unit)
         looks = self.looks if len(snapshot.cars) > 1 else None  # a race's
@@ -102,11 +103,16 @@ class ChaseView:
             fill_footprints(frame[:top], as_matrix(world_to_out), snapshot, looks.colors)
         # the car sits still in this frame: its patch depends on zoom and steering only (the
         # zoom-in's values repeat every episode, so they are worth caching too)
-        self.sprite.draw(frame, car, world_to_out, self.skid_width, cache_key=zoom)
+        self.sprite.draw(frame, car, world_to_out, self.skid_width, zoom, self._body_to_out)
         if looks is not None and self.skid_width:  # a video's view: every car's name
             draw_names(frame[:top], as_matrix(world_to_out), snapshot, looks)
         self.dashboard.draw(frame, car, score)
         return frame
+
+    def _body_to_out(self, zoom: float) -> Affine:
+        """The car body frame -> output pixels at ``zoom``: the car sits still in the
+        frame, so this is the view of a car at the origin, turned by 0."""
+        return chase_affine((0.0, 0.0), 0.0, zoom, self.size)
 
 
 def small_dashboard(size: tuple[int, int]) -> Dashboard:
@@ -124,10 +130,9 @@ class ChaseViewSensor:
         height, width = config.resolution
         self.size = (width, height)
         self.space = spaces.Box(0, 255, (height, width, 3), np.uint8)
-        # kept across episodes, as its patches; made at the first observation (the drawing
-        # path's choice imports numba, which gym.make does not)
+        # kept across episodes; made at the first observation (the drawing path's choice
+        # imports numba, which gym.make does not)
         self.dashboard: Dashboard | None = None
-        self.patches: Patches = {}
         self.view: ChaseView | None = None  # on the current episode's ground
 
     @property
@@ -144,18 +149,27 @@ class ChaseViewSensor:
         self.view = None  # a new episode has a new ground
 
     def observe(self, snapshot: Snapshot, track: Track, rng: np.random.Generator) -> np.ndarray:
+        return self._view(track).render(snapshot, snapshot.score)
+
+    def _view(self, track: Track) -> ChaseView:
+        """The view on the episode's ground now (a new texture: a new view)."""
         texture = self.ground.texture(track)  # asked each step: visited tiles get repainted
         view = self.view
         if view is None or view.texture is not texture:
             if self.dashboard is None:
                 self.dashboard = small_dashboard(self.size)
-            dashboard = self.dashboard
-            view = self.view = ChaseView(self.size, texture, dashboard, self.patches, self.looks)
-        return view.render(snapshot, snapshot.score)
+            view = self.view = ChaseView(self.size, texture, self.dashboard, self.looks)
+        return view
+
+    def observe_into(
+        self, snapshot: Snapshot, track: Track, rng: np.random.Generator, out: np.ndarray
+    ) -> np.ndarray:
+        """``observe``'s frame drawn into ``out`` (``DrawsInto``)."""
+        return self._view(track).render(snapshot, snapshot.score, out)
 
     def __getstate__(self) -> dict[str, Any]:
-        # the texture belongs to the episode; the cached pictures are redrawn when next asked
-        fresh: dict[str, Any] = {"view": None, "dashboard": None, "patches": {}}
+        # the texture belongs to the episode; the dashboard is redrawn when next asked
+        fresh: dict[str, Any] = {"view": None, "dashboard": None}
         return {**self.__dict__, **fresh}
 
 

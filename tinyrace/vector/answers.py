@@ -20,6 +20,8 @@ class Answers:
         self.infos, self.slices = infos, slices  # infos: (num_envs, INFO_BYTES) uint8
         self.signatures: list[shared.Signature | None] = [None] * len(slices)
         self.records: list[np.ndarray | None] = [None] * len(slices)
+        # every env's records bound to their signature (when all workers have it)
+        self.whole: dict[shared.Signature, shared.Bound] = {}
 
     def collect(
         self, status: np.ndarray, pipes: list[Connection], numbers: list[int] | None = None
@@ -51,7 +53,11 @@ class Answers:
             rows = self.records[numbers[0]]
             assert rows is not None
             if len(numbers) == len(pipes):  # every env, in order: one view of all records
-                return shared.merge_columns(first, shared.records(self.infos, rows.dtype))
+                bound = self.whole.get(first)
+                if bound is None:
+                    whole = shared.records(self.infos, rows.dtype)
+                    bound = self.whole[first] = shared.bind(first, whole)
+                return shared.merge_bound(bound, len(self.infos))
             parts = [self.records[number] for number in numbers]
             return shared.merge_columns(first, np.concatenate(parts))  # type: ignore[arg-type]
         infos: list[dict[str, Any]] = []

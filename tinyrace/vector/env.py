@@ -5,8 +5,9 @@ and some pickling per env and step, about as long as a tinyrace step itself. Her
 as in EnvPool, each worker steps a contiguous slice of the envs, and a step moves
 nothing through a pipe: actions, observations, rewards, terminations, truncations
 and the infos' usual values lie in one shared memory block; a semaphore per worker
-and direction wakes the other side (``tinyrace.vector.worker``). Infos of a new
-shape, and exceptions, go over the worker's pipe.
+and direction wakes the other side (the parent's end: ``tinyrace.vector.link``; the
+worker's: ``tinyrace.vector.worker``). Infos of a new shape, and exceptions, go over the
+worker's pipe.
 
 Results are those of ``gymnasium.vector.SyncVectorEnv(env_fns)``: next-step
 autoreset, ``reset(seed=s)`` seeds env ``i`` with ``s + i``, infos merged with the
@@ -32,37 +33,27 @@ Example:
 
 from __future__ import annotations
 
-import contextlib
 import itertools
 import multiprocessing
-import time
 from collections.abc import Callable, Sequence
 from copy import deepcopy
-from multiprocessing.connection import Connection
-from multiprocessing.reduction import ForkingPickler
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium.spaces import Box, Discrete, MultiBinary, MultiDiscrete
 from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import CloudpickleWrapper, batch_space, iterate
+from gymnasium.vector.utils import batch_space, iterate
 
 from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
 from tinyrace.vector import shared
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
-from tinyrace.vector.failures import await_close, check_count, died, rebuild_error
+from tinyrace.vector.failures import check_count
 from tinyrace.vector.infos import merge_infos
-from tinyrace.vector.worker import acquire, work
+from tinyrace.vector.link import Workers
 
-CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
-# [s] the parent polls for the workers' answers this long before it sleeps (a step of
-# a few envs takes less: the answer comes without a wake-up); after a step that took
-# longer it sleeps at once, leaving the cores to the workers
-PARENT_SPIN = 0.002
-LIVENESS = 0.05  # [s] a sleeping parent looks this often whether the workers live
 StepResult = tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]
 ARRAY_ACTIONS = (Box, Discrete, MultiBinary, MultiDiscrete)  # batched actions are one array
 
@@ -81,7 +72,8 @@ class BatchVectorEnv(VectorEnv):
             overwritten by the next step), as ``SyncVectorEnv``'s ``copy``.
         batch_physics: step the dynamic cars of a process's envs together (their tyre
             forces as one numpy computation, ``tinyrace.vector.batched``); False steps
-            each env by its own ``step``. Results are the same.
+            each env by its own ``step``, as a process with a single env does either way.
+            Results are the same.
         numpy_from: with batched physics, the envs per process from which their cars' tyre
             forces are one numpy computation; fewer cars each run their own tyre model
             (numpy's fixed cost per call outweighs it), still stepped together.
@@ -102,15 +94,11 @@ class BatchVectorEnv(VectorEnv):
         self.env_fns, self.copy = env_fns, copy
         self.num_envs = len(env_fns)
         self.autoreset_mode = AutoresetMode.NEXT_STEP
-        self._pipes: list[Connection] = []
-        self._processes: list[multiprocessing.process.BaseProcess] = []
-        self._semaphores: list[tuple[Any, Any]] = []
         self._local: EnvSlice | None = None  # workers=0: the envs, stepped in this process
         self._memory: Any = None
         self._pending = False
         self._pending_local: StepResult | None = None  # workers=0: step_async's results
         self._by_pipe = False  # the pending step's actions went over the pipes
-        self._spin = PARENT_SPIN  # [s] how long the parent polls for the next answers
         # The shared memory must exist before the workers start, so the spaces come from
         # an env made here (as AsyncVectorEnv does).
         probe = env_fns[0]()
@@ -129,6 +117,7 @@ class BatchVectorEnv(VectorEnv):
             )
         bounds = np.linspace(0, self.num_envs, min(max(workers, 1), self.num_envs) + 1)
         self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds.astype(int))]
+        self._workers = Workers(self._slices, self.close)
         layout = shared.Layout(
             self.single_observation_space,
             self.single_action_space,
@@ -143,31 +132,18 @@ class BatchVectorEnv(VectorEnv):
         self._memory = shared.create_block(layout.size)
         self._views = layout.views(self._memory.buf)
         try:
-            self._start(multiprocessing.get_context(context), layout, batch_physics, numpy_from)
-            self._check_spaces(self._receive_all())
+            self._workers.start(
+                multiprocessing.get_context(context),
+                self.env_fns,
+                (self._memory.name, layout),
+                self._views,
+                (batch_physics, numpy_from),
+            )
+            self._check_spaces(self._workers.receive_all())
         except BaseException:  # e.g. an env that cannot be made in a worker
             self.close()
             raise
         self._answers = Answers(self._views.infos, self._slices)
-
-    def _start(self, ctx: Any, layout: shared.Layout, batch_physics: bool, numpy_from: int) -> None:
-        block = (self._memory.name, layout)
-        physics = (batch_physics, numpy_from)
-        for number, envs in enumerate(self._slices):
-            parent, child = ctx.Pipe()
-            semaphores = (ctx.Semaphore(0), ctx.Semaphore(0))  # go, done
-            fns = [CloudpickleWrapper(fn) for fn in self.env_fns[envs]]
-            process = ctx.Process(
-                target=work,
-                args=(child, parent, number, fns, envs.start, block, semaphores, *physics),
-                name=f"BatchVectorEnv-worker-{number}",
-                daemon=True,
-            )
-            self._pipes.append(parent)
-            self._semaphores.append(semaphores)
-            process.start()
-            child.close()
-            self._processes.append(process)
 
     def _check_spaces(self, replies: list[list[tuple[gym.Space[Any], gym.Space[Any]]]]) -> None:
         """Every env must have the first env's spaces, as in SyncVectorEnv."""
@@ -234,15 +210,12 @@ class BatchVectorEnv(VectorEnv):
         target = self._views.actions
         if target is None or batch.dtype != target.dtype or batch.shape != target.shape:
             # a Dict action space, or actions that casting would change: over the pipes
-            self._send("step", [(batch[s],) for s in self._slices])
+            self._workers.send("step", [(batch[s],) for s in self._slices])
             self._pending = True
             self._by_pipe = True
             return
         target[:] = batch
-        command = self._views.command
-        for number, (go, _) in enumerate(self._semaphores):
-            command[number] = shared.STEP
-            go.release()
+        self._workers.step()
         self._pending = True
         self._by_pipe = False
 
@@ -258,7 +231,7 @@ class BatchVectorEnv(VectorEnv):
             self._pending_local = None
             return results
         if self._by_pipe:
-            replies = self._receive_all()
+            replies = self._workers.receive_all()
             rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
             return (
                 self._observations_out(),
@@ -267,13 +240,9 @@ class BatchVectorEnv(VectorEnv):
                 np.array(truncated, dtype=np.bool_),
                 merge_infos(env_infos, self.num_envs),
             )
-        start = time.perf_counter()
-        for number in range(len(self._slices)):
-            self._await_done(number)
-        # a step that took longer than the spin will likely again: sleep at once next time
-        self._spin = PARENT_SPIN if time.perf_counter() - start < PARENT_SPIN else 0.0
+        self._workers.wait_all()
         try:
-            infos = self._answers.collect(self._views.status, self._pipes)
+            infos = self._answers.collect(self._views.status, self._workers.pipes)
         except (EOFError, OSError):  # a worker died after its "done"
             self.close()
             raise
@@ -285,22 +254,6 @@ class BatchVectorEnv(VectorEnv):
             views.truncated.copy(),
             infos,
         )
-
-    def _await_done(self, number: int) -> None:
-        """Wait for worker ``number``'s step; if it dies meanwhile, close and say so."""
-        done = self._semaphores[number][1]
-        if acquire(done, self._spin):
-            return
-        process = self._processes[number]
-        try:
-            while not done.acquire(timeout=LIVENESS):
-                if not process.is_alive():
-                    self.close()
-                    raise died(number, self._slices[number], process.exitcode)
-        except BaseException:  # e.g. Ctrl-C: the workers would be out of step
-            if not self.closed:
-                self.close()
-            raise
 
     def render(self) -> tuple[Any, ...]:
         """The frames of the envs, as a tuple (``SyncVectorEnv.render``)."""
@@ -360,17 +313,7 @@ class BatchVectorEnv(VectorEnv):
         if self._local is not None:
             self._local.close()
             self._local = None
-        for number, pipe in enumerate(self._pipes):
-            with contextlib.suppress(OSError, ValueError):  # a worker that is gone already
-                self._signal(number, pipe, ForkingPickler.dumps(("close", ())))
-        for pipe, process in zip(self._pipes, self._processes, strict=True):
-            await_close(pipe, CLOSE_TIMEOUT)
-            pipe.close()
-            process.join(CLOSE_TIMEOUT)
-            if process.is_alive():
-                process.terminate()
-                process.join()
-        self._pipes, self._processes, self._semaphores = [], [], []
+        self._workers.close()
         self._views = self._answers = None  # type: ignore[assignment]  # before the memory
         memory, self._memory = self._memory, None
         shared.free_block(memory)
@@ -393,40 +336,8 @@ class BatchVectorEnv(VectorEnv):
             )
         if self._local is not None:  # in this process: the slice's own exceptions
             return [getattr(self._local, command)(*args[0])]
-        self._send(command, args)
-        return self._receive_all()
-
-    def _send(self, command: str, args: list[tuple[Any, ...]]) -> None:
-        # all pickled first: an argument that cannot be pickled leaves the pipes in step
-        messages = [ForkingPickler.dumps((command, worker_args)) for worker_args in args]
-        for number, (pipe, message) in enumerate(zip(self._pipes, messages, strict=True)):
-            with contextlib.suppress(OSError):  # a dead worker: reported by _receive_all
-                self._signal(number, pipe, message)
-
-    def _signal(self, number: int, pipe: Connection, message: bytes | memoryview) -> None:
-        """Put ``message`` in worker ``number``'s pipe and wake it to read it."""
-        pipe.send_bytes(message)
-        self._views.command[number] = shared.PIPE
-        self._semaphores[number][0].release()
-
-    def _receive_all(self) -> list[Any]:
-        """Every worker's answer, in order; the first worker's exception is raised here."""
-        replies = []
-        for number, pipe in enumerate(self._pipes):
-            try:
-                replies.append(pipe.recv())
-            except (EOFError, OSError):  # no answer will ever come
-                process = self._processes[number]
-                process.join(CLOSE_TIMEOUT)
-                self.close()
-                raise died(number, self._slices[number], process.exitcode) from None
-            except BaseException:  # e.g. Ctrl-C: the pipes would be out of step
-                self.close()
-                raise
-        for number, (ok, result) in enumerate(replies):
-            if not ok:
-                raise rebuild_error(result, number, self._slices[number])
-        return [result for _, result in replies]
+        self._workers.send(command, args)
+        return self._workers.receive_all()
 
     def _batch(self, actions: Any) -> Any:
         """The actions as one batch to slice: an array for array spaces, else a list."""

@@ -12,6 +12,9 @@ from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
 from tinyrace.vector.shared import Views
 
 Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
+# envs per slice from which their steps go through ``BatchStepper``'s stages: one env
+# alone costs more that way than by its own ``step`` (benchmarks/README.md, issue 37)
+BATCH_FROM = 2
 
 
 class EnvSlice:
@@ -28,7 +31,7 @@ class EnvSlice:
         self.envs = [fn() for fn in env_fns]
         self.first = first
         # dynamic cars: their tyre forces computed together (else each env's own step)
-        fits = batch_physics and BatchStepper.fits(self.envs)
+        fits = batch_physics and len(self.envs) >= BATCH_FROM and BatchStepper.fits(self.envs)
         self.batch = BatchStepper(self.envs, numpy_from) if fits else None
         self.views = views
         self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
@@ -61,19 +64,12 @@ class EnvSlice:
         """Step every env (an env whose episode ended at the last step is reset instead):
         rewards, terminations, truncations and infos, as lists (they pickle faster)."""
         n = len(self.envs)
-        autoreset = self.autoreset
+        autoreset = self.autoreset.tolist()
         results: list[Step | None]
         if self.batch is not None:
-            results = self.batch.step(actions, autoreset, self._write)
+            results = self.batch.step(actions, self.autoreset, self._write, self._rows())
         else:
-            results = [None] * n
-            for j, env in enumerate(self.envs):
-                if not autoreset[j]:
-                    try:
-                        results[j] = env.step(actions[j])
-                    except Exception as error:
-                        _blame(error, self.first + j)
-                        raise
+            results = self._step_each(actions, autoreset)
         rewards: list[SupportsFloat] = [0.0] * n
         terminated, truncated = [False] * n, [False] * n
         infos: list[dict[str, Any]] = [{}] * n
@@ -86,13 +82,31 @@ class EnvSlice:
                     raise
                 self._write(j, observation)
                 continue
-            observation, rewards[j], terminated[j], truncated[j], infos[j] = result
-            if self.batch is None:
-                self._write(j, observation)
+            _, rewards[j], terminated[j], truncated[j], infos[j] = result
         # cast by numpy as SyncVectorEnv's arrays are (a step may return numpy scalars)
         ended = np.array(terminated, dtype=np.bool_) | np.array(truncated, dtype=np.bool_)
         self.autoreset = ended
         return rewards, terminated, truncated, infos
+
+    def _step_each(self, actions: Any, autoreset: list[bool]) -> list[Step | None]:
+        """Each env's own ``step`` (None for those to reset); observations written."""
+        results: list[Step | None] = [None] * len(self.envs)
+        target = self.views.observations
+        whole = isinstance(target, np.ndarray)  # a Box: one array, a row per env
+        first = self.first
+        for j, env in enumerate(self.envs):
+            if autoreset[j]:
+                continue
+            try:
+                results[j] = result = env.step(actions[j])
+            except Exception as error:
+                _blame(error, first + j)
+                raise
+            if whole:
+                target[first + j] = result[0]
+            else:
+                _write_nested(target, first + j, result[0])
+        return results
 
     def call(
         self,
@@ -138,6 +152,14 @@ class EnvSlice:
     def close(self) -> None:
         for env in self.envs:
             env.close()
+
+    def _rows(self) -> np.ndarray | None:
+        """This slice's rows of a Box observation's array (None: a Dict or Tuple space)."""
+        target = self.views.observations
+        if not isinstance(target, np.ndarray):
+            return None
+        rows: np.ndarray = target[self.first : self.first + len(self.envs)]
+        return rows
 
     def _write(self, j: int, observation: Any) -> None:
         target = self.views.observations

@@ -69,14 +69,14 @@ def _merge_alike(infos: Sequence[dict[str, Any]], num_envs: int) -> dict[str, An
     array filled from a list of all the envs' values (in the first info's key order,
     which is ``_add_info``'s when every env has every key)."""
     every = list(range(num_envs))
-    full = np.ones(num_envs, dtype=np.bool_)  # copied per key: each mask its own array
+    full = np.array([True] * num_envs)  # copied per key: each mask its own array
     merged: dict[str, Any] = {}
     for key in infos[0]:
         values = [info[key] for info in infos]
         first = values[0]
         if key == "final_obs":
             array: Any = _objects(every, values, num_envs)
-        elif type(first) in _SCALARS and all(type(value) is type(first) for value in values):
+        elif type(first) in _SCALARS and list(map(type, values)).count(type(first)) == num_envs:
             array = np.array(values, dtype=type(first))  # the common case, checked first
         else:
             nested = [isinstance(value, dict) for value in values]
@@ -105,7 +105,7 @@ def _array(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
 
 
 def _objects(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
-    array = np.full(num_envs, fill_value=None, dtype=object)
+    array = np.empty(num_envs, dtype=object)  # every item None
     for index, value in zip(indices, values, strict=True):
         array[index] = value
     return array

@@ -27,9 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.vector import shared
-from tinyrace.vector.env import LIVENESS, PARENT_SPIN, BatchVectorEnv
-from tinyrace.vector.failures import died
+from tinyrace.vector.env import BatchVectorEnv
+from tinyrace.vector.link import LIVENESS, PARENT_SPIN
 from tinyrace.vector.worker import yield_core
 
 
@@ -76,10 +75,8 @@ class AsyncBatch:
         target = vector._views.actions
         assert target is not None
         target[ids] = np.asarray(actions, dtype=target.dtype)
-        for number in workers:
-            vector._views.command[number] = shared.STEP
-            vector._semaphores[number][0].release()
-            self.in_flight.append(number)
+        vector._workers.step(workers)
+        self.in_flight.extend(workers)
 
     def recv(self) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """The results of the first workers done, at least ``batch_size`` envs (fewer if
@@ -92,7 +89,7 @@ class AsyncBatch:
             [np.arange(vector._slices[n].start, vector._slices[n].stop) for n in ready]
         )
         try:
-            infos = vector._answers.collect(vector._views.status, vector._pipes, ready)
+            infos = vector._answers.collect(vector._views.status, vector._workers.pipes, ready)
         except (EOFError, OSError):
             vector.close()
             raise
@@ -117,7 +114,7 @@ class AsyncBatch:
         start = last_check = time.perf_counter()
         while count < want:
             for number in list(self.in_flight):
-                if vector._semaphores[number][1].acquire(False):
+                if vector._workers.semaphores[number][1].acquire(False):
                     self.in_flight.remove(number)
                     ready.append(number)
                     count += sizes[number]
@@ -132,12 +129,7 @@ class AsyncBatch:
                 time.sleep(0.0001)
             if now - last_check > LIVENESS:
                 last_check = now
-                for number in self.in_flight:
-                    process = vector._processes[number]
-                    if not process.is_alive():
-                        envs = vector._slices[number]
-                        vector.close()
-                        raise died(number, envs, process.exitcode)
+                vector._workers.check_alive(self.in_flight)
         return ready
 
     def _idle(self, what: str) -> None:

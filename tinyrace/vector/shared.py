@@ -200,23 +200,49 @@ def records(infos: np.ndarray, dtype: np.dtype) -> np.ndarray:
 
 def merge_columns(signature: Signature, rows: np.ndarray) -> dict[str, Any]:
     """What ``merge_infos`` makes of infos with ``signature`` in every env (``rows``)."""
+    return merge_bound(bind(signature, rows), len(rows))
+
+
+# per signature entry: (key, mask key, the records' column (None: a dict), is a tuple,
+# the dict's entries)
+Bound = tuple[tuple[str, str, np.ndarray | None, bool, Any], ...]
+
+
+def bind(signature: Signature, rows: np.ndarray) -> Bound:
+    """``signature``'s entries bound to their columns of ``rows`` (views, made once: a
+    step's merge then copies them)."""
     fields = iter(rows.dtype.names or ())
-    return _merge(signature, rows, fields, len(rows))
+
+    def entries(signature: Signature) -> Bound:
+        bound: list[tuple[str, str, np.ndarray | None, bool, Any]] = []
+        for entry in signature:
+            key, kind = entry[0], entry[1]
+            if kind is dict:
+                bound.append((key, f"_{key}", None, False, entries(entry[2])))
+            else:
+                bound.append((key, f"_{key}", rows[next(fields)], kind is tuple, None))
+        return tuple(bound)
+
+    return entries(signature)
 
 
-def _merge(signature: Signature, rows: np.ndarray, fields: Iterator[str], n: int) -> dict[str, Any]:
+def merge_bound(bound: Bound, n: int) -> dict[str, Any]:
+    """The merged infos of the records ``bound`` views (``n`` envs)."""
+    every = np.empty(n, dtype=np.bool_)
+    every.fill(True)
+    return _merge(bound, n, every)
+
+
+def _merge(bound: Bound, n: int, every: np.ndarray) -> dict[str, Any]:
     merged: dict[str, Any] = {}
-    for entry in signature:
-        key, kind = entry[0], entry[1]
-        if kind is dict:
-            array: Any = _merge(entry[2], rows, fields, n)
-        elif kind is tuple:
-            array = np.empty(n, dtype=object)
-            for index, row in enumerate(rows[next(fields)].tolist()):
-                array[index] = tuple(row)
+    for key, mask, column, is_tuple, inner in bound:
+        if column is None:
+            array: Any = _merge(inner, n, every)
+        elif is_tuple:
+            array = np.fromiter(map(tuple, column.tolist()), object, n)
         else:
-            array = rows[next(fields)].copy()
-        merged[key], merged[f"_{key}"] = array, np.ones(n, dtype=np.bool_)
+            array = column.copy()
+        merged[key], merged[mask] = array, every.copy()  # each mask its own array
     return merged
 
 

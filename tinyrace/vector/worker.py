@@ -129,7 +129,7 @@ class Worker:
         records = self.records
         assert records is not None
         try:
-            for j, item in enumerate(flat):
+            for j, item in enumerate(flat):  # row by row: at a few envs faster than at once
                 records[j] = tuple(item[1])  # type: ignore[index]
         except (OverflowError, ValueError, TypeError):  # e.g. an int beyond 64 bits
             self.signature = self.records = None
@@ -151,7 +151,11 @@ def work(
     batch_physics: bool = True,
     numpy_from: int = NUMPY_FROM,
 ) -> None:
-    """A worker process: attach the shared memory, build the envs, serve the commands."""
+    """A worker process: attach the shared memory, build the envs, serve the commands.
+
+    OpenCV's thread count is left as the process has it: ``cv2.setNumThreads`` in a
+    forked worker whose parent had started OpenCV's threads hangs (it waits on the
+    parent's thread pool, which the child does not have)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
     name, layout = block

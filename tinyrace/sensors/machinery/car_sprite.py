@@ -4,13 +4,18 @@ Small frames (the 96x96 observation) would lose the car's shape to cv2's
 antialiasing, so the car is drawn there at 4x into a patch, area-averaged
 down (like the reference's smooth scaling) and blended. A chase camera turns
 with the hull, so that patch only depends on the zoom and the steering angle:
-it is cached and reused from step to step.
+it is cached and reused from step to step. A cached patch is drawn from the placement
+its key stands for, never from the pose of the step that first asked for it, so it is
+the same picture whichever env or step drew it: the envs of a process (and thread)
+that draw the same car at the same frame size share one cache.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import threading
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import cv2
 import numpy as np
@@ -35,22 +40,26 @@ _WHEEL_BOX = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], float) * (
 # scratch of the same shape (the numpy path's)
 Patch = tuple[int, int, np.ndarray, np.ndarray, np.ndarray]
 Patches = dict[tuple[float, int], Patch | None]  # by (zoom, steering step)
+Placement = Callable[[float], Affine]  # a cache key -> the car body frame -> output pixels
 _STEER_STEP = 0.005  # [rad] steering resolution of cached patches
 _MAX_PATCHES = 2048  # cached car pictures per view size (a few kB each)
+# the process's patches by (frame shape, thread, car scale, wheel positions): a thread's
+# own, as the numpy path blends through a patch's scratch
+_SHARED: dict[tuple[Any, ...], Patches] = {}
+_MISSING: Any = object()  # not cached yet (a cached None: the car is outside the frame)
 
 
 class CarSprite:
     """Draws CarRacing's car from its state; polygons are prepared per car size, transformed
     per frame."""
 
-    def __init__(
-        self, supersample: bool, patches: Patches | None = None, drawing: str | None = None
-    ):
+    def __init__(self, supersample: bool, drawing: str | None = None):
         """``drawing``: the blend's path (auto | numba | numpy; see ``drawing.kernel``)."""
         self.supersample = supersample
         self.drawing, module = drawing_kernel(drawing)
         self._blend = None if module is None else module.blend
-        self._patches: Patches = {} if patches is None else patches
+        self._patches: Patches | None = None  # the shared cache of this car and frame shape
+        self._where: tuple[Any, ...] = ()  # (frame shape, thread) ``_patches`` is for
         self._scale: float | None = None  # the car size the polygons below are for
         self.hull: list[np.ndarray] = []
         self.wheel_box = _WHEEL_BOX
@@ -62,33 +71,37 @@ class CarSprite:
         world_to_out: np.ndarray | Affine,
         skid_width: int,
         cache_key: float | None = None,
+        placement: Placement | None = None,
     ) -> None:
         """Skid marks (unless ``skid_width`` is 0), wheels, then hull into ``image``.
 
-        ``world_to_out`` is a 2x3 array or six floats (row by row). ``cache_key`` (e.g.
-        the zoom) promises that the car's placement in the frame depends only on it and the
-        steering angle, which allows reusing patches.
+        ``world_to_out`` is a 2x3 array or six floats (row by row). ``cache_key`` (e.g. a
+        chase camera's zoom) with ``placement`` promises that the car's body frame ->
+        output pixels is ``placement(cache_key)`` at every step with that key: its patches
+        are drawn from that once and reused.
         """
         if car.scale != self._scale:
             unit = SIZE * car.scale
             self.hull = [np.array(poly, float) * unit for poly in HULL_POLYGONS]
             self.wheel_box = _WHEEL_BOX * unit
             self._scale = car.scale
+            self._patches = None  # another car: its own patches
         if skid_width and car.skids is not None and car.skids.lengths.any():
             _draw_skids(image, as_matrix(world_to_out), car.skids, skid_width)
         if self.supersample:
             steer = round(car.wheels[0].steer / _STEER_STEP)
-            key = None if cache_key is None else (cache_key, steer)
-            patch = None if key is None else self._patches.get(key)
-            if patch is None:
-                local_to_out = _local_to_out(car, world_to_out)
-                patch = _clip(
-                    image.shape, *self._render_patch(car, local_to_out, steer * _STEER_STEP)
-                )
-                if key is not None:
-                    if len(self._patches) >= _MAX_PATCHES:
-                        self._patches.clear()
-                    self._patches[key] = patch
+            if cache_key is None or placement is None:
+                patch = self._patch(image.shape, car, _local_to_out(car, world_to_out), steer)
+            else:
+                patches = self._patches_for(image.shape, car)
+                key = (cache_key, steer)
+                patch = patches.get(key, _MISSING)
+                if patch is _MISSING:
+                    body_to_out = as_matrix(placement(cache_key))
+                    patch = self._patch(image.shape, car, body_to_out, steer)
+                    if len(patches) >= _MAX_PATCHES:
+                        patches.clear()
+                    patches[key] = patch
             if patch is not None:
                 top, left, weight, color, scratch = patch
                 if self._blend is None:
@@ -100,6 +113,22 @@ class CarSprite:
         local_to_out = _local_to_out(car, world_to_out)
         _fill(image, local_to_out, polygons[:4], WHEEL_COLOR)
         _fill(image, local_to_out, polygons[4:], HULL_COLOR)
+
+    def _patch(
+        self, shape: tuple[int, ...], car: CarState, body_to_out: np.ndarray, steer: int
+    ) -> Patch | None:
+        """The car with its steering at ``steer`` steps, placed by ``body_to_out``, cut to
+        a frame of ``shape`` (None: outside it)."""
+        return _clip(shape, *self._render_patch(car, body_to_out, steer * _STEER_STEP))
+
+    def _patches_for(self, shape: tuple[int, ...], car: CarState) -> Patches:
+        """The shared patches of ``car``'s shape in frames of ``shape``."""
+        patches, where = self._patches, (shape, threading.get_ident())
+        if patches is None or where != self._where:
+            spots = tuple(wheel.position for wheel in car.wheels)
+            patches = self._patches = _SHARED.setdefault((*where, car.scale, spots), {})
+            self._where = where
+        return patches
 
     def _polygons(self, car: CarState, steer: float) -> list[np.ndarray]:
         """Four wheels (front ones steered) then the hull, in the body's frame."""
