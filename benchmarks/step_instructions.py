@@ -104,6 +104,8 @@ def main(argv: list[str] | None = None) -> int:
                 for ref in (args.old, args.new)
             )
             ratio = f"{new / old:.4f}" if old >= 100 else "(too few to compare)"
+            if old < 0 or new < 0:  # one run's start-up did more (a cache built, a compile)
+                ratio = "(start-up differed between the two runs: rerun)"
             print(f"{case:<16} {name:<13} {old:>12,.0f} {new:>12,.0f}  {ratio}")
     return 0
 
