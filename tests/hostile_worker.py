@@ -21,7 +21,7 @@ import traceback
 from pathlib import Path
 from typing import Any, BinaryIO
 
-WALL_FACTOR = 6  # a case's wall-time bound over its CPU-time bound: room for a loaded machine
+WALL_FACTOR = 3  # a case's wall-time bound over its CPU-time bound: room for a loaded machine
 
 
 class CaseTimeout(BaseException):

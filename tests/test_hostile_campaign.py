@@ -39,7 +39,7 @@ from tinyrace.env import RESET_OPTIONS
 
 WORKER = Path(__file__).with_name("hostile_worker.py")
 MEMORY = 2 << 30  # [bytes] address space of a worker (its imports take about 300 MiB)
-SECONDS = 5  # [s] of CPU time each case ends within (and 6x that of wall time), or it fails
+SECONDS = 10  # [s] of CPU time, all threads, each case ends within (3x that of wall time)
 WORKERS = 2
 IN_CI = bool(os.environ.get("CI"))
 CAMPAIGN = {  # hypothesis examples per kind; each example is a batch of WORKERS cases

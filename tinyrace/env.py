@@ -22,7 +22,7 @@ from tinyrace.ground.grounds import make_ground
 from tinyrace.render.pictures import CameraViews, Pictures
 from tinyrace.render.setup import make_pictures
 from tinyrace.render.window import Window
-from tinyrace.sensors.base import DrawsInto, Labelled, Sensor, SensorContext
+from tinyrace.sensors.base import Labelled, Sensor, SensorContext, drawer
 from tinyrace.sensors.registry import build_sensors, default_sensor
 from tinyrace.tracks.base import Track
 from tinyrace.world.snapshot import Snapshot
@@ -115,7 +115,7 @@ class TinyRaceEnv(gym.Env):
         self.box_camera = self.box_sensor(self.sensors)
         # the Box observation's one sensor, when it can draw into a given array (``observe``)
         first = self.sensors[0]
-        self._into = first if self.box_camera is not None and isinstance(first, DrawsInto) else None
+        self._into = drawer(first) if self.box_camera is not None else None
         self.draws_into = self._into is not None
         self.observation_space = self._observation_space()
         shaping = None if cte_shaping is None else _checked_shaping(cte_shaping)

@@ -80,6 +80,12 @@ class DrawsInto(Protocol):
         ...
 
 
+def drawer(sensor: Sensor) -> DrawsInto | None:
+    """The sensor as a ``DrawsInto`` when it offers that capability, else None (the one
+    place that asks: callers outside sensors/ ask this, not the sensor's class)."""
+    return sensor if isinstance(sensor, DrawsInto) else None
+
+
 @dataclass(frozen=True)
 class TopDown:
     """A sensor's image seen as a top-down picture: the track window it shows (its corners,
