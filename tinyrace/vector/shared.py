@@ -35,10 +35,12 @@ _NUMPY = (np.float64, np.float32, np.int64, np.int32, np.bool_)
 LEAVES = (Box, Discrete, MultiBinary, MultiDiscrete)
 
 # what a worker's status word says about its last step
-DONE = 0  # everything is in the shared memory
-NEW_SIGNATURE = 1  # ... and the pipe carries the infos' new signature
+NEW_SIGNATURE = 1  # the records hold the infos and the pipe carries their new signature
 INFOS_BY_PIPE = 2  # the infos come over the pipe
 FAILED = 3  # the pipe carries the exception
+# KNOWN + i: the records hold the infos, of the worker's i-th announced signature (infos
+# whose shape alternates, such as a reward term present at some steps, cost no message)
+KNOWN = 4
 
 # a worker's command word
 STEP = 1  # step with the actions in the shared memory
