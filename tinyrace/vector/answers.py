@@ -37,9 +37,10 @@ class Answers:
         numbers = list(range(len(pipes))) if numbers is None else numbers
         per_worker: list[Any] = []
         error: Exception | None = None
+        codes = status.tolist()  # one call, not a numpy scalar per worker
         for number in numbers:
             pipe = pipes[number]
-            code = int(status[number])
+            code = codes[number]
             if code == shared.FAILED:
                 _, described = pipe.recv()
                 error = error or rebuild_error(described, number, self.slices[number])
@@ -56,7 +57,7 @@ class Answers:
         if error is not None:
             raise error
         first = per_worker[0]
-        if isinstance(first, tuple) and all(s is first for s in per_worker):
+        if isinstance(first, tuple) and per_worker.count(first) == len(per_worker):
             rows = self.records[numbers[0]]
             assert rows is not None
             if len(numbers) == len(pipes):  # every env, in order: one view of all records

@@ -127,7 +127,7 @@ class Worker:
         has not seen first); else send them over the pipe. The status that says which."""
         flat = [shared.flatten(info) for info in infos]
         first = flat[0]
-        if first is None or any(f is None or f[0] != first[0] for f in flat):
+        if first is None or (len(flat) > 1 and any(f is None or f[0] != first[0] for f in flat)):
             self.pipe.send(infos)
             return shared.INFOS_BY_PIPE
         signature = first[0]
