@@ -14,7 +14,7 @@ from tinyrace.vector.shared import Views
 Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 # envs per slice from which their steps go through ``BatchStepper``'s stages: one env
 # alone costs more that way than by its own ``step`` (benchmarks/README.md, issue 37)
-BATCH_FROM = 1
+BATCH_FROM = 2
 
 
 class EnvSlice:
