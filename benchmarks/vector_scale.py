@@ -10,7 +10,12 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
 - ``Wx8``: W workers x 8 envs for W = 1 .. --max-workers (2 x 8 on 2 cores: target >= 1.6);
 - ``standin_2x64``: 2 workers x 64 stand-in envs that cost nothing (CarRacing's spaces, a
   constant frame): the vector env's own ceiling (target >= 300,000 env-steps/s);
-- ``envpool_W``: EnvPool's CarRacing-v2 with W threads x 8 envs, if ``envpool`` imports.
+- ``envpool_W``: EnvPool's CarRacing-v3 with W threads x 8 envs, if ``envpool`` imports
+  (``pip install envpool`` with its asset packages, in a venv of its own: see
+  benchmarks/README.md); else the import's error is printed and the rows are skipped.
+
+Then each side against its own one: tinyrace's W x 8 against one env, EnvPool's W threads
+against its 1 thread.
 
 Every case steps random actions (seeded), after a warm-up. The machine's load
 (``os.getloadavg``) is printed before and after: on a shared machine the figures move.
@@ -108,16 +113,24 @@ def standin(num_envs: int, workers: int) -> Any:
     )
 
 
-def envpool_case(threads: int) -> tuple[Callable[[], Any], int] | None:
+def envpool_case(threads: int) -> tuple[Callable[[], Any], int] | str:
+    """EnvPool's CarRacing-v3 with ``threads`` threads x 8 envs, or why it cannot run here."""
     try:
         import envpool
-    except Exception:  # not installed, or its assets are missing
-        return None
+    except Exception as exc:  # not installed, or its assets missing (envpool/atari/roms)
+        return f"{type(exc).__name__}: {exc}"
     num_envs = 8 * threads
 
     def make() -> Any:
-        pool = envpool.make_gymnasium("CarRacing-v2", num_envs=num_envs, num_threads=threads)
-        pool.reset = functools.partial(_envpool_reset, pool.reset)
+        pool = envpool.make(
+            "CarRacing-v3",
+            env_type="gymnasium",
+            num_envs=num_envs,
+            batch_size=num_envs,
+            num_threads=threads,
+            seed=0,
+        )
+        pool.reset = functools.partial(_envpool_reset, pool.reset)  # seeded at make
         return pool
 
     return make, num_envs
@@ -149,10 +162,25 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
     )
     for threads in range(1, max_workers + 1):
         found = envpool_case(threads)
-        if found is not None:
-            make, num_envs = found
-            table[f"envpool_{threads}"] = (functools.partial(rate_vector, make, num_envs), num_envs)
+        if isinstance(found, str):
+            print(f"envpool: skipped, it does not import here ({found})")
+            break
+        make, num_envs = found
+        table[f"envpool_{threads}"] = (functools.partial(rate_vector, make, num_envs), num_envs)
     return table
+
+
+def print_scaling(medians: dict[str, float], max_workers: int) -> None:
+    """Each side against its own one: tinyrace's W x 8 against one env, EnvPool's W threads
+    against its 1 thread (issue 37 quotes 1.74x for EnvPool's 2 threads on 2 cores)."""
+    one, pool = medians["one_env"], medians.get("envpool_1")
+    for workers in range(1, max_workers + 1):
+        line = f"  {workers} x 8: tinyrace {medians[f'{workers}x8'] / one:5.2f}x its one env"
+        if pool is not None:
+            threads = medians[f"envpool_{workers}"]
+            line += f", EnvPool {threads / pool:5.2f}x its 1 thread, tinyrace/EnvPool "
+            line += f"{medians[f'{workers}x8'] / threads:5.2f}x"
+        print(line)
 
 
 def main() -> None:
@@ -164,8 +192,6 @@ def main() -> None:
     gym.logger.min_level = gym.logger.ERROR
     print(f"load before: {os.getloadavg()}, cores: {os.cpu_count()}", flush=True)
     table = cases(args.max_workers)
-    if not any(name.startswith("envpool") for name in table):
-        print("envpool: not importable here (not installed, or its assets missing)")
     rates: dict[str, list[float]] = {name: [] for name in table}
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
@@ -178,9 +204,10 @@ def main() -> None:
         )
     one = statistics.median(rates["one_env"])
     print(f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env):")
-    for name, values in rates.items():
-        median = statistics.median(values)
+    medians = {name: statistics.median(values) for name, values in rates.items()}
+    for name, median in medians.items():
         print(f"  {name:>14}: {median:>10,.0f}  {median / one:6.2f}x")
+    print_scaling(medians, args.max_workers)
     one_cpu, batch_cpu = (statistics.median(CPU[k]) for k in ("one_env", "in_process_8"))
     print(
         f"  CPU per env-step (thread time): one env {one_cpu * 1e6:.0f} us, 8 in process "

@@ -147,5 +147,7 @@ def test_the_training_page_uses_the_train_extra_and_ci_runs_its_test():
     ci = (ROOT / ".ci" / "run").read_text()
     main_tests = ci.index('pip install -e ".[test]" && python -m pytest -q')
     train_stage = ci.index("torch==")
-    assert main_tests < train_stage < ci.index('".[train,rllib]"') < ci.index("tests_train")
-    assert ci.index("&& tinyrace train &&") > train_stage  # the README's command, as installed
+    # the training virtualenv: the built wheel with its train and rllib extras
+    extras = ci.index('"tinyrace[train,rllib] @ file://$wheel"')
+    assert main_tests < train_stage < extras < ci.index("tests_train")
+    assert ci.index(" tinyrace train && ") > extras  # the README's command, as installed

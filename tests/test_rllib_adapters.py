@@ -3,6 +3,7 @@ env creator RLlib's env runners call. tests_train/test_rllib.py runs them under 
 
 from __future__ import annotations
 
+import multiprocessing
 import pickle
 import subprocess
 import sys
@@ -10,12 +11,22 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from gymnasium import spaces
 from pettingzoo.test import parallel_api_test
 
 import tinyrace  # noqa: F401  (registers the ids)
+from tinyrace.errors import ConfigError
 from tinyrace.race import parallel_env
-from tinyrace.rllib import FloatPixels, FloatPixelsParallel, float_space, is_pixels, make_env
+from tinyrace.rllib import (
+    FloatPixels,
+    FloatPixelsParallel,
+    FloatPixelsVector,
+    float_space,
+    is_pixels,
+    make_env,
+)
+from tinyrace.vector import BatchVectorEnv
 
 ROOT = Path(__file__).resolve().parents[1]
 SENSORS = [
@@ -110,6 +121,77 @@ def test_make_env_makes_the_id_with_the_other_keys_as_keywords():
                     "observation": "box"})  # fmt: skip
     assert box.observation_space.shape == (120, 160, 3)
     assert box.observation_space.dtype == np.float32
+
+
+def test_make_env_with_num_envs_gives_the_ids_vector_entry_point_in_float_pixels():
+    """RLlib's vector_entry_point mode: the runner calls make_env(env_ctx | {"num_envs": n})."""
+    vector = make_env(Context(num_envs=3, workers=0, max_episode_steps=4))
+    plain = gym.make_vec("tinyrace/CarRacing-v0", num_envs=3, workers=0, max_episode_steps=4)
+    try:
+        assert isinstance(vector, FloatPixelsVector)
+        assert isinstance(vector.unwrapped, BatchVectorEnv) and vector.num_envs == 3
+        assert vector.single_observation_space == spaces.Box(0, 1, (96, 96, 3), np.float32)
+        assert vector.observation_space == spaces.Box(0, 1, (3, 96, 96, 3), np.float32)
+        assert vector.single_action_space == plain.single_action_space
+        expected, _ = plain.reset(seed=7)
+        got, _ = vector.reset(seed=7)
+        np.testing.assert_array_equal(got, expected / np.float32(255))
+        actions = np.tile(np.array([0.2, 0.6, 0.0], np.float32), (3, 1))
+        ends = []
+        for _ in range(5):  # past the time limit: the next-step autoreset's frame too
+            expected, rewards, terminations, truncations, _ = plain.step(actions)
+            got, got_rewards, got_terminations, got_truncations, _ = vector.step(actions)
+            assert got.dtype == np.float32 and vector.observation_space.contains(got)
+            np.testing.assert_array_equal(got, expected / np.float32(255))
+            np.testing.assert_array_equal(got_rewards, rewards)
+            np.testing.assert_array_equal(got_terminations, terminations)
+            np.testing.assert_array_equal(got_truncations, truncations)
+            ends.append(got_truncations.tolist())
+        assert ends == [[False] * 3] * 3 + [[True] * 3] + [[False] * 3]  # step 5: the resets
+    finally:
+        vector.close()
+        plain.close()
+
+
+def test_the_vector_env_steps_in_the_runners_own_process_unless_workers_says_otherwise():
+    """An RLlib env runner is a process with one CPU: no worker processes by default."""
+    before = set(multiprocessing.active_children())
+    vector = make_env({"num_envs": 2, "max_episode_steps": 3})
+    try:
+        assert set(multiprocessing.active_children()) == before
+        vector.reset(seed=0)
+        vector.step(np.zeros((2, 3), np.float32))
+    finally:
+        vector.close()
+    vector = make_env({"num_envs": 2, "workers": 1, "max_episode_steps": 3})
+    try:
+        assert len(set(multiprocessing.active_children()) - before) == 1
+    finally:
+        vector.close()
+
+
+def test_a_dict_observation_has_its_cameras_in_floats_in_the_vector_env_too():
+    vector = make_env({"id": "tinyrace/TinyRace-v0", "num_envs": 2, "workers": 0,
+                       "environment": "formula_student", "sensors": SENSORS})  # fmt: skip
+    try:
+        single = vector.single_observation_space
+        assert isinstance(single, spaces.Dict)
+        assert {k for k, sub in single.spaces.items() if sub.dtype == np.float32} >= {
+            "front", "front_camera", "classes"
+        }  # fmt: skip
+        got, _ = vector.reset(seed=1)
+        assert vector.observation_space.contains(got)
+        assert got["front"].shape == (2, 30, 40, 3) and got["front"].dtype == np.float32
+    finally:
+        vector.close()
+
+
+def test_workers_without_num_envs_names_the_mode_that_takes_them():
+    """RLlib's sync and async modes ask make_env for one env: workers would reach the env."""
+    with pytest.raises(
+        ConfigError, match=r"<RLlib env_config>: workers: got 2; .*vector_entry_point"
+    ):
+        make_env({"workers": 2})
 
 
 def test_make_env_in_a_fresh_process_registers_the_ids_itself():

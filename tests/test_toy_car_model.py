@@ -15,7 +15,7 @@ import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.actions import ActionSpec
 from tinyrace.cars.base import Car, Pose
 from tinyrace.cars.collision import footprint_sensor
-from tinyrace.cars.registry import CAR_MODELS, CarModel, register
+from tinyrace.cars.registry import CarModel, register, unregister
 from tinyrace.cars.state import CarFacts, CarState
 from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.drivers.centerline import CenterlineDriver
@@ -105,7 +105,7 @@ HOPPER = CarModel(
 def hopper() -> Iterator[None]:
     register(HOPPER)
     yield
-    del CAR_MODELS["hopper"]
+    unregister("hopper")
 
 
 def test_a_toy_model_drives_through_make_a_sensor_and_the_centreline_driver(hopper):

@@ -1,5 +1,6 @@
 """docs/training.md's RLlib examples, run as printed: PPO on CarRacing-v0 with two env
-runners, and PPO on the PettingZoo race (two cars, one shared policy).
+runners (each stepping a BatchVectorEnv of two envs), and PPO on the PettingZoo race (two
+cars, one shared policy).
 
 Run by .ci/run's train stage after ``pip install -e ".[train,rllib]"``. Each block runs as
 the page prints it (the very text, found as .ci/readme_examples.py finds it), as a script
@@ -81,6 +82,7 @@ def test_the_page_has_both_examples():
     assert len(BLOCKS) == 2, "docs/training.md: the CarRacing and the race examples"
     car, race = BLOCKS
     assert '"tinyrace/CarRacing-v0"' in car and "num_env_runners=2" in car
+    assert 'gym_env_vectorize_mode="vector_entry_point"' in car  # BatchVectorEnvs in the runners
     assert "ParallelPettingZooEnv(" in race and "parallel_env(" in race
     assert 'policies={"shared"}' in race and '"num_agents": 2' in race
     for code in BLOCKS:
@@ -97,7 +99,7 @@ def test_ppo_trains_one_iteration_on_carracing_with_two_env_runners(tmp_path: Pa
     found = ITERATION.search(out)
     assert found and found[2] == "return", out
     episodes, mean = int(found[1]), float(found[3])
-    # 400 steps, 100-step episodes, 2 runners with one env each: 4 episodes end
+    # 400 steps, 100-step episodes, 2 runners with two envs each: 4 episodes end
     assert episodes >= 2 and math.isfinite(mean), out
     # CarRacing's reward: -0.1 a step, +1000/N a tile; 100 steps cost 10 at most
     assert mean >= -10.0 - 1e-6, out

@@ -15,6 +15,12 @@ registers the ids) before it calls ``gym.make``. ``FloatPixels`` wraps a Gymnasi
 ``FloatPixelsParallel`` a PettingZoo ``ParallelEnv`` (``tinyrace.race.parallel_env``) before
 RLlib's ``ParallelPettingZooEnv``; docs/training.md runs both with PPO.
 
+With ``.env_runners(num_envs_per_env_runner=n, gym_env_vectorize_mode="vector_entry_point")``
+RLlib's ``SingleAgentEnvRunner`` calls the registered creator once, with ``"num_envs": n``
+added to ``env_config``; ``make_env`` then returns the id's vector entry point (tinyrace's
+``BatchVectorEnv``, its envs stepped together in the runner's process unless ``"workers"``
+says otherwise) in ``FloatPixelsVector``: the runner steps one batch, not n envs in turn.
+
 Neither Ray nor torch is imported here: ``pip install "tinyrace[rllib]"`` installs Ray.
 """
 
@@ -26,9 +32,17 @@ from typing import Any, TypeAlias
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector import VectorEnv, VectorObservationWrapper
+from gymnasium.vector.utils import batch_space
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
+from tinyrace.errors import ConfigError, Problem
+
 CARRACING_ID = "tinyrace/CarRacing-v0"
+# the key RLlib's vector entry point adds to env_config (SingleAgentEnvRunner.make_env,
+# gym_env_vectorize_mode="vector_entry_point": ``entry_point(env_ctx | {"num_envs": n})``)
+NUM_ENVS = "num_envs"
+WORKERS = "workers"  # the vector entry point's keyword: processes to step the envs in
 PIXEL_MAX = 255.0  # uint8 0..255 -> float32 0..1
 
 Observation: TypeAlias = Any  # an array, or a dict of them (a camera dict)
@@ -77,6 +91,21 @@ class FloatPixels(gym.ObservationWrapper[Any, Any, Any]):
         return float_pixels(self._pixels, observation)
 
 
+class FloatPixelsVector(VectorObservationWrapper):
+    """A Gymnasium vector env (tinyrace's ``BatchVectorEnv``) whose images are float32 in
+    [0, 1]: each env's observation as ``FloatPixels`` makes it, converted for the whole
+    batch at once. The single and the batched observation spaces follow."""
+
+    def __init__(self, env: VectorEnv):
+        super().__init__(env)
+        self._pixels = env.single_observation_space
+        self.single_observation_space = float_space(self._pixels)
+        self.observation_space = batch_space(self.single_observation_space, env.num_envs)
+
+    def observations(self, observations: Observation) -> Observation:
+        return float_pixels(self._pixels, observations)  # the single space: the batch's dtype
+
+
 class FloatPixelsParallel(BaseParallelWrapper):  # type: ignore[misc]  # pettingzoo: untyped
     """A PettingZoo ``ParallelEnv`` (``tinyrace.race.parallel_env(...)``) whose images are
     float32 in [0, 1], each agent's observation as ``FloatPixels`` makes it.
@@ -108,7 +137,7 @@ class FloatPixelsParallel(BaseParallelWrapper):  # type: ignore[misc]  # petting
         return self._floats(observations), rewards, terminations, truncations, infos
 
 
-def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any]:
+def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any] | VectorEnv:
     """RLlib's env creator: ``register_env("tinyrace", make_env)``.
 
     ``env_config["id"]`` is the env's id (default ``tinyrace/CarRacing-v0``); every other
@@ -116,18 +145,53 @@ def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any]:
     ``domain_randomize``, ...). The env's images are float32 in [0, 1] (``FloatPixels``).
     RLlib passes an ``EnvContext``: a dict, whose worker index is no key, so it reaches
     no env.
+
+    With ``"num_envs"`` in ``env_config`` (RLlib adds it in ``vector_entry_point`` mode)
+    the answer is ``make_vector_env``'s: one vector env of that many envs.
     """
     config = dict(env_config)
+    if NUM_ENVS in config:
+        return make_vector_env(config)
+    if WORKERS in config:
+        allowed = (
+            'a keyword of the vector entry point: .env_runners(gym_env_vectorize_mode="vector_'
+            'entry_point") makes RLlib ask for a runner\'s envs at once; in "sync" or "async" '
+            "mode it asks for one env at a time, which has no workers"
+        )
+        raise ConfigError(Problem("<RLlib env_config>", WORKERS, config[WORKERS], allowed))
     env_id = config.pop("id", CARRACING_ID)
     return FloatPixels(gym.make(env_id, **config))
 
 
+def make_vector_env(env_config: Mapping[str, Any]) -> FloatPixelsVector:
+    """``env_config["num_envs"]`` envs of ``env_config["id"]`` through the id's vector entry
+    point (tinyrace's ``BatchVectorEnv``), images as float32 in [0, 1].
+
+    The other keys go to ``gym.make_vec`` as keywords: the entry point's own (``workers``:
+    processes to step the envs in) and each env's (``max_episode_steps``, ...). ``workers``
+    defaults to 0, the envs stepped together in the caller's process: an RLlib env runner
+    is a process of its own, given one CPU (``num_cpus_per_env_runner``), and the vector
+    entry point's default (one process per core) in each runner would crowd the cores.
+    """
+    config = dict(env_config)
+    env_id = config.pop("id", CARRACING_ID)
+    num_envs = config.pop(NUM_ENVS)
+    config.setdefault(WORKERS, 0)
+    vector = gym.make_vec(
+        env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **config
+    )
+    return FloatPixelsVector(vector)
+
+
 __all__ = [
     "CARRACING_ID",
+    "NUM_ENVS",
     "FloatPixels",
     "FloatPixelsParallel",
+    "FloatPixelsVector",
     "float_pixels",
     "float_space",
     "is_pixels",
     "make_env",
+    "make_vector_env",
 ]

@@ -31,7 +31,8 @@ from tinyrace.cars.kinematic import KinematicCar
 from tinyrace.cars.kinematic_throttle import KinematicThrottleCar
 from tinyrace.cars.single_track import SingleTrackCar
 from tinyrace.cars.state import CarFacts
-from tinyrace.config import CarConfig, EnvConfig
+from tinyrace.config import CarConfig, EnvConfig, car_models
+from tinyrace.config.car_models import CarModelEntry
 from tinyrace.config.schema import F1TENTH_GYM_RATE, track_types_in
 from tinyrace.errors import ConfigError, Problem, one_of
 from tinyrace.tracks.base import Track
@@ -196,8 +197,17 @@ CAR_MODELS: dict[str, CarModel] = {}
 
 
 def register(model: CarModel) -> None:
-    """Add ``model`` to the registry (a new name, or a replacement of the same name)."""
+    """Add ``model`` to the registry (a new name, or a replacement of the same name); the
+    config layer lists it then (``car.model``'s values in the YAML reference)."""
     CAR_MODELS[model.name] = model
+    units = tuple(sorted(model.track_units))
+    car_models.add(CarModelEntry(model.name, units, model.doc))
+
+
+def unregister(name: str) -> None:
+    """Take car model ``name`` away again (a test's toy, when the test ends)."""
+    CAR_MODELS.pop(name, None)
+    car_models.remove(name)
 
 
 register(

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, Literal, Union
 
 from tinyrace.config.bounds import BOUNDS
+from tinyrace.config.car_models import car_models
 from tinyrace.config.colors import Color
 from tinyrace.config.experiment import ExperimentConfig, OutputConfig
 from tinyrace.config.rules import rule_configs
@@ -33,6 +34,7 @@ from tinyrace.config.schema import (
     track_configs,
 )
 from tinyrace.config.sensors import sensor_configs
+from tinyrace.config.tracks import track_types_in
 
 START = (
     "<!-- yaml-reference:start "
@@ -154,9 +156,32 @@ def bounds_section() -> str:
     return "\n".join(lines)
 
 
+def car_models_section() -> str:
+    """``car.model``'s values: every registered car model, the track types it drives on."""
+    lines = [
+        "## `car.model`",
+        "",
+        "The registered car models (a model your code or a plugin registers before the "
+        "reference is made is listed too).",
+        "",
+        "| model | track types | what it is |",
+        "|---|---|---|",
+    ]
+    for model in car_models().values():
+        tracks = ", ".join(track_types_in(model.track_units))
+        doc = model.doc.replace("|", "\\|")
+        lines.append(f"| `{model.name}` | {tracks} | {doc} |")
+    return "\n".join(lines)
+
+
 def markdown() -> str:
     """The whole reference as Markdown."""
-    return "\n\n".join([*(section(*s) for s in sections()), bounds_section()])
+    pages = []
+    for title, cls, path in sections():
+        pages.append(section(title, cls, path))
+        if path == "car":  # its model's values, right after it
+            pages.append(car_models_section())
+    return "\n\n".join([*pages, bounds_section()])
 
 
 def embed(readme: str) -> str:

@@ -93,9 +93,7 @@ class CarConfig:
 
     model: str | None = knob(
         None,
-        "a registered car model: kinematic (tinycarlo's bicycle at constant speed), dynamic "
-        "(CarRacing's car), kinematic_throttle (tinycarlo 2's bicycle with throttle), "
-        "single_track (CommonRoad's single-track dynamics, F1TENTH's car); null: by track kind",
+        "a registered car model (the car.model table below lists them); null: by track kind",
     )
     actions: Literal["continuous", "discrete", "raw"] = knob(
         "continuous",
