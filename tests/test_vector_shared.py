@@ -19,7 +19,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.error import AlreadyPendingCallError, NoAsyncCallError
-from vector_doubles import Chatty, Doomed
+from vector_doubles import Blinking, Chatty, Doomed
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
@@ -53,6 +53,29 @@ def test_infos_of_every_shape_match_sync_vector_env(num_envs, workers):
     got = run(BatchVectorEnv([Chatty] * num_envs, workers=workers), steps=80)
     for step, (a, b) in enumerate(zip(expected, got, strict=True)):
         assert_same(a, b, f"step {step}")
+
+
+@pytest.mark.parametrize(("num_envs", "workers"), [(1, 1), (3, 2)])
+def test_infos_whose_shape_takes_turns_are_announced_once_per_shape(num_envs, workers):
+    """A shape a worker has announced is named by its number afterwards: the parent keeps
+    one entry per shape and worker, and the results stay SyncVectorEnv's."""
+    expected = run(gym.vector.SyncVectorEnv([Blinking] * num_envs), steps=40)
+    batch = BatchVectorEnv([Blinking] * num_envs, workers=workers)
+    known = []
+    close = batch.close
+
+    def close_after_looking() -> None:  # run() closes it: look at the parent's table first
+        known.extend(batch._answers.known)
+        close()
+
+    batch.close = close_after_looking  # type: ignore[method-assign]
+    got = run(batch, steps=40)
+    for step, (a, b) in enumerate(zip(expected, got, strict=True)):
+        assert_same(a, b, f"step {step}")
+    assert len(known) == workers
+    for announced in known:
+        signatures = [signature for signature, _ in announced]
+        assert len(signatures) == 3 == len(set(signatures)), signatures  # + the reset info
 
 
 def test_records_round_trip_the_infos():

@@ -62,3 +62,23 @@ class Doomed(gym.Env):
         if action[0] < -0.5:
             os.kill(os.getpid(), signal.SIGKILL)
         return np.full(2, 0.5, np.float32), 1.0, False, False, {"t": 1}
+
+
+class Blinking(gym.Env):
+    """Infos of two shapes taking turns (as CarRacing's reward terms gain a key on the
+    steps that reach a tile), with an episode end every 9 steps."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.zeros(2, np.float32), {"t": 0}
+
+    def step(self, action):
+        self.t += 1
+        value = float(self.np_random.random())
+        terms = {"time": -0.1, "tiles": value} if self.t % 3 == 0 else {"time": -0.1}
+        info = {"t": self.t, "pose": (value, -value), "terms": terms}
+        return np.full(2, value, np.float32), value, self.t % 9 == 0, False, info

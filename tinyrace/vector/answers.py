@@ -20,8 +20,12 @@ class Answers:
         self.infos, self.slices = infos, slices  # infos: (num_envs, INFO_BYTES) uint8
         self.signatures: list[shared.Signature | None] = [None] * len(slices)
         self.records: list[np.ndarray | None] = [None] * len(slices)
-        # every env's records bound to their signature (when all workers have it)
-        self.whole: dict[shared.Signature, shared.Bound] = {}
+        # per worker, its announced signatures in order, with its slice's records of each
+        self.known: list[list[tuple[shared.Signature, np.ndarray]]] = [[] for _ in slices]
+        self.interned: dict[shared.Signature, shared.Signature] = {}  # equal ones: one object
+        # every env's records bound to their signature (when all workers have it), by
+        # the interned signature's id (a nested tuple's hash costs more)
+        self.whole: dict[int, shared.Bound] = {}
 
     def collect(
         self, status: np.ndarray, pipes: list[Connection], numbers: list[int] | None = None
@@ -33,9 +37,10 @@ class Answers:
         numbers = list(range(len(pipes))) if numbers is None else numbers
         per_worker: list[Any] = []
         error: Exception | None = None
+        codes = status.tolist()  # one call, not a numpy scalar per worker
         for number in numbers:
             pipe = pipes[number]
-            code = int(status[number])
+            code = codes[number]
             if code == shared.FAILED:
                 _, described = pipe.recv()
                 error = error or rebuild_error(described, number, self.slices[number])
@@ -45,18 +50,21 @@ class Answers:
             else:
                 if code == shared.NEW_SIGNATURE:
                     self._announce(number, pipe.recv())
+                else:
+                    signature, self.records[number] = self.known[number][code - shared.KNOWN]
+                    self.signatures[number] = signature
                 per_worker.append(self.signatures[number])
         if error is not None:
             raise error
         first = per_worker[0]
-        if isinstance(first, tuple) and all(s is first or s == first for s in per_worker):
+        if isinstance(first, tuple) and per_worker.count(first) == len(per_worker):
             rows = self.records[numbers[0]]
             assert rows is not None
             if len(numbers) == len(pipes):  # every env, in order: one view of all records
-                bound = self.whole.get(first)
+                bound = self.whole.get(id(first))
                 if bound is None:
                     whole = shared.records(self.infos, rows.dtype)
-                    bound = self.whole[first] = shared.bind(first, whole)
+                    bound = self.whole[id(first)] = shared.bind(first, whole)
                 return shared.merge_bound(bound, len(self.infos))
             parts = [self.records[number] for number in numbers]
             return shared.merge_columns(first, np.concatenate(parts))  # type: ignore[arg-type]
@@ -71,7 +79,9 @@ class Answers:
         return merge_infos(infos, len(infos))
 
     def _announce(self, number: int, signature: shared.Signature) -> None:
+        signature = self.interned.setdefault(signature, signature)
         dtype = shared.record_dtype(signature)
         assert dtype is not None  # the worker checked it
-        self.signatures[number] = signature
-        self.records[number] = shared.records(self.infos[self.slices[number]], dtype)
+        records = shared.records(self.infos[self.slices[number]], dtype)
+        self.signatures[number], self.records[number] = signature, records
+        self.known[number].append((signature, records))

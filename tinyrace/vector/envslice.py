@@ -34,7 +34,7 @@ class EnvSlice:
         fits = batch_physics and len(self.envs) >= BATCH_FROM and BatchStepper.fits(self.envs)
         self.batch = BatchStepper(self.envs, numpy_from) if fits else None
         self.views = views
-        self.autoreset = np.zeros(len(self.envs), dtype=np.bool_)
+        self.autoreset = [False] * len(self.envs)  # envs whose episode ended at the last step
 
     def spaces(self) -> list[tuple[gym.Space[Any], gym.Space[Any]]]:
         return [(env.observation_space, env.action_space) for env in self.envs]
@@ -64,10 +64,11 @@ class EnvSlice:
         """Step every env (an env whose episode ended at the last step is reset instead):
         rewards, terminations, truncations and infos, as lists (they pickle faster)."""
         n = len(self.envs)
-        autoreset = self.autoreset.tolist()
+        autoreset = self.autoreset
         results: list[Step | None]
         if self.batch is not None:
-            results = self.batch.step(actions, self.autoreset, self._write, self._rows())
+            mask = np.array(autoreset, dtype=np.bool_)
+            results = self.batch.step(actions, mask, self._write, self._rows())
         else:
             results = self._step_each(actions, autoreset)
         rewards: list[SupportsFloat] = [0.0] * n
@@ -83,9 +84,7 @@ class EnvSlice:
                 self._write(j, observation)
                 continue
             _, rewards[j], terminated[j], truncated[j], infos[j] = result
-        # cast by numpy as SyncVectorEnv's arrays are (a step may return numpy scalars)
-        ended = np.array(terminated, dtype=np.bool_) | np.array(truncated, dtype=np.bool_)
-        self.autoreset = ended
+        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
         return rewards, terminated, truncated, infos
 
     def _step_each(self, actions: Any, autoreset: list[bool]) -> list[Step | None]:
@@ -167,6 +166,14 @@ class EnvSlice:
             target[self.first + j] = observation  # a Box: one array
         else:
             _write_nested(target, self.first + j, observation)
+
+
+def _flag(value: Any) -> bool:
+    """``value`` as numpy casts it into SyncVectorEnv's flag arrays (a step may return
+    numpy scalars); a ``bool`` as it is, without a numpy call."""
+    if type(value) is bool:
+        return value
+    return bool(np.array(value, dtype=np.bool_))
 
 
 def _blame(error: Exception, index: int) -> None:

@@ -32,13 +32,16 @@ MAX_TUPLE = 16  # longest tuple of floats kept in a record
 ALIGN = 64  # [bytes] each array starts on a cache line
 _PLAIN = (float, int, bool)
 _NUMPY = (np.float64, np.float32, np.int64, np.int32, np.bool_)
+_SIMPLE = frozenset(_PLAIN + _NUMPY)  # one lookup per value
 LEAVES = (Box, Discrete, MultiBinary, MultiDiscrete)
 
 # what a worker's status word says about its last step
-DONE = 0  # everything is in the shared memory
-NEW_SIGNATURE = 1  # ... and the pipe carries the infos' new signature
+NEW_SIGNATURE = 1  # the records hold the infos and the pipe carries their new signature
 INFOS_BY_PIPE = 2  # the infos come over the pipe
 FAILED = 3  # the pipe carries the exception
+# KNOWN + i: the records hold the infos, of the worker's i-th announced signature (infos
+# whose shape alternates, such as a reward term present at some steps, cost no message)
+KNOWN = 4
 
 # a worker's command word
 STEP = 1  # step with the actions in the shared memory
@@ -150,12 +153,15 @@ def flatten(info: dict[str, Any]) -> tuple[Signature, list[Any]] | None:
     values: list[Any] = []
     for key, value in info.items():
         kind = type(value)
-        if kind in _PLAIN or kind in _NUMPY:
+        if kind in _SIMPLE:
             signature.append((key, kind))
             values.append(value)
         elif kind is tuple:
-            if not 0 < len(value) <= MAX_TUPLE or any(type(v) is not float for v in value):
+            if not 0 < len(value) <= MAX_TUPLE:
                 return None
+            for item in value:
+                if type(item) is not float:
+                    return None
             signature.append((key, tuple, len(value)))
             values.append(value)
         elif kind is dict:

@@ -36,6 +36,7 @@ from tinyrace.vector.envslice import EnvSlice
 
 # [s] a worker polls for its next command this long before it sleeps
 WORKER_SPIN = 0.0005
+ONE_BY_ONE = 4  # a worker with at most this many envs writes their results one by one
 PARENT_CHECK = 1.0  # [s] a sleeping worker looks this often whether its parent is alive
 CLOSED = "closed"  # a worker's last answer
 yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # no sched_yield on Windows
@@ -67,8 +68,15 @@ class Worker:
         self.pipe, self.number, self.envs, self.views = pipe, number, envs, views
         self.go, self.done = semaphores
         self.rows = slice(envs.first, envs.first + len(envs.envs))
-        self.signature: shared.Signature | None = None
-        self.records: np.ndarray | None = None  # the slice's info rows, as records
+        # this slice's rows of the shared arrays, made once (a slice per step costs more)
+        self.actions = None if views.actions is None else views.actions[self.rows]
+        self.rewards = views.rewards[self.rows]
+        self.terminated = views.terminated[self.rows]
+        self.truncated = views.truncated[self.rows]
+        self.one_by_one = len(envs.envs) <= ONE_BY_ONE
+        # per signature announced to the parent: its number and the slice's info rows
+        # as its records
+        self.known: dict[shared.Signature, tuple[int, np.ndarray]] = {}
 
     def serve(self) -> None:
         """Answer commands until "close" or the parent's end."""
@@ -95,14 +103,19 @@ class Worker:
                 self.pipe.send((False, describe(error)))
 
     def step(self) -> None:
-        views, rows = self.views, self.rows
-        status = views.status
+        status = self.views.status
         try:
-            actions = views.actions[rows].copy()  # type: ignore[index]  # the env may keep it
+            actions = self.actions.copy()  # type: ignore[union-attr]  # the env may keep it
             rewards, terminated, truncated, infos = self.envs.step(actions)
-            views.rewards[rows] = rewards
-            views.terminated[rows] = terminated
-            views.truncated[rows] = truncated
+            if self.one_by_one:  # a few scalar writes cost less than converting lists
+                for j, reward in enumerate(rewards):
+                    self.rewards[j] = reward
+                    self.terminated[j] = terminated[j]
+                    self.truncated[j] = truncated[j]
+            else:
+                self.rewards[:] = rewards
+                self.terminated[:] = terminated
+                self.truncated[:] = truncated
             status[self.number] = self._write_infos(infos)
         except Exception as error:
             status[self.number] = shared.FAILED
@@ -110,34 +123,33 @@ class Worker:
         self.done.release()
 
     def _write_infos(self, infos: list[dict[str, Any]]) -> int:
-        """Write the infos into the records if they fit (sending a new signature first);
-        else send them over the pipe. The status that says which."""
+        """Write the infos into the records if they fit (sending a signature the parent
+        has not seen first); else send them over the pipe. The status that says which."""
         flat = [shared.flatten(info) for info in infos]
         first = flat[0]
-        if first is None or any(f is None or f[0] != first[0] for f in flat):
+        if first is None or (len(flat) > 1 and any(f is None or f[0] != first[0] for f in flat)):
             self.pipe.send(infos)
             return shared.INFOS_BY_PIPE
-        status = shared.DONE
-        if first[0] != self.signature:
-            dtype = shared.record_dtype(first[0])
+        signature = first[0]
+        known = self.known.get(signature)
+        if known is None:
+            dtype = shared.record_dtype(signature)
             if dtype is None:
                 self.pipe.send(infos)
                 return shared.INFOS_BY_PIPE
-            self.signature = first[0]
-            self.records = shared.records(self.views.infos[self.rows], dtype)
-            status = shared.NEW_SIGNATURE
-        records = self.records
-        assert records is not None
+            known = (-1, shared.records(self.views.infos[self.rows], dtype))
+        number, records = known
         try:
             for j, item in enumerate(flat):  # row by row: at a few envs faster than at once
                 records[j] = tuple(item[1])  # type: ignore[index]
         except (OverflowError, ValueError, TypeError):  # e.g. an int beyond 64 bits
-            self.signature = self.records = None
             self.pipe.send(infos)
             return shared.INFOS_BY_PIPE
-        if status == shared.NEW_SIGNATURE:
-            self.pipe.send(self.signature)
-        return status
+        if number >= 0:
+            return shared.KNOWN + number
+        self.known[signature] = (len(self.known), records)
+        self.pipe.send(signature)
+        return shared.NEW_SIGNATURE
 
 
 def work(
