@@ -184,14 +184,7 @@ class BatchVectorEnv(VectorEnv):
         """Step every env; an env whose episode ended at the last step is reset instead."""
         if self._local is not None:  # in this process: no messages, no slicing
             self._check_open()
-            rewards, terminated, truncated, env_infos = self._local.step(self._batch(actions))
-            return (
-                self._observations_out(),
-                np.array(rewards, dtype=np.float64),
-                np.array(terminated, dtype=np.bool_),
-                np.array(truncated, dtype=np.bool_),
-                merge_infos(env_infos, self.num_envs),
-            )
+            return self._results(*self._local.step(self._batch(actions)))
         self.step_async(actions)
         return self.step_wait()
 
@@ -232,14 +225,7 @@ class BatchVectorEnv(VectorEnv):
             return results
         if self._by_pipe:
             replies = self._workers.receive_all()
-            rewards, terminated, truncated, env_infos = map(_flat, zip(*replies, strict=True))
-            return (
-                self._observations_out(),
-                np.array(rewards, dtype=np.float64),
-                np.array(terminated, dtype=np.bool_),
-                np.array(truncated, dtype=np.bool_),
-                merge_infos(env_infos, self.num_envs),
-            )
+            return self._results(*map(_flat, zip(*replies, strict=True)))
         self._workers.wait_all()
         try:
             infos = self._answers.collect(self._views.status, self._workers.pipes)
@@ -253,6 +239,22 @@ class BatchVectorEnv(VectorEnv):
             views.terminated.copy(),
             views.truncated.copy(),
             infos,
+        )
+
+    def _results(
+        self,
+        rewards: Sequence[Any],
+        terminated: Sequence[Any],
+        truncated: Sequence[Any],
+        env_infos: Sequence[dict[str, Any]],
+    ) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        """A step's results from per-env lists (in this process, or by the pipes)."""
+        return (
+            self._observations_out(),
+            np.array(rewards, dtype=np.float64),
+            np.array(terminated, dtype=np.bool_),
+            np.array(truncated, dtype=np.bool_),
+            merge_infos(env_infos, self.num_envs),
         )
 
     def render(self) -> tuple[Any, ...]:
