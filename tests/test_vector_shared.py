@@ -25,7 +25,7 @@ import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.pool import AsyncBatch
-from tinyrace.vector.shared import INFO_BYTES, flatten, merge_columns, record_dtype, records
+from tinyrace.vector.records import INFO_BYTES, flatten, merge_columns, record_dtype, records
 
 SHM = Path("/dev/shm")
 BOUND = 60  # [s] a test that waits longer has hung
@@ -74,8 +74,7 @@ def test_infos_whose_shape_takes_turns_are_announced_once_per_shape(num_envs, wo
         assert_same(a, b, f"step {step}")
     assert len(known) == workers
     for announced in known:
-        signatures = [signature for signature, _ in announced]
-        assert len(signatures) == 3 == len(set(signatures)), signatures  # + the reset info
+        assert len(announced) == 3 == len(set(announced)), announced  # + the reset info
 
 
 def test_records_round_trip_the_infos():

@@ -82,3 +82,23 @@ class Blinking(gym.Env):
         terms = {"time": -0.1, "tiles": value} if self.t % 3 == 0 else {"time": -0.1}
         info = {"t": self.t, "pose": (value, -value), "terms": terms}
         return np.full(2, value, np.float32), value, self.t % 9 == 0, False, info
+
+
+class Tiles(gym.Env):
+    """CarRacing's infos in small: the reward terms gain a key on the steps that reach a
+    tile, at random per env, so the envs of one worker disagree on most steps."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.zeros(2, np.float32), {"t": 0, "terms": {}}
+
+    def step(self, action):
+        self.t += 1
+        value = float(self.np_random.random())
+        terms = {"time": -0.1, "tiles": value} if value > 0.6 else {"time": -0.1}
+        info = {"pose": (value, -value, 0.5), "t": self.t, "on": value > 0.5, "terms": terms}
+        return np.full(2, value, np.float32), value, False, self.t % 13 == 0, info

@@ -11,77 +11,107 @@ import numpy as np
 from tinyrace.vector import shared
 from tinyrace.vector.failures import rebuild_error
 from tinyrace.vector.infos import merge_infos
+from tinyrace.vector.records import Plan, Signature, record_dtype, records, unflatten
 
 
 class Answers:
-    """Each worker's info signature and its slice's records, as the worker announced them."""
+    """The info signatures the workers announced, numbered once for all workers, and the
+    merge plans of the records over the whole batch."""
 
-    def __init__(self, infos: np.ndarray, slices: list[slice]) -> None:
-        self.infos, self.slices = infos, slices  # infos: (num_envs, INFO_BYTES) uint8
-        self.signatures: list[shared.Signature | None] = [None] * len(slices)
-        self.records: list[np.ndarray | None] = [None] * len(slices)
-        # per worker, its announced signatures in order, with its slice's records of each
-        self.known: list[list[tuple[shared.Signature, np.ndarray]]] = [[] for _ in slices]
-        self.interned: dict[shared.Signature, shared.Signature] = {}  # equal ones: one object
-        # every env's records bound to their signature (when all workers have it), by
-        # the interned signature's id (a nested tuple's hash costs more)
-        self.whole: dict[int, shared.Bound] = {}
+    def __init__(self, infos: np.ndarray, kinds: np.ndarray, slices: list[slice]) -> None:
+        self.infos, self.kinds, self.slices = infos, kinds, slices
+        self.signatures: list[Signature] = []  # by number
+        self.dtypes: list[np.dtype] = []  # their records' layouts
+        self.numbers: dict[Signature, int] = {}
+        # per worker: its numbers of signatures -> the common numbers; as one table
+        # (worker, its number) -> common number, and each env's worker
+        self.known: list[list[int]] = [[] for _ in slices]
+        self.table = np.zeros((len(slices), 0), np.int64)
+        self.worker_of = np.repeat(np.arange(len(slices)), [s.stop - s.start for s in slices])
+        self.plans: dict[tuple[int, ...], Plan | None] = {}  # by signatures in order
 
     def collect(
         self, status: np.ndarray, pipes: list[Connection], numbers: list[int] | None = None
     ) -> dict[str, Any]:
         """The step's merged infos of the workers ``numbers`` (default: all), their envs in
-        that order: columns of the records when every worker wrote the same kind, else
-        each env's info (from its record or the pipe), merged. A worker's exception is
-        raised once every worker's answer is read (the pipes stay in step)."""
+        that order: from the records when every worker wrote them, else each env's info
+        (from its record or the pipe), merged. A worker's exception is raised once every
+        worker's answer is read (the pipes stay in step)."""
+        whole = numbers is None
         numbers = list(range(len(pipes))) if numbers is None else numbers
-        per_worker: list[Any] = []
+        by_pipe: dict[int, list[dict[str, Any]]] = {}
         error: Exception | None = None
         codes = status.tolist()  # one call, not a numpy scalar per worker
         for number in numbers:
-            pipe = pipes[number]
             code = codes[number]
+            if code == shared.KNOWN:
+                continue
+            pipe = pipes[number]
             if code == shared.FAILED:
                 _, described = pipe.recv()
                 error = error or rebuild_error(described, number, self.slices[number])
-                per_worker.append(None)
             elif code == shared.INFOS_BY_PIPE:
-                per_worker.append(pipe.recv())
+                by_pipe[number] = pipe.recv()
             else:
-                if code == shared.NEW_SIGNATURE:
-                    self._announce(number, pipe.recv())
-                else:
-                    signature, self.records[number] = self.known[number][code - shared.KNOWN]
-                    self.signatures[number] = signature
-                per_worker.append(self.signatures[number])
+                self._announce(number, pipe.recv())
         if error is not None:
             raise error
-        first = per_worker[0]
-        if isinstance(first, tuple) and per_worker.count(first) == len(per_worker):
-            rows = self.records[numbers[0]]
-            assert rows is not None
-            if len(numbers) == len(pipes):  # every env, in order: one view of all records
-                bound = self.whole.get(id(first))
-                if bound is None:
-                    whole = shared.records(self.infos, rows.dtype)
-                    bound = self.whole[id(first)] = shared.bind(first, whole)
-                return shared.merge_bound(bound, len(self.infos))
-            parts = [self.records[number] for number in numbers]
-            return shared.merge_columns(first, np.concatenate(parts))  # type: ignore[arg-type]
+        if by_pipe:
+            return self._one_by_one(numbers, by_pipe)
+        if whole:
+            return self._merge(self.table[self.worker_of, self.kinds], self.infos, cache=True)
+        envs = np.concatenate(
+            [np.arange(s.start, s.stop) for s in map(self.slices.__getitem__, numbers)]
+        )
+        kinds = self.table[self.worker_of[envs], self.kinds[envs]]
+        return self._merge(kinds, self.infos[envs], cache=False)
+
+    def _merge(self, numbers: np.ndarray, rows: np.ndarray, cache: bool) -> dict[str, Any]:
+        """The infos of the records ``rows``, env ``i``'s of signature ``numbers[i]``."""
+        first = int(numbers[0])
+        if (numbers == first).all():
+            order: tuple[int, ...] = (first,)
+        else:
+            order = tuple(dict.fromkeys(numbers.tolist()))
+        if cache and order in self.plans:
+            plan = self.plans[order]
+        else:
+            plan = Plan.of([(n, self.signatures[n]) for n in order], rows)
+            if cache:
+                self.plans[order] = plan
+        if plan is None:  # a key of two types: as merge_infos merges them
+            infos = [self._info(n, row) for n, row in zip(numbers.tolist(), rows, strict=True)]
+            return merge_infos(infos, len(infos))
+        return plan.merge(numbers)
+
+    def _info(self, number: int, row: np.ndarray) -> dict[str, Any]:
+        """The info written into ``row`` (uint8) with signature ``number``."""
+        return unflatten(self.signatures[number], records(row[None], self.dtypes[number])[0])
+
+    def _one_by_one(
+        self, numbers: list[int], by_pipe: dict[int, list[dict[str, Any]]]
+    ) -> dict[str, Any]:
         infos: list[dict[str, Any]] = []
-        for number, item in zip(numbers, per_worker, strict=True):
-            if isinstance(item, list):
-                infos.extend(item)
-            else:
-                records = self.records[number]
-                assert records is not None and item is not None
-                infos.extend(shared.unflatten(item, row) for row in records)
+        for number in numbers:
+            if number in by_pipe:
+                infos.extend(by_pipe[number])
+                continue
+            span = self.slices[number]
+            kinds = self.table[number, self.kinds[span]]
+            for n, row in zip(kinds.tolist(), self.infos[span], strict=True):
+                infos.append(self._info(n, row))
         return merge_infos(infos, len(infos))
 
-    def _announce(self, number: int, signature: shared.Signature) -> None:
-        signature = self.interned.setdefault(signature, signature)
-        dtype = shared.record_dtype(signature)
-        assert dtype is not None  # the worker checked it
-        records = shared.records(self.infos[self.slices[number]], dtype)
-        self.signatures[number], self.records[number] = signature, records
-        self.known[number].append((signature, records))
+    def _announce(self, number: int, fresh: list[Signature]) -> None:
+        """Number worker ``number``'s new signatures (the same number for equal ones)."""
+        for signature in fresh:
+            common = self.numbers.get(signature)
+            if common is None:
+                common = self.numbers[signature] = len(self.signatures)
+                self.signatures.append(signature)
+                dtype = record_dtype(signature)
+                assert dtype is not None  # the worker checked it
+                self.dtypes.append(dtype)
+            self.known[number].append(common)
+        width = max(map(len, self.known))
+        self.table = np.array([k + [-1] * (width - len(k)) for k in self.known], np.int64)

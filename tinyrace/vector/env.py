@@ -143,7 +143,7 @@ class BatchVectorEnv(VectorEnv):
         except BaseException:  # e.g. an env that cannot be made in a worker
             self.close()
             raise
-        self._answers = Answers(self._views.infos, self._slices)
+        self._answers = Answers(self._views.infos, self._views.kinds, self._slices)
 
     def _check_spaces(self, replies: list[list[tuple[gym.Space[Any], gym.Space[Any]]]]) -> None:
         """Every env must have the first env's spaces, as in SyncVectorEnv."""

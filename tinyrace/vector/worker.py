@@ -30,7 +30,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from tinyrace.vector import shared
+from tinyrace.vector import records, shared
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
 
@@ -73,10 +73,11 @@ class Worker:
         self.rewards = views.rewards[self.rows]
         self.terminated = views.terminated[self.rows]
         self.truncated = views.truncated[self.rows]
+        self.infos, self.kinds = views.infos[self.rows], views.kinds[self.rows]
         self.one_by_one = len(envs.envs) <= ONE_BY_ONE
         # per signature announced to the parent: its number and the slice's info rows
         # as its records
-        self.known: dict[shared.Signature, tuple[int, np.ndarray]] = {}
+        self.known: dict[records.Signature, tuple[int, np.ndarray]] = {}
 
     def serve(self) -> None:
         """Answer commands until "close" or the parent's end."""
@@ -123,33 +124,41 @@ class Worker:
         self.done.release()
 
     def _write_infos(self, infos: list[dict[str, Any]]) -> int:
-        """Write the infos into the records if they fit (sending a signature the parent
-        has not seen first); else send them over the pipe. The status that says which."""
-        flat = [shared.flatten(info) for info in infos]
-        first = flat[0]
-        if first is None or (len(flat) > 1 and any(f is None or f[0] != first[0] for f in flat)):
-            self.pipe.send(infos)
-            return shared.INFOS_BY_PIPE
-        signature = first[0]
-        known = self.known.get(signature)
-        if known is None:
-            dtype = shared.record_dtype(signature)
-            if dtype is None:
-                self.pipe.send(infos)
-                return shared.INFOS_BY_PIPE
-            known = (-1, shared.records(self.views.infos[self.rows], dtype))
-        number, records = known
+        """Write each env's info into its record, its signature's number into ``kinds``
+        (numbering the signatures not seen before and sending them first); infos that do
+        not fit go over the pipe. The status that says which."""
+        known, fresh = self.known, list[records.Signature]()
+        places = []
+        for info in infos:
+            flat = records.flatten(info)
+            if flat is None:
+                return self._by_pipe(infos, fresh)
+            signature, values = flat
+            place = known.get(signature)
+            if place is None:
+                dtype = records.record_dtype(signature)
+                if dtype is None:
+                    return self._by_pipe(infos, fresh)
+                place = known[signature] = (len(known), records.records(self.infos, dtype))
+                fresh.append(signature)
+            places.append((place, values))
         try:
-            for j, item in enumerate(flat):  # row by row: at a few envs faster than at once
-                records[j] = tuple(item[1])  # type: ignore[index]
+            for j, ((number, rows), values) in enumerate(places):
+                rows[j] = tuple(values)
+                self.kinds[j] = number
         except (OverflowError, ValueError, TypeError):  # e.g. an int beyond 64 bits
-            self.pipe.send(infos)
-            return shared.INFOS_BY_PIPE
-        if number >= 0:
-            return shared.KNOWN + number
-        self.known[signature] = (len(self.known), records)
-        self.pipe.send(signature)
-        return shared.NEW_SIGNATURE
+            return self._by_pipe(infos, fresh)
+        if not fresh:
+            return shared.KNOWN
+        self.pipe.send(fresh)
+        return shared.NEW_SIGNATURES
+
+    def _by_pipe(self, infos: list[dict[str, Any]], fresh: list[records.Signature]) -> int:
+        """Send ``infos`` as they are, forgetting the signatures numbered for them."""
+        for signature in fresh:
+            del self.known[signature]
+        self.pipe.send(infos)
+        return shared.INFOS_BY_PIPE
 
 
 def work(

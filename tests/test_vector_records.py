@@ -1,0 +1,137 @@
+"""Infos as records in shared memory: each env's record with its own signature, merged as
+``VectorEnv._add_info`` merges the infos themselves (``merge_infos``), bit for bit.
+
+A property test writes random lists of infos (keys of several types, keys missing in some
+envs, nested dicts, tuples, numpy numbers) into records and compares the merge with
+``merge_infos``; a vector env whose envs disagree on most steps (``Tiles``) matches
+SyncVectorEnv's results and sends no info over a pipe.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis_budget import examples
+from vector_doubles import Tiles
+
+from tests.test_batch_vector import assert_same, run
+from tinyrace.vector import BatchVectorEnv
+from tinyrace.vector.answers import Answers
+from tinyrace.vector.infos import merge_infos
+from tinyrace.vector.records import INFO_BYTES, Plan, flatten, record_dtype, records
+
+FLOATS = st.floats(allow_nan=False, width=64)
+SCALARS = {
+    "speed": FLOATS,
+    "n": st.integers(-(2**63), 2**63 - 1),
+    "on": st.booleans(),
+    "small": st.floats(allow_nan=False, width=32).map(np.float32),
+    "lap": st.integers(-(2**31), 2**31 - 1).map(np.int32),
+    "pose": st.lists(FLOATS, min_size=1, max_size=4).map(tuple),  # lengths may differ
+}
+ANY = st.one_of(*SCALARS.values())
+
+
+def infos(depth: int = 2) -> st.SearchStrategy[dict[str, Any]]:
+    """Infos whose keys mostly keep one type (as an env's do), with a key ``wild`` of any
+    type and nested dicts under ``terms``."""
+    entries = [st.tuples(st.just(key), value) for key, value in SCALARS.items()]
+    entries.append(st.tuples(st.just("wild"), ANY))
+    if depth:
+        entries.append(st.tuples(st.just("terms"), infos(depth - 1)))
+    return st.lists(st.one_of(*entries), max_size=6).map(dict)
+
+
+def merged_by_records(batch: list[dict[str, Any]]) -> dict[str, Any]:
+    """Write ``batch`` into records, one signature number per distinct signature, and merge
+    them as the parent does."""
+    rows = np.zeros((len(batch), INFO_BYTES), np.uint8)
+    numbers: dict[Any, int] = {}
+    kinds = np.zeros(len(batch), np.int64)
+    for index, info in enumerate(batch):
+        signature, flat = flatten(info)
+        kinds[index] = numbers.setdefault(signature, len(numbers))
+        records(rows[index : index + 1], record_dtype(signature))[0] = tuple(flat)
+    answers = Answers(rows, kinds, [slice(0, len(batch))])
+    answers._announce(0, list(numbers))
+    return answers._merge(kinds, rows, cache=True)
+
+
+@settings(max_examples=examples(400), deadline=None)
+@given(st.lists(infos(), min_size=1, max_size=6))
+def test_records_merge_as_merge_infos(batch):
+    try:
+        expected = merge_infos(batch, len(batch))
+    except (ValueError, TypeError, OverflowError, AttributeError) as error:
+        with pytest.raises(type(error)):  # as SyncVectorEnv's step would raise
+            merged_by_records(batch)
+        return
+    assert_same(expected, merged_by_records(batch))
+
+
+@pytest.mark.parametrize(
+    "batch",
+    [
+        [{"a": 1.0}, {"a": 2}],  # one key, two types: the infos one by one
+        [{"d": {"x": 1.0}}, {"d": 2.0}],  # a dict and a value under one key
+        [{}, {"t": (1.0, 2.0)}, {"t": (3.0,)}],  # tuples of two lengths; an empty info
+        [{"a": {"b": {"c": True}}}, {"a": {}}, {"a": {"b": {}}}],
+    ],
+)
+def test_records_merge_disagreeing_infos_as_merge_infos(batch):
+    assert_same(merge_infos(batch, len(batch)), merged_by_records(batch))
+
+
+def test_a_plan_keeps_keys_in_order_of_first_appearance():
+    rows = np.zeros((2, INFO_BYTES), np.uint8)
+    plan = Plan.of([(0, flatten({"x": 1.0})[0]), (1, flatten({"y": 1, "x": 2.0})[0])], rows)
+    assert plan is not None
+    assert list(plan.merge(np.array([0, 1]))) == ["x", "_x", "y", "_y"]
+    assert list(plan.merge(np.array([1, 0]))) == ["x", "_x", "y", "_y"]  # the plan's order
+
+
+def test_numpy_bools_go_by_pipe_as_sync_vector_env_merges_them():
+    """_add_info keeps np.bool_ values as objects (it is no np.number)."""
+    assert flatten({"b": np.bool_(True)}) is None
+    got = run(BatchVectorEnv([NumpyBool] * 2, workers=1), steps=3)
+    expected = run(gym.vector.SyncVectorEnv([NumpyBool] * 2), steps=3)
+    for step, (a, b) in enumerate(zip(expected, got, strict=True)):
+        assert_same(a, b, f"step {step}")
+    assert got[-1][-1]["b"].dtype == object
+
+
+@pytest.mark.parametrize(("num_envs", "workers"), [(8, 2), (5, 1), (3, 3)])
+def test_envs_that_disagree_write_records_not_pipe_messages(num_envs, workers):
+    expected = run(gym.vector.SyncVectorEnv([Tiles] * num_envs), steps=60)
+    batch = BatchVectorEnv([Tiles] * num_envs, workers=workers)
+    by_pipe = []
+    one_by_one = batch._answers._one_by_one
+
+    def counted(*args):
+        by_pipe.append(args)
+        return one_by_one(*args)
+
+    batch._answers._one_by_one = counted
+    plans = batch._answers.plans
+    got = run(batch, steps=60)
+    for step, (a, b) in enumerate(zip(expected, got, strict=True)):
+        assert_same(a, b, f"step {step}")
+    assert by_pipe == []
+    assert any(len(order) > 1 for order in plans)  # steps whose envs disagreed
+
+
+class NumpyBool(gym.Env):
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(2, np.float32), {}
+
+    def step(self, action):
+        return np.zeros(2, np.float32), 0.0, False, False, {"b": np.bool_(action[0] > 0)}
