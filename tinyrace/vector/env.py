@@ -36,7 +36,6 @@ from __future__ import annotations
 import itertools
 import multiprocessing
 from collections.abc import Callable, Sequence
-from copy import deepcopy
 from typing import Any
 
 import gymnasium as gym
@@ -51,6 +50,7 @@ from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
 from tinyrace.vector.failures import check_count
+from tinyrace.vector.handout import Handout, buffers_for
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.link import Workers
 
@@ -118,19 +118,19 @@ class BatchVectorEnv(VectorEnv):
         bounds = np.linspace(0, self.num_envs, min(max(workers, 1), self.num_envs) + 1)
         self._slices = [slice(a, b) for a, b in itertools.pairwise(bounds.astype(int))]
         self._workers = Workers(self._slices, self.close)
-        layout = shared.Layout(
-            self.single_observation_space,
-            self.single_action_space,
-            self.num_envs,
-            len(self._slices),
-        )
+        spaces = (self.single_observation_space, self.single_action_space, self.num_envs)
+        layout = shared.Layout(*spaces, len(self._slices))
+        layout = shared.Layout(*spaces, len(self._slices), buffers_for(layout, copy))
         if workers == 0:
-            self._views = layout.views(bytearray(layout.size))
+            block = bytearray(layout.size)
+            self._views = layout.views(block)
+            self._handout = Handout(block, layout, self._views)
             self._local = EnvSlice(env_fns, 0, self._views, batch_physics, numpy_from)
             self._check_spaces([self._local.spaces()])
             return
         self._memory = shared.create_block(layout.size)
         self._views = layout.views(self._memory.buf)
+        self._handout = Handout(self._memory.buf, layout, self._views)
         try:
             self._workers.start(
                 multiprocessing.get_context(context),
@@ -176,6 +176,8 @@ class BatchVectorEnv(VectorEnv):
         if options is not None and "reset_mask" in options:
             options = dict(options)  # unlike SyncVectorEnv, leave the caller's dict alone
             mask = _check_reset_mask(options.pop("reset_mask"), self.num_envs)
+        self._check_idle("reset")
+        self._handout.write(full=bool(mask.all()))
         replies = self._exchange("reset", [(seed[s], options, mask[s]) for s in self._slices])
         # None: not in the reset mask
         return self._observations_out(), merge_infos(_flat(replies), self.num_envs)
@@ -184,7 +186,9 @@ class BatchVectorEnv(VectorEnv):
         """Step every env; an env whose episode ended at the last step is reset instead."""
         if self._local is not None:  # in this process: no messages, no slicing
             self._check_open()
-            return self._results(*self._local.step(self._batch(actions)))
+            batch = self._batch(actions)
+            self._handout.write(full=True)
+            return self._results(*self._local.step(batch))
         self.step_async(actions)
         return self.step_wait()
 
@@ -200,6 +204,7 @@ class BatchVectorEnv(VectorEnv):
             self._pending = True
             return
         batch = self._batch(actions)
+        self._handout.write(full=True)
         target = self._views.actions
         if target is None or batch.dtype != target.dtype or batch.shape != target.shape:
             # a Dict action space, or actions that casting would change: over the pipes
@@ -316,7 +321,7 @@ class BatchVectorEnv(VectorEnv):
             self._local.close()
             self._local = None
         self._workers.close()
-        self._views = self._answers = None  # type: ignore[assignment]  # before the memory
+        self._views = self._answers = self._handout = None  # type: ignore[assignment]
         memory, self._memory = self._memory, None
         shared.free_block(memory)
 
@@ -329,13 +334,16 @@ class BatchVectorEnv(VectorEnv):
         if self.closed:
             raise gym.error.ClosedEnvironmentError("BatchVectorEnv was closed")
 
-    def _exchange(self, command: str, args: list[tuple[Any, ...]]) -> list[Any]:
-        """Send each worker its command and arguments; every worker's answer, in order."""
+    def _check_idle(self, command: str) -> None:
         self._check_open()
         if self._pending:
             raise gym.error.AlreadyPendingCallError(
                 f"{command} was called while a step was pending: call step_wait first", "step"
             )
+
+    def _exchange(self, command: str, args: list[tuple[Any, ...]]) -> list[Any]:
+        """Send each worker its command and arguments; every worker's answer, in order."""
+        self._check_idle(command)
         if self._local is not None:  # in this process: the slice's own exceptions
             return [getattr(self._local, command)(*args[0])]
         self._workers.send(command, args)
@@ -352,12 +360,10 @@ class BatchVectorEnv(VectorEnv):
         return batch
 
     def _observations_out(self) -> Any:
-        observations = self._views.observations
+        """Views of the shared memory (``copy=False``), else arrays no later step changes."""
         if not self.copy:
-            return observations
-        if isinstance(observations, np.ndarray):
-            return observations.copy()  # as deepcopy, without its memo
-        return deepcopy(observations)
+            return self._views.observations
+        return self._handout.hand_out()
 
 
 def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:

@@ -75,6 +75,8 @@ class AsyncBatch:
         target = vector._views.actions
         assert target is not None
         target[ids] = np.asarray(actions, dtype=target.dtype)
+        if not self.in_flight:  # a buffer no array handed out by reset() refers to
+            vector._handout.write(full=False)
         vector._workers.step(workers)
         self.in_flight.extend(workers)
 

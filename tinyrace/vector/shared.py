@@ -51,7 +51,9 @@ def shareable(space: gym.Space[Any]) -> bool:
 class Views:
     """Numpy views of one block: the batch's observations, actions and results."""
 
-    observations: Any  # an array, or a dict / tuple of arrays as the space nests
+    observations: Any  # the buffer written now: an array, or a dict / tuple of arrays
+    buffers: list[Any]  # every observation buffer, as ``observations``
+    buffer: np.ndarray  # (1,) int64: the number of the buffer the next step writes
     actions: np.ndarray | None  # None: the action space is not one array
     rewards: np.ndarray
     terminated: np.ndarray
@@ -63,7 +65,8 @@ class Views:
 
 
 class Layout:
-    """Where each array lies in a block for ``num_envs`` envs and ``workers`` workers."""
+    """Where each array lies in a block for ``num_envs`` envs and ``workers`` workers, with
+    ``buffers`` observation buffers (``tinyrace.vector.handout``)."""
 
     def __init__(
         self,
@@ -71,10 +74,12 @@ class Layout:
         action_space: gym.Space[Any],
         num_envs: int,
         workers: int,
+        buffers: int = 1,
     ) -> None:
         self.observation_space, self.num_envs, self.workers = observation_space, num_envs, workers
         self.size = 0
-        self._observations = self._place_space(observation_space)
+        self.observations = [self._place_space(observation_space) for _ in range(buffers)]
+        self._buffer = self._place((), np.int64, 1)
         array_actions = isinstance(action_space, LEAVES) and action_space.shape is not None
         self._actions = (
             self._place(action_space.shape or (), action_space.dtype) if array_actions else None
@@ -103,15 +108,15 @@ class Layout:
 
     def views(self, buffer: Any) -> Views:
         def view(place: Any) -> Any:
-            if isinstance(place, dict):
-                return {key: view(p) for key, p in place.items()}
-            if isinstance(place, tuple) and isinstance(place[0], tuple):
-                return tuple(view(p) for p in place)
-            offset, shape, dtype = place
-            return np.ndarray(shape, dtype=dtype, buffer=buffer, offset=offset)
+            return map_places(
+                place, lambda o, s, d: np.ndarray(s, dtype=d, buffer=buffer, offset=o)
+            )
 
+        buffers = [view(place) for place in self.observations]
         return Views(
-            view(self._observations),
+            buffers[0],
+            buffers,
+            view(self._buffer),
             None if self._actions is None else view(self._actions),
             view(self._rewards),
             view(self._terminated),
@@ -123,6 +128,15 @@ class Layout:
         )
 
 
+def map_places(place: Any, leaf: Any) -> Any:
+    """``leaf(offset, shape, dtype)`` for each array of a placed space, nested as it is."""
+    if isinstance(place, dict):
+        return {key: map_places(p, leaf) for key, p in place.items()}
+    if isinstance(place, tuple) and isinstance(place[0], tuple):
+        return tuple(map_places(p, leaf) for p in place)
+    return leaf(*place)
+
+
 def create_block(size: int) -> SharedMemory:
     return SharedMemory(create=True, size=max(size, 1))
 
@@ -131,7 +145,12 @@ def free_block(block: SharedMemory | None) -> None:
     """Close and unlink ``block`` (once; a block already unlinked is left alone)."""
     if block is None:
         return
-    with contextlib.suppress(BufferError):  # views still alive: the OS frees it with them
+    try:
         block.close()
+    except BufferError:  # arrays handed out still use the mapping: it goes with the last of
+        # them (numpy's own memoryviews hold the mmap), not with this object's finalizer,
+        # which would try to close it again and report the same error
+        block._mmap = None  # type: ignore[attr-defined]
+        block.close()  # the file descriptor
     with contextlib.suppress(FileNotFoundError):
         block.unlink()

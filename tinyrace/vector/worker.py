@@ -87,7 +87,9 @@ class Worker:
                 while not self.go.acquire(timeout=PARENT_CHECK):
                     if parent is not None and not parent.is_alive():
                         return
-            if self.views.command[self.number] == shared.STEP:
+            views = self.views
+            views.observations = views.buffers[views.buffer[0]]  # the parent's choice
+            if views.command[self.number] == shared.STEP:
                 self.step()
                 continue
             try:

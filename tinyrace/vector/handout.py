@@ -1,0 +1,105 @@
+"""Observations handed out without a copy: a few buffers that the envs write in turn.
+
+``copy=True`` promises arrays that no later step changes. Copying the batch's frames
+costs the parent about a microsecond per 28 KB frame, serially, while the workers wait;
+for cheap envs it is most of the vector env's own cost. Instead the envs write each step
+into one of ``BUFFERS`` observation buffers, and the parent hands out numpy arrays over
+that buffer itself. A buffer is written again only when no array the caller holds (nor
+any view of one) refers to it: each hand-out is rooted in an array of its own
+(``np.frombuffer``), which every array and view made from it keeps alive as its
+``base``, so a weak reference to that root tells. The common loop
+(``obs = envs.step(policy(obs))[0]``) holds one or two batches at a time, so three
+buffers take turns; a caller that keeps more gets copies.
+
+Writes that leave rows as they were (a reset with ``reset_mask``, the workers of
+``AsyncBatch``) start from a copy of the last buffer when they must move to another.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Any
+
+import numpy as np
+
+from tinyrace.vector.shared import Layout, Views, map_places
+
+BUFFERS = 3  # observation buffers taking turns when the caller gets arrays over them
+MAX_BYTES = 64 * 2**20  # [bytes] above this the buffers' total would strain /dev/shm: 1
+
+
+def buffers_for(layout: Layout, copy: bool) -> int:
+    """How many observation buffers a vector env of ``layout`` gets: several when it hands
+    out copies and they fit in ``MAX_BYTES``, else one."""
+    one = sum(_nbytes(layout.observations[0]))
+    return BUFFERS if copy and BUFFERS * one <= MAX_BYTES else 1
+
+
+class Handout:
+    """The observation buffers of one vector env's block (shared memory or a bytearray)."""
+
+    def __init__(self, block: Any, layout: Layout, views: Views) -> None:
+        self.block, self.layout, self.views = block, layout, views
+        self.current = 0  # the buffer holding the latest observations
+        # per buffer: weak references to the roots of the arrays last handed out over it
+        self.handed: list[list[weakref.ref[np.ndarray]] | None] = [None] * len(views.buffers)
+        views.buffer[0] = 0
+
+    def write(self, full: bool) -> None:
+        """Point the next write at a buffer that no array handed out refers to; ``full``:
+        the write covers every row, else the rows it leaves keep the latest values."""
+        if not self._held(self.current):
+            return
+        free = next(k for k in range(len(self.handed)) if not self._held(k))
+        if not full:
+            _copy_tree(self.views.buffers[self.current], self.views.buffers[free])
+        self.current = free
+        self.views.observations = self.views.buffers[free]
+        self.views.buffer[0] = free
+
+    def hand_out(self) -> Any:
+        """The latest observations as arrays no later step changes: over their buffer
+        when another buffer stays free for the next step, else a copy."""
+        k = self.current
+        if len(self.handed) == 1 or all(self._held(j) for j in range(len(self.handed)) if j != k):
+            return _copy_tree(self.views.buffers[k], None)
+        leases: list[weakref.ref[np.ndarray]] = []
+
+        def lease(offset: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
+            count = int(np.prod(shape))
+            root = np.frombuffer(self.block, dtype=dtype, count=count, offset=offset)
+            leases.append(weakref.ref(root))
+            return root.reshape(shape)  # its base, as every view's of it, is root
+
+        arrays = map_places(self.layout.observations[k], lease)
+        self.handed[k] = leases
+        return arrays
+
+    def _held(self, k: int) -> bool:
+        """Whether an array handed out over buffer ``k`` (or a view of one) is alive."""
+        leases = self.handed[k]
+        if leases is None:
+            return False
+        if any(root() is not None for root in leases):
+            return True
+        self.handed[k] = None
+        return False
+
+
+def _nbytes(place: Any) -> list[int]:
+    found: list[int] = []
+    map_places(place, lambda o, s, d: found.append(int(np.prod(s)) * np.dtype(d).itemsize))
+    return found
+
+
+def _copy_tree(source: Any, target: Any) -> Any:
+    """``source``'s arrays copied into ``target``'s (None: into new arrays), nested alike."""
+    if isinstance(source, dict):
+        return {k: _copy_tree(v, None if target is None else target[k]) for k, v in source.items()}
+    if isinstance(source, tuple):
+        parts = target if target is not None else (None,) * len(source)
+        return tuple(_copy_tree(v, t) for v, t in zip(source, parts, strict=True))
+    if target is None:
+        return source.copy()
+    np.copyto(target, source)
+    return target
