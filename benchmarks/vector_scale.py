@@ -8,6 +8,10 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
   (target >= 0.95: an env in a batch costs what it costs alone);
 - ``1x1``: 1 env in 1 worker process (target >= 0.7: the round trip is cheap);
 - ``Wx8``: W workers x 8 envs for W = 1 .. --max-workers (2 x 8 on 2 cores: target >= 1.6);
+- ``apart_Wx8``: W processes that share nothing, each stepping 8 envs in itself
+  (``workers=0``), for W = 2 .. --max-workers: what the machine's cores give W x 8 envs with
+  no vector env between them (their caches and memory are shared all the same), the
+  ceiling of ``Wx8``;
 - ``standin_2x64``: 2 workers x 64 stand-in envs that cost nothing (CarRacing's spaces, a
   constant frame): the vector env's own ceiling (target >= 300,000 env-steps/s);
 - ``envpool_W``: EnvPool's CarRacing-v3 with W threads x 8 envs, if ``envpool`` imports
@@ -82,11 +86,11 @@ def rate_single(seconds: float) -> float:
     return rate
 
 
-def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float) -> float:
+def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float, seed: int = 0) -> float:
     """Env-steps/s of a vector env made by ``make`` (closed afterwards)."""
     vector = make()
     try:
-        vector.reset(seed=0)
+        vector.reset(seed=seed * num_envs)
         actions = _actions(num_envs)
         for index in range(WARMUP):
             vector.step(actions[index % ACTIONS])
@@ -99,6 +103,29 @@ def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float) -> float
         return steps * num_envs / (time.perf_counter() - start)
     finally:
         vector.close()
+
+
+def rate_apart(processes: int, seconds: float) -> float:
+    """Env-steps/s of ``processes`` processes stepping 8 envs each in themselves, summed."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    children = [
+        context.Process(target=_apart, args=(queue, seconds, index)) for index in range(processes)
+    ]
+    for child in children:
+        child.start()
+    rates = [queue.get() for _ in children]
+    for child in children:
+        child.join()
+    return float(sum(rates))
+
+
+def _apart(queue: Any, seconds: float, index: int) -> None:
+    from tinyrace.vector import make_batch
+
+    queue.put(rate_vector(functools.partial(make_batch, ENV_ID, 8, 0), 8, seconds, index))
 
 
 def standin(num_envs: int, workers: int) -> Any:
@@ -156,6 +183,8 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
     }
     for workers in range(1, max_workers + 1):
         table[f"{workers}x8"] = (vector(8 * workers, workers), 8 * workers)
+    for processes in range(2, max_workers + 1):
+        table[f"apart_{processes}x8"] = (functools.partial(rate_apart, processes), 8 * processes)
     table["standin_2x64"] = (
         functools.partial(rate_vector, functools.partial(standin, 64, 2), 64),
         64,
@@ -176,6 +205,9 @@ def print_scaling(medians: dict[str, float], max_workers: int) -> None:
     one, pool = medians["one_env"], medians.get("envpool_1")
     for workers in range(1, max_workers + 1):
         line = f"  {workers} x 8: tinyrace {medians[f'{workers}x8'] / one:5.2f}x its one env"
+        apart = medians.get(f"apart_{workers}x8")
+        if apart is not None:
+            line += f" ({medians[f'{workers}x8'] / apart:4.2f}x {workers} processes apart)"
         if pool is not None:
             threads = medians[f"envpool_{workers}"]
             line += f", EnvPool {threads / pool:5.2f}x its 1 thread, tinyrace/EnvPool "

@@ -68,11 +68,12 @@ class Answers:
 
     def _merge(self, numbers: np.ndarray, rows: np.ndarray, cache: bool) -> dict[str, Any]:
         """The infos of the records ``rows``, env ``i``'s of signature ``numbers[i]``."""
-        first = int(numbers[0])
-        if (numbers == first).all():
+        listed = numbers.tolist()  # one call; counting a list costs less than numpy's ==
+        first = listed[0]
+        if listed.count(first) == len(listed):
             order: tuple[int, ...] = (first,)
         else:
-            order = tuple(dict.fromkeys(numbers.tolist()))
+            order = tuple(dict.fromkeys(listed))
         if cache and order in self.plans:
             plan = self.plans[order]
         else:
@@ -80,7 +81,7 @@ class Answers:
             if cache:
                 self.plans[order] = plan
         if plan is None:  # a key of two types: as merge_infos merges them
-            infos = [self._info(n, row) for n, row in zip(numbers.tolist(), rows, strict=True)]
+            infos = [self._info(n, row) for n, row in zip(listed, rows, strict=True)]
             return merge_infos(infos, len(infos))
         return plan.merge(numbers)
 

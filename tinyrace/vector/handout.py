@@ -40,6 +40,8 @@ class Handout:
 
     def __init__(self, block: Any, layout: Layout, views: Views) -> None:
         self.block, self.layout, self.views = block, layout, views
+        # per buffer, its arrays' (offset, count, dtype, shape) in the space's order
+        self.leaves = [_leaves(place) for place in layout.observations]
         self.current = 0  # the buffer holding the latest observations
         # per buffer: weak references to the roots of the arrays last handed out over it
         self.handed: list[list[weakref.ref[np.ndarray]] | None] = [None] * len(views.buffers)
@@ -63,17 +65,15 @@ class Handout:
         k = self.current
         if len(self.handed) == 1 or all(self._held(j) for j in range(len(self.handed)) if j != k):
             return _copy_tree(self.views.buffers[k], None)
-        leases: list[weakref.ref[np.ndarray]] = []
-
-        def lease(offset: int, shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
-            count = int(np.prod(shape))
+        leases, arrays = [], []
+        for offset, count, dtype, shape in self.leaves[k]:
             root = np.frombuffer(self.block, dtype=dtype, count=count, offset=offset)
             leases.append(weakref.ref(root))
-            return root.reshape(shape)  # its base, as every view's of it, is root
-
-        arrays = map_places(self.layout.observations[k], lease)
+            arrays.append(root.reshape(shape))  # its base, as every view's of it, is root
         self.handed[k] = leases
-        return arrays
+        if len(arrays) == 1 and not isinstance(self.views.observations, dict | tuple):
+            return arrays[0]
+        return _nest(self.views.observations, iter(arrays))
 
     def _held(self, k: int) -> bool:
         """Whether an array handed out over buffer ``k`` (or a view of one) is alive."""
@@ -84,6 +84,21 @@ class Handout:
             return True
         self.handed[k] = None
         return False
+
+
+def _leaves(place: Any) -> list[tuple[int, int, np.dtype, tuple[int, ...]]]:
+    found: list[tuple[int, int, np.dtype, tuple[int, ...]]] = []
+    map_places(place, lambda o, s, d: found.append((o, int(np.prod(s)), np.dtype(d), s)))
+    return found
+
+
+def _nest(template: Any, arrays: Any) -> Any:
+    """The next arrays of ``arrays``, nested as ``template`` (a tree of arrays) is."""
+    if isinstance(template, dict):
+        return {key: _nest(value, arrays) for key, value in template.items()}
+    if isinstance(template, tuple):
+        return tuple(_nest(value, arrays) for value in template)
+    return next(arrays)
 
 
 def _nbytes(place: Any) -> list[int]:
