@@ -67,7 +67,7 @@ def test_the_common_loop_matches_sync_vector_env_without_copies(kind, workers):
 def test_held_arrays_and_views_never_change(workers):
     """Keep every fifth batch, a row view of others and a float tensor-like view: each still
     equals its copy 30 steps later; a caller that holds every buffer gets copies."""
-    batch = make_batch("tinyrace/CarRacing-v0", 2, workers, max_episode_steps=25)
+    batch = make_batch("tinyrace/CarRacing-v0", 3, workers, max_episode_steps=25)
     try:
         observations, _ = batch.reset(seed=1)
         kept = [(observations, copied(observations))]
@@ -76,7 +76,7 @@ def test_held_arrays_and_views_never_change(workers):
             if step % 5 == 0:
                 kept.append((observations, copied(observations)))
             elif step % 7 == 0:
-                row = observations[1]  # only a view of one row stays
+                row = observations[2]  # only a view of one row stays
                 kept.append((row, row.copy()))
             elif step % 11 == 0:
                 strided = observations[:, ::2, 1:, 0].T
@@ -124,8 +124,20 @@ def test_async_batches_leave_the_reset_observations_alone():
         pool.close()
 
 
+def test_a_small_batch_is_copied():
+    """Under HAND_OUT_FROM bytes a copy costs less than a hand-out: one buffer, copies."""
+    batch = make_batch("tinyrace/CarRacing-v0", 1, 1)
+    try:
+        assert len(batch._views.buffers) == 1
+        observations, _ = batch.reset(seed=0)
+        assert observations.flags.owndata
+        assert batch.step(np.zeros((1, 3), np.float32))[0].flags.owndata
+    finally:
+        batch.close()
+
+
 def test_the_buffers_are_freed_with_the_arrays_after_close():
-    batch = make_batch("tinyrace/CarRacing-v0", 2, 1)
+    batch = make_batch("tinyrace/CarRacing-v0", 3, 1)
     observations, _ = batch.reset(seed=0)
     snapshot = observations.copy()
     batch.close()

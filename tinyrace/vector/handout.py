@@ -26,13 +26,17 @@ from tinyrace.vector.shared import Layout, Views, map_places
 
 BUFFERS = 3  # observation buffers taking turns when the caller gets arrays over them
 MAX_BYTES = 64 * 2**20  # [bytes] above this the buffers' total would strain /dev/shm: 1
+# [bytes] a batch of observations smaller than this is copied: a hand-out's fixed cost
+# (about 6 µs here) is a copy of some 100 KB (four CarRacing frames), measured
+HAND_OUT_FROM = 64 * 2**10
 
 
 def buffers_for(layout: Layout, copy: bool) -> int:
     """How many observation buffers a vector env of ``layout`` gets: several when it hands
-    out copies and they fit in ``MAX_BYTES``, else one."""
+    out copies of a batch large enough to be worth it and they fit in ``MAX_BYTES``, else
+    one (and the batch is copied)."""
     one = sum(_nbytes(layout.observations[0]))
-    return BUFFERS if copy and BUFFERS * one <= MAX_BYTES else 1
+    return BUFFERS if copy and HAND_OUT_FROM <= one <= MAX_BYTES // BUFFERS else 1
 
 
 class Handout:
