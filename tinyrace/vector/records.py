@@ -138,6 +138,7 @@ class Plan:
     def __init__(self, order: tuple[int, ...], entries: tuple[Leaf | Branch, ...]) -> None:
         self.order, self.entries = order, entries
         self.every = frozenset(order)
+        self._steps = self._compile(entries)
 
     @classmethod
     def of(cls, signatures: Sequence[tuple[int, Signature]], infos: np.ndarray) -> Plan | None:
@@ -159,31 +160,49 @@ class Plan:
             masks = {self.order[0]: full}
         else:
             masks = {number: numbers == number for number in self.order}
-        return self._merge(self.entries, n, masks, full)
+        return self._merge(self._steps, n, masks, full)
 
-    def _merge(
-        self,
-        entries: tuple[Leaf | Branch, ...],
-        n: int,
-        masks: dict[int, np.ndarray],
-        full: np.ndarray,
-    ) -> dict[str, Any]:
-        merged: dict[str, Any] = {}
+    def _compile(self, entries: tuple[Leaf | Branch, ...]) -> tuple[_Step, ...]:
+        """Each entry as (key, mask key, in every env, how, what): decided once, not per
+        merge."""
+        steps: list[_Step] = []
         for entry in entries:
             everywhere = entry.having == self.every
-            mask = full.copy() if everywhere else _any(masks, entry.having)
+            what: Any
             if isinstance(entry, Branch):
-                value: Any = self._merge(entry.entries, n, masks, full)
-            elif entry.dtype is None:
-                value = _objects(entry, n, masks, everywhere)
+                how, what = _BRANCH, self._compile(entry.entries)
             elif everywhere and len(entry.columns) == 1:
-                value = entry.columns[0][1].copy()
+                how, what = (_TUPLES if entry.dtype is None else _COPY), entry.columns[0][1]
             else:
-                value = np.zeros(n, dtype=entry.dtype)
-                for having, column in entry.columns:
-                    np.copyto(value, column, where=_any(masks, having))
-            merged[entry.key], merged[f"_{entry.key}"] = value, mask
+                how, what = (_SOME_TUPLES if entry.dtype is None else _SPREAD), entry
+            steps.append((entry.key, f"_{entry.key}", everywhere, entry.having, how, what))
+        return tuple(steps)
+
+    def _merge(
+        self, steps: tuple[_Step, ...], n: int, masks: dict[int, np.ndarray], full: np.ndarray
+    ) -> dict[str, Any]:
+        merged: dict[str, Any] = {}
+        for key, mask_key, everywhere, having, how, what in steps:
+            if how is _COPY:
+                value: Any = what.copy()
+            elif how is _TUPLES:
+                value = np.fromiter(map(tuple, what.tolist()), object, n)
+            elif how is _BRANCH:
+                value = self._merge(what, n, masks, full)
+            elif how is _SOME_TUPLES:
+                value = _objects(what, n, masks)
+            else:
+                value = np.zeros(n, dtype=what.dtype)
+                for group, column in what.columns:
+                    np.copyto(value, column, where=_any(masks, group))
+            merged[key] = value
+            merged[mask_key] = full.copy() if everywhere else _any(masks, having)
         return merged
+
+
+# how a plan's step makes its value
+_COPY, _TUPLES, _BRANCH, _SOME_TUPLES, _SPREAD = "copy", "tuples", "branch", "some", "spread"
+_Step = tuple[str, str, bool, frozenset[int], str, Any]
 
 
 def merge_columns(signature: Signature, rows: np.ndarray) -> dict[str, Any]:
@@ -256,10 +275,8 @@ def _any(masks: dict[int, np.ndarray], numbers: frozenset[int]) -> np.ndarray:
     return mask
 
 
-def _objects(leaf: Leaf, n: int, masks: dict[int, np.ndarray], everywhere: bool) -> np.ndarray:
+def _objects(leaf: Leaf, n: int, masks: dict[int, np.ndarray]) -> np.ndarray:
     """A tuple key's values as ``_add_info`` keeps them: an object array, None where absent."""
-    if everywhere and len(leaf.columns) == 1:
-        return np.fromiter(map(tuple, leaf.columns[0][1].tolist()), object, n)
     values = np.empty(n, dtype=object)  # every item None
     for having, column in leaf.columns:
         rows = np.flatnonzero(_any(masks, having))
