@@ -13,6 +13,8 @@ from tinyrace.vector.failures import rebuild_error
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.records import Plan, Signature, record_dtype, records, unflatten
 
+MAX_PLANS = 256  # merge plans kept (one per order of signatures met); then they start anew
+
 
 class Answers:
     """The info signatures the workers announced, numbered once for all workers, and the
@@ -79,6 +81,8 @@ class Answers:
         else:
             plan = Plan.of([(n, self.signatures[n]) for n in order], rows)
             if cache:
+                if len(self.plans) >= MAX_PLANS:  # envs whose infos take many shapes
+                    self.plans.clear()
                 self.plans[order] = plan
         if plan is None:  # a key of two types: as merge_infos merges them
             infos = [self._info(n, row) for n, row in zip(listed, rows, strict=True)]
