@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
-from vector_doubles import Tiles
+from vector_doubles import NumpyBool, Tiles
 
 from tests.test_batch_vector import assert_same, run
 from tinyrace.vector import BatchVectorEnv
@@ -62,6 +62,7 @@ def merged_by_records(batch: list[dict[str, Any]]) -> dict[str, Any]:
     return answers._merge(kinds, rows, cache=True)
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast:RuntimeWarning")  # a wild key
 @settings(max_examples=examples(400), deadline=None)
 @given(st.lists(infos(), min_size=1, max_size=6))
 def test_records_merge_as_merge_infos(batch):
@@ -123,15 +124,3 @@ def test_envs_that_disagree_write_records_not_pipe_messages(num_envs, workers):
         assert_same(a, b, f"step {step}")
     assert by_pipe == []
     assert any(len(order) > 1 for order in plans)  # steps whose envs disagreed
-
-
-class NumpyBool(gym.Env):
-    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
-    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        return np.zeros(2, np.float32), {}
-
-    def step(self, action):
-        return np.zeros(2, np.float32), 0.0, False, False, {"b": np.bool_(action[0] > 0)}

@@ -102,3 +102,17 @@ class Tiles(gym.Env):
         terms = {"time": -0.1, "tiles": value} if value > 0.6 else {"time": -0.1}
         info = {"pose": (value, -value, 0.5), "t": self.t, "on": value > 0.5, "terms": terms}
         return np.full(2, value, np.float32), value, False, self.t % 13 == 0, info
+
+
+class NumpyBool(gym.Env):
+    """An info value of numpy's bool, which Gymnasium's merge keeps as an object."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(2, np.float32), {}
+
+    def step(self, action):
+        return np.zeros(2, np.float32), 0.0, False, False, {"b": np.bool_(action[0] > 0)}

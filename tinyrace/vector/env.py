@@ -68,8 +68,10 @@ class BatchVectorEnv(VectorEnv):
         workers: processes to run the envs in (at most one per env); 0 runs them all
             in this process, with no pipe and no pickling.
         context: ``multiprocessing`` start method; ``None`` for the platform default.
-        copy: return a copy of the observations (else views of the shared memory,
-            overwritten by the next step), as ``SyncVectorEnv``'s ``copy``.
+        copy: return observations that no later step changes, as ``SyncVectorEnv``'s
+            ``copy`` (arrays over one of a few buffers the envs write in turn, or copies:
+            ``tinyrace.vector.handout``); False returns views of the shared memory,
+            overwritten by the next step.
         batch_physics: step the dynamic cars of a process's envs together (their tyre
             forces as one numpy computation, ``tinyrace.vector.batched``); False steps
             each env by its own ``step``, as a process with a single env does either way.
