@@ -14,6 +14,8 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
   ceiling of ``Wx8``;
 - ``standin_2x64``: 2 workers x 64 stand-in envs that cost nothing (CarRacing's spaces, a
   constant frame): the vector env's own ceiling (target >= 300,000 env-steps/s);
+- ``standin_2x64_small``: the same with an observation of 8 floats: the ceiling without the
+  frames' bytes (27.6 KB per env and step written by the workers);
 - ``envpool_W``: EnvPool's CarRacing-v3 with W threads x 8 envs, if ``envpool`` imports
   (``pip install envpool`` with its asset packages, in a venv of its own: see
   benchmarks/README.md); else the import's error is printed and the rows are skipped.
@@ -128,12 +130,15 @@ def _apart(queue: Any, seconds: float, index: int) -> None:
     queue.put(rate_vector(functools.partial(make_batch, ENV_ID, 8, 0), 8, seconds, index))
 
 
-def standin(num_envs: int, workers: int) -> Any:
+def standin(num_envs: int, workers: int, small: bool = False) -> Any:
     from tinyrace.vector import BatchVectorEnv
 
     from standin import StandIn
 
-    observation = gym.spaces.Box(0, 255, (96, 96, 3), np.uint8)
+    if small:
+        observation = gym.spaces.Box(-1.0, 1.0, (8,), np.float32)
+    else:
+        observation = gym.spaces.Box(0, 255, (96, 96, 3), np.uint8)
     action = gym.spaces.Box(np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32))
     return BatchVectorEnv(
         [functools.partial(StandIn, 0.0, observation, action)] * num_envs, workers
@@ -189,6 +194,10 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
         functools.partial(rate_vector, functools.partial(standin, 64, 2), 64),
         64,
     )
+    table["standin_2x64_small"] = (
+        functools.partial(rate_vector, functools.partial(standin, 64, 2, True), 64),
+        64,
+    )
     for threads in range(1, max_workers + 1):
         found = envpool_case(threads)
         if isinstance(found, str):
@@ -238,7 +247,7 @@ def main() -> None:
     print(f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env):")
     medians = {name: statistics.median(values) for name, values in rates.items()}
     for name, median in medians.items():
-        print(f"  {name:>14}: {median:>10,.0f}  {median / one:6.2f}x")
+        print(f"  {name:>18}: {median:>10,.0f}  {median / one:6.2f}x")
     print_scaling(medians, args.max_workers)
     one_cpu, batch_cpu = (statistics.median(CPU[k]) for k in ("one_env", "in_process_8"))
     print(
@@ -250,6 +259,10 @@ def main() -> None:
         f"  the parent's CPU per env-step: 1x1 {one_x_one * 1e6:.0f} us, stand-ins 2x64 "
         f"{ceiling * 1e6:.2f} us (the ceiling: {statistics.median(rates['standin_2x64']):,.0f} "
         "env-steps/s; issue 37: >= 300,000)"
+    )
+    print(
+        f"  without the frames' bytes (8-float observations): "
+        f"{statistics.median(rates['standin_2x64_small']):,.0f} env-steps/s"
     )
     print(f"load after: {os.getloadavg()}")
 
