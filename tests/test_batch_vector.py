@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from gymnasium.error import ClosedEnvironmentError, InvalidAction
 from gymnasium.vector.utils import batch_space
+from vector_doubles import Still
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.errors import ConfigError
@@ -174,15 +175,8 @@ def test_make_batch_with_spawned_workers():
 
 
 # -- errors in the workers -------------------------------------------------------------------
-class Fragile(gym.Env):
+class Fragile(Still):
     """Raises ValueError on an action > 0.5, exits its process on an action < -0.5."""
-
-    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
-    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
-
-    def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        return np.zeros(2, np.float32), {}
 
     def step(self, action):
         if action[0] > 0.5:

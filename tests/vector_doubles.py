@@ -104,8 +104,8 @@ class Tiles(gym.Env):
         return np.full(2, value, np.float32), value, False, self.t % 13 == 0, info
 
 
-class NumpyBool(gym.Env):
-    """An info value of numpy's bool, which Gymnasium's merge keeps as an object."""
+class Still(gym.Env):
+    """Two floats observed, one action; resets to zeros with an empty info."""
 
     observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
     action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
@@ -113,6 +113,10 @@ class NumpyBool(gym.Env):
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
         return np.zeros(2, np.float32), {}
+
+
+class NumpyBool(Still):
+    """An info value of numpy's bool, which Gymnasium's merge keeps as an object."""
 
     def step(self, action):
         return np.zeros(2, np.float32), 0.0, False, False, {"b": np.bool_(action[0] > 0)}
