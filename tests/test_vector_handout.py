@@ -14,6 +14,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.vector.utils import batch_space
+from vector_doubles import Heavy
 
 from tests.test_batch_vector import FACTORIES, assert_same
 from tinyrace.vector import BatchVectorEnv, make_batch
@@ -143,3 +144,23 @@ def test_the_buffers_are_freed_with_the_arrays_after_close():
     batch.close()
     gc.collect()
     assert np.array_equal(observations, snapshot)  # still readable after close
+
+
+@pytest.mark.parametrize("workers", LAYOUTS.values(), ids=LAYOUTS.keys())
+def test_a_step_that_raises_leaves_the_failing_envs_last_observations(workers):
+    """Env 2 raises while the last batch is held (the step writes another buffer): the
+    rows of its worker (every row in process) keep the observations from before the step,
+    never a buffer's older contents."""
+    batch = BatchVectorEnv([Heavy] * 3, workers=workers)  # 2 workers: envs 0 | 1, 2
+    try:
+        held = [batch.reset(seed=0)[0]]
+        for _ in range(3):
+            held = [held[-1], batch.step(np.zeros((3, 1), np.float32))[0]]
+        with pytest.raises(ValueError, match="heavy env refused"):
+            batch.step(np.array([[0.0], [0.0], [0.9]], np.float32))
+        mask = np.array([True, False, False])
+        observations, _ = batch.reset(seed=1, options={"reset_mask": mask})
+        assert np.all(observations[0] == 0)  # reset
+        assert np.all(observations[1:] == 3), observations[1:, 0]  # as after step 3
+    finally:
+        batch.close()

@@ -120,3 +120,21 @@ class NumpyBool(Still):
 
     def step(self, action):
         return np.zeros(2, np.float32), 0.0, False, False, {"b": np.bool_(action[0] > 0)}
+
+
+class Heavy(Still):
+    """64 KiB observations (a batch of three is handed out over the buffers) that show the
+    steps since the reset; raises on an action above 0.5."""
+
+    observation_space = gym.spaces.Box(0.0, 1e6, (16384,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.t = 0
+        return np.zeros(16384, np.float32), {}
+
+    def step(self, action):
+        if action[0] > 0.5:
+            raise ValueError(f"heavy env refused action {action[0]:.1f}")
+        self.t += 1
+        return np.full(16384, self.t, np.float32), 0.0, False, False, {}

@@ -180,7 +180,11 @@ class BatchVectorEnv(VectorEnv):
             mask = _check_reset_mask(options.pop("reset_mask"), self.num_envs)
         self._check_idle("reset")
         self._handout.write(full=bool(mask.all()))
-        replies = self._exchange("reset", [(seed[s], options, mask[s]) for s in self._slices])
+        try:
+            replies = self._exchange("reset", [(seed[s], options, mask[s]) for s in self._slices])
+        except Exception:
+            self._restore(None)
+            raise
         # None: not in the reset mask
         return self._observations_out(), merge_infos(_flat(replies), self.num_envs)
 
@@ -190,7 +194,11 @@ class BatchVectorEnv(VectorEnv):
             self._check_open()
             batch = self._batch(actions)
             self._handout.write(full=True)
-            return self._results(*self._local.step(batch))
+            try:
+                return self._results(*self._local.step(batch))
+            except Exception:
+                self._restore(None)
+                raise
         self.step_async(actions)
         return self.step_wait()
 
@@ -231,13 +239,20 @@ class BatchVectorEnv(VectorEnv):
             self._pending_local = None
             return results
         if self._by_pipe:
-            replies = self._workers.receive_all()
+            try:
+                replies = self._workers.receive_all()
+            except Exception:
+                self._restore(None)
+                raise
             return self._results(*map(_flat, zip(*replies, strict=True)))
         self._workers.wait_all()
         try:
             infos = self._answers.collect(self._views.status, self._workers.pipes)
         except (EOFError, OSError):  # a worker died after its "done"
             self.close()
+            raise
+        except Exception:
+            self._restore(self._views.status.tolist())
             raise
         views = self._views
         return (
@@ -360,6 +375,15 @@ class BatchVectorEnv(VectorEnv):
         if len(batch) != self.num_envs:
             raise ValueError(f"expected actions for {self.num_envs} envs, got {len(batch)}")
         return batch
+
+    def _restore(self, status: list[int] | None) -> None:
+        """After a step or reset that raised: the rows of the workers that failed (None:
+        every row, when it is not known which) as they were before it."""
+        if self.closed:  # a worker died: nothing left to restore
+            return
+        for number, rows in enumerate(self._slices):
+            if status is None or status[number] == shared.FAILED:
+                self._handout.restore(rows)
 
     def _observations_out(self) -> Any:
         """Views of the shared memory (``copy=False``), else arrays no later step changes."""

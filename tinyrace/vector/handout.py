@@ -12,7 +12,9 @@ any view of one) refers to it: each hand-out is rooted in an array of its own
 buffers take turns; a caller that keeps more gets copies.
 
 Writes that leave rows as they were (a reset with ``reset_mask``, the workers of
-``AsyncBatch``) start from a copy of the last buffer when they must move to another.
+``AsyncBatch``) start from a copy of the last buffer when they must move to another. A
+step that raises leaves the rows it may not have written as they were before it
+(``restore``): the envs of the worker that raised show their last observation.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ class Handout:
         # per buffer, its arrays' (offset, count, dtype, shape) in the space's order
         self.leaves = [_leaves(place) for place in layout.observations]
         self.current = 0  # the buffer holding the latest observations
+        self.previous: int | None = None  # the one before, if the last write moved
         # per buffer: weak references to the roots of the arrays last handed out over it
         self.handed: list[list[weakref.ref[np.ndarray]] | None] = [None] * len(views.buffers)
         views.buffer[0] = 0
@@ -54,14 +57,21 @@ class Handout:
     def write(self, full: bool) -> None:
         """Point the next write at a buffer that no array handed out refers to; ``full``:
         the write covers every row, else the rows it leaves keep the latest values."""
+        self.previous = None
         if not self._held(self.current):
             return
         free = next(k for k in range(len(self.handed)) if not self._held(k))
         if not full:
             _copy_tree(self.views.buffers[self.current], self.views.buffers[free])
-        self.current = free
+        self.previous, self.current = self.current, free
         self.views.observations = self.views.buffers[free]
         self.views.buffer[0] = free
+
+    def restore(self, rows: slice) -> None:
+        """After a write that raised: ``rows`` as they were before it (in place if the
+        write did not move to another buffer, where they were never overwritten)."""
+        if self.previous is not None:
+            _copy_rows(self.views.buffers[self.previous], self.views.buffers[self.current], rows)
 
     def hand_out(self) -> Any:
         """The latest observations as arrays no later step changes: over their buffer
@@ -122,3 +132,15 @@ def _copy_tree(source: Any, target: Any) -> Any:
         return source.copy()
     np.copyto(target, source)
     return target
+
+
+def _copy_rows(source: Any, target: Any, rows: slice) -> None:
+    """``source``'s ``rows`` into ``target``'s, nested alike."""
+    if isinstance(source, dict):
+        for key, value in source.items():
+            _copy_rows(value, target[key], rows)
+    elif isinstance(source, tuple):
+        for value, part in zip(source, target, strict=True):
+            _copy_rows(value, part, rows)
+    else:
+        target[rows] = source[rows]
