@@ -84,10 +84,7 @@ class EnvSlice:
                 self._write(j, observation)
                 continue
             _, rewards[j], terminated[j], truncated[j], infos[j] = result
-        self.autoreset = [
-            (a if type(a) is bool else _flag(a)) or (b if type(b) is bool else _flag(b))
-            for a, b in zip(terminated, truncated, strict=True)
-        ]  # bools as they are, without a call each
+        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
         return rewards, terminated, truncated, infos
 
     def _step_each(self, actions: Any, autoreset: list[bool]) -> list[Step | None]:

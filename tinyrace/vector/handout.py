@@ -37,7 +37,7 @@ def buffers_for(layout: Layout, copy: bool) -> int:
     """How many observation buffers a vector env of ``layout`` gets: several when it hands
     out copies of a batch large enough to be worth it and they fit in ``MAX_BYTES``, else
     one (and the batch is copied)."""
-    one = sum(_nbytes(layout.observations[0]))
+    one = sum(count * dtype.itemsize for _, count, dtype, _ in _leaves(layout.observations[0]))
     return BUFFERS if copy and HAND_OUT_FROM <= one <= MAX_BYTES // BUFFERS else 1
 
 
@@ -45,7 +45,7 @@ class Handout:
     """The observation buffers of one vector env's block (shared memory or a bytearray)."""
 
     def __init__(self, block: Any, layout: Layout, views: Views) -> None:
-        self.block, self.layout, self.views = block, layout, views
+        self.block, self.views = block, views
         # per buffer, its arrays' (offset, count, dtype, shape) in the space's order
         self.leaves = [_leaves(place) for place in layout.observations]
         self.current = 0  # the buffer holding the latest observations
@@ -62,7 +62,7 @@ class Handout:
             return
         free = next(k for k in range(len(self.handed)) if not self._held(k))
         if not full:
-            _copy_tree(self.views.buffers[self.current], self.views.buffers[free])
+            _copy_rows(self.views.buffers[self.current], self.views.buffers[free], slice(None))
         self.previous, self.current = self.current, free
         self.views.observations = self.views.buffers[free]
         self.views.buffer[0] = free
@@ -78,7 +78,7 @@ class Handout:
         when another buffer stays free for the next step, else a copy."""
         k = self.current
         if len(self.handed) == 1 or all(self._held(j) for j in range(len(self.handed)) if j != k):
-            return _copy_tree(self.views.buffers[k], None)
+            return _copied(self.views.buffers[k])
         leases, arrays = [], []
         for offset, count, dtype, shape in self.leaves[k]:
             root = np.frombuffer(self.block, dtype=dtype, count=count, offset=offset)
@@ -115,23 +115,13 @@ def _nest(template: Any, arrays: Any) -> Any:
     return next(arrays)
 
 
-def _nbytes(place: Any) -> list[int]:
-    found: list[int] = []
-    map_places(place, lambda o, s, d: found.append(int(np.prod(s)) * np.dtype(d).itemsize))
-    return found
-
-
-def _copy_tree(source: Any, target: Any) -> Any:
-    """``source``'s arrays copied into ``target``'s (None: into new arrays), nested alike."""
-    if isinstance(source, dict):
-        return {k: _copy_tree(v, None if target is None else target[k]) for k, v in source.items()}
-    if isinstance(source, tuple):
-        parts = target if target is not None else (None,) * len(source)
-        return tuple(_copy_tree(v, t) for v, t in zip(source, parts, strict=True))
-    if target is None:
-        return source.copy()
-    np.copyto(target, source)
-    return target
+def _copied(tree: Any) -> Any:
+    """New arrays with ``tree``'s contents, nested alike."""
+    if isinstance(tree, dict):
+        return {key: _copied(value) for key, value in tree.items()}
+    if isinstance(tree, tuple):
+        return tuple(_copied(value) for value in tree)
+    return tree.copy()
 
 
 def _copy_rows(source: Any, target: Any, rows: slice) -> None:

@@ -136,7 +136,7 @@ class Plan:
     a merge copies them). ``Plan.of`` returns None when a key has two types."""
 
     def __init__(self, order: tuple[int, ...], entries: tuple[Leaf | Branch, ...]) -> None:
-        self.order, self.entries = order, entries
+        self.order = order
         self.every = frozenset(order)
         self._steps = self._compile(entries)
 
