@@ -9,6 +9,8 @@ SyncVectorEnv's results and sends no info over a pipe.
 
 from __future__ import annotations
 
+import copy
+import itertools
 from typing import Any
 
 import gymnasium as gym
@@ -17,13 +19,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
-from vector_doubles import NumpyBool, Tiles
+from vector_doubles import NumpyBool, Quiet, Tiles
 
 from tests.test_batch_vector import assert_same, run
 from tinyrace.vector import BatchVectorEnv
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.infos import merge_infos
-from tinyrace.vector.records import INFO_BYTES, Plan, flatten, record_dtype, records
+from tinyrace.vector.records import INFO_BYTES, Plan, flatten, record_struct
 
 FLOATS = st.floats(allow_nan=False, width=64)
 SCALARS = {
@@ -56,7 +58,7 @@ def merged_by_records(batch: list[dict[str, Any]]) -> dict[str, Any]:
     for index, info in enumerate(batch):
         signature, flat = flatten(info)
         kinds[index] = numbers.setdefault(signature, len(numbers))
-        records(rows[index : index + 1], record_dtype(signature))[0] = tuple(flat)
+        record_struct(signature).pack_into(rows[index], 0, *flat)  # as a worker packs
     answers = Answers(rows, kinds, [slice(0, len(batch))])
     answers._announce(0, list(numbers))
     return answers._merge(kinds, rows, cache=True)
@@ -73,6 +75,31 @@ def test_records_merge_as_merge_infos(batch):
             merged_by_records(batch)
         return
     assert_same(expected, merged_by_records(batch))
+
+
+@settings(max_examples=examples(200), deadline=None)
+@given(infos(), st.integers(1, 6), st.integers(1, 3))
+def test_one_signature_in_every_env_merges_as_merge_infos(info, num_envs, workers):
+    """The common case: every worker says its envs' infos share one signature (``uniform``)
+    and the parent merges them without looking at each env's number."""
+    batch = [copy.deepcopy(info) for _ in range(num_envs)]
+    signature, flat = flatten(info)
+    rows = np.zeros((num_envs, INFO_BYTES), np.uint8)
+    for row in rows:
+        record_struct(signature).pack_into(row, 0, *flat)
+    bounds = np.linspace(0, num_envs, min(workers, num_envs) + 1).astype(int)
+    slices = [slice(a, b) for a, b in itertools.pairwise(bounds)]
+    uniform = np.zeros(len(slices), np.int64)
+    answers = Answers(rows, np.zeros(num_envs, np.int64), slices, uniform)
+    for number in range(len(slices)):
+        answers._announce(number, [signature])
+    status = np.zeros(len(slices), np.int64)
+    merged = answers.collect(status, [None] * len(slices))
+    assert answers._common() == 0
+    assert_same(merge_infos(batch, num_envs), merged)
+    uniform[-1] = -1  # one worker's envs disagree: each env's number is read
+    assert answers._common() is None
+    assert_same(merge_infos(batch, num_envs), answers.collect(status, [None] * len(slices)))
 
 
 @pytest.mark.parametrize(
@@ -124,3 +151,25 @@ def test_envs_that_disagree_write_records_not_pipe_messages(num_envs, workers):
         assert_same(a, b, f"step {step}")
     assert by_pipe == []
     assert any(len(order) > 1 for order in plans)  # steps whose envs disagreed
+
+
+@pytest.mark.parametrize(("num_envs", "workers"), [(8, 2), (3, 1)])
+def test_steps_of_empty_infos_merge_as_sync_vector_env(num_envs, workers):
+    """Workers whose envs all give an empty info write no record (``uniform``); steps where
+    some env gives one merge as SyncVectorEnv's do."""
+    expected = run(gym.vector.SyncVectorEnv([Quiet] * num_envs), steps=60)
+    batch = BatchVectorEnv([Quiet] * num_envs, workers=workers)
+    answers = batch._answers
+    alike, merge_alike = [], answers._merge_alike
+
+    def counted(number):
+        alike.append(answers.signatures[number])
+        return merge_alike(number)
+
+    answers._merge_alike = counted
+    got = run(batch, steps=60)
+    for step, (a, b) in enumerate(zip(expected, got, strict=True)):
+        assert_same(a, b, f"step {step}")
+    empty = sum(not info for *_, info in got[1:])
+    assert empty >= 5 and alike.count(()) == empty  # steps with no info in any env
+    assert any(len(order) > 1 for order in answers.plans)  # and steps with some

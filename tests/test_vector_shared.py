@@ -25,7 +25,14 @@ import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.pool import AsyncBatch
-from tinyrace.vector.records import INFO_BYTES, flatten, merge_columns, record_dtype, records
+from tinyrace.vector.records import (
+    INFO_BYTES,
+    flatten,
+    merge_columns,
+    record_dtype,
+    record_struct,
+    records,
+)
 
 SHM = Path("/dev/shm")
 BOUND = 60  # [s] a test that waits longer has hung
@@ -81,9 +88,10 @@ def test_records_round_trip_the_infos():
     info = {"pose": (1.5, -2.0), "n": 3, "ok": False, "x": np.float32(0.25), "d": {"a": 1.0}}
     signature, values = flatten(info)
     dtype = record_dtype(signature)
-    rows = records(np.zeros((2, INFO_BYTES), np.uint8), dtype)
-    rows[0] = rows[1] = tuple(values)
-    merged = merge_columns(signature, rows)
+    infos = np.zeros((2, INFO_BYTES), np.uint8)
+    for row in infos:
+        record_struct(signature).pack_into(row, 0, *values)  # as a worker packs them
+    merged = merge_columns(signature, records(infos, dtype))
     assert list(merged) == ["pose", "_pose", "n", "_n", "ok", "_ok", "x", "_x", "d", "_d"]
     assert merged["pose"][1] == (1.5, -2.0) and merged["x"].dtype == np.float32
     assert flatten({"s": "text"}) is None and flatten({"t": (1, 2)}) is None

@@ -122,6 +122,20 @@ class NumpyBool(Still):
         return np.zeros(2, np.float32), 0.0, False, False, {"b": np.bool_(action[0] > 0)}
 
 
+class Quiet(Still):
+    """An empty info on most steps (as many envs give), a lap count on some, per env."""
+
+    def reset(self, *, seed=None, options=None):
+        self.t = 0
+        return super().reset(seed=seed)
+
+    def step(self, action):
+        self.t += 1
+        value = float(self.np_random.random())
+        info = {"lap": self.t} if value > 0.8 else {}
+        return np.full(2, value, np.float32), value, False, self.t % 11 == 0, info
+
+
 class Heavy(Still):
     """64 KiB observations (a batch of three is handed out over the buffers) that show the
     steps since the reset; raises on an action above 0.5."""

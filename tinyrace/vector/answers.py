@@ -20,8 +20,16 @@ class Answers:
     """The info signatures the workers announced, numbered once for all workers, and the
     merge plans of the records over the whole batch."""
 
-    def __init__(self, infos: np.ndarray, kinds: np.ndarray, slices: list[slice]) -> None:
+    def __init__(
+        self,
+        infos: np.ndarray,
+        kinds: np.ndarray,
+        slices: list[slice],
+        uniform: np.ndarray | None = None,
+    ) -> None:
         self.infos, self.kinds, self.slices = infos, kinds, slices
+        # per worker: its number of the one signature of all its envs' infos, or -1
+        self.uniform = uniform
         self.signatures: list[Signature] = []  # by number
         self.dtypes: list[np.dtype] = []  # their records' layouts
         self.numbers: dict[Signature, int] = {}
@@ -61,6 +69,9 @@ class Answers:
         if by_pipe:
             return self._one_by_one(numbers, by_pipe)
         if whole:
+            common = self._common()
+            if common is not None:  # one signature in every env: no numbers to look up
+                return self._merge_alike(common)
             return self._merge(self.table[self.worker_of, self.kinds], self.infos, cache=True)
         envs = np.concatenate(
             [np.arange(s.start, s.stop) for s in map(self.slices.__getitem__, numbers)]
@@ -76,18 +87,44 @@ class Answers:
             order: tuple[int, ...] = (first,)
         else:
             order = tuple(dict.fromkeys(listed))
-        if cache and order in self.plans:
-            plan = self.plans[order]
-        else:
-            plan = Plan.of([(n, self.signatures[n]) for n in order], rows)
-            if cache:
-                if len(self.plans) >= MAX_PLANS:  # envs whose infos take many shapes
-                    self.plans.clear()
-                self.plans[order] = plan
+        plan = self._plan(order) if cache else Plan.of(self._numbered(order), rows)
         if plan is None:  # a key of two types: as merge_infos merges them
             infos = [self._info(n, row) for n, row in zip(listed, rows, strict=True)]
             return merge_infos(infos, len(infos))
         return plan.merge(numbers)
+
+    def _common(self) -> int | None:
+        """The one signature of every env's info, if the workers all wrote one."""
+        if self.uniform is None:
+            return None
+        common = None
+        for worker, local in enumerate(self.uniform.tolist()):
+            if local < 0:
+                return None
+            number = self.known[worker][local]
+            if common is None:
+                common = number
+            elif number != common:
+                return None
+        return common
+
+    def _merge_alike(self, number: int) -> dict[str, Any]:
+        """The infos of every env, all of signature ``number``."""
+        plan = self._plan((number,))
+        assert plan is not None  # one signature: one type per key
+        return plan.merge_alike(len(self.infos))
+
+    def _plan(self, order: tuple[int, ...]) -> Plan | None:
+        """The kept plan for the whole batch's records of signatures ``order``."""
+        if order in self.plans:
+            return self.plans[order]
+        if len(self.plans) >= MAX_PLANS:  # envs whose infos take many shapes
+            self.plans.clear()
+        plan = self.plans[order] = Plan.of(self._numbered(order), self.infos)
+        return plan
+
+    def _numbered(self, order: tuple[int, ...]) -> list[tuple[int, Signature]]:
+        return [(n, self.signatures[n]) for n in order]
 
     def _info(self, number: int, row: np.ndarray) -> dict[str, Any]:
         """The info written into ``row`` (uint8) with signature ``number``."""

@@ -145,7 +145,8 @@ class BatchVectorEnv(VectorEnv):
         except BaseException:  # e.g. an env that cannot be made in a worker
             self.close()
             raise
-        self._answers = Answers(self._views.infos, self._views.kinds, self._slices)
+        views = self._views
+        self._answers = Answers(views.infos, views.kinds, self._slices, views.uniform)
 
     def _check_spaces(self, replies: list[list[tuple[gym.Space[Any], gym.Space[Any]]]]) -> None:
         """Every env must have the first env's spaces, as in SyncVectorEnv."""

@@ -4,9 +4,10 @@ One ``multiprocessing.shared_memory`` block per vector env holds, per env: the
 observation (each leaf of a Box / Discrete / MultiBinary / MultiDiscrete space, or a
 Dict or Tuple of them), the action (for array action spaces), the reward, the two
 episode flags, one fixed-size record of its info and the number of that record's
-signature (``tinyrace.vector.records``); per worker: the command and the status of its
-answer. Each array is a numpy view made once, so a step moves no bytes through a pipe
-and pickles nothing. A worker tells the parent each new signature once, over its pipe;
+signature (``tinyrace.vector.records``); per worker: the command, the status of its
+answer and, when all its envs' infos share one signature, that signature's number. Each
+array is a numpy view made once, so a step moves no bytes through a pipe and pickles
+nothing. A worker tells the parent each new signature once, over its pipe;
 infos that do not fit go over the pipe as they are.
 """
 
@@ -62,6 +63,7 @@ class Views:
     kinds: np.ndarray  # (num_envs,) int64: the worker's number of each record's signature
     command: np.ndarray  # (workers,) int64
     status: np.ndarray  # (workers,) int64
+    uniform: np.ndarray  # (workers,) int64: the worker's number of its envs' one signature, or -1
 
 
 class Layout:
@@ -91,6 +93,7 @@ class Layout:
         self._kinds = self._place((), np.int64)
         self._command = self._place((), np.int64, workers)
         self._status = self._place((), np.int64, workers)
+        self._uniform = self._place((), np.int64, workers)
 
     def _place(self, shape: Sequence[int], dtype: Any, rows: int | None = None) -> tuple[Any, ...]:
         shape = (self.num_envs if rows is None else rows, *shape)
@@ -125,6 +128,7 @@ class Layout:
             view(self._kinds),
             view(self._command),
             view(self._status),
+            view(self._uniform),
         )
 
 

@@ -19,6 +19,7 @@ import multiprocessing
 import os
 import pickle
 import signal
+import struct
 import time
 import traceback
 from collections.abc import Callable
@@ -28,7 +29,6 @@ from multiprocessing.synchronize import Semaphore
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
 from tinyrace.vector import records, shared
 from tinyrace.vector.batched import NUMPY_FROM
@@ -74,10 +74,12 @@ class Worker:
         self.terminated = views.terminated[self.rows]
         self.truncated = views.truncated[self.rows]
         self.infos, self.kinds = views.infos[self.rows], views.kinds[self.rows]
+        self.uniform = views.uniform
         self.one_by_one = len(envs.envs) <= ONE_BY_ONE
-        # per signature announced to the parent: its number and the slice's info rows
-        # as its records
-        self.known: dict[records.Signature, tuple[int, np.ndarray]] = {}
+        # the slice's records as bytes, where ``struct`` packs them
+        self.info_bytes = memoryview(self.infos).cast("B")  # type: ignore[arg-type]
+        # per signature announced to the parent: its number and its record's packer
+        self.known: dict[records.Signature, tuple[int, Callable[..., None]]] = {}
 
     def serve(self) -> None:
         """Answer commands until "close" or the parent's end."""
@@ -126,11 +128,16 @@ class Worker:
         self.done.release()
 
     def _write_infos(self, infos: list[dict[str, Any]]) -> int:
-        """Write each env's info into its record, its signature's number into ``kinds``
+        """Pack each env's info into its record, its signature's number into ``kinds``
         (numbering the signatures not seen before and sending them first); infos that do
         not fit go over the pipe. The status that says which."""
-        known, fresh = self.known, list[records.Signature]()
-        places = []
+        known, fresh, numbers = self.known, list[records.Signature](), []
+        empty = known.get(())
+        if empty is not None and infos.count({}) == len(infos):  # as many envs' are: no records
+            self.kinds[:] = empty[0]
+            self.uniform[self.number] = empty[0]
+            return shared.KNOWN
+        buffer, offset = self.info_bytes, 0
         for info in infos:
             flat = records.flatten(info)
             if flat is None:
@@ -138,18 +145,21 @@ class Worker:
             signature, values = flat
             place = known.get(signature)
             if place is None:
-                dtype = records.record_dtype(signature)
-                if dtype is None:
+                layout = records.record_struct(signature)
+                if layout is None:
                     return self._by_pipe(infos, fresh)
-                place = known[signature] = (len(known), records.records(self.infos, dtype))
+                place = known[signature] = (len(known), layout.pack_into)
                 fresh.append(signature)
-            places.append((place, values))
-        try:
-            for j, ((number, rows), values) in enumerate(places):
-                rows[j] = tuple(values)
-                self.kinds[j] = number
-        except (OverflowError, ValueError, TypeError):  # e.g. an int beyond 64 bits
-            return self._by_pipe(infos, fresh)
+            number, pack_into = place
+            try:
+                pack_into(buffer, offset, *values)
+            except (struct.error, OverflowError, TypeError, ValueError):  # e.g. a 65-bit int
+                return self._by_pipe(infos, fresh)
+            numbers.append(number)
+            offset += records.INFO_BYTES
+        self.kinds[:] = numbers
+        first = numbers[0]
+        self.uniform[self.number] = first if numbers.count(first) == len(numbers) else -1
         if not fresh:
             return shared.KNOWN
         self.pipe.send(fresh)
