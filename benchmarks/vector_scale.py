@@ -4,6 +4,14 @@
 prints, as medians of R interleaved rounds of S seconds each, env-steps per second and
 the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this process:
 
+- ``one_env``: that env, OpenCV as it comes: its thread pool (one thread per core) warps
+  each frame in stripes and spins between calls, so the one env keeps about two cores
+  busy here (the process's CPU time over the wall time is printed);
+- ``one_env_1core``: the same env on one core (``cv2.setNumThreads(1)``, in a fresh
+  spawned process): the reference for the rows that add cores (EnvPool's are against its
+  one thread, one core). A forked worker, and each ``apart`` process, steps its envs on
+  one core as it is: OpenCV's pool does not survive a fork;
+
 - ``in_process_8``: 8 envs stepped together in this process (``workers=0``), per env-step
   (target >= 0.95: an env in a batch costs what it costs alone);
 - ``1x1``: 1 env in 1 worker process (target >= 0.7: the round trip is cheap);
@@ -51,6 +59,7 @@ ACTIONS = 256  # pre-drawn action batches, cycled
 # workers=0, the whole work; robust to a loaded machine, unlike wall time)
 CPU: dict[str, list[float]] = {
     "one_env": [],
+    "one_env_cores": [],  # the process's CPU time over the wall time (OpenCV's threads)
     "last": [],
     "in_process_8": [],
     "1x1": [],
@@ -71,21 +80,43 @@ def rate_single(seconds: float) -> float:
     env = gym.make(ENV_ID)
     env.reset(seed=0)
     actions = [a[0] for a in _actions(1)]
-    steps, start, cpu, deadline = 0, 0.0, 0.0, None
+    steps, start, cpu, process, deadline = 0, 0.0, 0.0, 0.0, None
     while True:
         _, _, terminated, truncated, _ = env.step(actions[steps % ACTIONS])
         if terminated or truncated:
             env.reset()
         steps += 1
         if steps == WARMUP:
-            start, cpu = time.perf_counter(), time.thread_time()
+            start, cpu, process = time.perf_counter(), time.thread_time(), time.process_time()
             deadline = start + seconds
         if deadline is not None and steps % 16 == 0 and time.perf_counter() > deadline:
             break
-    rate = (steps - WARMUP) / (time.perf_counter() - start)
+    wall = time.perf_counter() - start
     CPU["one_env"].append((time.thread_time() - cpu) / (steps - WARMUP))
+    CPU["one_env_cores"].append((time.process_time() - process) / wall)
     env.close()
+    return (steps - WARMUP) / wall
+
+
+def rate_single_one_core(seconds: float) -> float:
+    """``rate_single`` on one core: OpenCV's pool off, in a fresh spawned process (a forked
+    one would inherit this process's OpenCV state)."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("spawn")
+    queue = context.Queue()
+    child = context.Process(target=_single_one_core, args=(queue, seconds))
+    child.start()
+    rate: float = queue.get()
+    child.join()
     return rate
+
+
+def _single_one_core(queue: Any, seconds: float) -> None:
+    import cv2
+
+    cv2.setNumThreads(1)
+    queue.put(rate_single(seconds))
 
 
 def rate_vector(make: Callable[[], Any], num_envs: int, seconds: float, seed: int = 0) -> float:
@@ -183,6 +214,7 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
 
     table: dict[str, tuple[Callable[[float], float], int]] = {
         "one_env": (rate_single, 1),
+        "one_env_1core": (rate_single_one_core, 1),
         "in_process_8": (vector(8, 0), 8),
         "1x1": (vector(1, 1), 1),
     }
@@ -209,11 +241,14 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
 
 
 def print_scaling(medians: dict[str, float], max_workers: int) -> None:
-    """Each side against its own one: tinyrace's W x 8 against one env, EnvPool's W threads
-    against its 1 thread (issue 37 quotes 1.74x for EnvPool's 2 threads on 2 cores)."""
-    one, pool = medians["one_env"], medians.get("envpool_1")
+    """Each side against its own one: tinyrace's W x 8 against one env on one core (and as
+    OpenCV comes), EnvPool's W threads against its 1 thread (issue 37 quotes 1.74x for
+    EnvPool's 2 threads on 2 cores)."""
+    one, core, pool = medians["one_env"], medians["one_env_1core"], medians.get("envpool_1")
     for workers in range(1, max_workers + 1):
-        line = f"  {workers} x 8: tinyrace {medians[f'{workers}x8'] / one:5.2f}x its one env"
+        rate = medians[f"{workers}x8"]
+        line = f"  {workers} x 8: tinyrace {rate / core:5.2f}x its one env on one core "
+        line += f"({rate / one:4.2f}x as OpenCV comes)"
         apart = medians.get(f"apart_{workers}x8")
         if apart is not None:
             line += f" ({medians[f'{workers}x8'] / apart:4.2f}x {workers} processes apart)"
@@ -243,11 +278,18 @@ def main() -> None:
             f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()),
             flush=True,
         )
-    one = statistics.median(rates["one_env"])
-    print(f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env):")
+    one, core = (statistics.median(rates[k]) for k in ("one_env", "one_env_1core"))
+    print(
+        f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env, "
+        "x one env on one core):"
+    )
     medians = {name: statistics.median(values) for name, values in rates.items()}
     for name, median in medians.items():
-        print(f"  {name:>18}: {median:>10,.0f}  {median / one:6.2f}x")
+        print(f"  {name:>18}: {median:>10,.0f}  {median / one:6.2f}x  {median / core:6.2f}x")
+    print(
+        f"  one env kept {statistics.median(CPU['one_env_cores']):.2f} cores busy "
+        "(process CPU time / wall time; OpenCV's pool)"
+    )
     print_scaling(medians, args.max_workers)
     one_cpu, batch_cpu = (statistics.median(CPU[k]) for k in ("one_env", "in_process_8"))
     print(

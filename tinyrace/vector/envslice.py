@@ -11,7 +11,6 @@ import numpy as np
 from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
 from tinyrace.vector.shared import Views
 
-Step = tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]
 # envs per slice from which their steps go through ``BatchStepper``'s stages: one env
 # alone costs more that way than by its own ``step`` (benchmarks/README.md, issue 37)
 BATCH_FROM = 2
@@ -63,14 +62,11 @@ class EnvSlice:
     ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
         """Step every env (an env whose episode ended at the last step is reset instead):
         rewards, terminations, truncations and infos, as lists (they pickle faster)."""
+        if self.batch is None:
+            return self._step_each(actions)
         n = len(self.envs)
-        autoreset = self.autoreset
-        results: list[Step | None]
-        if self.batch is not None:
-            mask = np.array(autoreset, dtype=np.bool_)
-            results = self.batch.step(actions, mask, self._write, self._rows())
-        else:
-            results = self._step_each(actions, autoreset)
+        mask = np.array(self.autoreset, dtype=np.bool_)
+        results = self.batch.step(actions, mask, self._write, self._rows())
         rewards: list[SupportsFloat] = [0.0] * n
         terminated, truncated = [False] * n, [False] * n
         infos: list[dict[str, Any]] = [{}] * n
@@ -87,25 +83,34 @@ class EnvSlice:
         self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
         return rewards, terminated, truncated, infos
 
-    def _step_each(self, actions: Any, autoreset: list[bool]) -> list[Step | None]:
-        """Each env's own ``step`` (None for those to reset); observations written."""
-        results: list[Step | None] = [None] * len(self.envs)
+    def _step_each(
+        self, actions: Any
+    ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
+        """``step`` by each env's own ``step`` (or ``reset``), env after env as SyncVectorEnv
+        goes, each observation written as it comes."""
+        n, first, autoreset = len(self.envs), self.first, self.autoreset
+        rewards: list[SupportsFloat] = [0.0] * n
+        terminated, truncated = [False] * n, [False] * n
+        infos: list[dict[str, Any]] = [{}] * n
         target = self.views.observations
-        whole = isinstance(target, np.ndarray)  # a Box: one array, a row per env
-        first = self.first
+        rows = self._rows()  # None: a Dict or Tuple space, written leaf by leaf
         for j, env in enumerate(self.envs):
-            if autoreset[j]:
-                continue
             try:
-                results[j] = result = env.step(actions[j])
+                if autoreset[j]:  # the episode ended at the last step: reset, reward 0
+                    observation, infos[j] = env.reset()
+                else:
+                    observation, rewards[j], terminated[j], truncated[j], infos[j] = env.step(
+                        actions[j]
+                    )
             except Exception as error:
                 _blame(error, first + j)
                 raise
-            if whole:
-                target[first + j] = result[0]
+            if rows is not None:
+                rows[j] = observation
             else:
-                _write_nested(target, first + j, result[0])
-        return results
+                _write_nested(target, first + j, observation)
+        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
+        return rewards, terminated, truncated, infos
 
     def call(
         self,
