@@ -1,6 +1,7 @@
 """The vector env against one in-process env, side by side in one run (issue 37's proxies).
 
-``python benchmarks/vector_scale.py [--rounds R] [--seconds S] [--max-workers W]``
+``python benchmarks/vector_scale.py [--rounds R] [--seconds S] [--max-workers W]
+[--workers 1,2,4,8,16]``
 prints, as medians of R interleaved rounds of S seconds each, env-steps per second and
 the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this process:
 
@@ -15,9 +16,10 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
 - ``in_process_8``: 8 envs stepped together in this process (``workers=0``), per env-step
   (target >= 0.95: an env in a batch costs what it costs alone);
 - ``1x1``: 1 env in 1 worker process (target >= 0.7: the round trip is cheap);
-- ``Wx8``: W workers x 8 envs for W = 1 .. --max-workers (2 x 8 on 2 cores: target >= 1.6);
+- ``Wx8``: W workers x 8 envs for W = 1 .. --max-workers, or each W of ``--workers`` (2 x 8
+  on 2 cores: target >= 1.6; on 16 cores, 1, 2, 4, 8, 16 in a few minutes);
 - ``apart_Wx8``: W processes that share nothing, each stepping 8 envs in itself
-  (``workers=0``), for W = 2 .. --max-workers: what the machine's cores give W x 8 envs with
+  (``workers=0``), for each W >= 2 of those: what the machine's cores give W x 8 envs with
   no vector env between them (their caches and memory are shared all the same), the
   ceiling of ``Wx8``;
 - ``standin_2x64``: 2 workers x 64 stand-in envs that cost nothing (CarRacing's spaces, a
@@ -68,7 +70,7 @@ CPU: dict[str, list[float]] = {
 }
 # [s] per round of a vector env with workers: the parent's time outside waiting for them
 # (sending, collecting, handing out, this loop): the serial part, which no core count hides
-SERIAL: dict[str, list[float]] = {"last": [], "1x1": [], "2x8": [], "standin_2x64": []}
+SERIAL: dict[str, list[float]] = {"last": []}
 
 
 def _actions(num_envs: int) -> list[np.ndarray]:
@@ -228,7 +230,7 @@ def _envpool_reset(reset: Callable[[], Any], seed: int | None = None) -> Any:
     return reset()
 
 
-def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
+def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
     """Name -> (seconds -> env-steps/s, envs per step), in the order printed."""
     from tinyrace.vector import make_batch
 
@@ -243,9 +245,9 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
         "in_process_8": (vector(8, 0), 8),
         "1x1": (vector(1, 1), 1),
     }
-    for workers in range(1, max_workers + 1):
+    for workers in counts:
         table[f"{workers}x8"] = (vector(8 * workers, workers), 8 * workers)
-    for processes in range(2, max_workers + 1):
+    for processes in (w for w in counts if w >= 2):
         table[f"apart_{processes}x8"] = (functools.partial(rate_apart, processes), 8 * processes)
     table["standin_2x64"] = (
         functools.partial(rate_vector, functools.partial(standin, 64, 2), 64),
@@ -255,7 +257,7 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
         functools.partial(rate_vector, functools.partial(standin, 64, 2, True), 64),
         64,
     )
-    for threads in range(1, max_workers + 1):
+    for threads in counts:
         found = envpool_case(threads)
         if isinstance(found, str):
             print(f"envpool: skipped, it does not import here ({found})")
@@ -265,12 +267,12 @@ def cases(max_workers: int) -> dict[str, tuple[Callable[[float], float], int]]:
     return table
 
 
-def print_scaling(medians: dict[str, float], max_workers: int) -> None:
+def print_scaling(medians: dict[str, float], counts: list[int]) -> None:
     """Each side against its own one: tinyrace's W x 8 against one env on one core (and as
     OpenCV comes), EnvPool's W threads against its 1 thread (issue 37 quotes 1.74x for
     EnvPool's 2 threads on 2 cores)."""
     one, core, pool = medians["one_env"], medians["one_env_1core"], medians.get("envpool_1")
-    for workers in range(1, max_workers + 1):
+    for workers in counts:
         rate = medians[f"{workers}x8"]
         line = f"  {workers} x 8: tinyrace {rate / core:5.2f}x its one env on one core "
         line += f"({rate / one:4.2f}x as OpenCV comes)"
@@ -289,18 +291,25 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=3.0)
     parser.add_argument("--max-workers", type=int, default=os.cpu_count() or 2)
+    parser.add_argument("--workers", help="worker counts, comma-separated (default 1..W)")
     args = parser.parse_args()
+    counts = (
+        sorted({int(w) for w in args.workers.split(",")})
+        if args.workers
+        else list(range(1, args.max_workers + 1))
+    )
     gym.logger.min_level = gym.logger.ERROR
     print(f"load before: {os.getloadavg()}, cores: {os.cpu_count()}", flush=True)
-    table = cases(args.max_workers)
+    table = cases(counts)
+    serial_cases = {"1x1", "standin_2x64", *(f"{w}x8" for w in counts)}
     rates: dict[str, list[float]] = {name: [] for name in table}
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
             rates[name].append(measure(args.seconds))
             if name == "in_process_8":
                 CPU[name] += CPU["last"]
-            if name in SERIAL:
-                SERIAL[name] += SERIAL["last"]
+            if name in serial_cases:
+                SERIAL.setdefault(name, []).extend(SERIAL["last"])
         print(
             f"round {round_ + 1}: " + ", ".join(f"{n} {r[-1]:,.0f}" for n, r in rates.items()),
             flush=True,
@@ -317,18 +326,20 @@ def main() -> None:
         f"  one env kept {statistics.median(CPU['one_env_cores']):.2f} cores busy "
         "(process CPU time / wall time; OpenCV's pool)"
     )
-    print_scaling(medians, args.max_workers)
+    print_scaling(medians, counts)
     one_cpu, batch_cpu = (statistics.median(CPU[k]) for k in ("one_env", "in_process_8"))
     print(
         f"  CPU per env-step (thread time): one env {one_cpu * 1e6:.0f} us, 8 in process "
         f"{batch_cpu * 1e6:.0f} us: {one_cpu / batch_cpu:.2f}x"
     )
-    serial = {k: statistics.median(SERIAL[k]) * 1e6 for k in ("1x1", "2x8", "standin_2x64")}
+    envs = {"1x1": 1, "standin_2x64": 64} | {f"{w}x8": 8 * w for w in counts}
+    parts = []
+    for name, values in SERIAL.items():
+        if name != "last":
+            serial = statistics.median(values) * 1e6
+            parts.append(f"{name} {serial:.0f} us ({serial / envs[name]:.2f} per env-step)")
     print(
-        f"  the parent's own time per round (outside waiting for the workers): 1x1 "
-        f"{serial['1x1']:.0f} us, 2x8 {serial['2x8']:.0f} us ({serial['2x8'] / 16:.1f} per "
-        f"env-step), stand-ins 2x64 {serial['standin_2x64']:.0f} us "
-        f"({serial['standin_2x64'] / 64:.2f} per env-step)"
+        "  the parent's own time per round (outside waiting for the workers): " + ", ".join(parts)
     )
     print(
         f"  the ceiling (stand-ins 2x64): {statistics.median(rates['standin_2x64']):,.0f} "
