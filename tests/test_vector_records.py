@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
-from vector_doubles import NumpyBool, Quiet, Tiles
+from vector_doubles import Huge, NumpyBool, Quiet, Tiles
 
 from tests.test_batch_vector import assert_same, run
 from tinyrace.vector import BatchVectorEnv
@@ -173,3 +173,22 @@ def test_steps_of_empty_infos_merge_as_sync_vector_env(num_envs, workers):
     empty = sum(not info for *_, info in got[1:])
     assert empty >= 5 and alike.count(()) == empty  # steps with no info in any env
     assert any(len(order) > 1 for order in answers.plans)  # and steps with some
+
+
+@pytest.mark.parametrize("workers", [0, 1])
+def test_an_int_no_record_holds_raises_as_in_sync_vector_env(workers):
+    """A 70-bit int fits no record (struct refuses it): the infos go by pipe and the merge
+    raises SyncVectorEnv's OverflowError; the steps before are SyncVectorEnv's, and the
+    vector env steps on afterwards."""
+    outcomes = []
+    zeros = np.zeros((2, 1), np.float32)
+    for vector in (gym.vector.SyncVectorEnv([Huge] * 2), BatchVectorEnv([Huge] * 2, workers)):
+        vector.reset(seed=0)
+        outcomes.append([vector.step(zeros) for _ in range(2)])
+        with pytest.raises(OverflowError):
+            vector.step(zeros)
+        if isinstance(vector, BatchVectorEnv):  # every env stepped: the next infos fit
+            assert vector.step(zeros)[-1]["n"].tolist() == [4, 4]
+        vector.close()
+    for step, (a, b) in enumerate(zip(*outcomes, strict=True)):
+        assert_same(a, b, f"step {step}")

@@ -136,6 +136,18 @@ class Quiet(Still):
         return np.full(2, value, np.float32), value, False, self.t % 11 == 0, info
 
 
+class Huge(Still):
+    """An info int beyond 64 bits on the third step (no record holds it)."""
+
+    def reset(self, *, seed=None, options=None):
+        self.t = 0
+        return super().reset(seed=seed)
+
+    def step(self, action):
+        self.t += 1
+        return np.zeros(2, np.float32), 0.0, False, False, {"n": 2**70 if self.t == 3 else self.t}
+
+
 class Heavy(Still):
     """64 KiB observations (a batch of three is handed out over the buffers) that show the
     steps since the reset; raises on an action above 0.5."""
