@@ -25,7 +25,15 @@ from tests.test_batch_vector import assert_same, run
 from tinyrace.vector import BatchVectorEnv
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.infos import merge_infos
-from tinyrace.vector.records import INFO_BYTES, Plan, flatten, record_struct
+from tinyrace.vector.records import (
+    INFO_BYTES,
+    Plan,
+    _leaves,
+    flatten,
+    record_dtype,
+    record_struct,
+    records,
+)
 
 FLOATS = st.floats(allow_nan=False, width=64)
 SCALARS = {
@@ -192,3 +200,23 @@ def test_an_int_no_record_holds_raises_as_in_sync_vector_env(workers):
         vector.close()
     for step, (a, b) in enumerate(zip(*outcomes, strict=True)):
         assert_same(a, b, f"step {step}")
+
+
+@pytest.mark.parametrize(
+    "info",
+    [
+        {"x": -0.0, "n": -(2**63), "on": True, "f": np.float32(-np.inf), "g": np.float64(np.nan)},
+        {"i": np.int32(-(2**31)), "j": np.int64(2**63 - 1), "t": (np.inf, -0.0, 5e-324)},
+        {"q": np.float32(np.nan), "d": {"e": {"x": 1.5, "b": False}}, "m": 2**63 - 1},
+    ],
+)
+def test_struct_packs_the_bytes_numpy_writes(info):
+    """``record_struct`` lays a record out as ``record_dtype`` does: packing the flat values
+    gives numpy's bytes for the same info (extremes, signed zeros, quiet NaNs included)."""
+    signature, flat = flatten(info)
+    packed, written = np.zeros((2, INFO_BYTES), np.uint8)
+    record_struct(signature).pack_into(packed, 0, *flat)
+    row, values = records(written[None], record_dtype(signature))[0], iter(flat)
+    for name, (kind, length) in zip(row.dtype.names, _leaves(signature), strict=True):
+        row[name] = [next(values) for _ in range(length)] if kind is tuple else next(values)
+    assert packed.tobytes() == written.tobytes()
