@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
-from vector_doubles import Huge, NumpyBool, Quiet, Tiles
+from vector_doubles import Huge, NoInfo, NumpyBool, Quiet, Tiles
 
 from tests.test_batch_vector import assert_same, run
 from tinyrace.vector import BatchVectorEnv
@@ -220,3 +220,14 @@ def test_struct_packs_the_bytes_numpy_writes(info):
     for name, (kind, length) in zip(row.dtype.names, _leaves(signature), strict=True):
         row[name] = [next(values) for _ in range(length)] if kind is tuple else next(values)
     assert packed.tobytes() == written.tobytes()
+
+
+def test_an_info_of_none_raises_as_in_sync_vector_env():
+    """None is no empty info: a worker raises what Gymnasium's merge raises for it."""
+    zeros = np.zeros((2, 1), np.float32)
+    for vector in (gym.vector.SyncVectorEnv([NoInfo] * 2), BatchVectorEnv([NoInfo] * 2, 1)):
+        vector.reset(seed=0)
+        assert vector.step(zeros)[-1] == {}
+        with pytest.raises(AttributeError, match="'NoneType' object has no attribute 'items'"):
+            vector.step(zeros)
+        vector.close()

@@ -148,6 +148,18 @@ class Huge(Still):
         return np.zeros(2, np.float32), 0.0, False, False, {"n": 2**70 if self.t == 3 else self.t}
 
 
+class NoInfo(Still):
+    """Returns None for an info on its second step (no dict: Gymnasium's merge raises)."""
+
+    def reset(self, *, seed=None, options=None):
+        self.t = 0
+        return super().reset(seed=seed)
+
+    def step(self, action):
+        self.t += 1
+        return np.zeros(2, np.float32), 0.0, False, False, None if self.t == 2 else {}
+
+
 class Heavy(Still):
     """64 KiB observations (a batch of three is handed out over the buffers) that show the
     steps since the reset; raises on an action above 0.5."""

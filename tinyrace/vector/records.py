@@ -42,7 +42,7 @@ Signature = tuple[Any, ...]  # ((key, kind[, detail]), ...), comparable with ==
 def flatten(info: dict[str, Any]) -> tuple[Signature, list[Any]] | None:
     """``info``'s signature and its values in record order (a tuple's items one by one,
     as ``record_struct`` packs them), or None if it does not fit."""
-    if not info:
+    if not info and isinstance(info, dict):  # (an info of None raises, as in _add_info)
         return (), []
     signature: list[Any] = []
     values: list[Any] = []
