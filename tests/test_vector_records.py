@@ -222,12 +222,17 @@ def test_struct_packs_the_bytes_numpy_writes(info):
     assert packed.tobytes() == written.tobytes()
 
 
-def test_an_info_of_none_raises_as_in_sync_vector_env():
-    """None is no empty info: a worker raises what Gymnasium's merge raises for it."""
+@pytest.mark.parametrize("workers", [0, 1])
+def test_an_info_of_none_raises_as_in_sync_vector_env(workers):
+    """None is no empty info (nor a missing one): a step or a reset that gives it raises
+    what Gymnasium's merge raises for it, in this process and in a worker."""
     zeros = np.zeros((2, 1), np.float32)
-    for vector in (gym.vector.SyncVectorEnv([NoInfo] * 2), BatchVectorEnv([NoInfo] * 2, 1)):
+    sync = gym.vector.SyncVectorEnv([NoInfo] * 2)
+    for vector in (sync, BatchVectorEnv([NoInfo] * 2, workers)):
         vector.reset(seed=0)
         assert vector.step(zeros)[-1] == {}
         with pytest.raises(AttributeError, match="'NoneType' object has no attribute 'items'"):
             vector.step(zeros)
+        with pytest.raises(AttributeError, match="'NoneType' object has no attribute 'items'"):
+            vector.reset(options={"no_info": True})
         vector.close()

@@ -149,11 +149,13 @@ class Huge(Still):
 
 
 class NoInfo(Still):
-    """Returns None for an info on its second step (no dict: Gymnasium's merge raises)."""
+    """Returns None for an info on its second step, and from a reset asked for it with
+    ``options={"no_info": True}`` (no dict: Gymnasium's merge raises)."""
 
     def reset(self, *, seed=None, options=None):
         self.t = 0
-        return super().reset(seed=seed)
+        observation, info = super().reset(seed=seed)
+        return observation, None if (options or {}).get("no_info") else info
 
     def step(self, action):
         self.t += 1

@@ -9,6 +9,7 @@ import gymnasium as gym
 import numpy as np
 
 from tinyrace.vector.batched import NUMPY_FROM, BatchStepper
+from tinyrace.vector.infos import check_infos
 from tinyrace.vector.shared import Views
 
 # envs per slice from which their steps go through ``BatchStepper``'s stages: one env
@@ -48,6 +49,7 @@ class EnvSlice:
                 continue
             try:
                 observation, info = env.reset(seed=seeds[j], options=options)
+                check_infos([info], self.first + j)  # None here means "not reset"
             except Exception as error:
                 _blame(error, self.first + j)
                 raise

@@ -55,6 +55,14 @@ def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[s
     return merged
 
 
+def check_infos(infos: Sequence[Any], first: int = 0) -> None:
+    """Raise what ``_add_info`` raises for an env's info that is no dict (``None``, say),
+    which ``merge_infos`` would take for a missing one; ``first``: the first env's index."""
+    for index, info in enumerate(infos):
+        if not isinstance(info, dict):
+            _Merger(first + index + 1)._add_info({}, info, first + index)
+
+
 def _alike(infos: Sequence[dict[str, Any] | None]) -> bool:
     """Whether every env has an info, each with the first one's keys (the common step)."""
     first = infos[0]
