@@ -105,13 +105,15 @@ class Tiles(gym.Env):
 
 
 class Still(gym.Env):
-    """Two floats observed, one action; resets to zeros with an empty info."""
+    """Two floats observed, one action; resets to zeros with an empty info, its step
+    count ``t`` to 0."""
 
     observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
     action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
+        self.t = 0
         return np.zeros(2, np.float32), {}
 
 
@@ -125,10 +127,6 @@ class NumpyBool(Still):
 class Quiet(Still):
     """An empty info on most steps (as many envs give), a lap count on some, per env."""
 
-    def reset(self, *, seed=None, options=None):
-        self.t = 0
-        return super().reset(seed=seed)
-
     def step(self, action):
         self.t += 1
         value = float(self.np_random.random())
@@ -138,10 +136,6 @@ class Quiet(Still):
 
 class Huge(Still):
     """An info int beyond 64 bits on the third step (no record holds it)."""
-
-    def reset(self, *, seed=None, options=None):
-        self.t = 0
-        return super().reset(seed=seed)
 
     def step(self, action):
         self.t += 1
@@ -153,7 +147,6 @@ class NoInfo(Still):
     ``options={"no_info": True}`` (no dict: Gymnasium's merge raises)."""
 
     def reset(self, *, seed=None, options=None):
-        self.t = 0
         observation, info = super().reset(seed=seed)
         return observation, None if (options or {}).get("no_info") else info
 
@@ -170,7 +163,6 @@ class Heavy(Still):
 
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
-        self.t = 0
         return np.zeros(16384, np.float32), {}
 
     def step(self, action):
