@@ -51,7 +51,7 @@ from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
 from tinyrace.vector.failures import check_count
 from tinyrace.vector.handout import Handout, buffers_for
-from tinyrace.vector.infos import check_infos, merge_infos
+from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.link import Workers
 
 StepResult = tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]
@@ -272,7 +272,6 @@ class BatchVectorEnv(VectorEnv):
         env_infos: Sequence[dict[str, Any]],
     ) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """A step's results from per-env lists (in this process, or by the pipes)."""
-        check_infos(env_infos)
         return (
             self._observations_out(),
             np.array(rewards, dtype=np.float64),

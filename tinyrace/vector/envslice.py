@@ -63,9 +63,19 @@ class EnvSlice:
         self, actions: Any
     ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
         """Step every env (an env whose episode ended at the last step is reset instead):
-        rewards, terminations, truncations and infos, as lists (they pickle faster)."""
-        if self.batch is None:
-            return self._step_each(actions)
+        rewards, terminations, truncations and infos, as lists (they pickle faster). An
+        info that is no dict raises here, as Gymnasium's merge would."""
+        results = self._step_each(actions) if self.batch is None else self._step_batch(actions)
+        _, terminated, truncated, infos = results
+        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
+        check_infos(infos, self.first)
+        return results
+
+    def _step_batch(
+        self, actions: Any
+    ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
+        """``step`` through ``BatchStepper``'s stages; the envs to reset after them."""
+        assert self.batch is not None
         n = len(self.envs)
         mask = np.array(self.autoreset, dtype=np.bool_)
         results = self.batch.step(actions, mask, self._write, self._rows())
@@ -82,7 +92,6 @@ class EnvSlice:
                 self._write(j, observation)
                 continue
             _, rewards[j], terminated[j], truncated[j], infos[j] = result
-        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
         return rewards, terminated, truncated, infos
 
     def _step_each(
@@ -111,7 +120,6 @@ class EnvSlice:
                 rows[j] = observation
             else:
                 _write_nested(target, first + j, observation)
-        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
         return rewards, terminated, truncated, infos
 
     def call(
