@@ -75,7 +75,7 @@ def _beam(  # pragma: no cover  (compiled; its twin is other_cars._distances)
     else:
         low, high = (-half_width - sy) / dy, (half_width - sy) / dy
         near, far = max(near, min(low, high)), min(far, max(low, high))
-    entry = max(near, 0.0)
+    entry = near if near > 0.0 else 0.0  # np.maximum's +0.0 for a near of -0.0
     if far >= entry:
         distance = np.float32(min(entry, max_range))
         if distance < ranges[j]:
