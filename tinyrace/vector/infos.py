@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from operator import itemgetter
 from typing import Any
 
 import numpy as np
 from gymnasium.vector import VectorEnv
 
 _SCALARS = (int, float, bool)
+_DTYPES = {kind: np.dtype(kind) for kind in _SCALARS}  # the arrays _add_info makes for them
 
 
 def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[str, Any]:
@@ -18,15 +20,25 @@ def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[s
     values are gathered per key first and each array is made and filled once. Keys come
     in the same order, arrays get the same dtypes (the first env's value decides) and
     the same ``_key`` masks. Infos that mix dicts and other values under one key take
-    ``_add_info`` itself.
+    ``_add_info`` itself, as do infos that make this merge raise: a value that does not
+    fit its key's array raises what ``_add_info`` raises at the first such value it meets.
     """
-    if len(infos) == num_envs and _alike(infos):
-        return _merge_alike(infos, num_envs)  # type: ignore[arg-type]  # no None: _alike
+    try:
+        return _merge(infos, num_envs)
+    except Exception:
+        return _merged_by_gymnasium(infos, num_envs)  # its error, or its merge if none
+
+
+def _merge(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[str, Any]:
+    if len(infos) == num_envs:
+        alike = _merge_alike(infos, num_envs)
+        if alike is not None:
+            return alike
     gathered: dict[str, tuple[list[int], list[Any]]] = {}
     for index, info in enumerate(infos):
-        if not info:
+        if info is None:
             continue
-        for key, value in info.items():
+        for key, value in info.items():  # an info that is no dict raises: Gymnasium's error
             entry = gathered.get(key)
             if entry is None:
                 gathered[key] = entry = ([], [])
@@ -43,7 +55,7 @@ def merge_infos(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[s
             per_env: list[dict[str, Any] | None] = [None] * num_envs
             for index, value in zip(indices, values, strict=True):
                 per_env[index] = value
-            array = merge_infos(per_env, num_envs)
+            array = _merge(per_env, num_envs)
         else:
             array = _array(indices, values, num_envs)
         if len(indices) == num_envs:
@@ -63,39 +75,51 @@ def check_infos(infos: Sequence[Any], first: int = 0) -> None:
             _Merger(first + index + 1)._add_info({}, info, first + index)
 
 
-def _alike(infos: Sequence[dict[str, Any] | None]) -> bool:
-    """Whether every env has an info, each with the first one's keys (the common step)."""
+def _merge_alike(infos: Sequence[dict[str, Any] | None], num_envs: int) -> dict[str, Any] | None:
+    """``merge_infos`` of infos that all have the first one's keys (the common step):
+    every mask all True, every array made from a list of all the envs' values, in the
+    first info's key order (``_add_info``'s when every env has every key). None when an
+    info is missing or has other keys."""
     first = infos[0]
-    if not first:
-        return False
-    keys = first.keys()
-    return all(info is not None and info.keys() == keys for info in infos)
-
-
-def _merge_alike(infos: Sequence[dict[str, Any]], num_envs: int) -> dict[str, Any]:
-    """``merge_infos`` of infos that all have the same keys: every mask all True, every
-    array filled from a list of all the envs' values (in the first info's key order,
-    which is ``_add_info``'s when every env has every key)."""
-    every = list(range(num_envs))
+    if not first or type(first) is not dict:
+        return None
+    keys = tuple(first)
+    try:  # every info as long as the first and holding its keys: the same keys
+        if list(map(len, infos)).count(len(keys)) != num_envs:  # type: ignore[arg-type]
+            return None
+        rows = list(map(itemgetter(*keys), infos))  # type: ignore[arg-type]  # None: TypeError
+    except (TypeError, KeyError):  # a missing info, or another key
+        return None
+    # each key with its values (itemgetter gives a row of values, or one value for one key)
+    if len(keys) == 1:
+        columns: Iterable[tuple[str, Sequence[Any]]] = [(keys[0], tuple(rows))]
+    else:
+        columns = zip(keys, zip(*rows, strict=True), strict=True)
     full = np.array([True] * num_envs)  # copied per key: each mask its own array
     merged: dict[str, Any] = {}
-    for key in infos[0]:
-        values = [info[key] for info in infos]
-        first = values[0]
+    for key, values in columns:
+        kind = type(values[0])
         if key == "final_obs":
-            array: Any = _objects(every, values, num_envs)
-        elif type(first) in _SCALARS and list(map(type, values)).count(type(first)) == num_envs:
-            array = np.array(values, dtype=type(first))  # the common case, checked first
+            array: Any = _objects(range(num_envs), values, num_envs)
+        elif kind in _SCALARS:
+            array = np.array(values)  # the common case: numpy's own type is the first's
+            if array.dtype != _DTYPES[kind]:  # other types among them: cast one by one
+                array = _array(range(num_envs), values, num_envs)
+        elif kind is tuple and list(map(type, values)).count(tuple) == num_envs:
+            array = np.fromiter(values, object, num_envs)  # each tuple as the object it is
         else:
             nested = [isinstance(value, dict) for value in values]
             if any(nested) and not all(nested):
                 return _merged_by_gymnasium(infos, num_envs)
-            array = merge_infos(values, num_envs) if nested[0] else _array(every, values, num_envs)
+            if nested[0]:
+                array = _merge(values, num_envs)
+            else:
+                array = _array(range(num_envs), values, num_envs)
         merged[key], merged[f"_{key}"] = array, full.copy()
     return merged
 
 
-def _array(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
+def _array(indices: Iterable[int], values: Sequence[Any], num_envs: int) -> np.ndarray:
     """One key's values in the array ``_add_info`` would make for the first of them."""
     first = values[0]
     kind = type(first)
@@ -112,7 +136,7 @@ def _array(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
     return array
 
 
-def _objects(indices: list[int], values: list[Any], num_envs: int) -> np.ndarray:
+def _objects(indices: Iterable[int], values: Sequence[Any], num_envs: int) -> np.ndarray:
     array = np.empty(num_envs, dtype=object)  # every item None
     for index, value in zip(indices, values, strict=True):
         array[index] = value
