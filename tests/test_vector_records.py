@@ -19,7 +19,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
-from vector_doubles import Huge, NoInfo, NumpyBool, Quiet, Tiles
+from vector_doubles import Flags, Huge, NoInfo, NumpyBool, Quiet, Tiles
 
 from tests.test_batch_vector import assert_same, run
 from tinyrace.vector import BatchVectorEnv
@@ -236,3 +236,15 @@ def test_an_info_of_none_raises_as_in_sync_vector_env(workers):
         with pytest.raises(AttributeError, match="'NoneType' object has no attribute 'items'"):
             vector.reset(options={"no_info": True})
         vector.close()
+
+
+@pytest.mark.parametrize(("num_envs", "workers"), [(6, 0), (6, 2), (3, 1)])
+def test_episode_ends_of_any_type_autoreset_as_in_sync_vector_env(num_envs, workers):
+    """Terminations and truncations as numpy bools, ints and numpy ints (steps with only
+    plain bools take the one-pass path): the same flags and autoresets as SyncVectorEnv."""
+    expected = run(gym.vector.SyncVectorEnv([Flags] * num_envs), steps=80)
+    got = run(BatchVectorEnv([Flags] * num_envs, workers=workers), steps=80)
+    for step, (a, b) in enumerate(zip(expected, got, strict=True)):
+        assert_same(a, b, f"step {step}")
+    ends = sum(int(np.sum(t | u)) for _, _, t, u, _ in got[1:])
+    assert ends >= 10  # autoresets happened, after ends of every kind

@@ -170,3 +170,17 @@ class Heavy(Still):
             raise ValueError(f"heavy env refused action {action[0]:.1f}")
         self.t += 1
         return np.full(16384, self.t, np.float32), 0.0, False, False, {}
+
+
+class Flags(Still):
+    """Episode ends given as numpy's bools, ints and numpy ints on some steps and as plain
+    bools on others, at steps that differ from env to env."""
+
+    KINDS = (bool, np.bool_, int, np.int64)
+
+    def step(self, action):
+        self.t += 1
+        value = float(self.np_random.random())
+        kind = self.KINDS[self.t % len(self.KINDS)] if value > 0.3 else bool
+        ended = value > 0.9
+        return np.full(2, value, np.float32), value, kind(ended), kind(self.t % 13 == 0), {}
