@@ -71,7 +71,8 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
     command = [sys.executable, "-m", "tinyrace", "train", "--timesteps", "1000000"]
     process = subprocess.Popen(
         [*command, "--subprocesses", "--envs", "2", "--out", "partial.zip"],
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        # faulthandler: a trainer that hangs after Ctrl-C is aborted and shows where it waits
+        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONFAULTHANDLER": "1"},
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -84,7 +85,12 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
                 break
         time.sleep(5)
         os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: the trainer and its workers
-        _, err = process.communicate(timeout=120)
+        try:
+            _, err = process.communicate(timeout=120)
+        except subprocess.TimeoutExpired:
+            os.kill(process.pid, signal.SIGABRT)  # faulthandler prints every thread's stack
+            _, err = process.communicate(timeout=30)
+            pytest.fail(f"no exit 120 s after Ctrl-C; the trainer's stderr ends:\n{err[-6000:]}")
     finally:
         process.kill()
     assert process.returncode == 130, err[-2000:]
