@@ -67,6 +67,22 @@ def test_the_default_run_learns_to_drive(here: Path, capsys):
     assert PPO.load(here / "ppo_f1tenth_lidar.zip").num_timesteps >= 20_000
 
 
+def hung(process: subprocess.Popen[str]) -> str:
+    """What a trainer that has not ended 120 s after Ctrl-C is doing: its threads' stacks
+    (faulthandler, on SIGABRT) if it still runs, else the processes of its group that keep
+    its stderr open; then the group is killed."""
+    code = process.poll()
+    listing = ["ps", "-s", str(process.pid), "-o", "pid,stat,etime,args"]  # its session's
+    group = subprocess.run(listing, capture_output=True, text=True).stdout
+    if code is None:
+        os.kill(process.pid, signal.SIGABRT)  # faulthandler prints every thread's stack
+        time.sleep(2)
+    os.killpg(process.pid, signal.SIGKILL)
+    _, err = process.communicate(timeout=30)
+    state = "still running" if code is None else f"exited with {code}, its stderr still open"
+    return f"120 s after Ctrl-C the trainer was {state}:\n{group}\nits stderr ends:\n{err[-6000:]}"
+
+
 def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
     command = [sys.executable, "-m", "tinyrace", "train", "--timesteps", "1000000"]
     process = subprocess.Popen(
@@ -88,9 +104,7 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
         try:
             _, err = process.communicate(timeout=120)
         except subprocess.TimeoutExpired:
-            os.kill(process.pid, signal.SIGABRT)  # faulthandler prints every thread's stack
-            _, err = process.communicate(timeout=30)
-            pytest.fail(f"no exit 120 s after Ctrl-C; the trainer's stderr ends:\n{err[-6000:]}")
+            pytest.fail(hung(process))
     finally:
         process.kill()
     assert process.returncode == 130, err[-2000:]
