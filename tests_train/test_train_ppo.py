@@ -67,6 +67,14 @@ def test_the_default_run_learns_to_drive(here: Path, capsys):
     assert PPO.load(here / "ppo_f1tenth_lidar.zip").num_timesteps >= 20_000
 
 
+def _default_ctrl_c() -> None:
+    """In the trainer's process before it starts: SIGINT as a terminal's foreground job has
+    it. A job a non-interactive shell starts with ``&`` (a CI script's) inherits SIGINT
+    ignored, and Python then installs no KeyboardInterrupt handler: Ctrl-C would not reach
+    the trainer the test means to interrupt."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def hung(process: subprocess.Popen[str]) -> str:
     """What a trainer that has not ended 120 s after Ctrl-C is doing: its threads' stacks
     (faulthandler, on SIGABRT) if it still runs, else the processes of its group that keep
@@ -93,6 +101,7 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
         stderr=subprocess.PIPE,
         text=True,
         start_new_session=True,  # its own process group, as a terminal's foreground job
+        preexec_fn=_default_ctrl_c,
     )
     try:
         assert process.stdout is not None
