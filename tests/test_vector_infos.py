@@ -19,6 +19,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis_budget import examples
 
+from tests.test_batch_physics import assert_same  # bit for bit: bytes, NaNs, signed zeros
 from tinyrace.vector.infos import merge_infos
 
 FLOATS = st.floats(width=64)  # NaNs, infinities and signed zeros included
@@ -86,31 +87,6 @@ def merged_by_gymnasium(batch: list[Any]) -> dict[str, Any]:
     return merged
 
 
-def assert_identical(a: Any, b: Any, where: str = "") -> None:
-    """Equal to the bit: dicts key by key in order, arrays by dtype, shape and bytes
-    (objects one by one, equal or both NaN), other values equal and of one type."""
-    assert type(a) is type(b), (where, type(a), type(b))
-    if isinstance(a, dict):
-        assert list(a) == list(b), (where, list(a), list(b))
-        for key in a:
-            assert_identical(a[key], b[key], f"{where}.{key}")
-    elif isinstance(a, np.ndarray):
-        assert (a.dtype, a.shape) == (b.dtype, b.shape), (where, a.dtype, b.dtype)
-        if a.dtype == object:
-            for x, y in zip(a.ravel(), b.ravel(), strict=True):
-                assert_identical(x, y, where)
-        else:
-            assert a.tobytes() == b.tobytes(), (where, a, b)
-    elif isinstance(a, tuple | list):
-        assert len(a) == len(b), where
-        for x, y in zip(a, b, strict=True):
-            assert_identical(x, y, where)
-    elif isinstance(a, float | np.floating) and np.isnan(a):
-        assert np.isnan(b), where
-    else:
-        assert a == b, (where, a, b)
-
-
 def check(batch: list[Any]) -> None:
     """``merge_infos`` gives what Gymnasium gives, or raises what it raises."""
     with warnings.catch_warnings():
@@ -121,7 +97,7 @@ def check(batch: list[Any]) -> None:
             with pytest.raises(type(error)):
                 merge_infos(batch, len(batch))
             return
-        assert_identical(expected, merge_infos(batch, len(batch)))
+        assert_same(expected, merge_infos(batch, len(batch)))
 
 
 @settings(max_examples=examples(400), deadline=None)
