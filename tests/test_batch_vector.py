@@ -263,3 +263,20 @@ def test_a_worker_that_dies():
         vector.step(np.array([[0.0], [-0.9]], np.float32))
     assert vector.closed
     vector.close()
+
+
+def test_observations_are_written_in_one_copy_only_when_each_fits_its_row():
+    """``_write_rows``: arrays of the rows' shape and dtype in one concatenation; anything
+    else row by row as numpy assigns (cast, broadcast, or its error), never shifted rows."""
+    from tinyrace.vector.envslice import _write_rows
+
+    rows = np.zeros((2, 3, 2), np.uint8)
+    _write_rows(rows, [np.full((3, 2), 1, np.uint8), np.full((3, 2), 2, np.uint8)])
+    assert rows[:, :, 0].tolist() == [[1, 1, 1], [2, 2, 2]]
+    _write_rows(rows, [np.full((3, 2), 7.9), [[3, 4]] * 3])  # float64 cast, a list
+    assert rows[0].tolist() == [[7, 7]] * 3 and rows[1].tolist() == [[3, 4]] * 3
+    _write_rows(rows, [np.uint8(5), np.full((1, 2), 6, np.uint8)])  # broadcast
+    assert rows[0].tolist() == [[5, 5]] * 3 and rows[1].tolist() == [[6, 6]] * 3
+    with pytest.raises(ValueError):  # 4 + 2 rows add up to the batch's 6: not one copy
+        _write_rows(rows, [np.zeros((4, 2), np.uint8), np.zeros((2, 2), np.uint8)])
+    assert rows[0].tolist() == [[5, 5]] * 3  # the first row was not overwritten in a shift
