@@ -3,6 +3,7 @@ the pipes), exceptions from the pipes."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -11,6 +12,7 @@ import numpy as np
 from tinyrace.vector import shared
 from tinyrace.vector.failures import rebuild_error
 from tinyrace.vector.infos import merge_infos
+from tinyrace.vector.inparent import ParentPipe
 from tinyrace.vector.records import Plan, Signature, record_dtype, records, unflatten
 
 MAX_PLANS = 256  # merge plans kept (one per order of signatures met); then they start anew
@@ -41,7 +43,10 @@ class Answers:
         self.plans: dict[tuple[int, ...], Plan | None] = {}  # by signatures in order
 
     def collect(
-        self, status: np.ndarray, pipes: list[Connection], numbers: list[int] | None = None
+        self,
+        status: np.ndarray,
+        pipes: Sequence[Connection | ParentPipe],
+        numbers: list[int] | None = None,
     ) -> dict[str, Any]:
         """The step's merged infos of the workers ``numbers`` (default: all), their envs in
         that order: from the records when every worker wrote them, else each env's info

@@ -39,8 +39,15 @@ def died(number: int, envs: slice, exitcode: int | None) -> RuntimeError:
     )
 
 
-def rebuild_error(error: tuple[str, str, str, bytes | None], number: int, envs: slice) -> Exception:
-    """The worker's exception (or a RuntimeError naming it), its traceback as a note."""
+def rebuild_error(
+    error: tuple[str, str, str, bytes | None] | Exception, number: int, envs: slice
+) -> Exception:
+    """The worker's exception (or a RuntimeError naming it), its traceback as a note; an
+    exception raised by the parent's own slice (``tinyrace.vector.inparent``) as it is."""
+    if isinstance(error, Exception):
+        if hasattr(error, "add_note"):  # Python >= 3.11
+            error.add_note(f"raised in the BatchVectorEnv's parent process (envs {show(envs)})")
+        return error
     name, message, trace, pickled = error
     rebuilt: Exception | None = None
     with contextlib.suppress(Exception):

@@ -25,7 +25,9 @@ import gymnasium as gym
 from gymnasium.vector.utils import CloudpickleWrapper
 
 from tinyrace.vector import shared
+from tinyrace.vector.envslice import EnvSlice
 from tinyrace.vector.failures import await_close, died, rebuild_error
+from tinyrace.vector.inparent import ParentPipe, ParentWorker
 from tinyrace.vector.worker import acquire, work
 
 CLOSE_TIMEOUT = 10.0  # [s] a worker gets to finish its command and close its envs
@@ -42,14 +44,20 @@ class Workers:
     """The worker processes of one vector env, each stepping one of ``slices``.
 
     ``on_failure`` is called (the vector env closes) before a dead worker is reported.
+    With ``parent_steps`` the last slice is the parent's own (``tinyrace.vector.inparent``):
+    worker number ``len(slices) - 1``, no process, its "pipe" a queue.
     """
 
-    def __init__(self, slices: list[slice], on_failure: Callable[[], None]) -> None:
+    def __init__(
+        self, slices: list[slice], on_failure: Callable[[], None], parent_steps: bool = False
+    ) -> None:
         self.slices = slices
         self.on_failure = on_failure
-        self.pipes: list[Connection] = []
+        self.spawned = len(slices) - parent_steps  # worker processes
+        self.parent: ParentWorker | None = None  # the parent's slice, once started
+        self.pipes: list[Connection] = []  # per worker process
         self.processes: list[Any] = []
-        self.semaphores: list[tuple[Any, Any]] = []  # (go, done) per worker
+        self.semaphores: list[tuple[Any, Any]] = []  # (go, done) per worker process
         self.command: Any = None  # the shared command words, once started
         self.spin = PARENT_SPIN  # [s] how long the parent polls for the next answers
 
@@ -61,9 +69,10 @@ class Workers:
         views: shared.Views,
         physics: tuple[bool, int],
     ) -> None:
-        """Start one process per slice, attached to the shared memory ``block``."""
+        """Start one process per slice, attached to the shared memory ``block`` (the
+        parent's slice made here, while the processes make theirs)."""
         self.command = views.command
-        for number, envs in enumerate(self.slices):
+        for number, envs in enumerate(self.slices[: self.spawned]):
             parent, child = ctx.Pipe()
             semaphores = (ctx.Semaphore(0), ctx.Semaphore(0))  # go, done
             fns = [CloudpickleWrapper(fn) for fn in env_fns[envs]]
@@ -78,19 +87,44 @@ class Workers:
             process.start()
             child.close()
             self.processes.append(process)
+        if self.spawned < len(self.slices):
+            envs = self.slices[-1]
+            own = EnvSlice(env_fns[envs], envs.start, views, *physics)
+            self.parent = ParentWorker(self.spawned, own, views)
+
+    @property
+    def answers(self) -> list[Connection | ParentPipe]:
+        """Where each worker's answers beyond the shared memory come from, in order: the
+        processes' pipes, then the parent's slice's queue."""
+        queues: list[Connection | ParentPipe] = list(self.pipes)
+        if self.parent is not None:
+            queues.append(self.parent.queue)
+        return queues
 
     def step(self, numbers: list[int] | range | None = None) -> None:
-        """Wake the workers ``numbers`` (default: all) to step their envs."""
+        """Wake the workers ``numbers`` (default: all) to step their envs; the parent's
+        slice, if among them, is stepped here meanwhile (done when this returns)."""
         command = self.command
+        ours = False
         for number in range(len(self.slices)) if numbers is None else numbers:
+            if number == self.spawned:
+                ours = True
+                continue
             command[number] = shared.STEP
             self.semaphores[number][0].release()
+        if ours:
+            assert self.parent is not None
+            try:
+                self.parent.step()  # its exception is its answer, as a worker's
+            except BaseException:  # e.g. Ctrl-C: the workers would be out of step
+                self.on_failure()
+                raise
 
     def wait_all(self) -> None:
-        """Wait for every worker's step; a step that outlasted the spin will likely again:
-        the next wait sleeps at once."""
+        """Wait for every worker process's step; a step that outlasted the spin will
+        likely again: the next wait sleeps at once."""
         start = time.perf_counter()
-        for number in range(len(self.slices)):
+        for number in range(self.spawned):
             self.await_done(number)
         self.spin = PARENT_SPIN if time.perf_counter() - start < PARENT_SPIN else 0.0
 
@@ -120,10 +154,16 @@ class Workers:
     # -- commands over the pipes ----------------------------------------------------------
     def send(self, command: str, args: list[tuple[Any, ...]]) -> None:
         # all pickled first: an argument that cannot be pickled leaves the pipes in step
-        messages = [ForkingPickler.dumps((command, worker_args)) for worker_args in args]
+        messages = [ForkingPickler.dumps((command, a)) for a in args[: self.spawned]]
         for number, message in enumerate(messages):
             with contextlib.suppress(OSError):  # a dead worker: reported by receive_all
                 self.signal(number, message)
+        if self.parent is not None:
+            try:
+                self.parent.run(command, args[-1])
+            except BaseException:  # e.g. Ctrl-C: the workers would be out of step
+                self.on_failure()
+                raise
 
     def signal(self, number: int, message: bytes | memoryview) -> None:
         """Put ``message`` in worker ``number``'s pipe and wake it to read it."""
@@ -134,9 +174,9 @@ class Workers:
     def receive_all(self) -> list[Any]:
         """Every worker's answer, in order; the first worker's exception is raised here."""
         replies = []
-        for number, pipe in enumerate(self.pipes):
+        for number, pipe in enumerate(self.answers):
             try:
-                replies.append(pipe.recv())
+                replies.append(pipe.recv())  # the parent's slice: a queued answer
             except (EOFError, OSError):  # no answer will ever come
                 process = self.processes[number]
                 process.join(CLOSE_TIMEOUT)
@@ -153,9 +193,18 @@ class Workers:
     def close(self) -> None:
         """Ask every worker to close its envs; terminate any that hang."""
         message = ForkingPickler.dumps(("close", ()))
-        for number in range(len(self.pipes)):
+        for number in range(len(self.processes)):
             with contextlib.suppress(OSError, ValueError):  # a worker that is gone already
                 self.signal(number, message)
+        parent, self.parent = self.parent, None
+        try:
+            if parent is not None:
+                parent.run("close", ())
+        finally:
+            self._join()
+
+    def _join(self) -> None:
+        """Wait for the processes told to close; terminate any that hang."""
         for pipe, process in zip(self.pipes, self.processes, strict=True):
             await_close(pipe, CLOSE_TIMEOUT)
             pipe.close()

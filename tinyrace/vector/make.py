@@ -23,10 +23,12 @@ def make_batch(
     copy: bool = True,
     batch_physics: bool = True,
     numpy_from: int = NUMPY_FROM,
+    parent_steps: bool = False,
     **kwargs: Any,
 ) -> BatchVectorEnv:
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``; ``workers=0``
-    steps them all in this process."""
+    steps them all in this process, ``parent_steps=True`` a slice of them beside the
+    ``workers`` processes."""
     check_count("num_envs", num_envs, 1, MAX_ENVS)
     maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv(
@@ -36,6 +38,7 @@ def make_batch(
         copy=copy,
         batch_physics=batch_physics,
         numpy_from=numpy_from,
+        parent_steps=parent_steps,
     )
 
 

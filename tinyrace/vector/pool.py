@@ -41,6 +41,11 @@ class AsyncBatch:
                 "AsyncBatch needs a BatchVectorEnv with worker processes (workers >= 1) "
                 "and an array action space"
             )
+        if vector._workers.parent is not None:
+            raise ValueError(
+                "AsyncBatch steps each worker on its own: a BatchVectorEnv made with "
+                "parent_steps=True has a slice that only a whole step moves"
+            )
         sizes = [s.stop - s.start for s in vector._slices]
         batch_size = vector.num_envs if batch_size is None else batch_size
         if not max(sizes) <= batch_size <= vector.num_envs:
@@ -91,7 +96,7 @@ class AsyncBatch:
             [np.arange(vector._slices[n].start, vector._slices[n].stop) for n in ready]
         )
         try:
-            infos = vector._answers.collect(vector._views.status, vector._workers.pipes, ready)
+            infos = vector._answers.collect(vector._views.status, vector._workers.answers, ready)
         except (EOFError, OSError):
             vector.close()
             raise

@@ -124,8 +124,12 @@ class Worker:
             status[self.number] = self._write_infos(infos)
         except Exception as error:
             status[self.number] = shared.FAILED
-            self.pipe.send((False, describe(error)))
+            self.fail(error)
         self.done.release()
+
+    def fail(self, error: Exception) -> None:
+        """Send the parent ``error``, described (a pickled exception may not unpickle)."""
+        self.pipe.send((False, describe(error)))
 
     def _write_infos(self, infos: list[dict[str, Any]]) -> int:
         """Pack each env's info into its record, its signature's number into ``kinds``
