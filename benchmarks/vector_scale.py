@@ -18,6 +18,9 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
 - ``1x1``: 1 env in 1 worker process (target >= 0.7: the round trip is cheap);
 - ``Wx8``: W workers x 8 envs for W = 1 .. --max-workers, or each W of ``--workers`` (2 x 8
   on 2 cores: target >= 1.6; on 16 cores, 1, 2, 4, 8, 16 in a few minutes);
+- ``Wx8_parent``: W slices of 8 envs, W - 1 stepped by worker processes and one by this
+  process itself (``parent_steps=True``) for each W >= 2: W cores' worth of workers with
+  no core shared between a worker and a waiting parent;
 - ``apart_Wx8``: W processes that share nothing, each stepping 8 envs in itself
   (``workers=0``), for each W >= 2 of those: what the machine's cores give W x 8 envs with
   no vector env between them (their caches and memory are shared all the same), the
@@ -26,6 +29,8 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
   constant frame): the vector env's own ceiling (target >= 300,000 env-steps/s);
 - ``standin_2x64_small``: the same with an observation of 8 floats: the ceiling without the
   frames' bytes (27.6 KB per env and step written by the workers);
+- ``standin_2x64_parent``, ``standin_2x64_small_parent``: the same 64 stand-ins in 2 slices,
+  1 worker process and this process (``parent_steps=True``);
 - ``envpool_W``: EnvPool's CarRacing-v3 with W threads x 8 envs, if ``envpool`` imports
   (``pip install envpool`` with its asset packages, in a venv of its own: see
   benchmarks/README.md); else the import's error is printed and the rows are skipped.
@@ -188,7 +193,7 @@ def _apart(queue: Any, seconds: float, index: int) -> None:
     queue.put(rate_vector(functools.partial(make_batch, ENV_ID, 8, 0), 8, seconds, index))
 
 
-def standin(num_envs: int, workers: int, small: bool = False) -> Any:
+def standin(num_envs: int, workers: int, small: bool = False, parent: bool = False) -> Any:
     from tinyrace.vector import BatchVectorEnv
 
     from standin import StandIn
@@ -199,7 +204,9 @@ def standin(num_envs: int, workers: int, small: bool = False) -> Any:
         observation = gym.spaces.Box(0, 255, (96, 96, 3), np.uint8)
     action = gym.spaces.Box(np.array([-1, 0, 0], np.float32), np.array([1, 1, 1], np.float32))
     return BatchVectorEnv(
-        [functools.partial(StandIn, 0.0, observation, action)] * num_envs, workers
+        [functools.partial(StandIn, 0.0, observation, action)] * num_envs,
+        workers,
+        parent_steps=parent,
     )
 
 
@@ -234,10 +241,9 @@ def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
     """Name -> (seconds -> env-steps/s, envs per step), in the order printed."""
     from tinyrace.vector import make_batch
 
-    def vector(num_envs: int, workers: int) -> Callable[[float], float]:
-        return functools.partial(
-            rate_vector, functools.partial(make_batch, ENV_ID, num_envs, workers), num_envs
-        )
+    def vector(num_envs: int, workers: int, parent: bool = False) -> Callable[[float], float]:
+        make = functools.partial(make_batch, ENV_ID, num_envs, workers, parent_steps=parent)
+        return functools.partial(rate_vector, make, num_envs)
 
     table: dict[str, tuple[Callable[[float], float], int]] = {
         "one_env": (rate_single, 1),
@@ -247,6 +253,8 @@ def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
     }
     for workers in counts:
         table[f"{workers}x8"] = (vector(8 * workers, workers), 8 * workers)
+    for slices in (w for w in counts if w >= 2):
+        table[f"{slices}x8_parent"] = (vector(8 * slices, slices - 1, True), 8 * slices)
     for processes in (w for w in counts if w >= 2):
         table[f"apart_{processes}x8"] = (functools.partial(rate_apart, processes), 8 * processes)
     table["standin_2x64"] = (
@@ -257,6 +265,10 @@ def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
         functools.partial(rate_vector, functools.partial(standin, 64, 2, True), 64),
         64,
     )
+    for small in (False, True):
+        make = functools.partial(standin, 64, 1, small, True)
+        name = "standin_2x64_small_parent" if small else "standin_2x64_parent"
+        table[name] = (functools.partial(rate_vector, make, 64), 64)
     for threads in counts:
         found = envpool_case(threads)
         if isinstance(found, str):
@@ -279,6 +291,9 @@ def print_scaling(medians: dict[str, float], counts: list[int]) -> None:
         apart = medians.get(f"apart_{workers}x8")
         if apart is not None:
             line += f" ({medians[f'{workers}x8'] / apart:4.2f}x {workers} processes apart)"
+        parent = medians.get(f"{workers}x8_parent")
+        if parent is not None:
+            line += f"; {workers - 1} + the parent {parent / core:5.2f}x ({parent / one:4.2f}x)"
         if pool is not None:
             threads = medians[f"envpool_{workers}"]
             line += f", EnvPool {threads / pool:5.2f}x its 1 thread, tinyrace/EnvPool "
@@ -301,7 +316,7 @@ def main() -> None:
     gym.logger.min_level = gym.logger.ERROR
     print(f"load before: {os.getloadavg()}, cores: {os.cpu_count()}", flush=True)
     table = cases(counts)
-    serial_cases = {"1x1", "standin_2x64", *(f"{w}x8" for w in counts)}
+    serial_cases = {"1x1", "standin_2x64", "standin_2x64_parent", *(f"{w}x8" for w in counts)}
     rates: dict[str, list[float]] = {name: [] for name in table}
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
@@ -332,7 +347,8 @@ def main() -> None:
         f"  CPU per env-step (thread time): one env {one_cpu * 1e6:.0f} us, 8 in process "
         f"{batch_cpu * 1e6:.0f} us: {one_cpu / batch_cpu:.2f}x"
     )
-    envs = {"1x1": 1, "standin_2x64": 64} | {f"{w}x8": 8 * w for w in counts}
+    envs = {"1x1": 1, "standin_2x64": 64, "standin_2x64_parent": 64}
+    envs |= {f"{w}x8": 8 * w for w in counts}
     parts = []
     for name, values in SERIAL.items():
         if name != "last":
@@ -341,14 +357,13 @@ def main() -> None:
     print(
         "  the parent's own time per round (outside waiting for the workers): " + ", ".join(parts)
     )
-    print(
-        f"  the ceiling (stand-ins 2x64): {statistics.median(rates['standin_2x64']):,.0f} "
-        "env-steps/s (issue 37: >= 300,000)"
-    )
-    print(
-        f"  without the frames' bytes (8-float observations): "
-        f"{statistics.median(rates['standin_2x64_small']):,.0f} env-steps/s"
-    )
+    for suffix, how in (("", "2 workers"), ("_parent", "1 worker and the parent")):
+        print(
+            f"  the ceiling (stand-ins 2x64, {how}): "
+            f"{statistics.median(rates['standin_2x64' + suffix]):,.0f} env-steps/s "
+            f"(issue 37: >= 300,000); without the frames' bytes (8-float observations): "
+            f"{statistics.median(rates['standin_2x64_small' + suffix]):,.0f}"
+        )
     print(f"load after: {os.getloadavg()}")
 
 
