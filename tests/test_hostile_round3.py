@@ -328,7 +328,9 @@ def test_perspective_cameras_count_against_the_camera_pixel_cap(tmp_path):
 @pytest.mark.parametrize(
     ("kwargs", "key"),
     [({"num_envs": 1000}, "num_envs"), ({"num_envs": 2.5}, "num_envs"),
-     ({"num_envs": 2, "workers": "2"}, "workers")],
+     ({"num_envs": 2, "workers": "2"}, "workers"),
+     ({"num_envs": 2, "parent_steps": "yes"}, "parent_steps"),
+     ({"num_envs": 2, "workers": 1, "parent_steps": 1}, "parent_steps")],
 )  # fmt: skip
 def test_make_vec_arguments_are_checked(kwargs, key):
     with pytest.raises(ConfigError, match=f"<make_vec arguments>: {key}"):

@@ -12,6 +12,7 @@ closes it; closing frees the shared memory and ends the workers.
 from __future__ import annotations
 
 import multiprocessing
+import os
 
 import gymnasium as gym
 import numpy as np
@@ -22,6 +23,7 @@ import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import FACTORIES, Counter, Fragile, assert_same, run
 from tests.test_vector_shared import _record_created, bounded, segments  # noqa: F401
 from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector.make import layout
 from tinyrace.vector.pool import AsyncBatch
 
 # (num_envs, workers, steps): the parent's slice is the last of workers + 1
@@ -148,3 +150,18 @@ def test_async_batch_refuses_a_parents_slice():
     with pytest.raises(ValueError, match="parent_steps"):
         AsyncBatch(vector, batch_size=2)
     vector.close()
+
+
+def test_the_entry_points_default_to_a_slice_per_core_the_parent_stepping_one(monkeypatch):
+    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    assert layout(8, None, None) == (2, True)  # 3 slices: 2 workers and the parent
+    assert layout(2, None, None) == (1, True)
+    assert layout(1, None, None) == (1, False)  # one env: one worker, as before
+    assert layout(8, None, False) == (3, False)  # a worker process per core
+    assert layout(8, 2, None) == (2, False) and layout(8, 2, True) == (2, True)
+    envs = gym.make_vec("tinyrace/CarRacing-v0", num_envs=4)
+    try:
+        assert len(envs._workers.processes) == 2 and envs._workers.parent is not None
+        assert envs.reset(seed=0)[0].shape == (4, 96, 96, 3)
+    finally:
+        envs.close()

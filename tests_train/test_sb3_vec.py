@@ -45,10 +45,10 @@ def same(a, b, where: str) -> None:
         assert a == b, (where, a, b)
 
 
-@pytest.mark.parametrize("workers", [0, 2])
-def test_steps_equal_sb3s_dummy_vec_env(workers):
+@pytest.mark.parametrize(("workers", "parent_steps"), [(0, False), (2, False), (1, True)])
+def test_steps_equal_sb3s_dummy_vec_env(workers, parent_steps):
     dummy = DummyVecEnv([MAKE] * 3)
-    batch = BatchVecEnv(BatchVectorEnv([MAKE] * 3, workers=workers))
+    batch = BatchVecEnv(BatchVectorEnv([MAKE] * 3, workers=workers, parent_steps=parent_steps))
     for vec in (dummy, batch):
         vec.seed(11)
     same(dummy.reset(), batch.reset(), "reset")
@@ -69,8 +69,10 @@ def test_steps_equal_sb3s_dummy_vec_env(workers):
     batch.close()
 
 
-def test_vec_env_api_with_indices():
-    vec = make_vec_env(MAKE, 3, workers=2, seed=0)
+@pytest.mark.parametrize("parent_steps", [False, True])
+def test_vec_env_api_with_indices(parent_steps):
+    vec = make_vec_env(MAKE, 3, workers=2 - parent_steps, seed=0, parent_steps=parent_steps)
+    assert (vec.venv._workers.parent is not None) is parent_steps
     vec.reset()
     assert vec.get_attr("spec", indices=[2])[0].id == "tinyrace/CarRacing-v0"
     vec.set_attr("marker", 5, indices=[0, 2])

@@ -34,7 +34,7 @@ from stable_baselines3.common.vec_env.base_vec_env import (
 )
 
 from tinyrace.vector import BatchVectorEnv, make_batch
-from tinyrace.vector.make import _workers
+from tinyrace.vector.make import layout
 
 
 class BatchVecEnv(VecEnv):  # type: ignore[misc, unused-ignore]  # Any where SB3 is absent
@@ -124,14 +124,17 @@ def make_vec_env(
     seed: int | None = None,
     workers: int | None = None,
     env_kwargs: dict[str, Any] | None = None,
+    parent_steps: bool | None = None,
     **batch_kwargs: Any,
 ) -> BatchVecEnv:
     """SB3's ``make_vec_env`` for the fast path: ``n_envs`` envs of ``env_id`` (an id for
-    ``gym.make`` or a function that makes the env) in ``workers`` processes (one per core
-    by default, 0: all in this process), seeded ``seed``, ``seed + 1``, ... at the first
-    reset. Wrap it in ``VecMonitor`` for SB3's episode statistics (per-env ``Monitor``
-    wrappers would take the envs off the batched physics)."""
-    workers = _workers(n_envs, workers)
+    ``gym.make`` or a function that makes the env) in ``workers`` processes (by default a
+    slice of them per core, this process stepping one: ``tinyrace.vector.make.layout``;
+    0: all in this process), seeded ``seed``, ``seed + 1``, ... at the first reset. Wrap it
+    in ``VecMonitor`` for SB3's episode statistics (per-env ``Monitor`` wrappers would take
+    the envs off the batched physics)."""
+    workers, parent_steps = layout(n_envs, workers, parent_steps)
+    batch_kwargs["parent_steps"] = parent_steps
     if isinstance(env_id, str):
         venv = make_batch(env_id, n_envs, workers, **batch_kwargs, **(env_kwargs or {}))
     else:

@@ -197,9 +197,10 @@ def ppo_settings(timesteps: int, envs: int) -> dict[str, Any]:
 
 
 def vector_env(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -> VecEnv:
-    """``envs`` copies of the env as one SB3 VecEnv (tinyrace's vector env: in worker
-    processes, one per core, when ``subprocesses`` and more than one, else in this process),
-    episode returns recorded (VecMonitor)."""
+    """``envs`` copies of the env as one SB3 VecEnv (tinyrace's vector env: a slice of them
+    per core, this process stepping one and worker processes the others, when
+    ``subprocesses`` and more than one, else all in this process), episode returns
+    recorded (VecMonitor)."""
     from stable_baselines3.common.vec_env import VecMonitor
 
     from tinyrace.sb3 import make_vec_env

@@ -49,7 +49,7 @@ from tinyrace.vector import shared
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
-from tinyrace.vector.failures import check_count
+from tinyrace.vector.failures import check_count, check_flag
 from tinyrace.vector.handout import Handout, buffers_for
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.link import Workers
@@ -98,6 +98,7 @@ class BatchVectorEnv(VectorEnv):
         env_fns = list(env_fns)
         check_count("num_envs", len(env_fns), 1, MAX_ENVS, "(len(env_fns))")
         check_count("workers", workers, 0, MAX_WORKERS, "(0: in this process)")
+        check_flag("parent_steps", parent_steps)
         self.env_fns, self.copy = env_fns, copy
         self.num_envs = len(env_fns)
         self.autoreset_mode = AutoresetMode.NEXT_STEP

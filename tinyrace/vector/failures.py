@@ -22,6 +22,12 @@ def check_count(name: str, value: object, low: int, high: int, note: str = "") -
     raise ConfigError(Problem("<make_vec arguments>", name, value, allowed))
 
 
+def check_flag(name: str, value: object) -> None:
+    """True or False (numpy's bools too), else a ConfigError naming the argument."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ConfigError(Problem("<make_vec arguments>", name, value, "expected true or false"))
+
+
 def show(envs: slice) -> str:
     """A slice of envs as "3" or "3-5"."""
     return f"{envs.start}-{envs.stop - 1}" if envs.stop - envs.start > 1 else str(envs.start)

@@ -11,7 +11,7 @@ import gymnasium as gym
 from tinyrace.config.bounds import MAX_ENVS
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.env import BatchVectorEnv
-from tinyrace.vector.failures import check_count
+from tinyrace.vector.failures import check_count, check_flag
 
 
 def make_batch(
@@ -43,23 +43,45 @@ def make_batch(
 
 
 def make_carracing_vec(
-    num_envs: int = 1, workers: int | None = None, **kwargs: Any
+    num_envs: int = 1,
+    workers: int | None = None,
+    parent_steps: bool | None = None,
+    **kwargs: Any,
 ) -> BatchVectorEnv:
     """``gym.make_vec("tinyrace/CarRacing-v0", vectorization_mode="vector_entry_point")``."""
-    return make_batch("tinyrace/CarRacing-v0", num_envs, _workers(num_envs, workers), **kwargs)
+    workers, parent_steps = layout(num_envs, workers, parent_steps)
+    return make_batch(
+        "tinyrace/CarRacing-v0", num_envs, workers, parent_steps=parent_steps, **kwargs
+    )
 
 
 def make_tinyrace_vec(
-    num_envs: int = 1, workers: int | None = None, **kwargs: Any
+    num_envs: int = 1,
+    workers: int | None = None,
+    parent_steps: bool | None = None,
+    **kwargs: Any,
 ) -> BatchVectorEnv:
     """``gym.make_vec("tinyrace/TinyRace-v0", vectorization_mode="vector_entry_point")``."""
-    return make_batch("tinyrace/TinyRace-v0", num_envs, _workers(num_envs, workers), **kwargs)
+    workers, parent_steps = layout(num_envs, workers, parent_steps)
+    return make_batch(
+        "tinyrace/TinyRace-v0", num_envs, workers, parent_steps=parent_steps, **kwargs
+    )
 
 
-def _workers(num_envs: int, workers: int | None) -> int:
-    """One worker process per core by default, never more than envs."""
+def layout(num_envs: int, workers: int | None, parent_steps: bool | None) -> tuple[int, bool]:
+    """(worker processes, whether the parent steps a slice too). By default one slice per
+    core, never more than envs, the parent stepping one of them (no core idles while the
+    parent waits, benchmarks/README.md); ``parent_steps=False``: one worker process per
+    core. Given ``workers``, that many processes, and the parent steps only if asked."""
     check_count("num_envs", num_envs, 1, MAX_ENVS)
-    return workers if workers is not None else max(1, min(num_envs, os.cpu_count() or 1))
+    if parent_steps is not None:
+        check_flag("parent_steps", parent_steps)
+    if workers is not None:
+        return workers, bool(parent_steps)
+    slices = max(1, min(num_envs, os.cpu_count() or 1))
+    if parent_steps is False or slices == 1:
+        return slices, False
+    return slices - 1, True
 
 
 def _make(id: str, kwargs: dict[str, Any]) -> gym.Env:
