@@ -353,7 +353,8 @@ def main() -> None:
     for name, values in SERIAL.items():
         if name != "last":
             serial = statistics.median(values) * 1e6
-            parts.append(f"{name} {serial:.0f} us ({serial / envs[name]:.2f} per env-step)")
+            own = " with its own slice's step" if name.endswith("_parent") else ""
+            parts.append(f"{name} {serial:.0f} us{own} ({serial / envs[name]:.2f} per env-step)")
     print(
         "  the parent's own time per round (outside waiting for the workers): " + ", ".join(parts)
     )
