@@ -6,6 +6,8 @@ for T timesteps on N envs, four frames stacked, and prints SB3's fps (timesteps 
 second of wall time, rollouts and updates together) for:
 
 - ``tinyrace_batch``: ``tinyrace.sb3.make_vec_env`` (W worker processes, the fast path);
+- ``tinyrace_batch_parent``: the same with W - 1 workers and this process stepping a slice
+  (``parent_steps=True``: ``make_vec_env``'s default layout for W cores);
 - ``tinyrace_subproc``: SB3's ``SubprocVecEnv``, one process per env, same id;
 - ``carracing_v3``: Gymnasium's ``CarRacing-v3`` in ``SubprocVecEnv`` (needs Box2D).
 
@@ -25,11 +27,12 @@ import gymnasium as gym
 HYPERPARAMETERS: dict[str, Any] = {"n_steps": 64, "batch_size": 128, "n_epochs": 1, "seed": 0}
 
 
-def batch_envs(envs: int, workers: int) -> Any:
+def batch_envs(envs: int, workers: int, parent_steps: bool = False) -> Any:
     from stable_baselines3.common.vec_env import VecMonitor
     from tinyrace.sb3 import make_vec_env
 
-    return VecMonitor(make_vec_env("tinyrace/CarRacing-v0", envs, seed=0, workers=workers))
+    vec = make_vec_env("tinyrace/CarRacing-v0", envs, 0, workers, parent_steps=parent_steps)
+    return VecMonitor(vec)
 
 
 def subproc_envs(env_id: str, envs: int) -> Any:
@@ -64,6 +67,7 @@ def main() -> None:
     gym.logger.min_level = gym.logger.ERROR
     cases: dict[str, Callable[[], Any]] = {
         "tinyrace_batch": lambda: batch_envs(args.envs, args.workers),
+        "tinyrace_batch_parent": lambda: batch_envs(args.envs, max(args.workers - 1, 1), True),
         "tinyrace_subproc": lambda: subproc_envs("tinyrace:tinyrace/CarRacing-v0", args.envs),
         "carracing_v3": lambda: subproc_envs("CarRacing-v3", args.envs),
     }
@@ -71,7 +75,7 @@ def main() -> None:
     results = {name: fps(make, args.timesteps) for name, make in cases.items()}
     for name, value in results.items():
         print(
-            f"  {name:>16}: {value:8.1f} fps  {value / results['carracing_v3']:5.2f}x CarRacing-v3"
+            f"  {name:>21}: {value:8.1f} fps  {value / results['carracing_v3']:5.2f}x CarRacing-v3"
         )
     print(f"load after: {os.getloadavg()}")
 
