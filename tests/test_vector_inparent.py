@@ -6,14 +6,17 @@ Dict), rewards, flags, infos of every shape (records, new signatures, infos by "
 autoresets, step_async / step_wait, actions that go by pipe, reset masks, call and
 set_attr. An exception of the parent's own envs is raised as it is, named, once every
 worker has answered, and the vector env stays usable; Ctrl-C in the parent's slice
-closes it; closing frees the shared memory and ends the workers.
+closes it; closing frees the shared memory and ends the workers; render and spawned
+workers beside it; the entry points' default layout.
 """
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import os
 
+import cv2
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -165,3 +168,39 @@ def test_the_entry_points_default_to_a_slice_per_core_the_parent_stepping_one(mo
         assert envs.reset(seed=0)[0].shape == (4, 96, 96, 3)
     finally:
         envs.close()
+
+
+def test_render_and_spawned_workers_beside_the_parents_slice():
+    fns = [functools.partial(gym.make, "tinyrace/CarRacing-v0", render_mode="rgb_array")] * 3
+    sync = gym.vector.SyncVectorEnv(fns)
+    batch = BatchVectorEnv(fns, workers=1, context="spawn", parent_steps=True)
+    assert_same(sync.reset(seed=0), batch.reset(seed=0))
+    actions = np.tile(np.array([0.1, 0.6, 0.0], np.float32), (3, 1))
+    assert_same(sync.step(actions), batch.step(actions))
+    frames = batch.render()
+    assert len(frames) == 3 and frames[2].shape == (400, 600, 3)
+    assert_same(frames, sync.render())
+    sync.close()
+    batch.close()
+
+
+class Threads(Fragile):
+    """Reports OpenCV's thread count during its step in its info."""
+
+    def step(self, action):
+        observation, reward, terminated, truncated, _ = super().step(action)
+        return observation, reward, terminated, truncated, {"threads": cv2.getNumThreads()}
+
+
+def test_opencv_runs_on_one_thread_in_the_parents_step_only():
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        vector = BatchVectorEnv([Threads] * 2, workers=1, parent_steps=True)
+        vector.reset(seed=0)
+        infos = vector.step(np.zeros((2, 1), np.float32))[4]
+        assert infos["threads"][1] == 1  # env 1: the parent's
+        assert cv2.getNumThreads() == 2  # as it was before the step
+        vector.close()
+    finally:
+        cv2.setNumThreads(before)
