@@ -203,8 +203,8 @@ def _write_rows(rows: np.ndarray, observations: list[Any]) -> None:
     """Observation ``j`` into ``rows[j]``: arrays of the rows' dtype and shape as one
     copy (``np.concatenate`` along the first axis, no numpy call per row: 25 of 75 µs
     for 32 CarRacing frames, benchmarks/README.md), anything else row by row, cast and
-    broadcast as numpy assigns."""
-    if rows.ndim >= 2:
+    broadcast as numpy assigns (a single one too: its row costs less than the checks)."""
+    if rows.ndim >= 2 and len(observations) > 1:
         try:
             # each one as long as a row (so no two unequal lengths add up to the rows'), and
             # of their dtype (``casting="no"``); ``tall`` is a view: ``rows`` is contiguous
