@@ -19,7 +19,7 @@ import cv2
 
 from tinyrace.vector.envslice import EnvSlice
 from tinyrace.vector.shared import Views
-from tinyrace.vector.worker import CLOSED, Worker
+from tinyrace.vector.worker import Worker
 
 
 class ParentPipe:
@@ -46,7 +46,8 @@ class _Released:
 
 
 class ParentWorker(Worker):
-    """The parent's slice, answering steps and commands as a worker process would."""
+    """The parent's slice, answering steps and commands (``Worker.run``) as a worker
+    process would, into its queue."""
 
     def __init__(self, number: int, envs: EnvSlice, views: Views) -> None:
         pipe = ParentPipe()
@@ -58,9 +59,6 @@ class ParentWorker(Worker):
         """The slice's step with OpenCV on one thread, as in a forked worker: its thread
         pool would spread each warp over the cores the workers are stepping on."""
         threads = cv2.getNumThreads()
-        if threads == 1:
-            super().step()
-            return
         cv2.setNumThreads(1)
         try:
             super().step()
@@ -69,14 +67,3 @@ class ParentWorker(Worker):
 
     def fail(self, error: Exception) -> None:
         self.queue.send((False, error))  # the exception itself, with its traceback
-
-    def run(self, command: str, args: tuple[Any, ...]) -> None:
-        """Carry out a command other than a step, its answer queued as a worker's."""
-        if command == "close":
-            self.envs.close()
-            self.queue.send((True, CLOSED))
-            return
-        try:
-            self.queue.send((True, getattr(self.envs, command)(*args)))
-        except Exception as error:
-            self.fail(error)

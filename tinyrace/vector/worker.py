@@ -98,14 +98,20 @@ class Worker:
                 command, args = self.pipe.recv()
             except EOFError:  # the parent is gone
                 return
+            self.run(command, args)
             if command == "close":
-                self.envs.close()
-                self.pipe.send((True, CLOSED))
                 return
-            try:
-                self.pipe.send((True, getattr(self.envs, command)(*args)))
-            except Exception as error:
-                self.pipe.send((False, describe(error)))
+
+    def run(self, command: str, args: tuple[Any, ...]) -> None:
+        """Carry out a command other than a step and send its answer."""
+        if command == "close":
+            self.envs.close()
+            self.pipe.send((True, CLOSED))
+            return
+        try:
+            self.pipe.send((True, getattr(self.envs, command)(*args)))
+        except Exception as error:
+            self.fail(error)
 
     def step(self) -> None:
         status = self.views.status
