@@ -54,7 +54,8 @@ LAYOUTS = {
 
 
 def assert_same(a, b, where: str = "") -> None:
-    """Equal values of equal types: dicts key by key, arrays by dtype, shape and content."""
+    """Equal values of equal types: dicts key by key, arrays by dtype, shape, content and
+    whether a caller may write into them."""
     assert type(a) is type(b), (where, type(a), type(b))
     if isinstance(a, tuple | list):
         assert len(a) == len(b), where
@@ -66,6 +67,7 @@ def assert_same(a, b, where: str = "") -> None:
             assert_same(a[key], b[key], f"{where}.{key}")
     elif isinstance(a, np.ndarray):
         assert (a.dtype, a.shape) == (b.dtype, b.shape), (where, a.dtype, b.dtype)
+        assert a.flags.writeable == b.flags.writeable, (where, "writeable")
         if a.dtype == object:  # tuples, lists, None: compared one by one
             assert all(x == y for x, y in zip(a.ravel(), b.ravel(), strict=True)), where
         else:

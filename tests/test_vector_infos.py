@@ -134,3 +134,4 @@ def test_every_array_and_mask_is_its_own():
     arrays += list(merged["d"].values())
     assert len({id(a) for a in arrays}) == len(arrays)
     assert not any(np.shares_memory(x, y) for i, x in enumerate(arrays) for y in arrays[:i])
+    assert all(a.flags.writeable for a in arrays)

@@ -52,11 +52,13 @@ class Answers:
         that order: from the records when every worker wrote them, else each env's info
         (from its record or the pipe), merged. A worker's exception is raised once every
         worker's answer is read (the pipes stay in step)."""
+        codes = status.tolist()  # one call, not a numpy scalar per worker
         whole = numbers is None
+        if whole and codes.count(shared.KNOWN) == len(codes):  # the common step
+            return self._merge_whole()
         numbers = list(range(len(pipes))) if numbers is None else numbers
         by_pipe: dict[int, list[dict[str, Any]]] = {}
         error: Exception | None = None
-        codes = status.tolist()  # one call, not a numpy scalar per worker
         for number in numbers:
             code = codes[number]
             if code == shared.KNOWN:
@@ -74,15 +76,19 @@ class Answers:
         if by_pipe:
             return self._one_by_one(numbers, by_pipe)
         if whole:
-            common = self._common()
-            if common is not None:  # one signature in every env: no numbers to look up
-                return self._merge_alike(common)
-            return self._merge(self.table[self.worker_of, self.kinds], self.infos, cache=True)
+            return self._merge_whole()
         envs = np.concatenate(
             [np.arange(s.start, s.stop) for s in map(self.slices.__getitem__, numbers)]
         )
         kinds = self.table[self.worker_of[envs], self.kinds[envs]]
         return self._merge(kinds, self.infos[envs], cache=False)
+
+    def _merge_whole(self) -> dict[str, Any]:
+        """The infos of every env, from the records."""
+        common = self._common()
+        if common is not None:  # one signature in every env: no numbers to look up
+            return self._merge_alike(common)
+        return self._merge(self.table[self.worker_of, self.kinds], self.infos, cache=True)
 
     def _merge(self, numbers: np.ndarray, rows: np.ndarray, cache: bool) -> dict[str, Any]:
         """The infos of the records ``rows``, env ``i``'s of signature ``numbers[i]``."""

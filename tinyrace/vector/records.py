@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from tinyrace.vector.infos import all_true
+
 INFO_BYTES = 512  # [bytes] per env's info record; a larger info goes over the pipe
 MAX_TUPLE = 16  # longest tuple of floats kept in a record
 _PLAIN = (float, int, bool)
@@ -174,7 +176,7 @@ class Plan:
     def merge(self, numbers: np.ndarray) -> dict[str, Any]:
         """The merged infos of envs whose signatures are ``numbers`` (one per env)."""
         n = len(numbers)
-        full = np.ones(n, dtype=np.bool_)  # copied per key: each mask its own array
+        full = all_true(n)  # copied per key: each mask its own array
         if len(self.order) == 1:
             masks = {self.order[0]: full}
         else:
@@ -185,7 +187,7 @@ class Plan:
         """The merged infos of ``n`` envs, all of this plan's one signature."""
         if not self._steps:
             return {}
-        full = np.ones(n, dtype=np.bool_)
+        full = all_true(n)
         return self._merge(self._steps, n, {self.order[0]: full}, full)
 
     def _compile(self, entries: tuple[Leaf | Branch, ...]) -> tuple[_Step, ...]:
@@ -220,7 +222,7 @@ class Plan:
             else:
                 value = np.zeros(n, dtype=what.dtype)
                 for group, column in what.columns:
-                    np.copyto(value, column, where=_any(masks, group))
+                    np.copyto(value, column, where=_where(masks, group))
             merged[key] = value
             merged[mask_key] = full.copy() if everywhere else _any(masks, having)
         return merged
@@ -301,11 +303,20 @@ def _any(masks: dict[int, np.ndarray], numbers: frozenset[int]) -> np.ndarray:
     return mask
 
 
+def _where(masks: dict[int, np.ndarray], numbers: frozenset[int]) -> np.ndarray:
+    """Which envs have one of the signatures ``numbers``, to read (the mask itself for one
+    signature: no copy)."""
+    if len(numbers) == 1:
+        (number,) = numbers
+        return masks[number]
+    return _any(masks, numbers)
+
+
 def _objects(leaf: Leaf, n: int, masks: dict[int, np.ndarray]) -> np.ndarray:
     """A tuple key's values as ``_add_info`` keeps them: an object array, None where absent."""
     values = np.empty(n, dtype=object)  # every item None
     for having, column in leaf.columns:
-        rows = np.flatnonzero(_any(masks, having))
+        rows = np.flatnonzero(_where(masks, having))
         for row, value in zip(rows.tolist(), column[rows].tolist(), strict=True):
             values[row] = tuple(value)
     return values
