@@ -35,6 +35,10 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
   (``pip install envpool`` with its asset packages, in a venv of its own: see
   benchmarks/README.md); else the import's error is printed and the rows are skipped.
 
+Each case's ratios are given twice: its median rate over the one env's median rate, and
+the median of the ratios taken round by round (each against the one env of its own round,
+stepped seconds before it: the pairing leaves out what the machine did between rounds).
+
 Then each side against its own one: tinyrace's W x 8 against one env on one core (and as
 OpenCV comes), EnvPool's W threads against its 1 thread; and the parent's own time per
 round of 1x1, 2x8 and the stand-ins, outside waiting for its workers (sending the actions,
@@ -332,11 +336,19 @@ def main() -> None:
     one, core = (statistics.median(rates[k]) for k in ("one_env", "one_env_1core"))
     print(
         f"\nmedians of {args.rounds} rounds of {args.seconds:g} s (env-steps/s, x one env, "
-        "x one env on one core):"
+        "x one env on one core; in brackets the same two ratios taken round by round, each "
+        "against the one env of its own round, and their medians):"
     )
     medians = {name: statistics.median(values) for name, values in rates.items()}
     for name, median in medians.items():
-        print(f"  {name:>18}: {median:>10,.0f}  {median / one:6.2f}x  {median / core:6.2f}x")
+        paired = [
+            statistics.median(r / o for r, o in zip(rates[name], rates[k], strict=True))
+            for k in ("one_env", "one_env_1core")
+        ]
+        print(
+            f"  {name:>18}: {median:>10,.0f}  {median / one:6.2f}x  {median / core:6.2f}x"
+            f"  [{paired[0]:.2f}x {paired[1]:.2f}x]"
+        )
     print(
         f"  one env kept {statistics.median(CPU['one_env_cores']):.2f} cores busy "
         "(process CPU time / wall time; OpenCV's pool)"
