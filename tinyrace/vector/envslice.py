@@ -67,8 +67,15 @@ class EnvSlice:
         info that is no dict raises here, as Gymnasium's merge would."""
         results = self._step_each(actions) if self.batch is None else self._step_batch(actions)
         _, terminated, truncated, infos = results
-        self.autoreset = [_flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)]
-        check_infos(infos, self.first)
+        n = len(self.envs)
+        if terminated.count(False) == n and truncated.count(False) == n:  # the common step
+            self.autoreset = [False] * n  # (each equal to False: _flag gives False)
+        else:
+            self.autoreset = [
+                _flag(a) or _flag(b) for a, b in zip(terminated, truncated, strict=True)
+            ]
+        if list(map(type, infos)).count(dict) != n:
+            check_infos(infos, self.first)
         return results
 
     def _step_batch(
