@@ -21,6 +21,8 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
 - ``Wx8_parent``: W slices of 8 envs, W - 1 stepped by worker processes and one by this
   process itself (``parent_steps=True``) for each W >= 2: W cores' worth of workers with
   no core shared between a worker and a waiting parent;
+- ``Wx8_pinned``: ``Wx8`` with worker ``i`` pinned to this process's ``i``-th core (``cores=``,
+  Linux), for each W up to the cores: the scheduler cannot put two workers on one core;
 - ``apart_Wx8``: W processes that share nothing, each stepping 8 envs in itself
   (``workers=0``), for each W >= 2 of those: what the machine's cores give W x 8 envs with
   no vector env between them (their caches and memory are shared all the same), the
@@ -31,6 +33,7 @@ the ratio to one ``gym.make("tinyrace/CarRacing-v0")`` env stepped in this proce
   frames' bytes (27.6 KB per env and step written by the workers);
 - ``standin_2x64_parent``, ``standin_2x64_small_parent``: the same 64 stand-ins in 2 slices,
   1 worker process and this process (``parent_steps=True``);
+- ``standin_2x64_pinned``: ``standin_2x64`` with the 2 workers pinned to 2 cores (Linux);
 - ``envpool_W``: EnvPool's CarRacing-v3 with W threads x 8 envs, if ``envpool`` imports
   (``pip install envpool`` with its asset packages, in a venv of its own: see
   benchmarks/README.md); else the import's error is printed and the rows are skipped.
@@ -197,7 +200,14 @@ def _apart(queue: Any, seconds: float, index: int) -> None:
     queue.put(rate_vector(functools.partial(make_batch, ENV_ID, 8, 0), 8, seconds, index))
 
 
-def standin(num_envs: int, workers: int, small: bool = False, parent: bool = False) -> Any:
+def pinned_cores() -> list[int] | None:
+    """This process's cores, for ``cores=`` (None where workers cannot be pinned)."""
+    return sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_setaffinity") else None
+
+
+def standin(
+    num_envs: int, workers: int, small: bool = False, parent: bool = False, pin: bool = False
+) -> Any:
     from tinyrace.vector import BatchVectorEnv
 
     from standin import StandIn
@@ -211,6 +221,7 @@ def standin(num_envs: int, workers: int, small: bool = False, parent: bool = Fal
         [functools.partial(StandIn, 0.0, observation, action)] * num_envs,
         workers,
         parent_steps=parent,
+        cores=pinned_cores() if pin else None,
     )
 
 
@@ -245,8 +256,12 @@ def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
     """Name -> (seconds -> env-steps/s, envs per step), in the order printed."""
     from tinyrace.vector import make_batch
 
-    def vector(num_envs: int, workers: int, parent: bool = False) -> Callable[[float], float]:
-        make = functools.partial(make_batch, ENV_ID, num_envs, workers, parent_steps=parent)
+    def vector(
+        num_envs: int, workers: int, parent: bool = False, cores: list[int] | None = None
+    ) -> Callable[[float], float]:
+        make = functools.partial(
+            make_batch, ENV_ID, num_envs, workers, parent_steps=parent, cores=cores
+        )
         return functools.partial(rate_vector, make, num_envs)
 
     table: dict[str, tuple[Callable[[float], float], int]] = {
@@ -259,6 +274,9 @@ def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
         table[f"{workers}x8"] = (vector(8 * workers, workers), 8 * workers)
     for slices in (w for w in counts if w >= 2):
         table[f"{slices}x8_parent"] = (vector(8 * slices, slices - 1, True), 8 * slices)
+    cores = pinned_cores()
+    for workers in (w for w in counts if cores is not None and w <= len(cores)):
+        table[f"{workers}x8_pinned"] = (vector(8 * workers, workers, cores=cores), 8 * workers)
     for processes in (w for w in counts if w >= 2):
         table[f"apart_{processes}x8"] = (functools.partial(rate_apart, processes), 8 * processes)
     table["standin_2x64"] = (
@@ -269,6 +287,11 @@ def cases(counts: list[int]) -> dict[str, tuple[Callable[[float], float], int]]:
         functools.partial(rate_vector, functools.partial(standin, 64, 2, True), 64),
         64,
     )
+    if cores is not None and len(cores) >= 2:
+        table["standin_2x64_pinned"] = (
+            functools.partial(rate_vector, functools.partial(standin, 64, 2, pin=True), 64),
+            64,
+        )
     for small in (False, True):
         make = functools.partial(standin, 64, 1, small, True)
         name = "standin_2x64_small_parent" if small else "standin_2x64_parent"
@@ -295,6 +318,9 @@ def print_scaling(medians: dict[str, float], counts: list[int]) -> None:
         apart = medians.get(f"apart_{workers}x8")
         if apart is not None:
             line += f" ({medians[f'{workers}x8'] / apart:4.2f}x {workers} processes apart)"
+        pinned = medians.get(f"{workers}x8_pinned")
+        if pinned is not None:
+            line += f"; pinned {pinned / core:5.2f}x ({pinned / one:4.2f}x)"
         parent = medians.get(f"{workers}x8_parent")
         if parent is not None:
             line += f"; {workers - 1} + the parent {parent / core:5.2f}x ({parent / one:4.2f}x)"
@@ -376,6 +402,12 @@ def main() -> None:
             f"{statistics.median(rates['standin_2x64' + suffix]):,.0f} env-steps/s "
             f"(issue 37: >= 300,000); without the frames' bytes (8-float observations): "
             f"{statistics.median(rates['standin_2x64_small' + suffix]):,.0f}"
+        )
+    if "standin_2x64_pinned" in rates:
+        print(
+            "  the ceiling (stand-ins 2x64, 2 workers pinned to 2 cores): "
+            f"{statistics.median(rates['standin_2x64_pinned']):,.0f} env-steps/s "
+            "(issue 37: >= 300,000)"
         )
     print(f"load after: {os.getloadavg()}")
 

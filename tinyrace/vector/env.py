@@ -49,7 +49,7 @@ from tinyrace.vector import shared
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
-from tinyrace.vector.failures import check_count, check_flag
+from tinyrace.vector.failures import check_cores, check_count, check_flag
 from tinyrace.vector.handout import Handout, buffers_for
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.link import Workers
@@ -83,6 +83,13 @@ class BatchVectorEnv(VectorEnv):
             ``workers`` processes (``workers + 1`` slices), instead of waiting for them: the
             faster choice when there is a core for each worker and one for the parent
             (``tinyrace.vector.inparent``). Results are the same.
+        cores: pin worker process ``i`` to core ``cores[i % len(cores)]`` (Linux; cores
+            this process may run on), as EnvPool's ``thread_affinity_offset`` pins its
+            threads; None leaves the workers to the OS. With a worker per core the
+            scheduler never puts two workers on one core while another core waits: with
+            2 workers on 2 cores the stand-ins' ceiling rose about 10% (benchmarks/README.md).
+            Pin only cores that are this vector env's alone: two runs pinned to the same
+            cores share them, however many others idle. Results are the same.
     """
 
     def __init__(
@@ -94,11 +101,13 @@ class BatchVectorEnv(VectorEnv):
         batch_physics: bool = True,
         numpy_from: int = NUMPY_FROM,
         parent_steps: bool = False,
+        cores: Sequence[int] | None = None,
     ):
         env_fns = list(env_fns)
         check_count("num_envs", len(env_fns), 1, MAX_ENVS, "(len(env_fns))")
         check_count("workers", workers, 0, MAX_WORKERS, "(0: in this process)")
         check_flag("parent_steps", parent_steps)
+        pinned = check_cores(cores, workers)
         self.env_fns, self.copy = env_fns, copy
         self.num_envs = len(env_fns)
         self.autoreset_mode = AutoresetMode.NEXT_STEP
@@ -150,6 +159,7 @@ class BatchVectorEnv(VectorEnv):
                 (self._memory.name, layout),
                 self._views,
                 (batch_physics, numpy_from),
+                pinned,
             )
             self._check_spaces(self._workers.receive_all())
         except BaseException:  # e.g. an env that cannot be made in a worker

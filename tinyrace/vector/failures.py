@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import pickle
 import signal
+from collections.abc import Sequence
 from multiprocessing.connection import Connection
 
 import numpy as np
@@ -26,6 +28,33 @@ def check_flag(name: str, value: object) -> None:
     """True or False (numpy's bools too), else a ConfigError naming the argument."""
     if not isinstance(value, (bool, np.bool_)):
         raise ConfigError(Problem("<make_vec arguments>", name, value, "expected true or false"))
+
+
+def check_cores(cores: object, workers: int) -> list[int] | None:
+    """``cores`` as a list of cores this process may run on (None stays None), else a
+    ConfigError naming the argument and what is allowed."""
+    if cores is None:
+        return None
+    if not hasattr(os, "sched_setaffinity"):
+        allowed = "pinning workers to cores needs os.sched_setaffinity (Linux); pass None"
+        raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
+    usable = sorted(os.sched_getaffinity(0))
+    allowed = f"expected a list of cores from the ones this process may run on: {usable}"
+    whole = (int, np.integer)
+    if (
+        isinstance(cores, str | bytes)
+        or not isinstance(cores, Sequence | np.ndarray)
+        or len(cores) == 0
+        or any(isinstance(c, bool | np.bool_) or not isinstance(c, whole) for c in cores)
+    ):
+        raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
+    outside = [int(c) for c in cores if int(c) not in usable]
+    if outside:
+        raise ConfigError(Problem("<make_vec arguments>", "cores", outside, allowed))
+    if workers == 0:
+        allowed = "cores pins worker processes: with workers=0 there are none; pass None"
+        raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
+    return [int(c) for c in cores]
 
 
 def show(envs: slice) -> str:

@@ -68,9 +68,11 @@ class Workers:
         block: tuple[str, shared.Layout],
         views: shared.Views,
         physics: tuple[bool, int],
+        cores: list[int] | None = None,
     ) -> None:
         """Start one process per slice, attached to the shared memory ``block`` (the
-        parent's slice made here, while the processes make theirs)."""
+        parent's slice made here, while the processes make theirs); worker ``i`` pinned
+        to core ``cores[i % len(cores)]`` if ``cores`` are given."""
         self.command = views.command
         for number, envs in enumerate(self.slices[: self.spawned]):
             parent, child = ctx.Pipe()
@@ -79,6 +81,7 @@ class Workers:
             process = ctx.Process(
                 target=work,
                 args=(child, parent, number, fns, envs.start, block, semaphores, *physics),
+                kwargs={"core": None if cores is None else cores[number % len(cores)]},
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
             )

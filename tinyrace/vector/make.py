@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import os
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -24,11 +25,12 @@ def make_batch(
     batch_physics: bool = True,
     numpy_from: int = NUMPY_FROM,
     parent_steps: bool = False,
+    cores: Sequence[int] | None = None,
     **kwargs: Any,
 ) -> BatchVectorEnv:
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``; ``workers=0``
     steps them all in this process, ``parent_steps=True`` a slice of them beside the
-    ``workers`` processes."""
+    ``workers`` processes, ``cores`` pins the worker processes (``BatchVectorEnv``)."""
     check_count("num_envs", num_envs, 1, MAX_ENVS)
     maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv(
@@ -39,6 +41,7 @@ def make_batch(
         batch_physics=batch_physics,
         numpy_from=numpy_from,
         parent_steps=parent_steps,
+        cores=cores,
     )
 
 

@@ -193,14 +193,18 @@ def work(
     semaphores: tuple[Semaphore, Semaphore],
     batch_physics: bool = True,
     numpy_from: int = NUMPY_FROM,
+    core: int | None = None,
 ) -> None:
-    """A worker process: attach the shared memory, build the envs, serve the commands.
+    """A worker process: pinned to ``core`` if given, attach the shared memory, build the
+    envs (their memory touched first on that core), serve the commands.
 
     OpenCV's thread count is left as the process has it: ``cv2.setNumThreads`` in a
     forked worker whose parent had started OpenCV's threads hangs (it waits on the
     parent's thread pool, which the child does not have)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
+    if core is not None:
+        os.sched_setaffinity(0, {core})  # the parent checked it is one of its cores
     name, layout = block
     memory = SharedMemory(name=name)
     views = layout.views(memory.buf)
