@@ -48,6 +48,8 @@ class Handout:
         self.block, self.views = block, views
         # per buffer, its arrays' (offset, count, dtype, shape) in the space's order
         self.leaves = [_leaves(place) for place in layout.observations]
+        # the observations are one array (a Box space, not a Dict or Tuple of them)
+        self.single = not isinstance(views.observations, dict | tuple)
         self.current = 0  # the buffer holding the latest observations
         self.previous: int | None = None  # the one before, if the last write moved
         # per buffer: weak references to the roots of the arrays last handed out over it
@@ -60,7 +62,8 @@ class Handout:
         self.previous = None
         if not self._held(self.current):
             return
-        free = next(k for k in range(len(self.handed)) if not self._held(k))
+        free = self._free()
+        assert free is not None  # hand_out leaves a buffer free, else it copies
         if not full:
             _copy_rows(self.views.buffers[self.current], self.views.buffers[free], slice(None))
         self.previous, self.current = self.current, free
@@ -77,25 +80,36 @@ class Handout:
         """The latest observations as arrays no later step changes: over their buffer
         when another buffer stays free for the next step, else a copy."""
         k = self.current
-        if len(self.handed) == 1 or all(self._held(j) for j in range(len(self.handed)) if j != k):
+        if self._free(but=k) is None:  # (also with a single buffer)
             return _copied(self.views.buffers[k])
+        if self.single:  # one array: the common case, without the loop and the nesting
+            offset, count, dtype, shape = self.leaves[k][0]
+            root = np.frombuffer(self.block, dtype=dtype, count=count, offset=offset)
+            self.handed[k] = [weakref.ref(root)]
+            return root.reshape(shape)  # its base, as every view's of it, is root
         leases, arrays = [], []
         for offset, count, dtype, shape in self.leaves[k]:
             root = np.frombuffer(self.block, dtype=dtype, count=count, offset=offset)
             leases.append(weakref.ref(root))
             arrays.append(root.reshape(shape))  # its base, as every view's of it, is root
         self.handed[k] = leases
-        if len(arrays) == 1 and not isinstance(self.views.observations, dict | tuple):
-            return arrays[0]
         return _nest(self.views.observations, iter(arrays))
+
+    def _free(self, but: int = -1) -> int | None:
+        """The first buffer other than ``but`` that no array handed out refers to."""
+        for k in range(len(self.handed)):
+            if k != but and not self._held(k):
+                return k
+        return None
 
     def _held(self, k: int) -> bool:
         """Whether an array handed out over buffer ``k`` (or a view of one) is alive."""
         leases = self.handed[k]
         if leases is None:
             return False
-        if any(root() is not None for root in leases):
-            return True
+        for root in leases:  # (a loop: any() with a generator costs twice as much here)
+            if root() is not None:
+                return True
         self.handed[k] = None
         return False
 
