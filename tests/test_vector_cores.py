@@ -85,3 +85,21 @@ def test_cores_where_the_platform_cannot_pin_are_refused(monkeypatch):
     monkeypatch.delattr(os, "sched_setaffinity", raising=False)
     with pytest.raises(ConfigError, match=r"cores: got \[0\]; .*needs os.sched_setaffinity"):
         make_batch("tinyrace/CarRacing-v0", 2, 1, cores=[0])
+
+
+@pytest.mark.skipif(not PINNING, reason="os.sched_setaffinity is Linux's (errors tested below)")
+def test_the_vector_entry_point_passes_cores_on():
+    import gymnasium as gym
+
+    core = usable()[-1]
+    envs = gym.make_vec(
+        "tinyrace/CarRacing-v0",
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        workers=2,
+        cores=[core],
+    )
+    try:
+        assert [os.sched_getaffinity(p.pid) for p in envs._workers.processes] == [{core}] * 2
+    finally:
+        envs.close()
