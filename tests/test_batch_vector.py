@@ -282,3 +282,23 @@ def test_observations_are_written_in_one_copy_only_when_each_fits_its_row():
     with pytest.raises(ValueError):  # 4 + 2 rows add up to the batch's 6: not one copy
         _write_rows(rows, [np.zeros((4, 2), np.uint8), np.zeros((2, 2), np.uint8)])
     assert rows[0].tolist() == [[5, 5]] * 3  # the first row was not overwritten in a shift
+
+
+@pytest.mark.parametrize("context", ["fork", "spawn"])
+def test_a_worker_freezes_what_it_inherits_so_its_collections_skip_it(context):
+    """A forked worker inherits every object of its parent (here pytest's and the test
+    session's): ``gc.freeze`` at its start keeps its collections from traversing them."""
+    import gc
+
+    from vector_doubles import Collector
+
+    if context not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {context} start method on this platform")
+    vector = BatchVectorEnv([Collector] * 2, workers=2, context=context)
+    try:
+        frozen = vector.call("frozen")
+        parent = gc.get_freeze_count()
+        assert all(count > 1000 for count in frozen), frozen  # the imports at least
+        assert parent == 0  # the parent's collections are left as they are
+    finally:
+        vector.close()

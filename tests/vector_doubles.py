@@ -184,3 +184,12 @@ class Flags(Still):
         kind = self.KINDS[self.t % len(self.KINDS)] if value > 0.3 else bool
         ended = value > 0.9
         return np.full(2, value, np.float32), value, kind(ended), kind(self.t % 13 == 0), {}
+
+
+class Collector(Still):
+    """Tells how many objects its process's collector has frozen (``gc.freeze``)."""
+
+    def frozen(self):
+        import gc
+
+        return gc.get_freeze_count()

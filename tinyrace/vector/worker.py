@@ -15,6 +15,7 @@ core costs 0.05-0.5 ms on a virtual machine, as much as a few env steps.
 from __future__ import annotations
 
 import contextlib
+import gc
 import multiprocessing
 import os
 import pickle
@@ -195,14 +196,19 @@ def work(
     numpy_from: int = NUMPY_FROM,
     core: int | None = None,
 ) -> None:
-    """A worker process: pinned to ``core`` if given, attach the shared memory, build the
-    envs (their memory touched first on that core), serve the commands.
+    """A worker process: its inherited objects frozen (``gc.freeze``), pinned to ``core``
+    if given, attach the shared memory, build the envs (their memory touched first on that
+    core), serve the commands.
 
     OpenCV's thread count is left as the process has it: ``cv2.setNumThreads`` in a
     forked worker whose parent had started OpenCV's threads hangs (it waits on the
     parent's thread pool, which the child does not have)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
+    # the objects this process inherited from its parent (all of them, when forked): its
+    # collections skip them, so they neither traverse the parent's heap (a learner's
+    # model, the garbage of envs closed before) nor copy its pages by touching them
+    gc.freeze()
     if core is not None:
         os.sched_setaffinity(0, {core})  # the parent checked it is one of its cores
     name, layout = block
