@@ -48,7 +48,9 @@ round of 1x1, 2x8 and the stand-ins, outside waiting for its workers (sending th
 collecting the infos, handing out the observations, this loop): the serial part of a step,
 which more cores do not hide (issue 37's proxy for many cores).
 
-Every case steps random actions (seeded), after a warm-up. The machine's load
+Every case steps random actions (seeded), after a warm-up, with the garbage of the case
+before it collected (``gc.collect``: 8 closed envs left to the collector made the next
+case's parent collect them in its loop, 1 x 1 about 7% slower). The machine's load
 (``os.getloadavg``) is printed before and after: on a shared machine the figures move.
 """
 
@@ -56,6 +58,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import gc
 import os
 import statistics
 import sys
@@ -350,6 +353,7 @@ def main() -> None:
     rates: dict[str, list[float]] = {name: [] for name in table}
     for round_ in range(args.rounds):
         for name, (measure, _) in table.items():
+            gc.collect()  # the last case's envs, closed: not this case's parent's garbage
             rates[name].append(measure(args.seconds))
             if name == "in_process_8":
                 CPU[name] += CPU["last"]
