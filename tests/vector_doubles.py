@@ -6,6 +6,7 @@ while this folder is on sys.path (conftest.py) and spawn hands sys.path to its c
 
 from __future__ import annotations
 
+import gc
 import os
 import signal
 
@@ -190,6 +191,4 @@ class Collector(Still):
     """Tells how many objects its process's collector has frozen (``gc.freeze``)."""
 
     def frozen(self):
-        import gc
-
         return gc.get_freeze_count()

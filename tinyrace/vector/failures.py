@@ -48,13 +48,14 @@ def check_cores(cores: object, workers: int) -> list[int] | None:
         or any(isinstance(c, bool | np.bool_) or not isinstance(c, whole) for c in cores)
     ):
         raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
-    outside = [int(c) for c in cores if int(c) not in usable]
+    chosen = [int(c) for c in cores]
+    outside = [c for c in chosen if c not in usable]
     if outside:
         raise ConfigError(Problem("<make_vec arguments>", "cores", outside, allowed))
     if workers == 0:
         allowed = "cores pins worker processes: with workers=0 there are none; pass None"
         raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
-    return [int(c) for c in cores]
+    return chosen
 
 
 def show(envs: slice) -> str:
