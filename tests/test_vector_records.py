@@ -222,13 +222,14 @@ def test_struct_packs_the_bytes_numpy_writes(info):
     assert packed.tobytes() == written.tobytes()
 
 
-@pytest.mark.parametrize("workers", [0, 1])
-def test_an_info_of_none_raises_as_in_sync_vector_env(workers):
+@pytest.mark.parametrize(("num_envs", "workers"), [(2, 0), (2, 1), (2, 2), (1, 0)])
+def test_an_info_of_none_raises_as_in_sync_vector_env(num_envs, workers):
     """None is no empty info (nor a missing one): a step or a reset that gives it raises
-    what Gymnasium's merge raises for it, in this process and in a worker."""
-    zeros = np.zeros((2, 1), np.float32)
-    sync = gym.vector.SyncVectorEnv([NoInfo] * 2)
-    for vector in (sync, BatchVectorEnv([NoInfo] * 2, workers)):
+    what Gymnasium's merge raises for it, in this process and in a worker (and in a slice
+    of one env, stepped on its own)."""
+    zeros = np.zeros((num_envs, 1), np.float32)
+    sync = gym.vector.SyncVectorEnv([NoInfo] * num_envs)
+    for vector in (sync, BatchVectorEnv([NoInfo] * num_envs, workers)):
         vector.reset(seed=0)
         assert vector.step(zeros)[-1] == {}
         with pytest.raises(AttributeError, match="'NoneType' object has no attribute 'items'"):
@@ -238,7 +239,7 @@ def test_an_info_of_none_raises_as_in_sync_vector_env(workers):
         vector.close()
 
 
-@pytest.mark.parametrize(("num_envs", "workers"), [(6, 0), (6, 2), (3, 1)])
+@pytest.mark.parametrize(("num_envs", "workers"), [(6, 0), (6, 2), (3, 1), (2, 2)])
 def test_episode_ends_of_any_type_autoreset_as_in_sync_vector_env(num_envs, workers):
     """Terminations and truncations as numpy bools, ints and numpy ints (steps with only
     plain bools take the one-pass path): the same flags and autoresets as SyncVectorEnv."""

@@ -171,14 +171,21 @@ def segments() -> set[str]:
     return present & CREATED
 
 
-def test_a_raising_env_is_named_by_its_index():
-    vector = BatchVectorEnv([Doomed] * 4, workers=2)
+@pytest.mark.parametrize(
+    ("num_envs", "workers", "slice_name"), [(4, 2, "envs 2-3"), (2, 2, "envs 1")]
+)
+def test_a_raising_env_is_named_by_its_index(num_envs, workers, slice_name):
+    """In a slice of several envs and in a slice of one (its own step)."""
+    vector = BatchVectorEnv([Doomed] * num_envs, workers=workers)
     vector.reset(seed=0)
+    actions = np.zeros((num_envs, 1), np.float32)
+    actions[-1] = 0.9
     with bounded(), pytest.raises(KeyError, match=r"refused 0\.9") as raised:
-        vector.step(np.array([[0.0], [0.0], [0.0], [0.9]], np.float32))
+        vector.step(actions)
     notes = "\n".join(raised.value.__notes__)
-    assert "raised by env 3" in notes and "worker 1 (envs 2-3)" in notes
-    assert vector.step(np.zeros((4, 1), np.float32))[1].tolist() == [1.0] * 4  # still usable
+    assert f"raised by env {num_envs - 1}" in notes and f"worker 1 ({slice_name})" in notes
+    still = vector.step(np.zeros((num_envs, 1), np.float32))[1]  # still usable
+    assert still.tolist() == [1.0] * num_envs
     vector.close()
 
 

@@ -35,6 +35,10 @@ class EnvSlice:
         self.batch = BatchStepper(self.envs, numpy_from) if fits else None
         self.views = views
         self.autoreset = [False] * len(self.envs)  # envs whose episode ended at the last step
+        # the observation array last written and this slice's rows of it (a slice made per
+        # step costs a few µs on the caches an env step leaves cold)
+        self._target: Any = None
+        self._target_rows: np.ndarray | None = None
 
     def spaces(self) -> list[tuple[gym.Space[Any], gym.Space[Any]]]:
         return [(env.observation_space, env.action_space) for env in self.envs]
@@ -65,9 +69,11 @@ class EnvSlice:
         """Step every env (an env whose episode ended at the last step is reset instead):
         rewards, terminations, truncations and infos, as lists (they pickle faster). An
         info that is no dict raises here, as Gymnasium's merge would."""
+        n = len(self.envs)
+        if n == 1:  # no batch, no loops: every object touched after the env's step is cold
+            return self._step_single(actions)
         results = self._step_each(actions) if self.batch is None else self._step_batch(actions)
         _, terminated, truncated, infos = results
-        n = len(self.envs)
         if terminated.count(False) == n and truncated.count(False) == n:  # the common step
             self.autoreset = [False] * n  # (each equal to False: _flag gives False)
         else:
@@ -77,6 +83,31 @@ class EnvSlice:
         if list(map(type, infos)).count(dict) != n:
             check_infos(infos, self.first)
         return results
+
+    def _step_single(
+        self, actions: Any
+    ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
+        """``step`` of a slice of one env: ``_step_each``'s results, written alike."""
+        env = self.envs[0]
+        try:
+            if self.autoreset[0]:  # the episode ended at the last step: reset, reward 0
+                observation, info = env.reset()
+                reward: SupportsFloat = 0.0
+                terminated = truncated = False
+            else:
+                observation, reward, terminated, truncated, info = env.step(actions[0])
+        except Exception as error:
+            _blame(error, self.first)
+            raise
+        rows = self._rows()
+        if rows is not None:
+            rows[0] = observation
+        else:
+            _write_nested(self.views.observations, self.first, observation)
+        self.autoreset = [_flag(terminated) or _flag(truncated)]
+        if type(info) is not dict:
+            check_infos([info], self.first)
+        return [reward], [terminated], [truncated], [info]
 
     def _step_batch(
         self, actions: Any
@@ -179,10 +210,14 @@ class EnvSlice:
     def _rows(self) -> np.ndarray | None:
         """This slice's rows of a Box observation's array (None: a Dict or Tuple space)."""
         target = self.views.observations
+        if target is self._target:  # the buffer of the last step
+            return self._target_rows
+        self._target = target
         if not isinstance(target, np.ndarray):
-            return None
-        rows: np.ndarray = target[self.first : self.first + len(self.envs)]
-        return rows
+            self._target_rows = None
+        else:
+            self._target_rows = target[self.first : self.first + len(self.envs)]
+        return self._target_rows
 
     def _write(self, j: int, observation: Any) -> None:
         target = self.views.observations
