@@ -126,6 +126,7 @@ class BatchVectorEnv(VectorEnv):
         probe.close()
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self._array_actions = isinstance(self.single_action_space, ARRAY_ACTIONS)
         if not shared.shareable(self.single_observation_space):
             raise TypeError(
                 f"BatchVectorEnv shares observations of Box, Discrete, MultiBinary and "
@@ -389,7 +390,7 @@ class BatchVectorEnv(VectorEnv):
 
     def _batch(self, actions: Any) -> Any:
         """The actions as one batch to slice: an array for array spaces, else a list."""
-        if isinstance(self.single_action_space, ARRAY_ACTIONS):
+        if self._array_actions:
             batch: Any = np.asarray(actions)
         else:
             batch = list(iterate(self.action_space, actions))

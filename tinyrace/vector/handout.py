@@ -50,6 +50,7 @@ class Handout:
         self.leaves = [_leaves(place) for place in layout.observations]
         # the observations are one array (a Box space, not a Dict or Tuple of them)
         self.single = not isinstance(views.observations, dict | tuple)
+        self.copies = len(views.buffers) == 1  # a single buffer: every hand-out a copy
         self.current = 0  # the buffer holding the latest observations
         self.previous: int | None = None  # the one before, if the last write moved
         # per buffer: weak references to the roots of the arrays last handed out over it
@@ -60,7 +61,7 @@ class Handout:
         """Point the next write at a buffer that no array handed out refers to; ``full``:
         the write covers every row, else the rows it leaves keep the latest values."""
         self.previous = None
-        if not self._held(self.current):
+        if self.copies or not self._held(self.current):
             return
         free = self._free()
         assert free is not None  # hand_out leaves a buffer free, else it copies
@@ -80,7 +81,7 @@ class Handout:
         """The latest observations as arrays no later step changes: over their buffer
         when another buffer stays free for the next step, else a copy."""
         k = self.current
-        if self._free(but=k) is None:  # (also with a single buffer)
+        if self.copies or self._free(but=k) is None:
             return _copied(self.views.buffers[k])
         if self.single:  # one array: the common case, without the loop and the nesting
             offset, count, dtype, shape = self.leaves[k][0]

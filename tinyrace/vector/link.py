@@ -59,6 +59,9 @@ class Workers:
         self.processes: list[Any] = []
         self.semaphores: list[tuple[Any, Any]] = []  # (go, done) per worker process
         self.command: Any = None  # the shared command words, once started
+        # where each worker's answers beyond the shared memory come from, in order: the
+        # processes' pipes, then the parent's slice's queue (set once started)
+        self.answers: list[Connection | ParentPipe] = []
         self.spin = PARENT_SPIN  # [s] how long the parent polls for the next answers
 
     def start(
@@ -90,19 +93,12 @@ class Workers:
             process.start()
             child.close()
             self.processes.append(process)
+        self.answers = list(self.pipes)
         if self.spawned < len(self.slices):
             envs = self.slices[-1]
             own = EnvSlice(env_fns[envs], envs.start, views, *physics)
             self.parent = ParentWorker(self.spawned, own, views)
-
-    @property
-    def answers(self) -> list[Connection | ParentPipe]:
-        """Where each worker's answers beyond the shared memory come from, in order: the
-        processes' pipes, then the parent's slice's queue."""
-        queues: list[Connection | ParentPipe] = list(self.pipes)
-        if self.parent is not None:
-            queues.append(self.parent.queue)
-        return queues
+            self.answers.append(self.parent.queue)
 
     def step(self, numbers: list[int] | range | None = None) -> None:
         """Wake the workers ``numbers`` (default: all) to step their envs; the parent's
@@ -215,5 +211,5 @@ class Workers:
             if process.is_alive():
                 process.terminate()
                 process.join()
-        self.pipes, self.processes, self.semaphores = [], [], []
+        self.pipes, self.processes, self.semaphores, self.answers = [], [], [], []
         self.command = None
