@@ -15,6 +15,8 @@ from __future__ import annotations
 import functools
 import multiprocessing
 import os
+import subprocess
+import sys
 
 import cv2
 import gymnasium as gym
@@ -25,7 +27,7 @@ from vector_doubles import Blinking, Chatty, Doomed, Flags, NumpyBool, Quiet, St
 import tinyrace  # noqa: F401  (registers the env ids)
 from tests.test_batch_vector import FACTORIES, Counter, Fragile, assert_same, run
 from tests.test_vector_shared import _record_created, bounded, segments  # noqa: F401
-from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector import BatchVectorEnv, make, make_batch
 from tinyrace.vector.make import layout
 from tinyrace.vector.pool import AsyncBatch
 
@@ -156,7 +158,7 @@ def test_async_batch_refuses_a_parents_slice():
 
 
 def test_the_entry_points_default_to_a_slice_per_core_the_parent_stepping_one(monkeypatch):
-    monkeypatch.setattr(os, "cpu_count", lambda: 3)
+    monkeypatch.setattr(make, "usable_cores", lambda: 3)
     assert layout(8, None, None) == (2, True)  # 3 slices: 2 workers and the parent
     assert layout(2, None, None) == (1, True)
     assert layout(1, None, None) == (1, False)  # one env: one worker, as before
@@ -204,3 +206,19 @@ def test_opencv_runs_on_one_thread_in_the_parents_step_only():
         vector.close()
     finally:
         cv2.setNumThreads(before)
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity on this OS")
+def test_the_default_layout_counts_the_cores_this_process_may_run_on():
+    """A job given one core of a larger machine (taskset, a cpuset) gets one slice, not a
+    worker per core of the machine; measured in a child process so this one's affinity
+    stays as it was."""
+    script = (
+        "import os\n"
+        "from tinyrace.vector.make import layout, usable_cores\n"
+        "os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})\n"
+        "print(usable_cores(), layout(8, None, None), layout(8, None, False))\n"
+    )
+    ran = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True)
+    assert ran.stdout.split("\n")[0] == "1 (1, False) (1, False)"
+    assert make.usable_cores() == len(os.sched_getaffinity(0))

@@ -73,18 +73,29 @@ def make_tinyrace_vec(
 
 def layout(num_envs: int, workers: int | None, parent_steps: bool | None) -> tuple[int, bool]:
     """(worker processes, whether the parent steps a slice too). By default one slice per
-    core, never more than envs, the parent stepping one of them (no core idles while the
-    parent waits, benchmarks/README.md); ``parent_steps=False``: one worker process per
-    core. Given ``workers``, that many processes, and the parent steps only if asked."""
+    core this process may run on (``usable_cores``), never more than envs, the parent
+    stepping one of them (no core idles while the parent waits, benchmarks/README.md);
+    ``parent_steps=False``: one worker process per core. Given ``workers``, that many
+    processes, and the parent steps only if asked."""
     check_count("num_envs", num_envs, 1, MAX_ENVS)
     if parent_steps is not None:
         check_flag("parent_steps", parent_steps)
     if workers is not None:
         return workers, bool(parent_steps)
-    slices = max(1, min(num_envs, os.cpu_count() or 1))
+    slices = max(1, min(num_envs, usable_cores()))
     if parent_steps is False or slices == 1:
         return slices, False
     return slices - 1, True
+
+
+def usable_cores() -> int:
+    """The cores this process may run on: its CPU affinity where the OS has one (``taskset``,
+    a container's cpuset, a Slurm allocation), not every core of the machine
+    (``os.cpu_count``), which would start a worker per core of a large host on the few
+    cores a job was given."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return os.cpu_count() or 1
 
 
 def _make(id: str, kwargs: dict[str, Any]) -> gym.Env:
