@@ -36,7 +36,7 @@ class EnvSlice:
         self.views = views
         self.autoreset = [False] * len(self.envs)  # envs whose episode ended at the last step
         # the observation array last written and this slice's rows of it (a slice made per
-        # step costs a few µs on the caches an env step leaves cold)
+        # step costs more than kept, on the caches an env step leaves cold: benchmarks/README.md)
         self._target: Any = None
         self._target_rows: np.ndarray | None = None
 
