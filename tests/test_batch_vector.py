@@ -12,6 +12,7 @@ that dies.
 from __future__ import annotations
 
 import functools
+import gc
 import multiprocessing
 import os
 from pathlib import Path
@@ -288,8 +289,6 @@ def test_observations_are_written_in_one_copy_only_when_each_fits_its_row():
 def test_a_worker_freezes_what_it_inherits_so_its_collections_skip_it(context):
     """A forked worker inherits every object of its parent (here pytest's and the test
     session's): ``gc.freeze`` at its start keeps its collections from traversing them."""
-    import gc
-
     from vector_doubles import Collector
 
     if context not in multiprocessing.get_all_start_methods():

@@ -88,17 +88,7 @@ class EnvSlice:
         self, actions: Any
     ) -> tuple[list[SupportsFloat], list[bool], list[bool], list[dict[str, Any]]]:
         """``step`` of a slice of one env: ``_step_each``'s results, written alike."""
-        env = self.envs[0]
-        try:
-            if self.autoreset[0]:  # the episode ended at the last step: reset, reward 0
-                observation, info = env.reset()
-                reward: SupportsFloat = 0.0
-                terminated = truncated = False
-            else:
-                observation, reward, terminated, truncated, info = env.step(actions[0])
-        except Exception as error:
-            _blame(error, self.first)
-            raise
+        observation, reward, terminated, truncated, info = self._step_env(0, actions[0])
         rows = self._rows()
         if rows is not None:
             rows[0] = observation
@@ -121,12 +111,8 @@ class EnvSlice:
         terminated, truncated = [False] * n, [False] * n
         infos: list[dict[str, Any]] = [{}] * n
         for j, result in enumerate(results):
-            if result is None:  # the episode ended at the last step: reset, reward 0, not done
-                try:
-                    observation, infos[j] = self.envs[j].reset()
-                except Exception as error:
-                    _blame(error, self.first + j)
-                    raise
+            if result is None:  # the episode ended at the last step: _step_env resets it
+                observation, _, _, _, infos[j] = self._step_env(j, None)
                 self._write(j, observation)
                 continue
             _, rewards[j], terminated[j], truncated[j], infos[j] = result
@@ -138,22 +124,15 @@ class EnvSlice:
         """``step`` by each env's own ``step`` (or ``reset``), env after env, the
         observations written once all have stepped, as SyncVectorEnv goes (an env that
         raises leaves every row of the slice as it was)."""
-        n, first, autoreset = len(self.envs), self.first, self.autoreset
+        n, first = len(self.envs), self.first
         rewards: list[SupportsFloat] = [0.0] * n
         terminated, truncated = [False] * n, [False] * n
         infos: list[dict[str, Any]] = [{}] * n
         observations: list[Any] = [None] * n
-        for j, env in enumerate(self.envs):
-            try:
-                if autoreset[j]:  # the episode ended at the last step: reset, reward 0
-                    observations[j], infos[j] = env.reset()
-                else:
-                    observations[j], rewards[j], terminated[j], truncated[j], infos[j] = env.step(
-                        actions[j]
-                    )
-            except Exception as error:
-                _blame(error, first + j)
-                raise
+        for j in range(n):
+            observations[j], rewards[j], terminated[j], truncated[j], infos[j] = self._step_env(
+                j, actions[j]
+            )
         rows = self._rows()  # None: a Dict or Tuple space, written leaf by leaf
         if rows is not None:
             _write_rows(rows, observations)
@@ -161,6 +140,20 @@ class EnvSlice:
             for j, observation in enumerate(observations):
                 _write_nested(self.views.observations, first + j, observation)
         return rewards, terminated, truncated, infos
+
+    def _step_env(self, j: int, action: Any) -> tuple[Any, SupportsFloat, Any, Any, Any]:
+        """Env ``j``'s step with ``action``; its reset instead if its episode ended at the
+        last step (reward 0, not done). An exception gets a note naming the env."""
+        env = self.envs[j]
+        try:
+            if self.autoreset[j]:
+                observation, info = env.reset()
+                return observation, 0.0, False, False, info
+            observation, reward, terminated, truncated, info = env.step(action)
+        except Exception as error:
+            _blame(error, self.first + j)
+            raise
+        return observation, reward, terminated, truncated, info
 
     def call(
         self,
