@@ -301,3 +301,33 @@ def test_a_worker_freezes_what_it_inherits_so_its_collections_skip_it(context):
         assert parent == 0  # the parent's collections are left as they are
     finally:
         vector.close()
+
+
+@pytest.mark.parametrize("context", ["fork", "spawn"])
+def test_a_worker_freezes_what_its_first_reset_loaded_and_still_collects_later_garbage(context):
+    """What an env loads at its first reset (tinyrace's kernels, numba with them) lives as
+    long as the worker: frozen after that reset, the worker's collections skip it. Frozen
+    once: later episodes' garbage (a cycle per reset here) is still collected."""
+    from vector_doubles import Lazy
+
+    if context not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {context} start method on this platform")
+    vector = BatchVectorEnv([Lazy] * 2, workers=2, context=context)
+    try:
+        vector.reset(seed=0)
+        first = vector.call("heap")
+        for _ in range(10):
+            vector.reset()
+            vector.step(np.zeros((2, 1), np.float32))
+        later = vector.call("heap")
+        for (tracked, frozen, _), (tracked_later, frozen_later, collects) in zip(
+            first, later, strict=True
+        ):
+            assert tracked < Lazy.LOADS // 2, first  # the loaded objects are not traversed
+            assert frozen > Lazy.LOADS, first
+            assert frozen_later <= frozen  # frozen once, not at every reset
+            assert tracked_later < tracked + 1000, later  # 10 episodes' cycles collected
+            assert collects  # by the collector itself, as before
+        assert gc.get_freeze_count() == 0  # the parent's collections are left as they are
+    finally:
+        vector.close()

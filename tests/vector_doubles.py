@@ -192,3 +192,31 @@ class Collector(Still):
 
     def frozen(self):
         return gc.get_freeze_count()
+
+
+LOADED: list[list[int]] = []  # what Lazy loads at its process's first reset
+
+
+class Lazy(Still):
+    """Loads 20,000 objects at its process's first reset, as an env that imports its
+    kernels on first use does, and leaves 500 objects in cycles behind at each reset (its
+    episode's, garbage once the next episode starts)."""
+
+    LOADS = 20_000
+
+    def reset(self, *, seed=None, options=None):
+        if not LOADED:
+            LOADED.extend([i] for i in range(self.LOADS))  # lists: the collector tracks them
+        episode: dict[str, list[dict]] = {"parts": []}
+        episode["parts"].extend({"episode": episode} for _ in range(499))
+        self.episode = episode
+        return super().reset(seed=seed, options=options)
+
+    def step(self, action):
+        return np.zeros(2, np.float32), 0.0, False, False, {}
+
+    def heap(self):
+        """(objects the collector tracks and would traverse, objects frozen, whether it
+        collects by itself), after a collection."""
+        gc.collect()
+        return len(gc.get_objects()), gc.get_freeze_count(), gc.isenabled()

@@ -81,6 +81,7 @@ class Worker:
         self.info_bytes = memoryview(self.infos).cast("B")  # type: ignore[arg-type]
         # per signature announced to the parent: its number and its record's packer
         self.known: dict[records.Signature, tuple[int, Callable[..., None]]] = {}
+        self.settled = False  # the heap frozen after the first reset (``settle``)
 
     def serve(self) -> None:
         """Answer commands until "close" or the parent's end."""
@@ -110,7 +111,11 @@ class Worker:
             self.pipe.send((True, CLOSED))
             return
         try:
-            self.pipe.send((True, getattr(self.envs, command)(*args)))
+            answer = getattr(self.envs, command)(*args)
+            if command == "reset" and not self.settled:
+                settle()
+                self.settled = True
+            self.pipe.send((True, answer))
         except Exception as error:
             self.fail(error)
 
@@ -226,6 +231,21 @@ def work(
         del views
         with contextlib.suppress(BufferError):  # views still held: freed with the process
             memory.close()
+
+
+def settle() -> None:
+    """Freeze what the first reset left alive (``gc.freeze``), once per worker.
+
+    An env imports much on first use: tinyrace's CarRacing loads its compiled kernels at
+    its first reset, and with them numba, llvmlite and parts of scipy, some 90,000 objects
+    that live as long as the process. Left to the collector, each full collection would
+    traverse them all, while the other workers of the step wait for this one. Frozen, they
+    are skipped. What is frozen is never collected as a cycle: the first episode's objects
+    that form cycles stay in memory once the envs have moved on (a bounded, one-time cost;
+    later episodes' garbage is collected as before). Its cost and gain are measured in
+    benchmarks/README.md."""
+    gc.collect()
+    gc.freeze()
 
 
 def describe(error: Exception) -> tuple[str, str, str, bytes | None]:
