@@ -203,7 +203,7 @@ def work(
 ) -> None:
     """A worker process: its inherited objects frozen (``gc.freeze``), pinned to ``core``
     if given, attach the shared memory, build the envs (their memory touched first on that
-    core), serve the commands.
+    core), serve the commands (freezing again after the first reset: ``settle``).
 
     OpenCV's thread count is left as the process has it: ``cv2.setNumThreads`` in a
     forked worker whose parent had started OpenCV's threads hangs (it waits on the
