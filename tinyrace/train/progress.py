@@ -15,7 +15,7 @@ REFRESH = 0.5  # [s] between updates of the recent mean return
 RECENT = 20  # episodes in the recent mean return
 
 
-class Progress(BaseCallback):
+class Progress(BaseCallback):  # type: ignore[misc, unused-ignore]  # Any where SB3 is absent
     """A tqdm bar on stderr (steps done, steps/s, the mean return of the last ``RECENT``
     episodes) when ``show``. ``check`` gets each step's infos: the trainer's raises when
     an env reported an exception."""
