@@ -112,7 +112,8 @@ class Worker:
             return
         try:
             answer = getattr(self.envs, command)(*args)
-            if command == "reset" and not self.settled:
+            # the first reset of one of its envs (None: an env left out by a reset mask)
+            if command == "reset" and not self.settled and answer.count(None) < len(answer):
                 settle()
                 self.settled = True
             self.pipe.send((True, answer))
