@@ -13,6 +13,7 @@ workers beside it; the entry points' default layout.
 from __future__ import annotations
 
 import functools
+import gc
 import multiprocessing
 import os
 import subprocess
@@ -206,6 +207,24 @@ def test_opencv_runs_on_one_thread_in_the_parents_step_only():
         vector.close()
     finally:
         cv2.setNumThreads(before)
+
+
+def test_the_parents_collector_is_left_alone_when_it_steps_a_slice():
+    """A worker process freezes its heap after its first reset (``worker.settle``); the
+    parent's slice, stepped in the user's process, must not freeze the user's heap."""
+    from vector_doubles import Lazy
+
+    before = gc.get_freeze_count()
+    vector = BatchVectorEnv([Lazy] * 2, workers=1, parent_steps=True)
+    try:
+        vector.reset(seed=0)
+        vector.step(np.zeros((2, 1), np.float32))
+        vector.reset(seed=1)
+        worker, _ = vector.call("heap")
+        assert worker[1] > Lazy.LOADS  # the worker process froze what its reset loaded
+        assert gc.get_freeze_count() == before  # this process froze nothing
+    finally:
+        vector.close()
 
 
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity on this OS")
