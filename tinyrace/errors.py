@@ -19,7 +19,7 @@ class Problem:
 
     def __str__(self) -> str:
         where = f"{self.source}: {self.path}" if self.path else self.source
-        return f"{where}: got {_show(self.value)}; {self.allowed}"
+        return f"{where}: got {shown(self.value)}; {self.allowed}"
 
 
 _SHORT = reprlib.Repr()  # containers are cut before they are turned into text
@@ -28,7 +28,7 @@ _SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 8
 _SHORT.maxlevel = 4
 
 
-def _show(value: object) -> str:
+def shown(value: object) -> str:
     """A value as a short text: a huge list, string or number is never turned whole into text."""
     if isinstance(value, int) and value.bit_length() > 256:  # repr of huge ints is slow or fails
         return f"<an integer of {value.bit_length()} bits>"

@@ -45,11 +45,20 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, iterate
 
 from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
+from tinyrace.errors import shown
 from tinyrace.vector import shared
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
-from tinyrace.vector.failures import check_cores, check_count, check_flag
+from tinyrace.vector.failures import (
+    NUMPY_FROM_NOTE,
+    check_context,
+    check_cores,
+    check_count,
+    check_env,
+    check_env_fns,
+    check_flag,
+)
 from tinyrace.vector.handout import Handout, buffers_for
 from tinyrace.vector.infos import merge_infos
 from tinyrace.vector.link import Workers
@@ -103,10 +112,14 @@ class BatchVectorEnv(VectorEnv):
         parent_steps: bool = False,
         cores: Sequence[int] | None = None,
     ):
-        env_fns = list(env_fns)
+        env_fns = check_env_fns(env_fns)
         check_count("num_envs", len(env_fns), 1, MAX_ENVS, "(len(env_fns))")
         check_count("workers", workers, 0, MAX_WORKERS, "(0: in this process)")
+        check_context(context)
+        for name, flag in (("copy", copy), ("batch_physics", batch_physics)):
+            check_flag(name, flag)
         check_flag("parent_steps", parent_steps)
+        check_count("numpy_from", numpy_from, 1, MAX_ENVS + 1, NUMPY_FROM_NOTE)
         pinned = check_cores(cores, workers)
         self.env_fns, self.copy = env_fns, copy
         self.num_envs = len(env_fns)
@@ -118,7 +131,7 @@ class BatchVectorEnv(VectorEnv):
         self._by_pipe = False  # the pending step's actions went over the pipes
         # The shared memory must exist before the workers start, so the spaces come from
         # an env made here (as AsyncVectorEnv does).
-        probe = env_fns[0]()
+        probe = check_env(env_fns[0](), env_fns[0])
         self.metadata = {**probe.metadata, "autoreset_mode": self.autoreset_mode}
         self.render_mode = probe.render_mode
         self.single_observation_space = probe.observation_space
@@ -189,8 +202,15 @@ class BatchVectorEnv(VectorEnv):
         """Reset every env (or those in ``options["reset_mask"]``), as SyncVectorEnv does."""
         if seed is None:
             seed = [None] * self.num_envs
-        elif isinstance(seed, int):
-            seed = [seed + i for i in range(self.num_envs)]
+        elif isinstance(seed, int | np.integer) and not isinstance(seed, bool | np.bool_):
+            seed = [int(seed) + i for i in range(self.num_envs)]
+        elif isinstance(seed, str | bytes) or not isinstance(seed, Sequence | np.ndarray):
+            raise TypeError(
+                f"seed: expected None, a whole number or a list of one per env "
+                f"({self.num_envs}), got {shown(seed)}"
+            )
+        if options is not None and not isinstance(options, dict):
+            raise TypeError(f"options: expected a dict or None, got {shown(options)}")
         if len(seed) != self.num_envs:
             raise ValueError(
                 f"If seeds are passed as a list the length must match num_envs={self.num_envs} "
@@ -314,13 +334,13 @@ class BatchVectorEnv(VectorEnv):
         self, indices: Sequence[int], name: str, *args: Any, **kwargs: Any
     ) -> tuple[Any, ...]:
         """``call`` for the envs in ``indices`` only (in increasing order of index)."""
-        only = sorted(set(indices))
+        only = self._indices(indices)
         replies = self._exchange("call", [(name, args, kwargs, only)] * len(self._slices))
         return tuple(_flat(replies))
 
     def set_attr_at(self, indices: Sequence[int], name: str, value: Any) -> None:
         """Set attribute ``name`` of the envs in ``indices`` to ``value``."""
-        only = sorted(set(indices))
+        only = self._indices(indices)
         self._exchange(
             "set_attr", [(name, [value] * (s.stop - s.start), only) for s in self._slices]
         )
@@ -365,8 +385,25 @@ class BatchVectorEnv(VectorEnv):
         shared.free_block(memory)
 
     def __del__(self) -> None:
-        if not getattr(self, "closed", True) and hasattr(self, "_local"):
+        # a constructor that raised before the workers' end existed has nothing to close
+        if not getattr(self, "closed", True) and hasattr(self, "_workers"):
             self.close()
+
+    def _indices(self, indices: Sequence[int]) -> list[int]:
+        """``indices`` sorted, each once, if they are envs of this vector env; else a
+        ValueError naming them."""
+        try:
+            chosen: list[Any] = list(indices)
+        except TypeError:
+            chosen = [indices]  # reported below
+        bad = [i for i in chosen if isinstance(i, bool) or not isinstance(i, int | np.integer)]
+        bad = bad or [i for i in chosen if not 0 <= i < self.num_envs]
+        if bad:
+            raise ValueError(
+                f"indices: got {shown(indices)}; expected env indices from 0 to "
+                f"{self.num_envs - 1} (not {shown(bad[0])})"
+            )
+        return sorted({int(i) for i in chosen})
 
     # -- messages ---------------------------------------------------------------------------
     def _check_open(self) -> None:
@@ -390,12 +427,21 @@ class BatchVectorEnv(VectorEnv):
 
     def _batch(self, actions: Any) -> Any:
         """The actions as one batch to slice: an array for array spaces, else a list."""
-        if self._array_actions:
-            batch: Any = np.asarray(actions)
-        else:
-            batch = list(iterate(self.action_space, actions))
-        if len(batch) != self.num_envs:
-            raise ValueError(f"expected actions for {self.num_envs} envs, got {len(batch)}")
+        try:
+            if self._array_actions:
+                batch: Any = np.asarray(actions)
+                count = len(batch) if batch.ndim else None
+            else:
+                batch = list(iterate(self.action_space, actions))
+                count = len(batch)
+        except (TypeError, ValueError, AssertionError) as error:  # ragged, or not iterable
+            raise ValueError(
+                f"actions: expected one per env, {self.num_envs} in all, of "
+                f"{self.single_action_space}; got {shown(actions)} ({error})"
+            ) from None
+        if count != self.num_envs:
+            got = "a single value" if count is None else f"{count}"
+            raise ValueError(f"expected actions for {self.num_envs} envs, got {got}")
         return batch
 
     def _restore(self, status: list[int] | None) -> None:

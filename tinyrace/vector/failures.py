@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import contextlib
+import multiprocessing
 import os
 import pickle
 import signal
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Sequence
 from multiprocessing.connection import Connection
+from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, shown
 from tinyrace.vector.worker import CLOSED
 
 
@@ -28,6 +31,36 @@ def check_flag(name: str, value: object) -> None:
     """True or False (numpy's bools too), else a ConfigError naming the argument."""
     if not isinstance(value, (bool, np.bool_)):
         raise ConfigError(Problem("<make_vec arguments>", name, value, "expected true or false"))
+
+
+NUMPY_FROM_NOTE = "(envs per process from which their tyre forces are one computation; more: never)"
+
+
+def check_context(context: object) -> None:
+    """None or a start method of ``multiprocessing`` on this platform."""
+    methods = multiprocessing.get_all_start_methods()
+    if context is not None and context not in methods:
+        allowed = f"expected None (the platform's default) or one of {methods}"
+        raise ConfigError(Problem("<make_vec arguments>", "context", context, allowed))
+
+
+def check_env_fns(env_fns: object) -> list[Callable[[], Any]]:
+    """``env_fns`` as a list of functions, else a ConfigError naming the first that is not."""
+    allowed = "expected a list of functions that make an env (e.g. [lambda: gym.make(id)] * n)"
+    if isinstance(env_fns, str | bytes) or not isinstance(env_fns, Iterable):
+        raise ConfigError(Problem("<make_vec arguments>", "env_fns", env_fns, allowed))
+    fns = list(env_fns)
+    for index, fn in enumerate(fns):
+        if not callable(fn):
+            raise ConfigError(Problem("<make_vec arguments>", f"env_fns[{index}]", fn, allowed))
+    return fns
+
+
+def check_env(env: object, fn: object) -> gym.Env[Any, Any]:
+    """What ``fn`` made, if it is a Gymnasium env, else a TypeError naming both."""
+    if not isinstance(env, gym.Env):
+        raise TypeError(f"env_fns[0] ({fn!r}) returned {shown(env)}, not a gymnasium.Env")
+    return env
 
 
 def check_cores(cores: object, workers: int) -> list[int] | None:
@@ -52,6 +85,10 @@ def check_cores(cores: object, workers: int) -> list[int] | None:
     outside = [c for c in chosen if c not in usable]
     if outside:
         raise ConfigError(Problem("<make_vec arguments>", "cores", outside, allowed))
+    twice = sorted({c for c in chosen if chosen.count(c) > 1})
+    if twice:
+        allowed = "expected each core once (fewer cores than workers share them out in turn)"
+        raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
     if workers == 0:
         allowed = "cores pins worker processes: with workers=0 there are none; pass None"
         raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))

@@ -27,7 +27,9 @@ from typing import Any
 
 import numpy as np
 
+from tinyrace.errors import shown
 from tinyrace.vector.env import BatchVectorEnv
+from tinyrace.vector.failures import check_count
 from tinyrace.vector.link import LIVENESS, PARENT_SPIN
 from tinyrace.vector.worker import yield_core
 
@@ -48,11 +50,9 @@ class AsyncBatch:
             )
         sizes = [s.stop - s.start for s in vector._slices]
         batch_size = vector.num_envs if batch_size is None else batch_size
-        if not max(sizes) <= batch_size <= vector.num_envs:
-            raise ValueError(
-                f"batch_size {batch_size}: expected from {max(sizes)} (one worker's envs) "
-                f"to {vector.num_envs} (all)"
-            )
+        check_count(
+            "batch_size", batch_size, max(sizes), vector.num_envs, "(one worker's envs to all)"
+        )
         self.vector, self.batch_size = vector, batch_size
         self.owner = np.repeat(np.arange(len(sizes)), sizes)  # env id -> worker number
         self.in_flight: list[int] = []  # worker numbers, in the order they were sent
@@ -66,7 +66,8 @@ class AsyncBatch:
         """Start stepping the envs ``env_ids`` (every env of each worker they touch, none
         in flight) with ``actions`` (one row per id, in the same order)."""
         vector = self.vector
-        ids = np.asarray(env_ids, dtype=np.int64).reshape(-1)
+        vector._check_open()
+        ids = self._ids(env_ids)
         workers = sorted(set(self.owner[ids].tolist()))
         for number in workers:
             envs = vector._slices[number]
@@ -79,7 +80,18 @@ class AsyncBatch:
                 )
         target = vector._views.actions
         assert target is not None
-        target[ids] = np.asarray(actions, dtype=target.dtype)
+        expected = (len(ids), *target.shape[1:])
+        try:
+            rows = np.asarray(actions, dtype=target.dtype)
+        except (TypeError, ValueError):  # ragged, or not numbers
+            rows = None
+        if rows is None or rows.shape != expected:
+            got = shown(actions) if rows is None else f"shape {rows.shape}"
+            raise ValueError(
+                f"actions: expected shape {expected} (a row of {vector.single_action_space} "
+                f"per env id), got {got}"
+            )
+        target[ids] = rows
         if not self.in_flight:  # a buffer no array handed out by reset() refers to
             vector._handout.write(full=False)
         vector._workers.step(workers)
@@ -88,6 +100,7 @@ class AsyncBatch:
     def recv(self) -> tuple[Any, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         """The results of the first workers done, at least ``batch_size`` envs (fewer if
         fewer are in flight); ``infos["env_id"]`` says which envs, in the order returned."""
+        self.vector._check_open()
         if not self.in_flight:
             raise RuntimeError("recv() with nothing sent: call send() first")
         ready = self._wait()
@@ -110,6 +123,20 @@ class AsyncBatch:
         else:
             picked = observations[ids]
         return picked, views.rewards[ids], views.terminated[ids], views.truncated[ids], infos
+
+    def _ids(self, env_ids: Any) -> np.ndarray:
+        """``env_ids`` as an array of env indices, else a ValueError naming them."""
+        allowed = f"expected env ids (whole numbers) from 0 to {self.vector.num_envs - 1}"
+        try:
+            given = np.asarray(env_ids)
+        except ValueError:  # ragged
+            given = np.asarray([], dtype=np.float64)
+        if given.dtype.kind not in "iu" or given.size == 0:
+            raise ValueError(f"env_ids: got {shown(env_ids)}; {allowed}")
+        ids = given.astype(np.int64).reshape(-1)
+        if ids.min() < 0 or ids.max() >= self.vector.num_envs:
+            raise ValueError(f"env_ids: got {shown(env_ids)}; {allowed}")
+        return ids
 
     def _wait(self) -> list[int]:
         """Poll the workers in flight until those done hold ``batch_size`` envs (or all)."""
