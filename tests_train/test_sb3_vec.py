@@ -146,3 +146,71 @@ def test_the_id_works_in_sb3_subprocess_workers(start_method):
     observations, rewards, _, infos = vec.step(np.zeros((2, 3), np.float32))
     assert rewards.shape == (2,) and "tiles_total" in infos[0]
     vec.close()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "said"),
+    [
+        ({"seed": "x"}, "seed: got 'x'; expected None or a whole number >= 0"),
+        ({"seed": -1}, "seed: got -1"),
+        ({"env_kwargs": [1, 2]}, "env_kwargs: got [1, 2]; expected a dict"),
+        ({"env_kwargs": {"workers": 3}}, "'workers' is an argument of make_vec_env itself"),
+        ({"env_id": 123}, "env_id: got 123; expected an env id"),
+    ],
+)
+def test_make_vec_env_names_a_bad_argument_before_making_envs(kwargs, said, monkeypatch):
+    made = []
+    monkeypatch.setattr(BatchVectorEnv, "__init__", lambda *a, **k: made.append(a))
+    arguments = {"env_id": "tinyrace/CarRacing-v0", "n_envs": 2, "workers": 1, **kwargs}
+    with pytest.raises(ValueError) as caught:
+        make_vec_env(**arguments)
+    assert said in str(caught.value)
+    assert made == []  # no env, no worker
+
+
+@pytest.fixture
+def two() -> BatchVecEnv:
+    vec = make_vec_env(MAKE, 2, workers=1)
+    vec.reset()
+    yield vec
+    vec.close()
+
+
+@pytest.mark.parametrize(
+    ("options", "said"),
+    [
+        ({"reset_mask": np.array([True, False])}, "'reset_mask' is not an option here"),
+        ([{}, {}, {"bogus": 1}], "got 3 dicts; expected None, a dict or a list of 2 dicts"),
+        ([{}, 5], "got 5 among them"),
+        ("x", "options: got 'x'"),
+    ],
+)
+def test_set_options_names_what_reset_could_not_use(two, options, said):
+    with pytest.raises(ValueError) as caught:
+        two.set_options(options)
+    assert said in str(caught.value)
+    observations = two.reset()  # the options set before stay, and every env resets
+    assert observations.shape == (2, 96, 96, 3) and observations.any(axis=(1, 2, 3)).all()
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda vec: vec.get_attr("spec", indices=[5]),
+        lambda vec: vec.env_method("render", indices=[5]),
+        lambda vec: vec.set_attr("foo", 1, indices=[5]),
+        lambda vec: vec.env_is_wrapped(Monitor, indices=[0.5]),
+    ],
+)
+def test_indices_outside_the_envs_are_named(two, call):
+    with pytest.raises(ValueError, match=r"indices: got .*; expected env indices from -2 to 1"):
+        call(two)
+
+
+def test_negative_indices_count_from_the_end_as_in_sb3s_own_vec_envs(two):
+    dummy = DummyVecEnv([MAKE] * 2)
+    try:
+        for indices in (-1, [-2, 1], None, 0):
+            assert two.get_attr("spec", indices) == dummy.get_attr("spec", indices)
+    finally:
+        dummy.close()

@@ -21,7 +21,8 @@ Example:
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Sequence
+import inspect
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -33,8 +34,12 @@ from stable_baselines3.common.vec_env.base_vec_env import (
     VecEnvStepReturn,
 )
 
+from tinyrace.errors import shown
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.make import layout
+
+# the vector env's own arguments: never an env's keyword arguments
+OWN_ARGUMENTS = frozenset(inspect.signature(make_batch).parameters) - {"kwargs"}
 
 
 class BatchVecEnv(VecEnv):  # type: ignore[misc, unused-ignore]  # Any where SB3 is absent
@@ -112,6 +117,48 @@ class BatchVecEnv(VecEnv):  # type: ignore[misc, unused-ignore]  # Any where SB3
         wrapped = self.venv.wrapped_by(wrapper_class)
         return [wrapped[i] for i in self._get_indices(indices)]
 
+    def seed(self, seed: int | None = None) -> Sequence[int | None]:
+        """Seeds ``seed``, ``seed + 1``, ... for the next reset (None: drawn at random)."""
+        if seed is not None:
+            _check_seed(seed)
+            seed = int(seed)
+        return super().seed(seed)  # type: ignore[no-any-return, unused-ignore]
+
+    def set_options(self, options: list[dict[str, Any]] | dict[str, Any] | None = None) -> None:
+        """Options for the next reset: one dict for every env, or a list of one per env."""
+        listed = [options] if options is None or isinstance(options, dict) else options
+        allowed = f"expected None, a dict or a list of {self.num_envs} dicts (one per env)"
+        if isinstance(listed, str | bytes) or not isinstance(listed, Sequence):
+            raise ValueError(f"options: got {shown(options)}; {allowed}")
+        if not isinstance(options, dict | None) and len(listed) != self.num_envs:
+            raise ValueError(f"options: got {len(listed)} dicts; {allowed}")
+        for option in listed:
+            if not isinstance(option, dict | None):
+                raise ValueError(f"options: got {shown(option)} among them; {allowed}")
+            if option and "reset_mask" in option:
+                raise ValueError(
+                    "options: 'reset_mask' is not an option here: SB3's reset() resets every "
+                    "env (a finished env resets on its own, in step_wait)"
+                )
+        super().set_options(options)
+
+    def _get_indices(self, indices: VecEnvIndices) -> list[int]:
+        """``indices`` (None: every env; an int; or several) as a list of env indices, a
+        negative one counted from the end, as SB3's own VecEnvs take them."""
+        if indices is None:
+            return list(range(self.num_envs))
+        listed = [indices] if isinstance(indices, int | np.integer) else indices
+        allowed = f"expected env indices from {-self.num_envs} to {self.num_envs - 1}"
+        try:
+            chosen = list(listed)
+        except TypeError:
+            raise ValueError(f"indices: got {shown(indices)}; {allowed}") from None
+        for index in chosen:
+            whole = isinstance(index, int | np.integer) and not isinstance(index, bool)
+            if not whole or not -self.num_envs <= index < self.num_envs:
+                raise ValueError(f"indices: got {shown(indices)}; {allowed}")
+        return [int(index) % self.num_envs for index in chosen]
+
     def get_images(self) -> Sequence[np.ndarray | None]:
         if self.render_mode != "rgb_array":
             return [None] * self.num_envs
@@ -133,6 +180,7 @@ def make_vec_env(
     0: all in this process), seeded ``seed``, ``seed + 1``, ... at the first reset. Wrap it
     in ``VecMonitor`` for SB3's episode statistics (per-env ``Monitor`` wrappers would take
     the envs off the batched physics)."""
+    _check_make_args(env_id, seed, env_kwargs)
     workers, parent_steps = layout(n_envs, workers, parent_steps)
     batch_kwargs["parent_steps"] = parent_steps
     if isinstance(env_id, str):
@@ -144,6 +192,34 @@ def make_vec_env(
     if seed is not None:
         vec.seed(seed)
     return vec
+
+
+def _check_seed(seed: object) -> None:
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed: got {shown(seed)}; expected None or a whole number >= 0")
+
+
+def _check_make_args(env_id: object, seed: object, env_kwargs: object) -> None:
+    """make_vec_env's own arguments, checked before any env or worker is made."""
+    if not isinstance(env_id, str) and not callable(env_id):
+        raise ValueError(
+            f"env_id: got {shown(env_id)}; expected an env id for gym.make "
+            '(e.g. "tinyrace/CarRacing-v0") or a function that makes the env'
+        )
+    if seed is not None:
+        _check_seed(seed)
+    if env_kwargs is None:
+        return
+    if not isinstance(env_kwargs, Mapping):
+        raise ValueError(
+            f"env_kwargs: got {shown(env_kwargs)}; expected a dict of the env's keyword arguments"
+        )
+    own = sorted(set(env_kwargs) & OWN_ARGUMENTS) if isinstance(env_id, str) else []
+    if own:
+        raise ValueError(
+            f"env_kwargs: {own[0]!r} is an argument of make_vec_env itself, not of the env: "
+            f"pass it as make_vec_env(..., {own[0]}=...)"
+        )
 
 
 def split_infos(merged: dict[str, Any], num_envs: int) -> list[dict[str, Any]]:
