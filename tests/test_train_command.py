@@ -39,7 +39,14 @@ def test_a_mistyped_env_is_refused_before_training(here: Path, capsys):
     assert "did you mean 'formula_student'?" in err and err.count("\n") == 1
 
 
-@pytest.mark.parametrize(("out", "said"), [("model.pt", "ending in .zip"), ("taken.zip", "exists")])
+@pytest.mark.parametrize(
+    ("out", "said"),
+    [
+        ("model.pt", "ending in .zip"),
+        ("taken.zip", "exists"),
+        ("taken.zip/model.zip", "expected a path in folders: 'taken.zip' is a file"),
+    ],
+)
 def test_out_is_checked_before_training(here: Path, capsys, out: str, said: str):
     (here / "taken.zip").write_text("a model")
     assert cli.main(["train", "--out", out]) == 2

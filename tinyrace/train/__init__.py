@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import math
 import multiprocessing
+import os
 import signal
 import sys
 from collections.abc import Callable
@@ -127,9 +128,23 @@ def model_file(name: str, force: bool) -> Path:
         allowed = "expected a .zip file name, not a folder"
     elif path.exists() and not force:
         allowed = "expected a new file name: this one exists (or --force to replace it)"
+    else:
+        allowed = _unwritable(path)
     if allowed is not None:
         raise ConfigError(Problem("<command line>", "--out", name, allowed))
     return path
+
+
+def _unwritable(path: Path) -> str | None:
+    """Why the model file cannot be written at ``path`` (None if it can): its nearest
+    existing folder above must be a folder this user may write in (the folders between are
+    made at the save)."""
+    existing = next(p for p in (path.parent, *path.parent.parents) if p.exists())
+    if not existing.is_dir():
+        return f"expected a path in folders: {str(existing)!r} is a file"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"expected a folder this user may write in: {str(existing)!r} is not one"
+    return None
 
 
 def missing() -> str | None:
