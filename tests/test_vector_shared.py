@@ -9,7 +9,9 @@ from __future__ import annotations
 import contextlib
 import functools
 import gc
+import multiprocessing
 import signal
+import sys
 from collections.abc import Iterator
 from multiprocessing import shared_memory, synchronize
 from pathlib import Path
@@ -205,6 +207,32 @@ def test_a_killed_worker_is_named_never_a_hang(context):
     assert segments() <= before  # the semaphores are gone too
     with pytest.raises(gym.error.ClosedEnvironmentError):
         vector.step(np.zeros((4, 1), np.float32))
+
+
+def test_a_worker_that_cannot_start_is_the_one_error_and_frees_everything(monkeypatch):
+    """``Process.start`` failing for the second worker (a spawned script without a main
+    guard, say): its error alone, the first worker ended, the memory and semaphores freed."""
+    context = multiprocessing.get_context("fork")
+    real_start = context.Process.start
+    started: list[Any] = []
+
+    def start(process: Any) -> None:
+        if started:
+            raise RuntimeError("no second worker")
+        real_start(process)
+        started.append(process)
+
+    monkeypatch.setattr(context.Process, "start", start)
+    ignored: list[Any] = []
+    monkeypatch.setattr(sys, "unraisablehook", ignored.append)
+    before = segments()
+    with pytest.raises(RuntimeError, match="no second worker") as caught:
+        BatchVectorEnv([Doomed] * 2, workers=2, context="fork")
+    assert caught.value.__context__ is None  # not raised while another was handled
+    gc.collect()
+    assert ignored == []
+    assert not started[0].is_alive()
+    assert segments() <= before
 
 
 def test_closing_frees_the_shared_memory():

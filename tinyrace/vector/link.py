@@ -88,10 +88,15 @@ class Workers:
                 name=f"BatchVectorEnv-worker-{number}",
                 daemon=True,
             )
+            try:
+                process.start()
+            except BaseException:  # e.g. a spawned script without a main guard
+                parent.close()
+                raise
+            finally:
+                child.close()
             self.pipes.append(parent)
             self.semaphores.append(semaphores)
-            process.start()
-            child.close()
             self.processes.append(process)
         self.answers = list(self.pipes)
         if self.spawned < len(self.slices):
