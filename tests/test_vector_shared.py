@@ -10,7 +10,9 @@ import contextlib
 import functools
 import gc
 import multiprocessing
+import os
 import signal
+import subprocess
 import sys
 from collections.abc import Iterator
 from multiprocessing import shared_memory, synchronize
@@ -23,7 +25,7 @@ import pytest
 from gymnasium.error import AlreadyPendingCallError, NoAsyncCallError
 from vector_doubles import Blinking, Chatty, Doomed
 
-import tinyrace  # noqa: F401  (registers the env ids)
+import tinyrace  # registers the env ids; its folder for the scripts run below
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.pool import AsyncBatch
@@ -233,6 +235,37 @@ def test_a_worker_that_cannot_start_is_the_one_error_and_frees_everything(monkey
     assert ignored == []
     assert not started[0].is_alive()
     assert segments() <= before
+
+
+NO_GUARD = """
+import multiprocessing
+multiprocessing.set_start_method({method!r}, force=True)
+from tinyrace.vector import make_batch
+envs = make_batch("tinyrace/CarRacing-v0", num_envs=4, workers=2)
+"""
+
+
+@pytest.mark.parametrize("method", ["spawn", "forkserver"])
+def test_a_script_without_a_main_guard_gets_an_error_that_says_so_not_a_hang(tmp_path, method):
+    """A spawned worker runs the script again and dies starting its own vector env. The
+    parent used to hang sending the worker its start (the layout pickled with the
+    observation space, 110 KB: more than the pipe holds, and the worker gone)."""
+    if method not in multiprocessing.get_all_start_methods():
+        pytest.skip(f"no {method} start method on this platform")
+    script = tmp_path / "no_guard.py"
+    script.write_text(NO_GUARD.format(method=method))
+    here = {"PYTHONPATH": str(Path(tinyrace.__file__).parents[1])}  # this tinyrace, not another
+    done = subprocess.run(
+        [sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+        env={**os.environ, **here},
+    )
+    assert done.returncode == 1
+    assert "WorkerDied: BatchVectorEnv worker 0 (envs 0-1) died without an answer" in done.stderr
+    assert f"A worker started by {method!r} imports the main script again" in done.stderr
 
 
 def test_closing_frees_the_shared_memory():

@@ -51,7 +51,9 @@ from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
 from tinyrace.vector.failures import (
+    MAIN_GUARD_NOTE,
     NUMPY_FROM_NOTE,
+    WorkerDied,
     check_context,
     check_cores,
     check_count,
@@ -176,8 +178,15 @@ class BatchVectorEnv(VectorEnv):
                 pinned,
             )
             self._check_spaces(self._workers.receive_all())
-        except BaseException:  # e.g. an env that cannot be made in a worker
+        except BaseException as error:  # e.g. an env that cannot be made in a worker
             self.close()
+            method = context or multiprocessing.get_start_method()
+            if isinstance(error, WorkerDied) and method != "fork":
+                note = MAIN_GUARD_NOTE.format(method=method)
+                if hasattr(error, "add_note"):  # Python >= 3.11
+                    error.add_note(note)
+                else:
+                    error.args = (f"{error.args[0]}\n{note}",)
             raise
         views = self._views
         self._answers = Answers(views.infos, views.kinds, self._slices, views.uniform)

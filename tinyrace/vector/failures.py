@@ -100,13 +100,25 @@ def show(envs: slice) -> str:
     return f"{envs.start}-{envs.stop - 1}" if envs.stop - envs.start > 1 else str(envs.start)
 
 
-def died(number: int, envs: slice, exitcode: int | None) -> RuntimeError:
+class WorkerDied(RuntimeError):
+    """A worker process ended without answering (a RuntimeError, as it always was)."""
+
+
+# noted when a worker started by spawn or forkserver dies before its first answer
+MAIN_GUARD_NOTE = (
+    "A worker started by {method!r} imports the main script again before it makes its envs: "
+    'a script that makes the vector env outside `if __name__ == "__main__":` starts it there '
+    "too, which ends the worker (its error is printed above)."
+)
+
+
+def died(number: int, envs: slice, exitcode: int | None) -> WorkerDied:
     """The error for worker ``number`` (stepping ``envs``) that ended without an answer."""
     how = f"exit code {exitcode}"
     if exitcode is not None and exitcode < 0:
         names = {s.value: s.name for s in signal.Signals}
         how = f"killed by {names.get(-exitcode, f'signal {-exitcode}')}"
-    return RuntimeError(
+    return WorkerDied(
         f"BatchVectorEnv worker {number} (envs {show(envs)}) died without an answer ({how}); "
         "the vector env is closed"
     )

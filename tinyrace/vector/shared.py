@@ -78,7 +78,9 @@ class Layout:
         workers: int,
         buffers: int = 1,
     ) -> None:
-        self.observation_space, self.num_envs, self.workers = observation_space, num_envs, workers
+        # offsets, shapes and dtypes only: the layout is sent to every worker, and a space
+        # holds its bounds (a 96x96x3 Box's pickle takes 110 KB, more than a pipe's buffer)
+        self.num_envs, self.workers = num_envs, workers
         self.size = 0
         self.observations = [self._place_space(observation_space) for _ in range(buffers)]
         self._buffer = self._place((), np.int64, 1)
