@@ -103,11 +103,12 @@ def test_a_bad_call_is_named_and_the_vector_env_stays_usable(local, call, raised
     assert observations.shape == (2, 2)
 
 
-def test_a_numpy_integer_seed_seeds_as_the_same_int(local):
+@pytest.mark.parametrize(("given", "same"), [(np.int64(7), 7), (np.arange(7, 9), [7, 8])])
+def test_numpy_integer_seeds_seed_as_the_same_ints(local, given, same):
     other = BatchVectorEnv([Quiet] * 2, workers=0)
     try:
-        local.reset(seed=np.int64(7))
-        other.reset(seed=7)
+        local.reset(seed=given)
+        other.reset(seed=same)
         actions = np.zeros((2, 1), np.float32)
         for _ in range(5):
             assert np.array_equal(local.step(actions)[0], other.step(actions)[0])

@@ -225,6 +225,7 @@ class BatchVectorEnv(VectorEnv):
                 f"If seeds are passed as a list the length must match num_envs={self.num_envs} "
                 f"but got length={len(seed)}."
             )
+        seed = [int(s) if isinstance(s, np.integer) else s for s in seed]  # np.arange(n), say
         mask = np.ones(self.num_envs, dtype=np.bool_)
         if options is not None and "reset_mask" in options:
             options = dict(options)  # unlike SyncVectorEnv, leave the caller's dict alone
