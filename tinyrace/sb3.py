@@ -216,9 +216,10 @@ def _check_make_args(env_id: object, seed: object, env_kwargs: object) -> None:
         )
     own = sorted(set(env_kwargs) & OWN_ARGUMENTS) if isinstance(env_id, str) else []
     if own:
+        name = {"id": "env_id", "num_envs": "n_envs"}.get(own[0], own[0])  # as named here
         raise ValueError(
             f"env_kwargs: {own[0]!r} is an argument of make_vec_env itself, not of the env: "
-            f"pass it as make_vec_env(..., {own[0]}=...)"
+            f"pass it as make_vec_env(..., {name}=...)"
         )
 
 

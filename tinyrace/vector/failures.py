@@ -85,8 +85,7 @@ def check_cores(cores: object, workers: int) -> list[int] | None:
     outside = [c for c in chosen if c not in usable]
     if outside:
         raise ConfigError(Problem("<make_vec arguments>", "cores", outside, allowed))
-    twice = sorted({c for c in chosen if chosen.count(c) > 1})
-    if twice:
+    if len(set(chosen)) < len(chosen):
         allowed = "expected each core once (fewer cores than workers share them out in turn)"
         raise ConfigError(Problem("<make_vec arguments>", "cores", cores, allowed))
     if workers == 0:
