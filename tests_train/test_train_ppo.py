@@ -222,4 +222,4 @@ def test_the_training_pages_script_runs_as_printed(here: Path):
         [sys.executable, "train_sb3.py"], capture_output=True, text=True, timeout=600
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    assert PPO.load(here / "ppo_carracing.zip").num_timesteps >= 256
+    assert PPO.load(here / "ppo_carracing_script.zip").num_timesteps >= 256
