@@ -194,6 +194,20 @@ def test_workers_without_num_envs_names_the_mode_that_takes_them():
         make_env({"workers": 2})
 
 
+@pytest.mark.parametrize(
+    ("config", "said"),
+    [
+        ("tinyrace/CarRacing-v0", "<RLlib env_config>: got 'tinyrace/CarRacing-v0'; expected a"),
+        ({"id": 5}, "<RLlib env_config>: id: got 5; expected an env id"),
+        ({"id": 5, "num_envs": 2}, "<RLlib env_config>: id: got 5; expected an env id"),
+    ],
+)
+def test_an_env_config_that_is_no_dict_or_has_no_id_text_is_named(config, said):
+    with pytest.raises(ConfigError) as caught:
+        make_env(config)
+    assert said in str(caught.value)
+
+
 def test_make_env_in_a_fresh_process_registers_the_ids_itself():
     """What an env runner does: unpickle make_env (importing tinyrace), then call it."""
     code = (

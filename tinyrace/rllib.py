@@ -149,7 +149,15 @@ def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any] | VectorEnv:
     With ``"num_envs"`` in ``env_config`` (RLlib adds it in ``vector_entry_point`` mode)
     the answer is ``make_vector_env``'s: one vector env of that many envs.
     """
+    if not isinstance(env_config, Mapping):
+        allowed = (
+            'expected a dict (RLlib passes its EnvContext), e.g. {"id": "tinyrace/CarRacing-v0"}'
+        )
+        raise ConfigError(Problem("<RLlib env_config>", "", env_config, allowed))
     config = dict(env_config)
+    if not isinstance(config.get("id", CARRACING_ID), str):
+        allowed = 'expected an env id, e.g. "tinyrace/CarRacing-v0"'
+        raise ConfigError(Problem("<RLlib env_config>", "id", config["id"], allowed))
     if NUM_ENVS in config:
         return make_vector_env(config)
     if WORKERS in config:
