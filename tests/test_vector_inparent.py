@@ -209,6 +209,23 @@ def test_opencv_runs_on_one_thread_in_the_parents_step_only():
         cv2.setNumThreads(before)
 
 
+@pytest.mark.parametrize("parent_steps", [False, True])
+def test_a_forked_worker_runs_opencv_on_one_thread_and_the_parent_keeps_its_count(parent_steps):
+    """The parent forks its workers with OpenCV at one thread: a forked worker never uses
+    the thread pool it copied, whose threads it does not have."""
+    before = cv2.getNumThreads()
+    cv2.setNumThreads(2)
+    try:
+        vector = BatchVectorEnv([Threads] * 2, workers=1, parent_steps=parent_steps, context="fork")
+        assert cv2.getNumThreads() == 2  # as it was
+        vector.reset(seed=0)
+        infos = vector.step(np.zeros((2, 1), np.float32))[4]
+        assert infos["threads"][0] == 1  # env 0: a forked worker's
+        vector.close()
+    finally:
+        cv2.setNumThreads(before)
+
+
 def test_the_parents_collector_is_left_alone_when_it_steps_a_slice():
     """A worker process freezes its heap after its first reset (``worker.settle``); the
     parent's slice, stepped in the user's process, must not freeze the user's heap."""

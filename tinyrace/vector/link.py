@@ -21,6 +21,7 @@ from multiprocessing.connection import Connection
 from multiprocessing.reduction import ForkingPickler
 from typing import Any
 
+import cv2
 import gymnasium as gym
 from gymnasium.vector.utils import CloudpickleWrapper
 
@@ -77,6 +78,32 @@ class Workers:
         parent's slice made here, while the processes make theirs); worker ``i`` pinned
         to core ``cores[i % len(cores)]`` if ``cores`` are given."""
         self.command = views.command
+        threads = cv2.getNumThreads()
+        cv2.setNumThreads(1)  # see _start
+        try:
+            self._start(ctx, env_fns, block, physics, cores)
+        finally:
+            cv2.setNumThreads(threads)
+        self.answers = list(self.pipes)
+        if self.spawned < len(self.slices):
+            envs = self.slices[-1]
+            own = EnvSlice(env_fns[envs], envs.start, views, *physics)
+            self.parent = ParentWorker(self.spawned, own, views)
+            self.answers.append(self.parent.queue)
+
+    def _start(
+        self,
+        ctx: Any,
+        env_fns: list[Callable[[], gym.Env[Any, Any]]],
+        block: tuple[str, shared.Layout],
+        physics: tuple[bool, int],
+        cores: list[int] | None,
+    ) -> None:
+        """Start the worker processes, with OpenCV on one thread in this process: OpenCV's
+        thread pool does not survive a fork, and a forked worker that used it (its state
+        copied from a pool whose threads were busy at the fork) could wait forever in its
+        first parallel call (a `cv2.resize` seen hanging so in CI). A forked worker keeps
+        that one thread, as a worker steps on one core anyway."""
         for number, envs in enumerate(self.slices[: self.spawned]):
             parent, child = ctx.Pipe()
             semaphores = (ctx.Semaphore(0), ctx.Semaphore(0))  # go, done
@@ -98,12 +125,6 @@ class Workers:
             self.pipes.append(parent)
             self.semaphores.append(semaphores)
             self.processes.append(process)
-        self.answers = list(self.pipes)
-        if self.spawned < len(self.slices):
-            envs = self.slices[-1]
-            own = EnvSlice(env_fns[envs], envs.start, views, *physics)
-            self.parent = ParentWorker(self.spawned, own, views)
-            self.answers.append(self.parent.queue)
 
     def step(self, numbers: list[int] | range | None = None) -> None:
         """Wake the workers ``numbers`` (default: all) to step their envs; the parent's

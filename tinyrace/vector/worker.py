@@ -206,9 +206,10 @@ def work(
     if given, attach the shared memory, build the envs (their memory touched first on that
     core), serve the commands (freezing again after the first reset: ``settle``).
 
-    OpenCV's thread count is left as the process has it: ``cv2.setNumThreads`` in a
-    forked worker whose parent had started OpenCV's threads hangs (it waits on the
-    parent's thread pool, which the child does not have)."""
+    OpenCV's thread count is not set here: ``cv2.setNumThreads`` in a forked worker whose
+    parent had started OpenCV's threads hangs (it waits on the parent's thread pool, which
+    the child does not have). The parent forks it with that count at 1 instead
+    (``link.Workers._start``)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     parent.close()
     # the objects this process inherited from its parent (all of them, when forked): its
