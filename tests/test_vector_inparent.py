@@ -213,6 +213,8 @@ def test_opencv_runs_on_one_thread_in_the_parents_step_only():
 def test_a_forked_worker_runs_opencv_on_one_thread_and_the_parent_keeps_its_count(parent_steps):
     """The parent forks its workers with OpenCV at one thread: a forked worker never uses
     the thread pool it copied, whose threads it does not have."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("no fork start method on this platform")
     before = cv2.getNumThreads()
     cv2.setNumThreads(2)
     try:
