@@ -36,6 +36,7 @@ from stable_baselines3.common.vec_env.base_vec_env import (
 
 from tinyrace.errors import shown
 from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector.arguments import env_indices
 from tinyrace.vector.make import layout
 
 # the vector env's own arguments: never an env's keyword arguments
@@ -147,17 +148,7 @@ class BatchVecEnv(VecEnv):  # type: ignore[misc, unused-ignore]  # Any where SB3
         negative one counted from the end, as SB3's own VecEnvs take them."""
         if indices is None:
             return list(range(self.num_envs))
-        listed = [indices] if isinstance(indices, int | np.integer) else indices
-        allowed = f"expected env indices from {-self.num_envs} to {self.num_envs - 1}"
-        try:
-            chosen = list(listed)
-        except TypeError:
-            raise ValueError(f"indices: got {shown(indices)}; {allowed}") from None
-        for index in chosen:
-            whole = isinstance(index, int | np.integer) and not isinstance(index, bool)
-            if not whole or not -self.num_envs <= index < self.num_envs:
-                raise ValueError(f"indices: got {shown(indices)}; {allowed}")
-        return [int(index) % self.num_envs for index in chosen]
+        return env_indices(indices, self.num_envs, negative=True)
 
     def get_images(self) -> Sequence[np.ndarray | None]:
         if self.render_mode != "rgb_array":

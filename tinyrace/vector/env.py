@@ -42,11 +42,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.spaces import Box, Discrete, MultiBinary, MultiDiscrete
 from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space, iterate
+from gymnasium.vector.utils import batch_space
 
 from tinyrace.config.bounds import MAX_ENVS, MAX_WORKERS
-from tinyrace.errors import shown
-from tinyrace.vector import shared
+from tinyrace.vector import arguments, shared
 from tinyrace.vector.answers import Answers
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.envslice import EnvSlice
@@ -209,27 +208,8 @@ class BatchVectorEnv(VectorEnv):
         options: dict[str, Any] | None = None,
     ) -> tuple[Any, dict[str, Any]]:
         """Reset every env (or those in ``options["reset_mask"]``), as SyncVectorEnv does."""
-        if seed is None:
-            seed = [None] * self.num_envs
-        elif isinstance(seed, int | np.integer) and not isinstance(seed, bool | np.bool_):
-            seed = [int(seed) + i for i in range(self.num_envs)]
-        elif isinstance(seed, str | bytes) or not isinstance(seed, Sequence | np.ndarray):
-            raise TypeError(
-                f"seed: expected None, a whole number or a list of one per env "
-                f"({self.num_envs}), got {shown(seed)}"
-            )
-        if options is not None and not isinstance(options, dict):
-            raise TypeError(f"options: expected a dict or None, got {shown(options)}")
-        if len(seed) != self.num_envs:
-            raise ValueError(
-                f"If seeds are passed as a list the length must match num_envs={self.num_envs} "
-                f"but got length={len(seed)}."
-            )
-        seed = [int(s) if isinstance(s, np.integer) else s for s in seed]  # np.arange(n), say
-        mask = np.ones(self.num_envs, dtype=np.bool_)
-        if options is not None and "reset_mask" in options:
-            options = dict(options)  # unlike SyncVectorEnv, leave the caller's dict alone
-            mask = _check_reset_mask(options.pop("reset_mask"), self.num_envs)
+        seed = arguments.seeds(seed, self.num_envs)
+        options, mask = arguments.reset_options(options, self.num_envs)
         self._check_idle("reset")
         self._handout.write(full=bool(mask.all()))
         try:
@@ -344,13 +324,13 @@ class BatchVectorEnv(VectorEnv):
         self, indices: Sequence[int], name: str, *args: Any, **kwargs: Any
     ) -> tuple[Any, ...]:
         """``call`` for the envs in ``indices`` only (in increasing order of index)."""
-        only = self._indices(indices)
+        only = sorted(set(arguments.env_indices(indices, self.num_envs)))
         replies = self._exchange("call", [(name, args, kwargs, only)] * len(self._slices))
         return tuple(_flat(replies))
 
     def set_attr_at(self, indices: Sequence[int], name: str, value: Any) -> None:
         """Set attribute ``name`` of the envs in ``indices`` to ``value``."""
-        only = self._indices(indices)
+        only = sorted(set(arguments.env_indices(indices, self.num_envs)))
         self._exchange(
             "set_attr", [(name, [value] * (s.stop - s.start), only) for s in self._slices]
         )
@@ -399,22 +379,6 @@ class BatchVectorEnv(VectorEnv):
         if not getattr(self, "closed", True) and hasattr(self, "_workers"):
             self.close()
 
-    def _indices(self, indices: Sequence[int]) -> list[int]:
-        """``indices`` sorted, each once, if they are envs of this vector env; else a
-        ValueError naming them."""
-        try:
-            chosen: list[Any] = list(indices)
-        except TypeError:
-            chosen = [indices]  # reported below
-        bad = [i for i in chosen if isinstance(i, bool) or not isinstance(i, int | np.integer)]
-        bad = bad or [i for i in chosen if not 0 <= i < self.num_envs]
-        if bad:
-            raise ValueError(
-                f"indices: got {shown(indices)}; expected env indices from 0 to "
-                f"{self.num_envs - 1} (not {shown(bad[0])})"
-            )
-        return sorted({int(i) for i in chosen})
-
     # -- messages ---------------------------------------------------------------------------
     def _check_open(self) -> None:
         if self.closed:
@@ -437,22 +401,9 @@ class BatchVectorEnv(VectorEnv):
 
     def _batch(self, actions: Any) -> Any:
         """The actions as one batch to slice: an array for array spaces, else a list."""
-        try:
-            if self._array_actions:
-                batch: Any = np.asarray(actions)
-                count = len(batch) if batch.ndim else None
-            else:
-                batch = list(iterate(self.action_space, actions))
-                count = len(batch)
-        except (TypeError, ValueError, AssertionError) as error:  # ragged, or not iterable
-            raise ValueError(
-                f"actions: expected one per env, {self.num_envs} in all, of "
-                f"{self.single_action_space}; got {shown(actions)} ({error})"
-            ) from None
-        if count != self.num_envs:
-            got = "a single value" if count is None else f"{count}"
-            raise ValueError(f"expected actions for {self.num_envs} envs, got {got}")
-        return batch
+        return arguments.actions_batch(
+            actions, self.action_space, self.single_action_space, self.num_envs, self._array_actions
+        )
 
     def _restore(self, status: list[int] | None) -> None:
         """After a step or reset that raised: the rows of the workers that failed (None:
@@ -468,17 +419,6 @@ class BatchVectorEnv(VectorEnv):
         if not self.copy:
             return self._views.observations
         return self._handout.hand_out()
-
-
-def _check_reset_mask(mask: Any, num_envs: int) -> np.ndarray:
-    """``options["reset_mask"]``, checked as SyncVectorEnv does."""
-    if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_:
-        raise TypeError(f"`options['reset_mask']` must be a numpy array of bools, got {mask!r}")
-    if mask.shape != (num_envs,) or not mask.any():
-        raise ValueError(
-            f"`options['reset_mask']` must have shape `({num_envs},)` and a True value, got {mask}"
-        )
-    return mask
 
 
 def _flat(per_worker: Sequence[list[Any]]) -> list[Any]:
