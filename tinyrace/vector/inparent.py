@@ -53,7 +53,6 @@ class ParentWorker(Worker):
         pipe = ParentPipe()
         super().__init__(pipe, number, envs, views, (_Released(), _Released()))  # type: ignore[arg-type]
         self.queue = pipe
-        self.settled = True  # the user's process: its collector is not ours to freeze
         pipe.send((True, envs.spaces()))  # as a worker's first answer
 
     def step(self) -> None:

@@ -100,25 +100,29 @@ class Worker:
                 command, args = self.pipe.recv()
             except EOFError:  # the parent is gone
                 return
-            self.run(command, args)
+            answer = self.run(command, args)
             if command == "close":
                 return
+            # the first reset of one of its envs (None: an env left out by a reset mask)
+            reset_one = command == "reset" and any(r is not None for r in answer or ())
+            if reset_one and not self.settled:
+                settle()  # this process's heap, never the parent's: its slice runs no serve
+                self.settled = True
 
-    def run(self, command: str, args: tuple[Any, ...]) -> None:
-        """Carry out a command other than a step and send its answer."""
+    def run(self, command: str, args: tuple[Any, ...]) -> Any:
+        """Carry out a command other than a step and send its answer; return it (None when
+        the command raised)."""
         if command == "close":
             self.envs.close()
             self.pipe.send((True, CLOSED))
-            return
+            return None
         try:
             answer = getattr(self.envs, command)(*args)
-            # the first reset of one of its envs (None: an env left out by a reset mask)
-            if command == "reset" and not self.settled and answer.count(None) < len(answer):
-                settle()
-                self.settled = True
-            self.pipe.send((True, answer))
         except Exception as error:
             self.fail(error)
+            return None
+        self.pipe.send((True, answer))
+        return answer
 
     def step(self) -> None:
         status = self.views.status
