@@ -133,13 +133,14 @@ def test_colour_beside_the_footprint(tmp_path, outside, fires):
     """Lines 1 px outside each side of the path never fire; 1 px inside they do."""
     image = blank()
     half = TRACK_WIDTH // 2
-    image[300 - half - outside, 50:] = BGR["red"]
-    image[300 + half + outside, 50:] = BGR["red"]
+    image[300 - half - outside, 200:] = BGR["red"]  # ahead of the start (a spawn on an
+    image[300 + half + outside, 200:] = BGR["red"]  # obstacle colour is refused)
     steps = drive_straight(obstacle_env(tmp_path, image, (60.0, 300.0, 0.0)), 35)
     assert len(steps) == 35
-    assert any(info["obstacles_hit"] for info, _, _ in steps) == fires
-    if fires:
-        assert all(info["obstacles_hit"] for info, _, _ in steps)
+    hits = [bool(info["obstacles_hit"]) for info, _, _ in steps]
+    assert any(hits) == fires
+    if fires:  # from the step the car's nose reaches the lines on
+        assert all(hits[hits.index(True) :]) and hits.index(True) > 0
 
 
 def test_obstacles_match_brute_force_while_turning(tmp_path):
@@ -150,6 +151,7 @@ def test_obstacles_match_brute_force_while_turning(tmp_path):
         x, y = rng.integers(100, 700, 2)
         side = rng.integers(1, 5)
         image[y : y + side, x : x + side] = BGR["red"]
+    image[140:260, 380:540] = 0  # the start clear (a spawn on an obstacle colour is refused)
     ys, xs = np.nonzero(color_mask(image[..., ::-1], BGR["red"], tolerance=0))
     specks = np.stack([xs, ys], axis=1).astype(float)
     env = obstacle_env(tmp_path, image, (400.0, 200.0, 0.0), velocity=200.0)

@@ -58,7 +58,31 @@ def test_an_obstacle_in_the_trajectory_colour_is_refused(tmp_path: Path):
 
 def test_an_obstacle_colour_is_fine_without_cte(tmp_path: Path):
     design = {"color_obstacles": [{"color": WHITE, "reward": -1}]}
-    assert validate_path(_folder(tmp_path, reward_design=design))[0] == []
+    car = {"wheelbase": 8, "track_width": 6}  # started below the white line, clear of it
+    tracks = [{"image": "t.png", "spawns": [[20, 50, 0]]}]
+    folder = _folder(tmp_path, reward_design=design, car=car, tracks=tracks)
+    assert validate_path(folder)[0] == []
+
+
+def test_a_spawn_on_an_obstacle_colour_is_refused(tmp_path: Path):
+    # the default car (160 x 100 px) at (20, 32) covers the white line, an obstacle here
+    # (not the blue block at x 5-9 px, which the footprint does not reach)
+    design = {"color_obstacles": [{"color": BLUE, "reward": -1}, {"color": WHITE, "reward": -1}]}
+    folder = _folder(tmp_path, reward_design=design)
+    _both_refuse(folder, "tracks[0].spawns[0]")
+    (problem,) = validate_path(folder)[0]
+    assert "it covers reward_design.color_obstacles[1] (color #ffffff, reward -1.0):" in problem
+    assert "(160 x 100 px, length x width)" in problem
+
+
+def test_an_obstacle_colour_no_pixel_has_is_refused_naming_the_swapped_list(tmp_path: Path):
+    design = {"color_obstacles": [{"color": [0, 0, 255], "reward": -1}]}  # red, as [b, g, r]
+    car = {"wheelbase": 8, "track_width": 6}
+    folder = _folder(tmp_path, reward_design=design, car=car)
+    _both_refuse(folder, "reward_design.color_obstacles[0].color")
+    (problem,) = validate_path(folder)[0]
+    assert "no pixel has it" in problem
+    assert "the image has [255, 0, 0]: a list is [b, g, r]" in problem  # the blue block
 
 
 @pytest.mark.parametrize("shaping", ["linear", 3, [1, 2]])

@@ -60,20 +60,21 @@ def validate_path(path: Path) -> tuple[list[str], str]:
 
 
 def start_summary(parts: Parts) -> str:
-    """'; start free: ...' on tracks with walls or cones: the car's footprint at its spawns
-    and how far it is from the nearest wall and cone (``prepare`` refuses a spawn that
-    touches either)."""
+    """'; start free: ...' on tracks with walls, cones or obstacle colours: the car's
+    footprint at its spawns and how far it is from the nearest wall and cone (``prepare``
+    refuses a spawn that overlaps either or covers an obstacle colour's pixel)."""
     fits = start_fits(parts.config, parts.source.tracks, parts.car_model)
     if not fits:
         return ""
     length, width = fits[0].size
-    text = f"; start free: car footprint {length:.2f} x {width:.2f} m"
+    unit = fits[0].unit
+    text = f"; start free: car footprint {length:.2f} x {width:.2f} {unit}"
     for name, clearance in (
         ("wall", min(f.wall_clearance for f in fits)),
         ("cone", min(f.cone_clearance for f in fits)),
     ):
         if math.isfinite(clearance):
-            text += f", {clearance:.2f} m from the nearest {name}"
+            text += f", {clearance:.2f} {unit} from the nearest {name}"
     return text
 
 

@@ -1,6 +1,7 @@
-"""Start poses that fit: on tracks in metres, the car's footprint at every spawn must touch
-no wall and no cone, or the config is refused (``prepare``: ``gym.make`` and ``tinyrace
-validate`` alike), naming the pose's file and key.
+"""Start poses that fit: the car's footprint at every spawn must touch no wall and no cone
+(tracks in metres) and cover no pixel of an obstacle colour (picture tracks), or the config
+is refused (``prepare``: ``gym.make`` and ``tinyrace validate`` alike), naming the pose's
+file and key.
 
 The footprint is the car's outline as the world sees it (``World.footprints`` of the car
 built at the spawn: its whole body where the model has one, e.g. the single-track car's
@@ -32,29 +33,38 @@ class StartFit:
     track_index: int
     spawn: tuple[float, float, float]  # (x [m], y [m], heading [rad])
     corners: np.ndarray  # (4, 2) [m]
-    size: tuple[float, float]  # (length, width) [m] of the footprint
-    wall_clearance: float  # [m] to the nearest wall; < 0: overlapping (inf: no walls)
-    cone_clearance: float  # [m] to the nearest cone's edge; < 0: overlapping (inf: no cones)
+    size: tuple[float, float]  # (length, width) [track units] of the footprint
+    wall_clearance: float  # [track units] to the nearest wall; < 0: overlapping (inf: none)
+    cone_clearance: float  # [track units] to the nearest cone's edge; < 0: overlapping
+    unit: str = "m"  # the track's unit
+    obstacles: tuple[int, ...] = ()  # the obstacle colours it covers a pixel of (pictures)
+    number: int = 0  # which of the track's spawns
 
     @property
     def free(self) -> bool:
-        """Clear of walls and cones, or only touching them."""
-        return min(self.wall_clearance, self.cone_clearance) >= -TOUCH
+        """Clear of walls, cones and obstacle colours, or only touching walls and cones."""
+        return min(self.wall_clearance, self.cone_clearance) >= -TOUCH and not self.obstacles
 
 
 def start_fits(config: EnvConfig, tracks: Sequence[Track], car_model: CarModel) -> list[StartFit]:
-    """The fit of the car of ``config`` at every spawn of every track with walls or cones."""
+    """The fit of the car of ``config`` at every spawn of every track with walls, cones or
+    obstacle colours."""
     fits = []
     for index, track in enumerate(tracks):
-        if not len(track.walls) and not len(track.cones):
+        pictured = track.obstacle_test is not None and len(track.obstacle_test.cells) > 0
+        if not len(track.walls) and not len(track.cones) and not pictured:
             continue
-        for spawn in track.spawns:
+        for number, spawn in enumerate(track.spawns):
             world = World()
             world.add_car(car_model.build(world.space, spawn, config.car, track))
             (corners,) = world.footprints()
             walls = _wall_clearance(corners, track.wall_quads)
             cones = _cone_clearance(corners, track.cones[:, :2], track.cone_radii)
-            fits.append(StartFit(index, spawn, corners, quad_size(corners), walls, cones))
+            covered = tuple(_obstacles_under(track, corners))
+            size = quad_size(corners)
+            fits.append(
+                StartFit(index, spawn, corners, size, walls, cones, track.unit, covered, number)
+            )
     return fits
 
 
@@ -72,18 +82,54 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         where = f"tracks[{fit.track_index}].{key}"
         x, y, heading = fit.spawn
         length, width = fit.size
+        unit = fit.unit
+        if fit.obstacles:
+            problems.append(_obstacle_problem(config, fit, source, where, key))
+            continue
         what = "a wall" if fit.wall_clearance <= 0 else "a cone"
         pose = f"[{x:.3f}, {y:.3f}, {heading:.3f}]"
         origin = "" if given else " (the start pose is this file's first point)"
         allowed = (
-            f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} m, "
-            f"length x width, at {pose} [m, m, rad]) overlaps no wall or cone; it "
-            f"overlaps {what}{origin}: move the spawn (track.spawn) or make the car smaller "
-            "(car.wheelbase, car.track_width)"
+            f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} "
+            f"{unit}, length x width, at {pose} [{unit}, {unit}, rad]) overlaps no wall or "
+            f"cone; it overlaps {what}{origin}: move the spawn (track.spawn) or make the car "
+            "smaller (car.wheelbase, car.track_width)"
         )
         value = list(spawn) if spawn is not None else getattr(track, key)
         problems.append(Problem(source, where, value, allowed))
     return problems
+
+
+def _obstacle_problem(
+    config: EnvConfig, fit: StartFit, source: str, where: str, key: str
+) -> Problem:
+    """A picture track's spawn whose footprint covers pixels of obstacle colours."""
+    spawn = getattr(config.tracks[fit.track_index], key)[fit.number]
+    obstacles = config.reward_design.color_obstacles
+    named = ", ".join(
+        f"reward_design.color_obstacles[{k}] (color {obstacles[k].color!r}, reward "
+        f"{obstacles[k].reward})"
+        for k in fit.obstacles
+    )
+    length, width = fit.size
+    allowed = (
+        f"expected a spawn where the car's footprint ({length:.0f} x {width:.0f} "
+        f"{fit.unit}, length x width) covers no pixel of an obstacle colour; it covers "
+        f"{named}: the car would hit it on its first step. Move the spawn, or paint the "
+        "start clear"
+    )
+    return Problem(source, f"{where}[{fit.number}]", list(spawn), allowed)
+
+
+def _obstacles_under(track: Track, quad: np.ndarray) -> list[int]:
+    """The obstacle colours (indices) with a pixel inside ``quad`` (picture tracks)."""
+    test = track.obstacle_test
+    if test is None or len(test.cells) == 0:
+        return []
+    cells = as_quads(test.cells)
+    low, high = quad.min(axis=0), quad.max(axis=0)
+    near = np.flatnonzero(((cells.min(axis=1) <= high) & (cells.max(axis=1) >= low)).all(axis=1))
+    return test.touched(quad, near.tolist()) if near.size else []
 
 
 def placement_problems(
@@ -181,13 +227,7 @@ def _at(outline: np.ndarray, pose: Pose) -> np.ndarray:
 
 def _on_obstacle(track: Track, quad: np.ndarray) -> bool:
     """Whether a pixel of an obstacle colour lies inside ``quad`` (picture tracks)."""
-    test = track.obstacle_test
-    if test is None or len(test.cells) == 0:
-        return False
-    cells = as_quads(test.cells)
-    low, high = quad.min(axis=0), quad.max(axis=0)
-    near = np.flatnonzero(((cells.min(axis=1) <= high) & (cells.max(axis=1) >= low)).all(axis=1))
-    return bool(near.size) and bool(test.touched(quad, near.tolist()))
+    return bool(_obstacles_under(track, quad))
 
 
 def quads_overlap(a: np.ndarray, b: np.ndarray) -> bool:

@@ -373,6 +373,8 @@ class ImageSource:
             problems += found
             if track is not None:
                 loaded.append(track)
+        if not problems:
+            problems = _unseen_obstacles(config, loaded, source)
         if problems:
             raise ConfigError(problems)
         cte = config.reward_design.cross_track_error
@@ -386,6 +388,29 @@ class ImageSource:
         track_index = pick_index(options, "track", len(self.tracks), rng)
         spawn_index = pick_index(options, "spawn", len(self.tracks[track_index].spawns), rng)
         return TrackDraw(self.tracks[track_index], track_index, spawn_index)
+
+
+def _unseen_obstacles(config: EnvConfig, tracks: list[ImageTrack], source: str) -> list[Problem]:
+    """A Problem for each obstacle colour that no pixel of any track has: the car could never
+    hit it (often a colour written [r, g, b] where tinycarlo's order is [b, g, r])."""
+    seen = set(np.concatenate([track.cell_obstacles for track in tracks]).tolist())
+    images = ", ".join(sorted({track.path for track in tracks}))
+    problems = []
+    for k, obstacle in enumerate(config.reward_design.color_obstacles):
+        if k not in seen:
+            b, g, r = obstacle.color.bgr
+            swapped = pack(Color.rgb(b, g, r))  # the list read the other way round
+            if any((track.packed() == swapped).any() for track in tracks):
+                hint = f"; the image has [{r}, {g}, {b}]: a list is [b, g, r], tinycarlo's order"
+            else:
+                hint = '; a list is [b, g, r], tinycarlo\'s order, or give "#rrggbb"'
+            allowed = (
+                f"expected a colour present in {images} (no pixel has it, so the car could "
+                f"never hit it{hint})"
+            )
+            where = f"reward_design.color_obstacles[{k}].color"
+            problems.append(Problem(source, where, obstacle.color, allowed))
+    return problems
 
 
 def as_track(
