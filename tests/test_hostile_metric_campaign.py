@@ -122,7 +122,8 @@ def cone_case(rng: random.Random, folder: Path) -> None:
     inner = inner * 0.8  # a road between the two
     rows = [["blue", f"{x:.3f}", f"{y:.3f}", "0", "0", "0", "0"] for x, y in outer]
     rows += [["yellow", f"{x:.3f}", f"{y:.3f}", "0", "0", "0", "0"] for x, y in inner]
-    rows += [["big_orange", f"{outer[0][0]:.3f}", f"{outer[0][1]:.3f}", "0", "0", "0", "0"]]
+    start = outer[0] * 1.05  # beside the first blue cone (one cone per place)
+    rows += [["big_orange", f"{start[0]:.3f}", f"{start[1]:.3f}", "0", "0", "0", "0"]]
     damage = "none" if clean(rng) else rng.choice(
         ["cells", "one_point", "one_colour", "tags", "short_rows", "huge", "duplicates",
          "far_apart"])  # fmt: skip

@@ -149,7 +149,9 @@ def test_cones_at_one_point_are_refused(tmp_path):
     folder.mkdir()
     (folder / "k.csv").write_text("blue,1,1\n" * 5 + "yellow,1,1\n" * 5)
     (folder / "track.yaml").write_text("track: {type: cone_map, file: k.csv}\n")
-    assert "k.csv" in (text := refused(folder)) and "enclose 0 m" in text
+    text = refused(folder)  # the same place ten times: the cones written twice, named
+    assert "k.csv: line 2" in text
+    assert "expected one cone per place; line 1 has a cone there" in text
 
 
 def test_a_one_cell_ros_map_is_refused(tmp_path):

@@ -25,10 +25,12 @@ class Bound:
 MAX_DATA_BYTES = 64 << 20  # [bytes] a track data file (a real circuit's CSV is ~50 kB)
 MAX_ROWS = 200_000  # rows of numbers in a track data file (a real circuit has ~1,000 points)
 MAX_COORDINATE = 1e7  # [m] |x|, |y| and widths of metric track files after scale
+MIN_ROAD_WIDTH = 0.1  # [m] right + left width at a point of a centreline: narrower than a car
 MAX_TRACK_POINTS = 100_000  # centreline points after resampling (track length / spacing)
 MAX_CONES = 5_000  # cones in one cone map (a Formula Student track has a few hundred)
 MAX_CONE_ROAD_POINTS = 5_000  # an edge of a cone map / spacing (the road is matched edge to edge)
 MIN_MAP_SIDE = 2  # [cells] a ROS map's width and height
+MAX_MAP_WALLS = 100_000  # wall rectangles of one ROS map (f1tenth_gym's example: 2,083)
 RESOLUTION_RANGE = (1e-4, 1e3)  # [m/px] a ROS map's resolution (F1TENTH maps: 0.05)
 MAX_CROSSING_PAIRS = 50_000_000  # segment pairs sharing grid cells in the self-crossing check
 MAX_TEXTURE_SIDE = 8192  # [px] the procedural ground texture: 8192^2 RGBx is 256 MiB

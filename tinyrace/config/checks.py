@@ -65,7 +65,13 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         allowed = f"expected at most {MAX_RACE_CARS} cars (one world holds {MAX_RACE_CARS})"
         parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
         return
-    parser.problems += race_problems(config, at, parser.source)
+    # a pose that did not parse is named already: the poses left are not the ones given
+    named = {p.path.split("[")[0] for p in parser.problems}
+    parser.problems += [
+        p
+        for p in race_problems(config, at, parser.source)
+        if not (p.path == f"{at}race.poses" and p.path in named)
+    ]
     parser.problems += race_pixel_problems(config, at, parser.source)
     for i, entry in enumerate(cars):
         if entry.cameras is None and entry.sensors is None:

@@ -27,7 +27,8 @@ def resolve_defaults(config: EnvConfig) -> EnvConfig:
     sim = config.sim
     if sim.fps is None:
         fps = 50.0 if carracing_rules else 30.0
-        sim = dataclasses.replace(sim, fps=F1TENTH_GYM_RATE if config.car.compat else fps)
+        compat = config.car.compat or any(e.car.compat for e in config.race.cars)  # any car
+        sim = dataclasses.replace(sim, fps=F1TENTH_GYM_RATE if compat else fps)
     sizes = facts.car_sizes
     car = config.car
     car = dataclasses.replace(

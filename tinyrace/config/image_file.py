@@ -35,6 +35,7 @@ class ImageHeader:
     width: int  # [px]
     height: int  # [px]
     channels: int
+    maxval: int = 255  # a PGM/PPM's white (its samples run from 0 to it)
 
 
 class _Bad(Exception):
@@ -94,7 +95,7 @@ def _pnm_header(data: bytes) -> ImageHeader:
     needed = width * height * channels * (1 if maxval < 256 else 2)
     if len(data) - start < needed:
         raise _Bad("a PGM/PPM shorter than its header says (truncated)")
-    return ImageHeader("PNM", width, height, channels)
+    return ImageHeader("PNM", width, height, channels, maxval)
 
 
 _PNM_HEADER_BYTES = 4096  # [bytes] the magic, width, height, maxval and comments among them
@@ -165,8 +166,22 @@ def read_image_bgr(
     reason = check_size(header, max_pixels)
     if reason is not None:
         raise refuse(f"{path.name} is {reason}")
-    bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    if header.format == "PNM" and header.maxval not in (255, 65535):
+        bgr = _scaled_pnm(data, header.maxval)  # OpenCV reads the samples unscaled
+    else:
+        bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
     del data
     if bgr is None or bgr.shape[:2] != (header.height, header.width):
         raise refuse(f"{path.name} cannot be decoded (corrupt)")
     return bgr
+
+
+def _scaled_pnm(data: bytes, maxval: int) -> np.ndarray | None:
+    """A PGM/PPM whose white is ``maxval`` (not 255 or 65535) as 8-bit BGR, its samples
+    scaled to 0-255 as every reader of the format does (a map_saver PGM of maxval 100 is
+    white at 100); a sample above maxval counts as white."""
+    raw = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+    if raw is None:
+        return None
+    scaled = np.rint(np.minimum(raw, maxval) * (255.0 / maxval)).astype(np.uint8)
+    return cv2.cvtColor(scaled, cv2.COLOR_GRAY2BGR) if scaled.ndim == 2 else scaled

@@ -70,11 +70,15 @@ def _own_car_problems(
     own = car_model_problems(dataclasses.replace(config, car=car.car), source)
     seen = {(p.path, repr(p.value), p.allowed) for p in shared}
     at = f"race.cars[{car.index}]."
-    return [
-        dataclasses.replace(p, path=f"{at}{p.path}")
-        for p in own
-        if (p.path, repr(p.value), p.allowed) not in seen
-    ]
+    return [_at_entry(p, at) for p in own if (p.path, repr(p.value), p.allowed) not in seen]
+
+
+def _at_entry(problem: Problem, at: str) -> Problem:
+    """``problem`` of a race entry's car, named at the entry; a shared section's key (``sim``:
+    one clock for every car) stays named where it is, the entry named in the text."""
+    if problem.path.startswith("sim."):
+        return dataclasses.replace(problem, allowed=f"{problem.allowed} (for {at}car)")
+    return dataclasses.replace(problem, path=f"{at}{problem.path}")
 
 
 def _racer(config: EnvConfig, car: RaceCar) -> Racer:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tinyrace.config.bounds import MAX_COORDINATE
+from tinyrace.config.bounds import MAX_COORDINATE, MIN_ROAD_WIDTH
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import Table, read_table
@@ -117,10 +117,18 @@ def _check_widths(
     if widths is None:
         return []
     rows, sides = np.nonzero(widths < 0)
-    return [
+    problems = [
         table.problem(r, columns[s], float(widths[r, s]), "expected a width >= 0 [m]")
         for r, s in zip(rows[:20], sides[:20], strict=True)
     ]
+    if problems:
+        return problems
+    narrow = np.flatnonzero(widths.sum(axis=1) < MIN_ROAD_WIDTH)[:20]
+    allowed = (
+        f"expected a road at least {MIN_ROAD_WIDTH:g} m wide (right + left width; narrower "
+        "than any car, the car would start off it)"
+    )
+    return [table.problem(r, columns[0], float(widths[r].sum()), allowed) for r in narrow]
 
 
 def _check_repeats(table: Table, points: np.ndarray) -> list[Problem]:

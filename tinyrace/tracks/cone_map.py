@@ -69,6 +69,7 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
         if len(positions) > MAX_CONES:
             allowed = f"expected at most {MAX_CONES:,} cones (tinyrace's bound)"
             raise ConfigError(Problem(str(path), f"line {number}", f"cone {len(tags):,}", allowed))
+    problems += _repeated(str(path), positions, lines)
     if problems:
         raise ConfigError(problems[:20])
     array = np.array(positions, np.float64).reshape(-1, 2) * scale
@@ -78,6 +79,18 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
         where = f"line {lines[far[0]]}"
         raise ConfigError(Problem(str(path), where, array[far[0]].tolist(), allowed))
     return Cones(str(path), array, tuple(tags), tuple(lines))
+
+
+def _repeated(path: str, positions: list[tuple[float, float]], lines: list[int]) -> list[Problem]:
+    """A problem for each cone at the very place of an earlier one (a row written twice)."""
+    first: dict[tuple[float, float], int] = {}
+    problems = []
+    for position, line in zip(positions, lines, strict=True):
+        if position in first:
+            allowed = f"expected one cone per place; line {first[position]} has a cone there"
+            problems.append(Problem(path, f"line {line}", list(position), allowed))
+        first.setdefault(position, line)
+    return problems
 
 
 def _cone(

@@ -152,8 +152,20 @@ def _split(line: str) -> tuple[str, ...]:
 
 
 def _is_header(cells: tuple[str, ...]) -> bool:
-    """A first line whose cells are all names (no numbers) is a header."""
-    return all(cell and not _is_number(cell) for cell in cells)
+    """A first line whose cells are all names (no numbers) is a header; numbers split by
+    spaces (``1.0 2.0``) or with a decimal comma (``1,5``) are a row this reader does not
+    take, and are named as such."""
+    return all(cell and not _is_number(cell) and not _misread(cell) for cell in cells)
+
+
+def _misread(cell: str) -> str:
+    """Why ``cell`` holds numbers in a form the reader does not take ("" when it does not)."""
+    parts = cell.split()
+    if len(parts) > 1 and all(_is_number(part) for part in parts):
+        return "separated by ',', ';' or tabs, not spaces"
+    if "," in cell and _is_number(cell.replace(",", ".")):
+        return "with a decimal point, not a comma"
+    return ""
 
 
 def _is_number(cell: str) -> bool:
@@ -174,9 +186,11 @@ def _numbers(
     """The row's floats, or None with its problems recorded (wrong count, not a finite number)."""
     if len(cells) not in columns:
         counts = " or ".join(str(c) for c in columns)
-        problems.append(
-            Problem(path, f"line {number}", ",".join(cells), f"expected {counts} numbers")
-        )
+        allowed = f"expected {counts} numbers separated by ',', ';' or tabs"
+        misread = next((why for why in map(_misread, cells) if why), "")
+        if misread:
+            allowed = f"expected {counts} numbers {misread}"
+        problems.append(Problem(path, f"line {number}", ",".join(cells), allowed))
         return None
     values = []
     for column, cell in enumerate(cells):
@@ -186,7 +200,8 @@ def _numbers(
             value = math.nan
         if not math.isfinite(value):
             where = f"line {number}, column {column + 1}"
-            problems.append(Problem(path, where, cell, "expected a finite number"))
+            allowed = f"expected a finite number {_misread(cell)}".rstrip()
+            problems.append(Problem(path, where, cell, allowed))
             return None
         values.append(value)
     return values

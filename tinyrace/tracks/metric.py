@@ -22,7 +22,7 @@ from tinyrace.config import (
     EnvConfig,
     RosMapTrackConfig,
 )
-from tinyrace.config.bounds import MAX_TRACK_POINTS
+from tinyrace.config.bounds import MAX_TRACK_POINTS, MIN_ROAD_WIDTH
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
@@ -145,6 +145,16 @@ def _cone_map(
     cones = read_cones(base_dir / config.file, source, f"{where}.file", config.scale)
     road = road_between(cones, config.spacing, config.max_cone_gap)
     _check_length(road.centerline, config.spacing, source, where, cones.path)
+    narrowest = int(np.argmin(road.widths.sum(axis=1)))
+    if road.widths[narrowest].sum() < MIN_ROAD_WIDTH:
+        x, y = road.centerline[narrowest]
+        allowed = (
+            f"expected a road at least {MIN_ROAD_WIDTH:g} m wide between the blue and yellow "
+            f"cones; at ({x:.2f}, {y:.2f}) m it is {road.widths[narrowest].sum():.3f} m: do "
+            "the edges cross or interleave? (blue cones on the left edge, yellow cones "
+            "on the right)"
+        )
+        raise ConfigError(Problem(cones.path, "", "the cones' road", allowed))
     circuit = Circuit.build(road.centerline, road.widths, config.spacing)
     low = cones.positions.min(axis=0) - config.margin
     high = cones.positions.max(axis=0) + config.margin
@@ -218,7 +228,26 @@ def _ros_spawn(
     if circuit is None:
         allowed = "expected waypoints (a reference line) or a spawn [x, y, heading] [m, m, rad]"
         raise ConfigError(Problem(source, f"{where}.spawn", None, allowed))
-    return circuit.start_pose
+    start = circuit.start_pose
+    if not occupancy.is_free(np.array([start[:2]]))[0]:
+        x, y, heading = start
+        height, width = occupancy.shape
+        on = "outside the map" if not _on_map(occupancy, start) else "on a cell that is not free"
+        allowed = (
+            f"expected waypoints whose first point, the start pose [{x:.3f}, {y:.3f}, "
+            f"{heading:.3f}] [m, m, rad], lies on a free cell of the map ({width} x {height} "
+            f"cells from {list(occupancy.info.origin[:2])} m); it lies {on}: check the "
+            "waypoints' frame against the map's origin and resolution, or give track.spawn"
+        )
+        raise ConfigError(Problem(source, f"{where}.waypoints", config.waypoints, allowed))
+    return start
+
+
+def _on_map(occupancy: OccupancyMap, pose: Pose) -> bool:
+    """Whether the point of ``pose`` lies inside the map's picture."""
+    row, col = np.rint(occupancy.to_pixel(np.array([pose[:2]]))[0])
+    height, width = occupancy.shape
+    return bool(0 <= row < height and 0 <= col < width)
 
 
 LOADERS: dict[str, Callable[..., MetricTrack]] = {

@@ -2,10 +2,13 @@
 
 YAML keys: ``image`` (relative to the YAML), ``resolution`` [m/px], ``origin``
 [x m, y m, yaw rad] (the pose of the image's lower-left pixel), ``negate``,
-``occupied_thresh``, ``free_thresh`` and an optional ``mode`` (trinary). A pixel
-of value v has occupancy p = (255 - v) / 255 (v / 255 when negated): occupied above
-``occupied_thresh``, free below ``free_thresh``, unknown between (not drivable).
-Image row 0 is the top; world y grows upward.
+``occupied_thresh``, ``free_thresh`` and an optional ``mode``. In ``trinary`` (the
+default) and ``scale`` modes a pixel of value v has occupancy p = (255 - v) / 255 (v / 255
+when negated): occupied above ``occupied_thresh``, free below ``free_thresh``, between
+unknown (trinary) or a cost (scale), either way not drivable; a picture's alpha is not
+read. In ``raw`` mode the value is the occupancy in percent, as map_server reads it (0-100,
+``negate`` not applied; above 100 unknown), against the same thresholds. Image row 0 is
+the top; world y grows upward.
 """
 
 from __future__ import annotations
@@ -19,12 +22,17 @@ import cv2
 import numpy as np
 import yaml
 
-from tinyrace.config.bounds import MAX_COORDINATE, MIN_MAP_SIDE, RESOLUTION_RANGE
+from tinyrace.config.bounds import (
+    MAX_COORDINATE,
+    MAX_MAP_WALLS,
+    MIN_MAP_SIDE,
+    RESOLUTION_RANGE,
+)
 from tinyrace.config.image_file import read_image_bgr
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.config.yaml_file import parse_yaml
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, shown
 from tinyrace.tracks.csv_rows import read_text
 
 MODES = ("trinary", "scale", "raw")
@@ -41,6 +49,7 @@ class MapInfo:
     negate: bool
     occupied_thresh: float
     free_thresh: float
+    mode: str = "trinary"  # one of MODES
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,6 +157,8 @@ def _merged_runs(mask: np.ndarray) -> np.ndarray:
     padded[:, 1:-1] = mask
     step = np.diff(padded, axis=1)
     rows, first = np.nonzero(step == 1)
+    if not len(rows):  # no True pixel (a map without walls)
+        return np.zeros((0, 4), np.int64)
     last = np.nonzero(step == -1)[1] - 1  # the same runs, in the same row-major order
     order = np.lexsort((rows, last, first))  # equal runs together, top to bottom
     rows, first, last = rows[order], first[order], last[order]
@@ -180,10 +191,32 @@ def read_map(path: Path, source: str, key: str, files: FilesConfig = DEFAULT_FIL
         )
         raise ConfigError(Problem(str(path), where, str(info.image), allowed))
     gray = cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY)  # equal channels: the grey values unchanged
+    if info.mode == "raw":  # the value is the occupancy in percent; above 100 unknown
+        percent = gray.astype(np.float32)
+        known = percent <= 100
+        free = known & (percent / 100 < info.free_thresh)
+        occupied = known & (percent / 100 > info.occupied_thresh)
+        return _bounded(OccupancyMap(info, free, occupied), path, where)
     occupancy = gray.astype(np.float32) / 255.0
     if not info.negate:
         occupancy = 1.0 - occupancy
-    return OccupancyMap(info, occupancy < info.free_thresh, occupancy > info.occupied_thresh)
+    free, occupied = occupancy < info.free_thresh, occupancy > info.occupied_thresh
+    return _bounded(OccupancyMap(info, free, occupied), path, where)
+
+
+def _bounded(occupancy: OccupancyMap, path: Path, where: str) -> OccupancyMap:
+    """``occupancy``, unless its occupied cells make more walls than MAX_MAP_WALLS: each is a
+    body in the physics and a box for the lidar (a noisy scan, speckled cell by cell, would
+    take minutes and gigabytes to build)."""
+    walls = len(pixel_rects(occupancy.occupied))
+    if walls > MAX_MAP_WALLS:
+        allowed = (
+            f"expected a map whose occupied cells make at most {MAX_MAP_WALLS:,} wall rectangles "
+            f"(they make {walls:,}: a speckled map? clean its isolated cells, e.g. with a "
+            "morphological opening, or raise occupied_thresh)"
+        )
+        raise ConfigError(Problem(str(path), where, str(occupancy.info.image.name), allowed))
+    return occupancy
 
 
 def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
@@ -205,8 +238,10 @@ def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
         except ConfigError as error:
             problems += error.problems
         else:
-            if not (path.parent / image).is_file():
-                bad("image", f"expected an existing picture; {path.parent / image} does not exist")
+            missing = _not_a_file(path.parent / image)
+            if missing:
+                named = shown(str(path.parent / image))
+                bad("image", f"expected an existing picture; {named} {missing}")
     resolution = data.get("resolution")
     low, high = RESOLUTION_RANGE
     if not _number(resolution) or not low <= resolution <= high:
@@ -237,11 +272,28 @@ def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
         bool(negate),
         float(occupied),
         float(free),
+        str(data.get("mode", "trinary")),
     )
 
 
+def _not_a_file(path: Path) -> str:
+    """Why ``path`` is no picture to read ("" when it is a regular file)."""
+    try:
+        if path.is_file():
+            return ""
+        return "is not a file" if path.exists() else "does not exist"
+    except OSError as exc:  # a name too long for the file system, a symlink loop
+        return f"cannot be read ({exc.strerror or exc})"
+
+
 def _number(value: object) -> TypeGuard[float]:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    """A finite int or float (an int too large for a float is not: YAML reads any digits)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def _where(text: str, key: str) -> str:
