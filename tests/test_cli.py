@@ -41,7 +41,8 @@ def test_python_dash_m_runs_the_command():
         text=True,
         timeout=120,
     )
-    assert done.returncode == 0 and done.stdout.startswith("OK: procedural track")
+    path = CONFIGS_DIR / "carracing.yaml"
+    assert done.returncode == 0 and done.stdout.startswith(f"OK: {path}: procedural track")
 
 
 @pytest.mark.parametrize(

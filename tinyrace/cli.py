@@ -222,9 +222,10 @@ def _run(args: argparse.Namespace) -> int:
     out = _out_folder(args.out, experiment.config.output.dir, args.force)
     config = experiment.config
     if not (args.quiet or args.json):
-        what = f"{config.episodes} episodes, driver {config.driver}"
+        episodes = f"{config.episodes} episode{'s' if config.episodes != 1 else ''}"
+        what = f"{episodes}, driver {config.driver}"
         if experiment.is_race:
-            what = f"{config.episodes} episodes, a race of {len(experiment.agents)} cars"
+            what = f"{episodes}, a race of {len(experiment.agents)} cars"
         kind = "the track " if track else ""
         print(f"tinyrace: running {kind}{experiment.source} ({what})")
     result = run_experiment(experiment, out, show_progress=not args.quiet)
@@ -368,13 +369,14 @@ def _cache(args: argparse.Namespace) -> int:
 def _validate(args: argparse.Namespace) -> int:
     from tinyrace.validate import validate_path
 
-    problems, summary = validate_path(find_example(args.path))
+    path = find_example(args.path)  # the file checked, named in the answer
+    problems, summary = validate_path(path)
     for problem in problems:
         print(problem)
     if problems:
         print(f"{len(problems)} problem(s) found", file=sys.stderr)
         return 1
-    print(f"OK: {summary}")
+    print(f"OK: {path}: {summary}")
     return 0
 
 

@@ -110,7 +110,21 @@ def _read_source(
                 str(path), "", raw, "expected a YAML mapping of sections (sim, track, car, ...)"
             )
         )
+    found = sorted(EXPERIMENT_KEYS & set(raw))
+    if found:  # its env section alone would be an env config
+        allowed = (
+            f"expected an env config (sim, track, car, ...); this is an experiment file (it "
+            f"has {', '.join(found)}): run it with `tinyrace run {path}`, or give its env: "
+            "section as config="
+        )
+        raise ConfigError(Problem(str(path), found[0], raw[found[0]], allowed))
     return dict(raw), str(path), path.parent
+
+
+# the top-level keys of an experiment file (tinyrace.experiment), none of an env config's
+EXPERIMENT_KEYS = frozenset(
+    {"env", "driver", "drivers", "episodes", "output", "driver_args", "max_steps"}
+)
 
 
 def _no_track(folder: Path) -> str:

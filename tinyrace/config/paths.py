@@ -27,7 +27,10 @@ def _why_outside(value: str, folder: Path, allow_outside: bool) -> str | None:
         return "expected a file name without a NUL byte"
     if allow_outside:
         return None
-    outside = f"expected a path inside {folder} (or {OPT_IN_KEY}: true)"
+    outside = (
+        f"expected a path inside {folder} (or {OPT_IN_KEY}: true, a section of the env "
+        "config: top level in a track.yaml, under env: in an experiment)"
+    )
     pure = PurePath(value)
     if pure.is_absolute():
         return f"{outside}; this one is absolute"

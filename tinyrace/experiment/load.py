@@ -13,6 +13,7 @@ from typing import Any, cast
 
 from tinyrace.config import TRACK_FILE, EnvConfig, LoadedConfig, Overrides, load_env_config
 from tinyrace.config.experiment import ExperimentConfig
+from tinyrace.config.load import EXPERIMENT_KEYS
 from tinyrace.config.loader import Parser, read_yaml
 from tinyrace.config.paths import inside_folder
 from tinyrace.errors import ConfigError, Problem, did_you_mean, one_of
@@ -49,8 +50,7 @@ class Experiment:
 
 def is_experiment(raw: object) -> bool:
     """An experiment file has experiment keys; a track.yaml has track sections."""
-    keys = {"env", "driver", "drivers", "episodes", "output", "driver_args", "max_steps"}
-    return isinstance(raw, Mapping) and bool(keys & set(raw))
+    return isinstance(raw, Mapping) and bool(EXPERIMENT_KEYS & set(raw))
 
 
 def load_experiment(path: str | Path) -> Experiment:

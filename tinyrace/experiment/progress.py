@@ -27,8 +27,10 @@ class Progress:
         stream: TextIO | None = None,
         enabled: bool = True,
         interval: float = 0.1,
+        video: bool = True,
     ):
         self.episodes = episodes
+        self.video = video  # whether the wall time includes writing a video
         self.limit = limit  # steps per episode at most (0: unknown)
         self.stream = stream or sys.stderr
         self.enabled = enabled
@@ -86,7 +88,8 @@ class Progress:
         summary = f"return {result.episode_return:.1f}, {result.steps} steps{lap}, {result.end}"
         summary += f"; simulated {result.steps_per_second:.0f} steps/s"
         if result.wall_seconds is not None:
-            summary += f", {result.wall_seconds:.1f} s wall (video included)"
+            video = " (video included)" if self.video else ""
+            summary += f", {result.wall_seconds:.1f} s wall{video}"
         self.stream.write(f"{self.name(episode)}: {summary}\n")
         self.stream.flush()
 

@@ -214,7 +214,9 @@ def run_race(
             raise ConfigError(problems)
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             drivers = {d.agent: (d, _load(d, experiment.source)) for d in specs}
-        progress = progress or Progress(config.episodes, enabled=show_progress)
+        progress = progress or Progress(
+            config.episodes, enabled=show_progress, video=config.output.video
+        )
         run = RaceRun(experiment, race, drivers, out_root, progress)
         return RaceRunResult(run.run_dir, run.results, run.all())
     finally:

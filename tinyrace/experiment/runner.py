@@ -66,7 +66,9 @@ def run_experiment(
         check_view(experiment.config, env.config, experiment.source)
         with importable_from(experiment.folder):  # own drivers sit beside the experiment file
             driver = _driver(config.driver, config.driver_args, experiment.source)
-        progress = progress or Progress(config.episodes, enabled=show_progress)
+        progress = progress or Progress(
+            config.episodes, enabled=show_progress, video=config.output.video
+        )
         run = _Run(experiment, env, driver, out_root, progress)
         return RunResult(run.run_dir, run.results, run.all())
     finally:

@@ -1,7 +1,7 @@
 """``tinyrace train``: PPO (Stable-Baselines3) on a tinyrace env, evaluated before and after.
 
 Needs the ``train`` extra: ``pip install ".[train]"`` from a clone, or the wheel's
-``pip install "tinyrace-*.whl[train]"`` (without a GPU, install PyTorch's CPU build first).
+``pip install "$(ls tinyrace-*.whl)[train]"`` (without a GPU, install PyTorch's CPU build first).
 The env is the shipped ``f1tenth_lidar`` experiment by default (a lidar and the car's state
 on the F1TENTH loop: small vectors that PPO learns to drive in a minute or two on a CPU), or
 the env of any experiment or track (``tinyrace train carracing``: CarRacing's pixels, a far
@@ -43,7 +43,9 @@ if TYPE_CHECKING:
 
 TINYRACE_ID = "tinyrace/TinyRace-v0"
 DEFAULT_TARGET = "f1tenth_lidar"  # the shipped experiment that learns in minutes
-TRAIN_EXTRA = 'pip install ".[train]" (from a clone; a wheel: "tinyrace-*.whl[train]")'
+TRAIN_EXTRA = (
+    'pip install ".[train]" (from a clone; from a wheel: pip install "$(ls tinyrace-*.whl)[train]")'
+)
 FRAMES = 4  # image observations stacked, so that the policy sees speed and turning
 PPO_SETTINGS = {"n_steps": 256, "batch_size": 256, "learning_rate": 3e-4}
 MIN_STEPS = 16  # the shortest rollout per env (a very short training run)
