@@ -28,11 +28,11 @@ from tinyrace.world.world import TOUCH, World
 
 @dataclass(frozen=True)
 class StartFit:
-    """How one spawn fits: the footprint's corners and its clearances [m]."""
+    """How one spawn fits: the footprint's corners and its clearances [track units]."""
 
     track_index: int
-    spawn: tuple[float, float, float]  # (x [m], y [m], heading [rad])
-    corners: np.ndarray  # (4, 2) [m]
+    spawn: tuple[float, float, float]  # (x, y [track units], heading [rad])
+    corners: np.ndarray  # (4, 2) [track units]
     size: tuple[float, float]  # (length, width) [track units] of the footprint
     wall_clearance: float  # [track units] to the nearest wall; < 0: overlapping (inf: none)
     cone_clearance: float  # [track units] to the nearest cone's edge; < 0: overlapping

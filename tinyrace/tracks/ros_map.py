@@ -13,6 +13,7 @@ the top; world y grows upward.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -126,12 +127,17 @@ class OccupancyMap:
             segments.append(np.stack((world, np.roll(world, -1, axis=0)), axis=1))
         return np.concatenate(segments) if segments else np.zeros((0, 2, 2))
 
+    @functools.cached_property
+    def rects(self) -> np.ndarray:
+        """(M, 4) int the occupied pixels as rectangles (``pixel_rects``), found once."""
+        return pixel_rects(self.occupied)
+
     def wall_quads(self) -> np.ndarray:
         """(M, 4, 2) [m] the occupied pixels as solid walls for the physics: rectangles of
         whole pixels (``pixel_rects``), each the four corners of its pixels' outer edges in
         the world (counter-clockwise; turned with the origin's yaw). Their union is the
         occupied pixels exactly: no wall reaches past an occupied pixel."""
-        rects = pixel_rects(self.occupied).astype(np.float64)
+        rects = self.rects.astype(np.float64)
         if len(rects) == 0:
             return np.zeros((0, 4, 2))
         top, left = rects[:, 0] - 0.5, rects[:, 1] - 0.5  # pixel edges: centres +- 0.5
@@ -208,7 +214,7 @@ def _bounded(occupancy: OccupancyMap, path: Path, where: str) -> OccupancyMap:
     """``occupancy``, unless its occupied cells make more walls than MAX_MAP_WALLS: each is a
     body in the physics and a box for the lidar (a noisy scan, speckled cell by cell, would
     take minutes and gigabytes to build)."""
-    walls = len(pixel_rects(occupancy.occupied))
+    walls = len(occupancy.rects)
     if walls > MAX_MAP_WALLS:
         allowed = (
             f"expected a map whose occupied cells make at most {MAX_MAP_WALLS:,} wall rectangles "
