@@ -152,6 +152,20 @@ def _norm_312(x: float, y: float, scale: float) -> float:
 
 
 @_compile
+def _subnormal_311(x: float, y: float, big: float) -> float:
+    """CPython 3.11's vector_norm of (x, y) when the larger is subnormal: each divided by
+    it, the squares summed with one compensation term."""
+    csum, frac = 1.0, 0.0
+    for value in (x, y):
+        v = value / big
+        v = v * v
+        old = csum
+        csum += v
+        frac += (old - csum) + v
+    return big * math.sqrt(csum - 1.0 + frac)
+
+
+@_compile
 def hypot(x: float, y: float) -> float:
     """``math.hypot(x, y)`` as CPython computes it, bit for bit."""
     x, y = abs(x), abs(y)
@@ -167,9 +181,11 @@ def hypot(x: float, y: float) -> float:
     if big == 0.0:
         return big
     _, exponent = math.frexp(big)
-    if exponent < -1023:  # subnormals: CPython divides them up first; never met by a car
-        tiny = 2.2250738585072014e-308  # DBL_MIN
-        return tiny * hypot(x / tiny, y / tiny)
+    if exponent < -1023:  # subnormals (never met by a car), as each CPython treats them
+        if HYPOT_FMA_STYLE:  # 3.12+: scaled up to normal numbers first
+            tiny = 2.2250738585072014e-308  # DBL_MIN
+            return tiny * hypot(x / tiny, y / tiny)
+        return _subnormal_311(x, y, big)
     scale = math.ldexp(1.0, -exponent)
     if HYPOT_FMA_STYLE:
         return _norm_312(x, y, scale)
