@@ -352,7 +352,11 @@ def valid_image(draw) -> tuple[str, bytes]:
         channels = 3
     shape = (height, width) if channels == 1 else (height, width, channels)
     image = np.zeros(shape, dtype)
-    image[: height // 2] = np.iinfo(dtype).max
+    top = np.iinfo(dtype).max
+    image[: height // 2] = top
+    if channels >= 3 and height >= 10 and width >= 20:  # the obstacle colours, off the spawn
+        for color, columns in ((BLUE, slice(2, 8)), (RED, slice(12, 18))):
+            image[2:8, columns, :3] = np.array(color) // 255 * top
     return ext, encoded(image, ext)
 
 
@@ -406,6 +410,8 @@ def image_config(draw) -> str:
     if draw(st.integers(0, 5)) == 0:  # a black plane instead of the image
         side = st.integers(16, 20000)
         config["tracks"] = [{"plane_size": [draw(side), draw(side)], "spawns": [[40, 75, 0]]}]
+        if draw(st.booleans()):  # a plane has no obstacle pixels (refused colours), or none
+            del config["reward_design"]["color_obstacles"]
     return yaml.safe_dump(config, sort_keys=False)
 
 

@@ -246,3 +246,13 @@ def test_rows_in_a_form_the_reader_does_not_take_are_named(tmp_path, row, says):
     with pytest.raises(ConfigError) as caught:
         read_loop(tmp_path / "c.csv", "t", "k")
     assert str(caught.value.problems[0]).endswith(says)
+
+
+def test_a_race_car_placed_on_a_cell_that_is_not_free_is_refused():
+    race = {"num_agents": 2, "start": "poses", "poses": [[13.29, 0, 1.73], [0.0, 0.0, 0.0]]}
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", environment="f1tenth_loop", race=race)
+    ((key, allowed),) = problems_of(caught)
+    assert key == "race.poses[1]"
+    assert "car 'car_1' would start on a cell of the map that is not free" in allowed
+    assert "inside the track on the map's free cells" in allowed

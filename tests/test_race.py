@@ -117,7 +117,8 @@ def test_a_tile_pays_only_the_first_car_with_tile_reward_first():
 
 
 def test_a_car_whose_episode_ends_leaves_the_race_parked_and_the_others_go_on():
-    env = parallel_env(environment="f1tenth_loop", num_agents=2)
+    # a track without a map: a start on a cell that is not free (the map's edge) is refused
+    env = parallel_env(environment="autocross", num_agents=2)
     env.reset(seed=0)
     _, y0, x1, y1 = env.core.layout.bounds
     cars = env.core.snapshot().cars

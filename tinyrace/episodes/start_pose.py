@@ -144,13 +144,15 @@ def placement_problems(
     footprints: Sequence[np.ndarray],
 ) -> list[Problem]:
     """A Problem for each car that starts outside the track's bounds, on a wall or a cone,
-    or on another car (``footprints``: each car's outline as the world sees it,
-    ``World.footprints``), named by its id and by the key (``paths[i]``) its pose came
-    from, showing ``value`` (None: the pose). Cars that only touch are no problem."""
+    on a map's cell that is not free, or on another car (``footprints``: each car's outline
+    as the world sees it, ``World.footprints``), named by its id and by the key
+    (``paths[i]``) its pose came from, showing ``value`` (None: the pose). Cars that only
+    touch are no problem."""
     corners = list(footprints)
     assert len(corners) == len(states)
     walls = track.wall_quads
     x0, y0, x1, y1 = track.bounds
+    free = "" if track.occupancy is None else " on the map's free cells"
     problems = []
     for i, (state, quad) in enumerate(zip(states, corners, strict=True)):
         where = []
@@ -161,6 +163,8 @@ def placement_problems(
             where.append("on a wall")
         if _cone_clearance(quad, track.cones[:, :2], track.cone_radii) < -TOUCH:
             where.append("on a cone")
+        if not _on_free_cell(track, state.pose[:2]):
+            where.append("on a cell of the map that is not free")
         where += [f"on car {names[j]!r}" for j in range(i) if quads_overlap(quad, corners[j])]
         if where:
             pose = [round(v, 4) for v in state.pose]
@@ -168,7 +172,7 @@ def placement_problems(
             allowed = (
                 f"car {names[i]!r} would start {' and '.join(where)} (its footprint {length:.2f} "
                 f"x {width:.2f} track units at {pose}): expected a start pose clear of the "
-                f"walls, cones and the other cars, inside the track{hint}"
+                f"walls, cones and the other cars, inside the track{free}{hint}"
             )
             problems.append(Problem(source, paths[i], pose if value is None else value, allowed))
     return problems
@@ -201,6 +205,7 @@ def grid_check(
             and not _overlaps(quad, walls)
             and _cone_clearance(quad, cones, radii) >= -TOUCH
             and not _on_obstacle(track, quad)
+            and _on_free_cell(track, pose[:2])
             and not any(quads_overlap(quad, other) for other in placed)
         )
         if clear:
@@ -223,6 +228,11 @@ def _at(outline: np.ndarray, pose: Pose) -> np.ndarray:
     x, y, heading = pose
     c, s = math.cos(heading), math.sin(heading)
     return np.asarray(outline @ np.array([[c, s], [-s, c]]) + (x, y), np.float64)
+
+
+def _on_free_cell(track: Track, point: Sequence[float]) -> bool:
+    """Whether ``point`` lies on a free cell of the track's map (no map: True)."""
+    return track.occupancy is None or bool(track.occupancy.is_free(np.array([point[:2]]))[0])
 
 
 def _on_obstacle(track: Track, quad: np.ndarray) -> bool:
