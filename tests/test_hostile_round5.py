@@ -237,6 +237,8 @@ def test_a_race_car_under_f1tenth_gym_compat_sets_the_clock_as_a_single_one_does
          "separated by ',', ';' or tabs, not spaces"),
         ("60,0;0,0;5,0;5,0", "line 1, column 1: got '60,0'; expected a finite number with a "
          "decimal point, not a comma"),
+        ("6_0,0,5,5", "line 1, column 1: got '6_0'; expected a finite number without '_' "
+         "(Python reads 6_0 as 60)"),
     ],
 )  # fmt: skip
 def test_rows_in_a_form_the_reader_does_not_take_are_named(tmp_path, row, says):

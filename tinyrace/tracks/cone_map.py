@@ -107,8 +107,8 @@ def _cone(
         return None
     values = []
     for column in (1, 2):
-        try:
-            value = float(cells[column])
+        try:  # float reads 6_0 as 60: refused
+            value = float("nan") if "_" in cells[column] else float(cells[column])
         except ValueError:
             value = float("nan")
         if not np.isfinite(value):
