@@ -405,13 +405,15 @@ def hostile_image(draw) -> tuple[str, bytes]:
 @st.composite
 def image_config(draw) -> str:
     config = yaml.safe_load(BASE_TEXT)
+    if draw(st.integers(0, 2)) == 0:  # no obstacles: a grey picture can hold no colour
+        del config["reward_design"]["color_obstacles"]
     if draw(st.integers(0, 3)) == 0:
         config["files"] = {"max_image_pixels": draw(st.integers(1, 400_000_000))}
     if draw(st.integers(0, 5)) == 0:  # a black plane instead of the image
         side = st.integers(16, 20000)
         config["tracks"] = [{"plane_size": [draw(side), draw(side)], "spawns": [[40, 75, 0]]}]
         if draw(st.booleans()):  # a plane has no obstacle pixels (refused colours), or none
-            del config["reward_design"]["color_obstacles"]
+            config["reward_design"].pop("color_obstacles", None)
     return yaml.safe_dump(config, sort_keys=False)
 
 
