@@ -66,11 +66,11 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         parser.problem(f"{at}race.cars", f"{len(cars)} cars", allowed)
         return
     # a pose that did not parse is named already: the poses left are not the ones given
-    named = {p.path.split("[")[0] for p in parser.problems}
+    unparsed = any(p.path.startswith(f"{at}race.poses[") for p in parser.problems)
     parser.problems += [
         p
         for p in race_problems(config, at, parser.source)
-        if not (p.path == f"{at}race.poses" and p.path in named)
+        if not (unparsed and p.path == f"{at}race.poses")
     ]
     parser.problems += race_pixel_problems(config, at, parser.source)
     for i, entry in enumerate(cars):

@@ -80,12 +80,12 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         given = spawn is not None
         key = "spawn" if given else track.start_key  # the file whose first point it is
         where = f"tracks[{fit.track_index}].{key}"
-        x, y, heading = fit.spawn
-        length, width = fit.size
-        unit = fit.unit
         if fit.obstacles:
             problems.append(_obstacle_problem(config, fit, source, where, key))
             continue
+        x, y, heading = fit.spawn
+        length, width = fit.size
+        unit = fit.unit
         what = "a wall" if fit.wall_clearance <= 0 else "a cone"
         pose = f"[{x:.3f}, {y:.3f}, {heading:.3f}]"
         origin = "" if given else " (the start pose is this file's first point)"

@@ -18,7 +18,7 @@ import numpy as np
 from tinyrace.config.bounds import MAX_CONE_ROAD_POINTS, MAX_CONES, MAX_COORDINATE
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks import polyline
-from tinyrace.tracks.csv_rows import read_text
+from tinyrace.tracks.csv_rows import cell_number, read_text
 
 CLASSES = ("blue", "yellow", "orange", "big_orange", "unknown")  # class id = index + 1
 RADII = {"blue": 0.115, "yellow": 0.115, "orange": 0.115, "big_orange": 0.145, "unknown": 0.115}
@@ -107,10 +107,7 @@ def _cone(
         return None
     values = []
     for column in (1, 2):
-        try:  # float reads 6_0 as 60: refused
-            value = float("nan") if "_" in cells[column] else float(cells[column])
-        except ValueError:
-            value = float("nan")
+        value = cell_number(cells[column])
         if not np.isfinite(value):
             where = f"line {number}, column {column + 1} ({_COLUMNS[column]})"
             problems.append(Problem(path, where, cells[column], "expected a finite number [m]"))

@@ -174,6 +174,17 @@ def _misread(cell: str) -> str:
     return ""
 
 
+def cell_number(cell: str) -> float:
+    """The number a cell holds; NaN when it holds none, or one written with ``_``, which
+    Python's float reads (6_0 as 60) and a track file does not mean."""
+    if "_" in cell:
+        return math.nan
+    try:
+        return float(cell)
+    except ValueError:
+        return math.nan
+
+
 def _is_number(cell: str) -> bool:
     try:
         float(cell)
@@ -200,10 +211,7 @@ def _numbers(
         return None
     values = []
     for column, cell in enumerate(cells):
-        try:
-            value = math.nan if "_" in cell else float(cell)  # float reads 6_0 as 60
-        except ValueError:
-            value = math.nan
+        value = cell_number(cell)
         if not math.isfinite(value):
             where = f"line {number}, column {column + 1}"
             allowed = f"expected a finite number {_misread(cell)}".rstrip()

@@ -232,7 +232,8 @@ def _ros_spawn(
     if not occupancy.is_free(np.array([start[:2]]))[0]:
         x, y, heading = start
         height, width = occupancy.shape
-        on = "outside the map" if not _on_map(occupancy, start) else "on a cell that is not free"
+        outside = not occupancy.on_map(np.array([start[:2]]))[0]
+        on = "outside the map" if outside else "on a cell that is not free"
         allowed = (
             f"expected waypoints whose first point, the start pose [{x:.3f}, {y:.3f}, "
             f"{heading:.3f}] [m, m, rad], lies on a free cell of the map ({width} x {height} "
@@ -241,13 +242,6 @@ def _ros_spawn(
         )
         raise ConfigError(Problem(source, f"{where}.waypoints", config.waypoints, allowed))
     return start
-
-
-def _on_map(occupancy: OccupancyMap, pose: Pose) -> bool:
-    """Whether the point of ``pose`` lies inside the map's picture."""
-    row, col = np.rint(occupancy.to_pixel(np.array([pose[:2]]))[0])
-    height, width = occupancy.shape
-    return bool(0 <= row < height and 0 <= col < width)
 
 
 LOADERS: dict[str, Callable[..., MetricTrack]] = {

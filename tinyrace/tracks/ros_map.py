@@ -97,12 +97,22 @@ class OccupancyMap:
 
     def is_free(self, points: np.ndarray) -> np.ndarray:
         """(K,) bool: whether each world point [m] lies on a free cell (outside: not free)."""
+        rows, cols, inside = self._cells_of(points)
+        result = np.zeros(len(rows), bool)
+        result[inside] = self.free[rows[inside], cols[inside]]
+        return result
+
+    def on_map(self, points: np.ndarray) -> np.ndarray:
+        """(K,) bool: whether each world point [m] lies on a cell of the map."""
+        return self._cells_of(points)[2]
+
+    def _cells_of(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The nearest cell's row and column of each world point [m], and whether it is one
+        of the map's."""
         pixel = np.rint(self.to_pixel(points)).astype(int)
         rows, cols = pixel[:, 0], pixel[:, 1]
         inside = (rows >= 0) & (rows < self.shape[0]) & (cols >= 0) & (cols < self.shape[1])
-        result = np.zeros(len(pixel), bool)
-        result[inside] = self.free[rows[inside], cols[inside]]
-        return result
+        return rows, cols, inside
 
     def clearance(self, points: np.ndarray) -> np.ndarray:
         """(K,) [m] distance from each world point to the nearest cell that is not free."""
