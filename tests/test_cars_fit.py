@@ -69,9 +69,9 @@ def test_the_docs_one_line_ros_map_config_starts_free(tmp_path):
     ("text", "key", "value"),
     [
         ("track: {type: ros_map, file: map.yaml, waypoints: raceline.csv, spawn: "
-         f"{SPAWN_NEAR_WALL}}}", "tracks[0].spawn", str(SPAWN_NEAR_WALL)),
+         f"{SPAWN_NEAR_WALL}}}", "track.spawn", str(SPAWN_NEAR_WALL)),
         ("track: {type: ros_map, file: map.yaml, waypoints: raceline.csv}\n"
-         "car: {wheelbase: 2.5, track_width: 1.6}", "tracks[0].waypoints", "raceline.csv"),
+         "car: {wheelbase: 2.5, track_width: 1.6}", "track.waypoints", "raceline.csv"),
     ],
 )  # fmt: skip
 def test_a_start_pose_touching_a_wall_is_refused(tmp_path, text, key, value):
@@ -93,7 +93,7 @@ def test_a_start_pose_on_a_cone_is_refused(tmp_path):
     config["car"] = {**config.get("car", {}), "track_width": 6.0}  # wider than the road
     (tmp_path / "track.yaml").write_text(yaml.safe_dump(config))
     problems, _ = validate_path(tmp_path)
-    assert len(problems) == 1 and "tracks[0].file" in problems[0]
+    assert len(problems) == 1 and "track.file" in problems[0]
     assert "overlaps a cone" in problems[0]
 
 

@@ -642,11 +642,11 @@ SMALL_CAMERA = {"cameras": [{"id": "a", "resolution": [8, 8], "roi": [16, 16]}]}
         ({"reward_design": {"cross_track_error": {"weight": 10**400}}}, "weight"),
         ({"reward_design": {"time_penalty": 1e300}}, "reward_design.time_penalty"),  # inf score
         ({"car": {"model": np.array([1, 2])}}, "car.model"),  # was ValueError (ambiguous truth)
-        ({"track": {"type": ["procedural"]}}, "track[0].type"),  # was TypeError (unhashable)
-        ({"track": {"type": {"a": 1}}}, "track[0].type"),
+        ({"track": {"type": ["procedural"]}}, "track.type"),  # was TypeError (unhashable)
+        ({"track": {"type": {"a": 1}}}, "track.type"),
         ({**SMALL_CAMERA, "tracks": [{"image": "x" * 300}]}, "tracks[0].image"),  # was OSError
-        ({"track": {"type": "procedural", "playfield": 10000}}, "tracks[0].pixels_per_unit"),
-        ({"track": {"type": "procedural", "pixels_per_unit": 16}}, "tracks[0].pixels_per_unit"),
+        ({"track": {"type": "procedural", "playfield": 10000}}, "track.pixels_per_unit"),
+        ({"track": {"type": "procedural", "pixels_per_unit": 16}}, "track.pixels_per_unit"),
         ({**PLANE, **SMALL_CAMERA, "cameras": [{"id": "a", "position": [1e300, 0]}]}, "position"),
     ],
 )

@@ -62,7 +62,7 @@ def test_a_speckled_map_with_too_many_walls_is_refused(tmp_path, monkeypatch):
         read_map(map_folder(tmp_path, picture=picture), "t", "k")
     ((key, allowed),) = problems_of(caught)
     assert key == "line 1 (image)"
-    assert "at most 20 wall rectangles (they make 36: a speckled map?" in allowed
+    assert "at most 20 wall rectangles (they make at least 36: a speckled map?" in allowed
     picture[::2, ::2] = 254
     picture[:, 0] = 0  # one wall, a column of cells
     assert len(read_map(map_folder(tmp_path, picture=picture), "t", "k").wall_quads()) == 1
@@ -150,7 +150,7 @@ def test_a_start_taken_from_the_waypoints_must_lie_on_a_free_cell(tmp_path, firs
     with pytest.raises(ConfigError) as caught:
         gym.make("tinyrace/TinyRace-v0", environment=str(tmp_path / "t"))
     ((path, allowed),) = problems_of(caught)
-    assert path == "tracks[0].waypoints"
+    assert path == "track.waypoints"
     assert f"lies {lies}" in allowed and "free cell of the map" in allowed
 
 

@@ -134,7 +134,7 @@ def test_a_ros_map_without_waypoints_says_cte_and_lookahead_are_unavailable():
         CenterlineDriver().reset(env)
     with pytest.raises(ConfigError) as error:
         make("ros_map", track={"file": "map.yaml", "waypoints": None})
-    assert error.value.problems[0].path == "tracks[0].spawn"
+    assert error.value.problems[0].path == "track.spawn"
 
 
 # -- bad files through gym.make --------------------------------------------------------------
@@ -268,7 +268,7 @@ def test_track_files_stay_in_the_configs_folder_unless_allowed(tmp_path):
     track = {"type": "centerline", "file": outside}
     with pytest.raises(ConfigError) as error:
         gym.make("tinyrace/TinyRace-v0", config={"track": track})
-    assert error.value.problems[0].path == "tracks[0].file"
+    assert error.value.problems[0].path == "track.file"
     env = gym.make(
         "tinyrace/TinyRace-v0", config={"track": track, "files": {"paths_outside_folder": True}}
     )

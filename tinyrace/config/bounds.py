@@ -26,6 +26,10 @@ MAX_DATA_BYTES = 64 << 20  # [bytes] a track data file (a real circuit's CSV is 
 MAX_ROWS = 200_000  # rows of numbers in a track data file (a real circuit has ~1,000 points)
 MAX_COORDINATE = 1e7  # [m] |x|, |y| and widths of metric track files after scale
 MIN_ROAD_WIDTH = 0.1  # [m] right + left width at a point of a centreline: narrower than a car
+# The road's width to the inside of a curve over the curve's radius (polyline.
+# inner_width_over_radius): above 1 the inner edge passes the centre and the road folds.
+# The racetrack-database's 24 open circuits reach 1.01 (Norisring's hairpin) at 0.1 m spacing.
+MAX_INNER_WIDTH_OVER_RADIUS = 1.2
 MAX_TRACK_POINTS = 100_000  # centreline points after resampling (track length / spacing)
 MAX_CONES = 5_000  # cones in one cone map (a Formula Student track has a few hundred)
 MAX_CONE_ROAD_POINTS = 5_000  # an edge of a cone map / spacing (the road is matched edge to edge)

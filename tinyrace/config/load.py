@@ -14,7 +14,14 @@ from tinyrace.config.camera_info import with_camera_info
 from tinyrace.config.checks import check_consistency
 from tinyrace.config.defaults import resolve_defaults
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
-from tinyrace.config.overrides import DEFAULTS, KWARGS, Overrides, blame, spelled_as
+from tinyrace.config.overrides import (
+    DEFAULTS,
+    KWARGS,
+    Overrides,
+    blame,
+    spelled_as,
+    spelling_of,
+)
 from tinyrace.config.race import inherited, lay_cars_over_car, resolve_race_cars
 from tinyrace.config.schema import EnvConfig
 from tinyrace.errors import ConfigError, Problem, did_you_mean
@@ -31,11 +38,14 @@ class LoadedConfig:
     source: str  # file path or "<dict>", used in error messages
     base_dir: Path  # images are relative to this
     overrides: Overrides = dataclasses.field(default_factory=Overrides)  # laid over ``source``
+    # how the file writes its list sections (``track: {...}`` or ``tracks: [...]``)
+    spelling: Mapping[str, tuple[str, bool]] = dataclasses.field(default_factory=dict)
 
     def blame(self, problems: list[Problem]) -> list[Problem]:
         """Each problem named where its value came from: a key given as an override names
-        the overrides' source (a keyword argument, the experiment file), not the track file."""
-        return blame(problems, self.source, self.overrides)
+        the overrides' source (a keyword argument, the experiment file), not the track file;
+        a key of the file is named as the file writes it (``track.file``, not ``tracks[0]``)."""
+        return blame(problems, self.source, self.overrides, self.spelling)
 
 
 def load_env_config(
@@ -59,11 +69,12 @@ def load_env_config(
         raw = deep_merge(raw, spelled_as(laid.keys, raw))
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
+    spelling = spelling_of(raw)
     try:
         parsed = with_camera_info(parse_env_config(raw, source), source, base_dir)
     except ConfigError as exc:
-        raise ConfigError(blame(exc.problems, source, laid)) from None
-    return LoadedConfig(parsed, source, base_dir, laid)
+        raise ConfigError(blame(exc.problems, source, laid, spelling)) from None
+    return LoadedConfig(parsed, source, base_dir, laid, spelling)
 
 
 _Source = str | Path | Mapping[str, Any] | None  # what _read_source reads

@@ -27,18 +27,29 @@ class Overrides:
     prefix: str = ""  # e.g. "env." inside an experiment file
 
 
-def blame(problems: list[Problem], source: str, overrides: Overrides) -> list[Problem]:
+def blame(
+    problems: list[Problem],
+    source: str,
+    overrides: Overrides,
+    spelling: Mapping[str, tuple[str, bool]] | None = None,
+) -> list[Problem]:
     """``problems`` found in ``source`` merged with ``overrides``, each renamed to the
-    overrides' source when its key path lies in an override (or no file was read)."""
+    overrides' source when its key path lies in an override (or no file was read); the
+    others with their list sections named as the file writes them (``spelling``)."""
     renamed = []
     for p in problems:
         if p.source == source and (source == DEFAULTS or _overridden(p.path, overrides.keys)):
             p = Problem(overrides.source, f"{overrides.prefix}{p.path}", p.value, p.allowed)
+        elif spelling:  # a message of a data file may name the key that named the file
+            path = as_written(p.path, spelling) if p.source == source else p.path
+            p = Problem(p.source, path, p.value, as_written(p.allowed, spelling))
         renamed.append(p)
     return renamed
 
 
 _SINGULAR = {"tracks": "track", "cameras": "camera", "sensors": "sensor"}  # key aliases
+_LIST_KEY = re.compile(r"^(tracks|track|cameras|camera|sensors|sensor)(?=$|[.\[])")
+_LIST_ITEM = re.compile(r"(?<![\w.])(tracks|track|cameras|camera|sensors|sensor)\[(\d+)\]")
 
 
 def spelled_as(overrides: Mapping[str, Any], raw: Mapping[str, Any]) -> dict[str, Any]:
@@ -69,3 +80,38 @@ def _overridden(path: str, keys: Mapping[str, Any]) -> bool:
             return False
         node = node[token]
     return bool(path)
+
+
+def spelling_of(raw: Mapping[str, Any]) -> dict[str, tuple[str, bool]]:
+    """How ``raw`` writes each list section it has: plural name -> (the key as written,
+    whether its value is a list). ``track: {...}`` is a list of one written as a mapping."""
+    spelling = {}
+    for plural, singular in _SINGULAR.items():
+        for key in (plural, singular):
+            if key in raw:
+                spelling[plural] = (key, isinstance(raw[key], list | tuple))
+    return spelling
+
+
+def as_written(text: str, spelling: Mapping[str, tuple[str, bool]]) -> str:
+    """A key path (``tracks[0].file``, the parser's ``track[0].file``), or the key paths in a
+    message, as the file writes them: ``track.file`` under ``track: {file: ...}``,
+    ``track[0].file`` under a list."""
+
+    def item(match: re.Match[str]) -> str:
+        plural = _plural(match.group(1))
+        if plural not in spelling:
+            return match.group(0)
+        written, is_list = spelling[plural]
+        index = match.group(2)
+        return written if index == "0" and not is_list else f"{written}[{index}]"
+
+    def section(match: re.Match[str]) -> str:
+        plural = _plural(match.group(1))
+        return spelling[plural][0] if plural in spelling else match.group(0)
+
+    return _LIST_KEY.sub(section, _LIST_ITEM.sub(item, text), count=1)
+
+
+def _plural(name: str) -> str:
+    return name if name in _SINGULAR else next(p for p, s in _SINGULAR.items() if s == name)

@@ -54,7 +54,7 @@ def prepare(loaded: LoadedConfig) -> Parts:
     tracks = getattr(source, "tracks", ())  # a source's fixed tracks (none: drawn per reset)
     fits = start_fits(config, tracks, car_model)  # the car must fit at every spawn
     if any(not fit.free for fit in fits):
-        raise ConfigError(start_problems(config, fits, loaded.source))
+        raise ConfigError(loaded.blame(start_problems(config, fits, loaded.source)))
     course = Course(config, racers, loaded.source)
     grid_problems = course.check_fixed_starts(tracks)  # every car of the grid fits too
     if grid_problems:

@@ -9,6 +9,7 @@ ax`` whose positions are columns 2 and 3. Headings are computed from the points,
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -28,6 +29,8 @@ _NAMES = {
     "right": ("w_tr_right_m", "w_right", "w_right_m"),
     "left": ("w_tr_left_m", "w_left", "w_left_m"),
 }
+# A header name that reads as a width: w_r, w_tr_right, width, half_width_left.
+_WIDTH_LIKE = re.compile(r"^w(_|$)|width")
 
 
 @dataclass(frozen=True)
@@ -67,15 +70,38 @@ def read_loop(path: Path, source: str, key: str, scale: float = 1.0) -> Loop:
 
 def _columns(table: Table) -> tuple[int, int, int | None, int | None]:
     """Which columns hold x, y and the widths: by header name (a header as wide as the rows),
-    else by row width."""
-    found: dict[str, int | None] = dict.fromkeys(_NAMES)
-    for role, names in _NAMES.items():
-        if len(table.header) != table.values.shape[1]:
-            break
-        found[role] = next((table.header.index(n) for n in names if n in table.header), None)
-    if found["x"] is not None and found["y"] is not None:
-        return found["x"], found["y"], found["right"], found["left"]
-    return _BY_WIDTH[table.values.shape[1]]
+    else by row width. A header that names x and y but only one width, or names a column
+    that reads as a width under a name not known here (``w_r``), is refused: the widths
+    would silently fall back to the default."""
+    if len(table.header) != table.values.shape[1]:
+        return _BY_WIDTH[table.values.shape[1]]
+    found = {
+        role: next((table.header.index(n) for n in names if n in table.header), None)
+        for role, names in _NAMES.items()
+    }
+    if found["x"] is None or found["y"] is None:
+        return _BY_WIDTH[table.values.shape[1]]
+    known = {index for index in found.values() if index is not None}
+    unknown = [
+        name
+        for index, name in enumerate(table.header)
+        if index not in known and _WIDTH_LIKE.search(name)
+    ]
+    if (found["right"] is None) != (found["left"] is None) or (found["right"] is None and unknown):
+        names = " and ".join(" / ".join(_NAMES[side]) for side in ("right", "left"))
+        what = (
+            f"{' and '.join(repr(n) for n in unknown)} "
+            + ("is not a width name" if len(unknown) == 1 else "are not width names")
+            + " tinyrace reads"
+            if unknown
+            else "one width named alone is not read"
+        )
+        allowed = (
+            f"expected both widths named, {names}, or neither (then the track's default "
+            f"width is used); {what}"
+        )
+        raise ConfigError(Problem(table.path, "header", ", ".join(table.header), allowed))
+    return found["x"], found["y"], found["right"], found["left"]
 
 
 def _drop_closing_row(table: Table, xy: tuple[int, int]) -> Table:

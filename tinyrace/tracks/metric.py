@@ -22,13 +22,13 @@ from tinyrace.config import (
     EnvConfig,
     RosMapTrackConfig,
 )
-from tinyrace.config.bounds import MAX_TRACK_POINTS, MIN_ROAD_WIDTH
+from tinyrace.config.bounds import MAX_INNER_WIDTH_OVER_RADIUS, MAX_TRACK_POINTS, MIN_ROAD_WIDTH
 from tinyrace.config.paths import inside_folder
 from tinyrace.config.schema import FilesConfig
 from tinyrace.errors import Problem
 from tinyrace.tracks import polyline
 from tinyrace.tracks.base import PaintedGround, Surface, Track, TrackDraw, TrackRules, pick_index
-from tinyrace.tracks.centerline_csv import read_loop
+from tinyrace.tracks.centerline_csv import Loop, read_loop
 from tinyrace.tracks.circuit import Circuit
 from tinyrace.tracks.cone_map import RADII, read_cones, road_between
 from tinyrace.tracks.ros_map import OccupancyMap, read_map
@@ -130,6 +130,8 @@ def _centerline(
         widths = np.full((len(loop.points), 2), config.default_width / 2)
     _check_length(loop.points, config.spacing, source, where, loop.table.path)
     circuit = Circuit.build(loop.points, widths, config.spacing)
+    width_key = None if loop.widths is not None else (source, f"{where}.default_width")
+    _check_folds(circuit, loop, width_key)
     return MetricTrack(
         "centerline",
         circuit,
@@ -182,6 +184,10 @@ def _ros_map(
             widths = np.column_stack((clearance, clearance))
         _check_length(loop.points, config.spacing, source, where, loop.table.path)
         circuit = Circuit.build(loop.points, widths, config.spacing)
+        if loop.widths is None:
+            circuit = _unfolded(circuit)
+        else:
+            _check_folds(circuit, loop, None)
     spawn = _ros_spawn(config, circuit, occupancy, where, source)
     corners = occupancy.to_world(
         np.array([0, 0, occupancy.shape[0] - 1, occupancy.shape[0] - 1]),
@@ -197,6 +203,42 @@ def _ros_map(
         walls=occupancy.wall_quads(),
         occupancy=occupancy,
     )
+
+
+def _check_folds(circuit: Circuit, loop: Loop, width_key: tuple[str, str] | None) -> None:
+    """Refuse a road wider to the inside of a curve than the curve's radius allows (it
+    would fold over itself), naming the file's line nearest the worst point, or the
+    ``default_width`` key (``width_key``: source, key) when the widths came from there."""
+    ratio = polyline.inner_width_over_radius(circuit.centerline, circuit.widths)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] <= MAX_INNER_WIDTH_OVER_RADIUS:
+        return
+    x, y = circuit.centerline[worst]
+    side = 1 if polyline.curvature(circuit.centerline)[worst] > 0 else 0
+    width = float(circuit.widths[worst, side])
+    radius = width / float(ratio[worst])
+    allowed = (
+        f"expected the road's width to the inside of a curve at most "
+        f"{MAX_INNER_WIDTH_OVER_RADIUS:g} x the curve's radius: at ({x:.2f}, {y:.2f}) m it is "
+        f"{width:.3g} m to the {('right', 'left')[side]} of a curve of radius {radius:.3g} m, so "
+        "the road's inner edge passes the curve's centre and the road folds over itself"
+    )
+    if width_key is not None:
+        source, key = width_key
+        raise ConfigError(Problem(source, key, 2 * width, allowed + "; give a narrower width"))
+    row = polyline.nearest_index(loop.points, circuit.centerline[worst])
+    value = f"{width:.3g} m to the {('right', 'left')[side]}"
+    raise ConfigError(Problem(loop.table.path, loop.table.where(row), value, allowed))
+
+
+def _unfolded(circuit: Circuit) -> Circuit:
+    """The circuit with its widths cut where a curve's radius is narrower (free space
+    measured around waypoints can be wider than the curve they turn), so that no tile folds."""
+    ratio = polyline.inner_width_over_radius(circuit.centerline, circuit.widths)
+    if ratio.max() <= 1.0:
+        return circuit
+    widths = circuit.widths / np.maximum(ratio, 1.0)[:, None]
+    return Circuit.build(circuit.centerline, widths, circuit.spacing)
 
 
 def _check_length(points: np.ndarray, spacing: float, source: str, where: str, path: str) -> None:

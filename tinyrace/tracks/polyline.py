@@ -80,6 +80,29 @@ def tiles(loop: np.ndarray, widths: np.ndarray) -> np.ndarray:
     return np.stack((left, right, np.roll(right, -1, axis=0), np.roll(left, -1, axis=0)), axis=1)
 
 
+def inner_width_over_radius(loop: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """(N,) the road's width to the inside of the curve at each point over the curve's
+    radius there, the radius measured over the arc of that width to each side (0 on a
+    straight). Above 1 the inner edge passes the curve's centre and the road folds over
+    itself; measured at the width's own scale, the small kinks of surveyed data at a
+    hairpin's apex count for little. ``widths`` (N, 2) = (to the right, to the left)."""
+    n = len(loop)
+    angle = np.unwrap(headings(loop))
+    close = angle[0] - angle[-1]
+    turn_total = angle[-1] - angle[0] + (close + math.pi) % (2 * math.pi) - math.pi
+    spacing = perimeter(loop) / n
+    wider = widths.max(axis=1)
+    k = np.clip(np.ceil(wider / spacing).astype(np.int64), 1, max(n // 4, 1))
+    index = np.arange(n)
+
+    def unwrapped(at: np.ndarray) -> np.ndarray:  # the heading at ``at`` mod n, laps counted
+        return np.asarray(angle[at % n] + (at // n) * turn_total)
+
+    curve = (unwrapped(index + k) - unwrapped(index - k)) / (2 * k * spacing)  # [1/m], left > 0
+    inner = np.where(curve > 0, widths[:, 1], widths[:, 0])
+    return np.asarray(inner * np.abs(curve))
+
+
 def signed_area(loop: np.ndarray) -> float:
     """Shoelace area: positive for a counter-clockwise loop (y up)."""
     x, y = loop[:, 0], loop[:, 1]
