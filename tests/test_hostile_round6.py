@@ -248,3 +248,29 @@ def test_a_message_naming_a_key_names_it_as_written(tmp_path):
     ((source, _, allowed),) = problems_of(caught)
     assert source == str(tmp_path / "c.csv")
     assert "3 x track.spacing (90 m)" in allowed and "tracks[0]" not in allowed
+
+
+@pytest.mark.parametrize(
+    ("keys", "key"),
+    [
+        ({"track": {"type": "centerline", "file": "nope.csv"}}, "track.file"),
+        ({"tracks": [{"type": "centerline", "file": "nope.csv"}]}, "tracks[0].file"),
+        ({"track": {"type": "centerline", "file": "c.csv", "spacing": -1}}, "track.spacing"),
+    ],
+)
+def test_a_key_given_to_gym_make_is_named_as_given(tmp_path, monkeypatch, keys, key):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "c.csv").write_text(circle_rows(60.0))
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", **keys)
+    assert [(p.source, p.path) for p in caught.value.problems] == [("<kwargs>", key)]
+
+
+def test_a_key_of_an_experiments_env_section_is_named_as_written(tmp_path, capsys):
+    from tinyrace.cli import main
+
+    (tmp_path / "e.yaml").write_text(
+        "env:\n  track: {type: centerline, file: nope.csv}\nepisodes: 1\n"
+    )
+    assert main(["run", str(tmp_path / "e.yaml")]) == 2
+    assert "e.yaml: env.track.file: got '" in capsys.readouterr().err

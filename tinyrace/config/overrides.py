@@ -37,9 +37,11 @@ def blame(
     overrides' source when its key path lies in an override (or no file was read); the
     others with their list sections named as the file writes them (``spelling``)."""
     renamed = []
+    laid = spelling_of(overrides.keys)  # the overrides' own spelling (``env: {track: ...}``)
     for p in problems:
         if p.source == source and (source == DEFAULTS or _overridden(p.path, overrides.keys)):
-            p = Problem(overrides.source, f"{overrides.prefix}{p.path}", p.value, p.allowed)
+            path = f"{overrides.prefix}{as_written(p.path, laid)}"
+            p = Problem(overrides.source, path, p.value, as_written(p.allowed, laid))
         elif spelling:  # a message of a data file may name the key that named the file
             path = as_written(p.path, spelling) if p.source == source else p.path
             p = Problem(p.source, path, p.value, as_written(p.allowed, spelling))
