@@ -156,6 +156,14 @@ def test_the_id_works_in_sb3_subprocess_workers(start_method):
         ({"env_kwargs": [1, 2]}, "env_kwargs: got [1, 2]; expected a dict"),
         ({"env_kwargs": {"workers": 3}}, "'workers' is an argument of make_vec_env itself"),
         ({"env_id": 123}, "env_id: got 123; expected an env id"),
+        ({"monitor_dir": "logs"}, "monitor_dir: not taken by tinyrace.sb3.make_vec_env: wrap"),
+        ({"monitor_kwargs": {}}, "monitor_kwargs: not taken"),
+        ({"vec_env_cls": SubprocVecEnv}, "vec_env_cls: not taken"),
+        ({"vec_env_kwargs": {"start_method": "spawn"}}, "start method is context='spawn'"),
+        ({"start_index": -1}, "start_index: got -1; expected a whole number >= 0"),
+        ({"start_index": 1.5}, "start_index: got 1.5"),
+        ({"wrapper_class": 3}, "wrapper_class: got 3; expected a wrapper class"),
+        ({"wrapper_kwargs": [1]}, "wrapper_kwargs: got [1]; expected a dict"),
     ],
 )
 def test_make_vec_env_names_a_bad_argument_before_making_envs(kwargs, said, monkeypatch):
@@ -166,6 +174,44 @@ def test_make_vec_env_names_a_bad_argument_before_making_envs(kwargs, said, monk
         make_vec_env(**arguments)
     assert said in str(caught.value)
     assert made == []  # no env, no worker
+
+
+@pytest.mark.parametrize("workers", [0, 1])
+def test_make_vec_env_takes_sb3s_wrapper_class_and_start_index(workers):
+    """As SB3's make_vec_env: each env wrapped in wrapper_class(env, **wrapper_kwargs), the
+    envs seeded from seed whatever start_index; the env's keywords reach the env."""
+    vec = make_vec_env(
+        "tinyrace/CarRacing-v0",
+        n_envs=2,
+        workers=workers,
+        seed=3,
+        start_index=2,
+        wrapper_class=gym.wrappers.GrayscaleObservation,
+        wrapper_kwargs={"keep_dim": True},
+        max_episode_steps=EPISODE,
+    )
+    sb3 = sb3_make_vec_env(
+        "tinyrace/CarRacing-v0",
+        n_envs=2,
+        seed=3,
+        start_index=2,
+        wrapper_class=gym.wrappers.GrayscaleObservation,
+        wrapper_kwargs={"keep_dim": True},
+        env_kwargs={"max_episode_steps": EPISODE},
+    )
+    try:
+        assert vec.observation_space == sb3.observation_space
+        assert vec.observation_space.shape == (96, 96, 1)
+        same(sb3.reset(), vec.reset(), "reset")
+        for _ in range(EPISODE + 2):  # across the time limit's reset
+            actions = np.tile(np.array([0.2, 0.5, 0.0], np.float32), (2, 1))
+            expected, got = sb3.step(actions), vec.step(actions)
+            same(expected[0], got[0], "observations")
+            same(expected[1], got[1], "rewards")
+            same(expected[2], got[2], "dones")
+    finally:
+        vec.close()
+        sb3.close()
 
 
 @pytest.fixture

@@ -163,26 +163,91 @@ def make_vec_env(
     workers: int | None = None,
     env_kwargs: dict[str, Any] | None = None,
     parent_steps: bool | None = None,
+    *,
+    start_index: int = 0,
+    wrapper_class: Callable[..., gym.Env] | None = None,
+    wrapper_kwargs: dict[str, Any] | None = None,
     **batch_kwargs: Any,
 ) -> BatchVecEnv:
     """SB3's ``make_vec_env`` for the fast path: ``n_envs`` envs of ``env_id`` (an id for
     ``gym.make`` or a function that makes the env) in ``workers`` processes (by default a
     slice of them per core, this process stepping one: ``tinyrace.vector.make.layout``;
-    0: all in this process), seeded ``seed``, ``seed + 1``, ... at the first reset. Wrap it
-    in ``VecMonitor`` for SB3's episode statistics (per-env ``Monitor`` wrappers would take
-    the envs off the batched physics)."""
+    0: all in this process), seeded ``seed``, ``seed + 1``, ... at the first reset, each
+    wrapped in ``wrapper_class(env, **wrapper_kwargs)`` when given (as SB3 does; such an env
+    steps on its own, off the batched physics). ``start_index`` is taken as SB3 takes it,
+    where it numbers the Monitor files and not the envs' seeds. The other keywords
+    are ``make_batch``'s (``context="spawn"``, ``cores``) or, with an id, the env's. Wrap the
+    result in ``VecMonitor`` for SB3's episode statistics: SB3's per-env ``Monitor``
+    (``monitor_dir``) and its own VecEnv classes (``vec_env_cls``) are not made here."""
     _check_make_args(env_id, seed, env_kwargs)
+    _check_sb3_args(start_index, wrapper_class, wrapper_kwargs, batch_kwargs)
     workers, parent_steps = layout(n_envs, workers, parent_steps)
     batch_kwargs["parent_steps"] = parent_steps
-    if isinstance(env_id, str):
+    if isinstance(env_id, str) and wrapper_class is None:
         venv = make_batch(env_id, n_envs, workers, **batch_kwargs, **(env_kwargs or {}))
     else:
-        maker = functools.partial(env_id, **(env_kwargs or {}))
-        venv = BatchVectorEnv([maker] * n_envs, workers=workers, **batch_kwargs)
+        own = {k: v for k, v in batch_kwargs.items() if k in OWN_ARGUMENTS}
+        kwargs = {**{k: v for k, v in batch_kwargs.items() if k not in own}, **(env_kwargs or {})}
+        if kwargs and not isinstance(env_id, str):
+            raise ValueError(
+                f"{sorted(kwargs)[0]!r}: not an argument of make_vec_env; with a function as "
+                "env_id, the env's own arguments go in env_kwargs"
+            )
+        maker = functools.partial(_made, env_id, kwargs, wrapper_class, wrapper_kwargs or {})
+        venv = BatchVectorEnv([maker] * n_envs, workers=workers, **own)
     vec = BatchVecEnv(venv)
     if seed is not None:
         vec.seed(seed)
     return vec
+
+
+# SB3's make_vec_env arguments not taken here, and what to do instead
+_NOT_HERE = {
+    "monitor_dir": "wrap the result in VecMonitor(venv, filename=...) for a monitor file "
+    "(a Monitor per env would take the envs off the batched physics)",
+    "monitor_kwargs": "wrap the result in VecMonitor(venv, ...) with those arguments",
+    "vec_env_cls": "this VecEnv is tinyrace's own (BatchVecEnv); for SB3's DummyVecEnv or "
+    "SubprocVecEnv use stable_baselines3.common.env_util.make_vec_env with the id "
+    "'tinyrace:tinyrace/CarRacing-v0'",
+    "vec_env_kwargs": "the worker processes' start method is context='spawn' (or "
+    "'forkserver', 'fork'); the other options are make_batch's (docs/vector.md)",
+}
+
+
+def _check_sb3_args(
+    start_index: object, wrapper_class: object, wrapper_kwargs: object, others: Mapping[str, Any]
+) -> None:
+    """SB3's own arguments: those taken here checked, those not taken named, before any env
+    or worker is made (else they would reach the env's constructor as its arguments)."""
+    for name in others:
+        if name in _NOT_HERE:
+            raise ValueError(f"{name}: not taken by tinyrace.sb3.make_vec_env: {_NOT_HERE[name]}")
+    if isinstance(start_index, bool) or not isinstance(start_index, int | np.integer):
+        raise ValueError(f"start_index: got {shown(start_index)}; expected a whole number >= 0")
+    if start_index < 0:
+        raise ValueError(f"start_index: got {start_index}; expected a whole number >= 0")
+    if wrapper_class is not None and not callable(wrapper_class):
+        raise ValueError(
+            f"wrapper_class: got {shown(wrapper_class)}; expected a wrapper class or a function "
+            "that takes the env (and wrapper_kwargs) and returns the wrapped env"
+        )
+    if wrapper_kwargs is not None and not isinstance(wrapper_kwargs, Mapping):
+        raise ValueError(
+            f"wrapper_kwargs: got {shown(wrapper_kwargs)}; expected a dict of the wrapper's "
+            "keyword arguments"
+        )
+
+
+def _made(
+    env_id: str | Callable[..., gym.Env],
+    kwargs: dict[str, Any],
+    wrapper_class: Callable[..., gym.Env] | None,
+    wrapper_kwargs: dict[str, Any],
+) -> gym.Env:
+    """One env, wrapped as asked (module level: a worker process unpickles it by reference,
+    importing tinyrace, which registers the ids)."""
+    env = gym.make(env_id, **kwargs) if isinstance(env_id, str) else env_id(**kwargs)
+    return env if wrapper_class is None else wrapper_class(env, **wrapper_kwargs)
 
 
 def _check_seed(seed: object) -> None:
