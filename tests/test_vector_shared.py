@@ -27,7 +27,7 @@ from vector_doubles import Blinking, Chatty, Doomed
 
 import tinyrace  # registers the env ids; its folder for the scripts run below
 from tests.test_batch_vector import EPISODE, FACTORIES, assert_same, run
-from tinyrace.vector import BatchVectorEnv, make_batch
+from tinyrace.vector import BatchVectorEnv, make_batch, shared
 from tinyrace.vector.pool import AsyncBatch
 from tinyrace.vector.records import (
     INFO_BYTES,
@@ -324,3 +324,26 @@ def test_async_batches_give_each_env_its_sync_trajectory():
     with pytest.raises(ValueError, match="every env of worker 0"):
         pool.send(np.zeros((1, 3), np.float32), [0])
     pool.close()
+
+
+def test_a_worker_attaches_the_block_without_registering_it(monkeypatch):
+    """Only the parent, which makes and unlinks the block, registers it with the resource
+    tracker; a worker's registration could outlive the parent's unlink ("leaked
+    shared_memory ... No such file" at exit)."""
+    from multiprocessing import resource_tracker
+
+    registered = []
+    monkeypatch.setattr(resource_tracker, "register", lambda name, rtype: registered.append(name))
+    monkeypatch.setattr(resource_tracker, "unregister", lambda name, rtype: None)
+    block = shared.create_block(64)
+    try:
+        assert registered == [block._name]  # the parent's, on creation
+        attached = shared.attach_block(block.name)
+        attached.buf[0] = 7
+        assert block.buf[0] == 7 and registered == [block._name]
+        attached.close()
+        shared.attach_block(block.name).close()
+        assert registered == [block._name]
+        assert resource_tracker.register is not shared._not_registered  # put back
+    finally:
+        shared.free_block(block)

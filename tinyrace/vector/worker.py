@@ -25,7 +25,6 @@ import time
 import traceback
 from collections.abc import Callable
 from multiprocessing.connection import Connection
-from multiprocessing.shared_memory import SharedMemory
 from multiprocessing.synchronize import Semaphore
 from typing import Any
 
@@ -223,7 +222,7 @@ def work(
     if core is not None:
         os.sched_setaffinity(0, {core})  # the parent checked it is one of its cores
     name, layout = block
-    memory = SharedMemory(name=name)
+    memory = shared.attach_block(name)
     views = layout.views(memory.buf)
     try:
         envs = EnvSlice(env_fns, first, views, batch_physics, numpy_from)
