@@ -152,3 +152,105 @@ def test_an_env_error_is_reported_not_raised_and_ends_the_episode():
 
 def _kwargs(env: train.TrainEnv) -> dict:
     return {"env_id": env.env_id, "kwargs": env.kwargs}
+
+
+# -- hostile input, sixth round ----------------------------------------------------------------
+
+
+def test_force_never_replaces_a_file_that_is_no_model(here: Path, capsys):
+    """An experiment called e.zip, or a link to the experiment, named as --out with --force:
+    a model is a zip archive, and train replaces only models."""
+    experiment = "env: {environment: f1tenth_loop}\nepisodes: 1\n"
+    (here / "e.zip").write_text(experiment)
+    (here / "exp.yaml").write_text(experiment)
+    (here / "m.zip").symlink_to(here / "exp.yaml")
+    for out in ("e.zip", "m.zip"):
+        assert cli.main(["train", "exp.yaml", "--out", out, "--force"]) == 2
+        assert "this file is no zip archive" in capsys.readouterr().err
+    assert (here / "e.zip").read_text() == (here / "exp.yaml").read_text() == experiment
+    (here / "model.zip").write_bytes(_zip_bytes())
+    assert train.model_file("model.zip", force=True) == Path("model.zip")
+
+
+def _zip_bytes() -> bytes:
+    import io
+    import zipfile
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        archive.writestr("data", "{}")
+    return buffer.getvalue()
+
+
+def test_out_through_a_dangling_link_or_into_proc_is_refused_before_training(here: Path):
+    (here / "dangling.zip").symlink_to(here / "missing" / "x.zip")
+    with pytest.raises(ConfigError) as caught:
+        train.model_file("dangling.zip", force=True)
+    assert "a link to" in caught.value.problems[0].allowed
+    assert "which is missing" in caught.value.problems[0].allowed
+    if Path("/proc/self").is_dir():  # Linux: root may write in /proc by its permissions
+        with pytest.raises(ConfigError) as caught:
+            train.model_file("/proc/m.zip", force=False)
+        assert "expected a folder where a file can be made: '/proc'" in str(caught.value)
+
+
+def test_an_env_whose_episodes_never_end_is_refused_unless_given_a_limit(tmp_path: Path):
+    (tmp_path / "exp.yaml").write_text(
+        "env: {environment: f1tenth_loop, cameras: [], sensors: [{id: s, type: state}], "
+        "sim: {step_limit: null}}\nmax_steps: null\n"
+    )
+    with pytest.raises(ConfigError) as caught:
+        train.train_env(tmp_path / "exp.yaml")
+    assert "no step limit" in caught.value.problems[0].allowed
+    assert "--max-episode-steps" in caught.value.problems[0].allowed
+    limited = train.train_env(tmp_path / "exp.yaml", max_episode_steps=20)
+    assert limited.kwargs["max_episode_steps"] == 20
+
+
+@pytest.mark.parametrize(
+    ("camera", "observation", "said"),
+    [
+        ("[8, 8]", "box", "'observation' is 8 x 8 px"),
+        ("[200, 1]", "box", "'observation' is 1 x 200 px"),
+        ("[8, 8]", "dict", "'c' is 8 x 8 px"),
+    ],
+)
+def test_a_picture_smaller_than_the_cnn_takes_is_refused(tmp_path, camera, observation, said):
+    (tmp_path / "exp.yaml").write_text(
+        f"env: {{environment: formula_student, observation: {observation}, "
+        f"cameras: [{{id: c, resolution: {camera}}}]}}\nmax_steps: 50\n"
+    )
+    with pytest.raises(ConfigError) as caught:
+        train.train_env(tmp_path / "exp.yaml")
+    assert said in caught.value.problems[0].allowed
+    assert "at least 36 x 36 px" in caught.value.problems[0].allowed
+    (tmp_path / "exp.yaml").write_text(
+        "env: {environment: formula_student, observation: box, "
+        "cameras: [{id: c, resolution: [36, 36]}]}\nmax_steps: 50\n"
+    )
+    assert train.train_env(tmp_path / "exp.yaml").name == "exp"
+
+
+@pytest.mark.parametrize(
+    ("timesteps", "envs"), [(2000, 8), (3000, 8), (32, 2), (20_000, 8), (1000, 7), (999, 3)]
+)
+def test_minibatches_split_the_rollout_evenly(timesteps: int, envs: int):
+    settings = train.ppo_settings(timesteps, envs)
+    rollout = settings["n_steps"] * envs
+    assert rollout % settings["batch_size"] == 0 and settings["batch_size"] <= 256
+    trained = train.trained_steps(timesteps, envs)
+    assert trained % rollout == 0 and timesteps <= trained < timesteps + rollout
+
+
+@pytest.mark.parametrize("seed", ["1_0", "١", "１", "4294967296", "-1", " "])
+def test_train_seeds_are_ascii_digits_within_numpys_range(here: Path, capsys, seed: str):
+    assert cli.main(["train", "--seed", seed]) == 2
+    assert "argument --seed: got" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("option", "value"), [("--seed", "1_0"), ("--seed", "١"), ("--episodes", "１")]
+)
+def test_run_counts_are_ascii_digits(capsys, option: str, value: str):
+    assert cli.main(["run", option, value]) == 2
+    assert f"argument {option}: got {value!r}" in capsys.readouterr().err

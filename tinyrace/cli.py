@@ -6,6 +6,7 @@ import argparse
 import dataclasses
 import json
 import os
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -83,10 +84,9 @@ def _count(low: int, what: str, high: int | None = None) -> Callable[[str], int]
     """An argparse type: a whole number from ``low`` (to ``high``)."""
 
     def parse(text: str) -> int:
-        try:
-            value = int(text) if len(text) <= 40 else None
-        except ValueError:
-            value = None
+        # ASCII digits only: int() also reads 1_0 as 10 and other scripts' digits (١)
+        digits = text.strip()
+        value = int(digits) if len(digits) <= 40 and re.fullmatch(r"[+-]?[0-9]+", digits) else None
         if value is None or value < low or (high is not None and value > high):
             raise argparse.ArgumentTypeError(f"got {_short(text)!r}; expected {what}")
         return value

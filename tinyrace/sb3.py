@@ -187,12 +187,13 @@ def make_vec_env(
         venv = make_batch(env_id, n_envs, workers, **batch_kwargs, **(env_kwargs or {}))
     else:
         own = {k: v for k, v in batch_kwargs.items() if k in OWN_ARGUMENTS}
-        kwargs = {**{k: v for k, v in batch_kwargs.items() if k not in own}, **(env_kwargs or {})}
-        if kwargs and not isinstance(env_id, str):
+        extra = {k: v for k, v in batch_kwargs.items() if k not in own}
+        if extra and not isinstance(env_id, str):
             raise ValueError(
-                f"{sorted(kwargs)[0]!r}: not an argument of make_vec_env; with a function as "
+                f"{sorted(extra)[0]!r}: not an argument of make_vec_env; with a function as "
                 "env_id, the env's own arguments go in env_kwargs"
             )
+        kwargs = {**extra, **(env_kwargs or {})}
         maker = functools.partial(_made, env_id, kwargs, wrapper_class, wrapper_kwargs or {})
         venv = BatchVectorEnv([maker] * n_envs, workers=workers, **own)
     vec = BatchVecEnv(venv)

@@ -25,6 +25,8 @@ import multiprocessing
 import os
 import signal
 import sys
+import tempfile
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +51,8 @@ TRAIN_EXTRA = (
 FRAMES = 4  # image observations stacked, so that the policy sees speed and turning
 PPO_SETTINGS = {"n_steps": 256, "batch_size": 256, "learning_rate": 3e-4}
 MIN_STEPS = 16  # the shortest rollout per env (a very short training run)
+MAX_TRAIN_SEED = 2**32 - 1  # SB3 seeds numpy's global generator with it (np.random.seed)
+MIN_CNN_SIDE = 36  # [px] the smallest image SB3's NatureCNN takes (8/4, 4/2 and 3/1 kernels)
 FAILED = "tinyrace_env_error"  # the info key by which a worker's env reports its exception
 INTERRUPTED = 130  # the exit status after Ctrl-C, as for ``tinyrace run``
 
@@ -77,7 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser, count: Callable[..., Any]) ->
         help="an experiment or track, as run takes it (default: %(default)s, a lidar and "
         "the car's state on the F1TENTH loop; carracing: CarRacing's pixels, far slower)",
     )
-    whole, positive = count(0, "a whole number >= 0"), count(1, "a whole number >= 1")
+    positive = count(1, "a whole number >= 1")
     parser.add_argument(
         "--timesteps", type=positive, default=20_000, help="env steps (default: %(default)s)"
     )
@@ -88,12 +92,16 @@ def add_arguments(parser: argparse.ArgumentParser, count: Callable[..., Any]) ->
     parser.add_argument(
         "--subprocesses",
         action="store_true",
-        help="step each env in a worker process of its own (default: all in this process, "
-        "the faster on few cores)",
+        help="split the envs into a slice per core, this process stepping one and a worker "
+        "process each of the others (default: all in this process, the faster on few cores)",
     )
     parser.add_argument(
         "--seed",
-        type=whole,
+        type=count(
+            0,
+            f"a whole number from 0 to {MAX_TRAIN_SEED} (numpy's seeds, which SB3 uses)",
+            MAX_TRAIN_SEED,
+        ),
         default=0,
         help="seeds the envs (env i: seed + i) and the network; evaluation from seed + 1000 "
         "(default: %(default)s)",
@@ -121,15 +129,23 @@ def add_arguments(parser: argparse.ArgumentParser, count: Callable[..., Any]) ->
 
 def model_file(name: str, force: bool) -> Path:
     """``--out`` checked before training: a .zip file path (SB3 adds .zip to any other
-    name), not a folder, and not an existing file unless ``force``."""
+    name), not a folder, not an existing file unless ``force``, and never a file that is no
+    model (an experiment file called e.zip, a link to one): a model is a zip archive."""
     path = Path(name)
     allowed = None
     if path.suffix != ".zip":
         allowed = "expected a file name ending in .zip"
     elif path.is_dir():
         allowed = "expected a .zip file name, not a folder"
+    elif path.is_symlink() and not path.exists():
+        allowed = f"expected a file name: this is a link to {os.readlink(path)!r}, which is missing"
     elif path.exists() and not force:
         allowed = "expected a new file name: this one exists (or --force to replace it)"
+    elif path.exists() and not zipfile.is_zipfile(path):
+        allowed = (
+            "expected a new file name or a model to replace: this file is no zip archive "
+            "(tinyrace train replaces only models, even with --force)"
+        )
     else:
         allowed = _unwritable(path)
     if allowed is not None:
@@ -139,13 +155,19 @@ def model_file(name: str, force: bool) -> Path:
 
 def _unwritable(path: Path) -> str | None:
     """Why the model file cannot be written at ``path`` (None if it can): its nearest
-    existing folder above must be a folder this user may write in (the folders between are
-    made at the save)."""
+    existing folder above must be a folder where this user can make a file (the folders
+    between are made at the save); tried with a temporary file, as permissions alone do not
+    tell (``/proc`` lets root through)."""
     existing = next(p for p in (path.parent, *path.parent.parents) if p.exists())
     if not existing.is_dir():
         return f"expected a path in folders: {str(existing)!r} is a file"
-    if not os.access(existing, os.W_OK | os.X_OK):
-        return f"expected a folder this user may write in: {str(existing)!r} is not one"
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as exc:
+        return (
+            f"expected a folder where a file can be made: {str(existing)!r} is not ({exc.strerror})"
+        )
     return None
 
 
@@ -183,7 +205,41 @@ def train_env(
         raise ConfigError(Problem("<command line>", "NAME_OR_PATH", str(target), allowed))
     steps = max_episode_steps or experiment.config.max_steps
     limit = {"max_episode_steps": steps} if steps is not None else {}
-    return TrainEnv(TINYRACE_ID, {**experiment.env_kwargs, **limit}, experiment.name)
+    chosen = TrainEnv(TINYRACE_ID, {**experiment.env_kwargs, **limit}, experiment.name)
+    problem = _untrainable(chosen)
+    if problem:
+        raise ConfigError(Problem("<command line>", "NAME_OR_PATH", str(target), problem))
+    return chosen
+
+
+def _untrainable(env: TrainEnv) -> str | None:
+    """Why PPO cannot train on ``env`` (None if it can): an episode without a step limit
+    (the evaluation before training would never end), or a picture smaller than the CNN's
+    kernels take."""
+    made = gym.make(env.env_id, **env.kwargs)
+    try:
+        limit = made.spec.max_episode_steps if made.spec is not None else None
+        limit = limit or made.unwrapped.config.sim.step_limit  # type: ignore[attr-defined]
+        space = made.observation_space
+    finally:
+        made.close()
+    if not limit:
+        return (
+            "expected episodes that end: this env has no step limit (sim.step_limit: null) and "
+            "the experiment no max_steps, so an evaluation episode could run for ever; give "
+            "--max-episode-steps N"
+        )
+    images = space.spaces if isinstance(space, spaces.Dict) else {"observation": space}
+    for key, image in images.items():
+        shape = image.shape or ()
+        if _image(image) and min(shape[:2]) < MIN_CNN_SIDE:
+            height, width = shape[:2]
+            return (
+                f"expected pictures of at least {MIN_CNN_SIDE} x {MIN_CNN_SIDE} px, the "
+                f"smallest tinyrace train's CNN (SB3's NatureCNN) takes: {key!r} is "
+                f"{width} x {height} px (its camera's resolution)"
+            )
+    return None
 
 
 def policy_for(space: spaces.Space[Any]) -> str:
@@ -207,10 +263,19 @@ def has_images(space: spaces.Space[Any]) -> bool:
 
 
 def ppo_settings(timesteps: int, envs: int) -> dict[str, Any]:
-    """PPO's rollout fitted to a short run: never more steps per env than the run has."""
+    """PPO's rollout fitted to a short run: never more steps per env than the run has; its
+    minibatches the largest that split the rollout evenly (SB3 warns of a short last one)."""
     n_steps = max(MIN_STEPS, min(PPO_SETTINGS["n_steps"], math.ceil(timesteps / envs)))
-    batch_size = min(PPO_SETTINGS["batch_size"], n_steps * envs)
+    rollout = n_steps * envs
+    largest = int(PPO_SETTINGS["batch_size"])
+    batch_size = max(b for b in range(1, largest + 1) if rollout % b == 0)
     return {**PPO_SETTINGS, "n_steps": n_steps, "batch_size": batch_size}
+
+
+def trained_steps(timesteps: int, envs: int) -> int:
+    """The env steps PPO takes for ``timesteps``: whole rollouts of n_steps x envs."""
+    rollout = int(ppo_settings(timesteps, envs)["n_steps"]) * envs
+    return math.ceil(timesteps / rollout) * rollout
 
 
 def vector_env(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -> VecEnv:
@@ -348,7 +413,8 @@ def learn(model: BaseAlgorithm, timesteps: int, progress: bool = True) -> BaseAl
     EnvFailed. Ctrl-C (KeyboardInterrupt) goes through: the model keeps what it learnt."""
     from tinyrace.train.progress import Progress
 
-    bar = Progress(timesteps, raise_failure, progress)
+    rollout = getattr(model, "n_steps", 1) * model.n_envs  # PPO trains whole rollouts
+    bar = Progress(math.ceil(timesteps / rollout) * rollout, raise_failure, progress)
     try:
         return model.learn(total_timesteps=timesteps, callback=bar)
     finally:
@@ -396,7 +462,11 @@ def run_command(args: argparse.Namespace) -> int:
     if lacking:
         print(f"tinyrace: error: {lacking}", file=sys.stderr)
         return 2
-    print(f"tinyrace: PPO on {env.name}: {args.timesteps} steps, {args.envs} envs", flush=True)
+    trained = trained_steps(args.timesteps, args.envs)
+    rollout = ppo_settings(args.timesteps, args.envs)["n_steps"]
+    whole = f" ({trained} trained: whole rollouts of {rollout} x {args.envs})"
+    asked = f"{args.timesteps} steps{whole if trained != args.timesteps else ''}"
+    print(f"tinyrace: PPO on {env.name}: {asked}, {args.envs} envs", flush=True)
     episodes = f"{args.eval_episodes} episode{'s' if args.eval_episodes > 1 else ''}"
     model = new_model(env, args.envs, args.seed, args.timesteps, args.subprocesses)
     try:
