@@ -12,6 +12,7 @@ names the section as the file writes it (``track.file`` under ``track: {...}``).
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 import cv2
@@ -274,3 +275,115 @@ def test_a_key_of_an_experiments_env_section_is_named_as_written(tmp_path, capsy
     )
     assert main(["run", str(tmp_path / "e.yaml")]) == 2
     assert "e.yaml: env.track.file: got '" in capsys.readouterr().err
+
+
+# -- the campaign on the training surface ----------------------------------------------------
+
+EXPERIMENT = "env: {environment: formula_student}\nepisodes: 1\nmax_steps: 5\n"
+QUIET = ["--quiet"]
+
+
+def run_cli(argv: list[str], capsys) -> tuple[int, str]:
+    from tinyrace.cli import main
+
+    code = main(argv)
+    return code, capsys.readouterr().err
+
+
+def test_an_experiment_whose_name_is_not_utf8_writes_its_results_and_report(tmp_path, capsys):
+    name = os.fsdecode(b"caf\xe9.yaml")
+    (tmp_path / name).write_text(EXPERIMENT + "output: {video: false}\n")
+    code, err = run_cli(["run", str(tmp_path / name), "-o", str(tmp_path / "runs"), *QUIET], capsys)
+    assert code == 0, err
+    (run,) = (tmp_path / "runs").iterdir()
+    assert (run / "results.json").is_file()
+    assert "caf\\udce9.yaml" in (run / "report.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("driver", "said"),
+    [
+        ("sys:exit", "sys:exit with driver_args {} raised SystemExit"),
+        ("mine:exits", "mine:exits with driver_args {} raised SystemExit: 0"),
+        ("mine:policy_exits", "act() at step 0 raised SystemExit: 0"),
+        ("mine:policy_closes", "act() at step 0 raised GeneratorExit"),
+    ],
+)
+def test_a_driver_that_exits_is_a_driver_error_not_a_silent_success(tmp_path, capsys, driver, said):
+    (tmp_path / "mine.py").write_text(
+        "import sys\n"
+        "def exits():\n    raise SystemExit(0)\n"
+        "def policy_exits():\n    return lambda observation, info: sys.exit(0)\n"
+        "def policy_closes():\n    def act(observation, info):\n        raise GeneratorExit\n"
+        "    return act\n"
+    )
+    (tmp_path / "e.yaml").write_text(EXPERIMENT + f"driver: {driver}\noutput: {{video: false}}\n")
+    code, err = run_cli(
+        ["run", str(tmp_path / "e.yaml"), "-o", str(tmp_path / "r"), *QUIET], capsys
+    )
+    assert code == 2
+    assert "e.yaml: driver: got" in err and said in err
+
+
+@pytest.mark.parametrize(
+    ("args", "key", "said"),
+    [
+        ("{offset: .nan}", "driver_args.offset", "got nan; expected a finite number"),
+        ("{offset: .inf}", "driver_args.offset", "got inf; expected a finite number"),
+        ("{top_speed: 0}", "driver_args.top_speed", "expected a finite number > 0"),
+        ("{corner_gas_cut: 2}", "driver_args.corner_gas_cut", "<= 1"),
+    ],
+)
+def test_a_built_in_drivers_argument_is_named_under_driver_args(tmp_path, capsys, args, key, said):
+    (tmp_path / "e.yaml").write_text(EXPERIMENT + f"driver: centerline\ndriver_args: {args}\n")
+    code, err = run_cli(
+        ["run", str(tmp_path / "e.yaml"), "-o", str(tmp_path / "r"), *QUIET], capsys
+    )
+    assert code == 2
+    assert f"e.yaml: {key}: " in err and said in err
+
+
+def test_an_environment_that_is_no_track_file_is_named_at_its_key(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("secret words\n" * 100)
+    (tmp_path / "e.yaml").write_text("env: {environment: notes.txt}\nepisodes: 1\n")
+    code, err = run_cli(["run", str(tmp_path / "e.yaml"), *QUIET], capsys)
+    assert code == 2
+    assert "e.yaml: env.environment: got 'notes.txt'" in err
+    assert "holds a text of 1,299 characters, not a mapping" in err
+    assert "secret" not in err
+
+
+def test_make_vec_takes_gymnasiums_autoreset_mode_next_step_only():
+    from gymnasium.vector import AutoresetMode
+
+    for accepted in (AutoresetMode.NEXT_STEP, "NextStep"):
+        vector = gym.make_vec(
+            "tinyrace/CarRacing-v0",
+            2,
+            vectorization_mode="vector_entry_point",
+            workers=0,
+            autoreset_mode=accepted,
+        )
+        assert vector.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+        vector.close()
+    for refused in (AutoresetMode.SAME_STEP, AutoresetMode.DISABLED, "bogus"):
+        with pytest.raises(ConfigError) as caught:
+            gym.make_vec(
+                "tinyrace/CarRacing-v0",
+                2,
+                vectorization_mode="vector_entry_point",
+                workers=0,
+                autoreset_mode=refused,
+            )
+        ((source, key, allowed),) = problems_of(caught)
+        assert (source, key) == ("<make_vec arguments>", "autoreset_mode")
+        assert "NEXT_STEP" in allowed
+
+
+def test_a_run_folder_where_no_file_can_be_made_is_named_before_running(tmp_path, capsys):
+    if not Path("/proc/self").is_dir():
+        pytest.skip("needs Linux's /proc (root may write there by its permissions)")
+    (tmp_path / "e.yaml").write_text(EXPERIMENT + "output: {dir: /proc/tinyrace_runs}\n")
+    code, err = run_cli(["run", str(tmp_path / "e.yaml"), *QUIET], capsys)
+    assert code == 2
+    assert "output.dir (run folders): '/proc/tinyrace_runs': expected a folder where a file" in err

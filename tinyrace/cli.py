@@ -257,6 +257,7 @@ def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
 
 def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
     """``--out`` checked: a folder, and (unless ``force``) not inside a track folder."""
+    from tinyrace.experiment.files import unmakeable
     from tinyrace.validate import system_reason, track_folder_holding
 
     path = Path(out if out is not None else default)
@@ -270,6 +271,9 @@ def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
             f"{where}: {_short(str(path))!r} is no folder the system can make "
             f"({system_reason(exc)})"
         ) from None
+    unmade = unmakeable(path / "probe")  # the run folders go inside it
+    if unmade is not None:
+        raise UsageError(f"{where}: {_short(str(path))!r}: {unmade}")
     if inside is not None and not force:
         raise UsageError(
             f"{where}: {str(path)!r} lies inside the track folder {str(inside)!r}; "

@@ -37,6 +37,7 @@ from stable_baselines3.common.vec_env.base_vec_env import (
 from tinyrace.errors import shown
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.arguments import env_indices
+from tinyrace.vector.failures import check_autoreset
 from tinyrace.vector.make import layout
 
 # the vector env's own arguments: never an env's keyword arguments
@@ -187,6 +188,7 @@ def make_vec_env(
         venv = make_batch(env_id, n_envs, workers, **batch_kwargs, **(env_kwargs or {}))
     else:
         own = {k: v for k, v in batch_kwargs.items() if k in OWN_ARGUMENTS}
+        check_autoreset(own.pop("autoreset_mode", "NextStep"))  # make_batch's, not the env's
         extra = {k: v for k, v in batch_kwargs.items() if k not in own}
         if extra and not isinstance(env_id, str):
             raise ValueError(

@@ -24,6 +24,7 @@ from tinyrace.config.overrides import (
 )
 from tinyrace.config.race import inherited, lay_cars_over_car, resolve_race_cars
 from tinyrace.config.schema import EnvConfig
+from tinyrace.config.yaml_file import document_kind
 from tinyrace.errors import ConfigError, Problem, did_you_mean
 from tinyrace.examples import find_track, track_names
 
@@ -116,11 +117,8 @@ def _read_source(
     if raw is None:
         raw = {}
     if not isinstance(raw, Mapping):
-        raise ConfigError(
-            Problem(
-                str(path), "", raw, "expected a YAML mapping of sections (sim, track, car, ...)"
-            )
-        )
+        allowed = "expected a YAML mapping of sections (sim, track, car, ...)"
+        raise ConfigError(Problem(str(path), "", document_kind(raw), allowed))
     found = sorted(EXPERIMENT_KEYS & set(raw))
     if found:  # its env section alone would be an env config
         allowed = (

@@ -212,3 +212,13 @@ def _file_kind(mode: int) -> str:
         (stat.S_ISSOCK, "a socket"),
     )
     return next((name for test, name in kinds if test(mode)), "a special file")
+
+
+def document_kind(document: object) -> str:
+    """What a YAML document that is not a mapping holds, for a message that should not quote
+    a whole file (a text file read as YAML is one long string)."""
+    if isinstance(document, str):
+        return f"a text of {len(document):,} characters, not a mapping"
+    if isinstance(document, list):
+        return f"a list of {len(document):,} items, not a mapping"
+    return f"{type(document).__name__} {document!r}, not a mapping"

@@ -32,17 +32,26 @@ from tinyrace.drivers.base import (
     RandomDriver,
 )
 from tinyrace.drivers.centerline import CenterlineDriver, Route, order_path, route_of, speed_profile
-from tinyrace.drivers.loop import DriverError, EpisodeObserver, check_action, run_episode
+from tinyrace.drivers.loop import (
+    USER_CODE_ERRORS,
+    DriverArgumentError,
+    DriverError,
+    EpisodeObserver,
+    check_action,
+    run_episode,
+)
 from tinyrace.errors import did_you_mean, one_line
 
 __all__ = [
     "DRIVERS",
+    "USER_CODE_ERRORS",
     "ActionAdapter",
     "CenterlineDriver",
     "ConstantDriver",
     "Controls",
     "DiscreteChooser",
     "Driver",
+    "DriverArgumentError",
     "DriverError",
     "EpisodeObserver",
     "RandomDriver",
@@ -102,7 +111,9 @@ def load_driver(spec: str, **kwargs: Any) -> Driver:
     factory = _factory(spec)
     try:
         made = factory(**kwargs)
-    except Exception as exc:  # user code and user arguments: report, do not crash
+    except DriverArgumentError:  # a built-in driver's argument: named as driver_args.<name>
+        raise
+    except USER_CODE_ERRORS as exc:  # user code and user arguments: report, do not crash
         raise DriverError(f"{spec} with driver_args {kwargs} raised {one_line(exc)}") from exc
     if hasattr(made, "act"):
         return made

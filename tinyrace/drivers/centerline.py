@@ -15,6 +15,7 @@ from gymnasium import spaces
 from tinyrace.cars import CARRACING_WHEELBASE
 from tinyrace.cars.registry import model_of
 from tinyrace.drivers.base import ActionAdapter, Controls
+from tinyrace.drivers.loop import number_argument
 
 if TYPE_CHECKING:
     from tinyrace.env import TinyRaceEnv
@@ -139,16 +140,24 @@ class CenterlineDriver:
         grip_share: float = 0.35,  # of the tyres' grip the speed profile plans with
         offset: float = 0.0,  # [track units] follow a line this far left of the route (- right)
     ):
-        self.grip_share = grip_share
-        self.offset = offset
-        self.lookahead = lookahead
-        self.lookahead_per_speed = lookahead_per_speed
-        self.top_speed = top_speed
-        self.lateral_accel = lateral_accel
-        self.brake_accel = brake_accel
-        self.brake_margin = brake_margin
-        self.gas_gain = gas_gain
-        self.corner_gas_cut = corner_gas_cut
+        self.grip_share = number_argument("grip_share", grip_share, low=0.0, above=True)
+        self.offset = number_argument("offset", offset, unit="track units, + left")
+        self.lookahead = number_argument("lookahead", lookahead, 0.0, unit="track units")
+        self.lookahead_per_speed = number_argument(
+            "lookahead_per_speed", lookahead_per_speed, 0.0, unit="s"
+        )
+        self.top_speed = number_argument(
+            "top_speed", top_speed, unit="track units/s", low=0.0, above=True
+        )
+        self.lateral_accel = number_argument(
+            "lateral_accel", lateral_accel, unit="track units/s^2", low=0.0, above=True
+        )
+        self.brake_accel = number_argument(
+            "brake_accel", brake_accel, unit="track units/s^2", low=0.0, above=True
+        )
+        self.brake_margin = number_argument("brake_margin", brake_margin, 0.0, unit="track units/s")
+        self.gas_gain = number_argument("gas_gain", gas_gain, 0.0, unit="s/track unit")
+        self.corner_gas_cut = number_argument("corner_gas_cut", corner_gas_cut, 0.0, 1.0)
         self.route: Route | None = None
         self.target_speeds = np.zeros(0)  # [track units/s] per route point
         self._spacing = 1.0  # [track units] mean distance between route points

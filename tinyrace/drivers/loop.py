@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -10,7 +12,12 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.drivers.base import Driver
-from tinyrace.errors import one_line
+from tinyrace.errors import one_line, shown
+
+# What a driver's code may raise that is its failure, reported as the driver's: any
+# Exception, and an exit (sys.exit, a generator's close) that would end the run silently.
+# Ctrl-C (KeyboardInterrupt) and the run's own signals go through.
+USER_CODE_ERRORS = (Exception, SystemExit, GeneratorExit)
 
 
 class DriverError(ValueError):
@@ -65,8 +72,38 @@ def run_episode(
 def _call(method: Callable[..., Any], what: str, *args: Any) -> Any:
     try:
         return method(*args)
-    except Exception as exc:  # the driver is user code: any failure is reported as its own
+    except USER_CODE_ERRORS as exc:  # the driver is user code: any failure is reported as its own
         raise DriverError(f"{what} raised {one_line(exc)}") from exc
+
+
+class DriverArgumentError(DriverError):
+    """A built-in driver's keyword argument out of its range, named as written in an
+    experiment: ``driver_args.<name>``."""
+
+    def __init__(self, name: str, value: object, allowed: str):
+        super().__init__(f"{name}: got {shown(value)}; {allowed}")
+        self.name, self.value, self.allowed = name, value, allowed
+
+
+def number_argument(
+    name: str,
+    value: object,
+    low: float | None = None,
+    high: float | None = None,
+    unit: str = "",
+    above: bool = False,
+) -> float:
+    """``value`` as a finite float from ``low`` (above it when ``above``) to ``high`` (a
+    bound of None: none), else DriverArgumentError naming ``name``."""
+    real = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    number = float(value) if real else math.nan  # type: ignore[arg-type]
+    fits = math.isfinite(number) and (high is None or number <= high)
+    if fits and (low is None or number > low or (number == low and not above)):
+        return number
+    bounds = [f"{'>' if above else '>='} {low:g}"] if low is not None else []
+    bounds += [f"<= {high:g}"] if high is not None else []
+    allowed = f"expected a finite number {' and '.join(bounds)}".rstrip()
+    raise DriverArgumentError(name, value, allowed + (f" [{unit}]" if unit else ""))
 
 
 def check_action(action: Any, space: spaces.Space[Any], what: str = "the action") -> None:

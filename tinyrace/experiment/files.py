@@ -37,8 +37,9 @@ def write_file(path: Path, data: bytes) -> Path:
 
 
 def write_text(path: Path, text: str) -> Path:
-    """``write_file`` of UTF-8 text."""
-    return write_file(path, text.encode("utf-8"))
+    """``write_file`` of UTF-8 text. A file name that is not UTF-8 (Python keeps its bytes
+    as lone surrogates) is written escaped (``caf\\udce9.yaml``), so the file stays UTF-8."""
+    return write_file(path, text.encode("utf-8", "backslashreplace"))
 
 
 def check_writable(path: Path) -> None:
@@ -69,3 +70,21 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def unmakeable(path: Path) -> str | None:
+    """Why no file can be made at ``path`` (None if one can): its nearest existing folder
+    above must be a folder where this user can make a file (the folders between are made
+    when it is written); tried with a temporary file, since permissions alone do not tell
+    (``/proc`` lets root through)."""
+    existing = next(p for p in (path.parent, *path.parent.parents) if p.exists())
+    if not existing.is_dir():
+        return f"expected a path in folders: {str(existing)!r} is a file"
+    try:
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as exc:
+        return (
+            f"expected a folder where a file can be made: {str(existing)!r} is not ({exc.strerror})"
+        )
+    return None

@@ -16,6 +16,7 @@ from tinyrace.config.experiment import ExperimentConfig
 from tinyrace.config.load import EXPERIMENT_KEYS
 from tinyrace.config.loader import Parser, read_yaml
 from tinyrace.config.paths import inside_folder
+from tinyrace.config.yaml_file import document_kind
 from tinyrace.errors import ConfigError, Problem, did_you_mean, one_of
 from tinyrace.examples import shipped_track
 
@@ -231,6 +232,13 @@ def _track_file(value: object, base_dir: Path, source: str) -> Path:
         found = False
     if not found:  # a shipped track's bare name, or an error listing them
         return shipped_track(value, source, where) / TRACK_FILE
+    document = read_yaml(path)  # invalid YAML: named in its own file
+    if document is not None and not isinstance(document, Mapping):
+        allowed = (
+            f"expected a track folder or a track.yaml of sections (sim, track, car, ...): "
+            f"{path} holds {document_kind(document)}"
+        )
+        raise ConfigError(Problem(source, where, value, allowed))
     return path
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, cast
 
 from tinyrace.config import car_colors
-from tinyrace.drivers import Driver, load_driver
+from tinyrace.drivers import Driver, DriverArgumentError, load_driver
 from tinyrace.errors import ConfigError, Problem, one_line
 from tinyrace.experiment.interrupt import StopSignals
 from tinyrace.experiment.load import Experiment, importable_from
@@ -186,6 +186,10 @@ def _load(driver: CarDriver, source: str) -> Driver:
     """A car's driver; problems name the experiment file, its key and the car."""
     try:
         return load_driver(driver.spec, **driver.args)
+    except DriverArgumentError as exc:
+        where = "driver_args" if driver.key == "driver" else f"{driver.key}.driver_args"
+        allowed = f"car {driver.agent}'s driver: {exc.allowed}"
+        raise ConfigError(Problem(source, f"{where}.{exc.name}", exc.value, allowed)) from None
     except ValueError as exc:  # DriverError included: the factory raised
         allowed = f"car {driver.agent}'s driver: {one_line(exc)}"
         raise ConfigError(Problem(source, driver.key, driver.spec, allowed)) from None

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tinyrace.drivers import Driver, DriverError, load_driver, run_episode
+from tinyrace.drivers import Driver, DriverArgumentError, DriverError, load_driver, run_episode
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem, one_line
 from tinyrace.experiment.interrupt import Interrupted, StopSignals
@@ -183,6 +183,10 @@ def _driver(spec: str, args: dict[str, Any], source: str) -> Driver:
     """The experiment's driver; problems name the experiment file and its ``driver`` key."""
     try:
         return load_driver(spec, **args)
+    except DriverArgumentError as exc:
+        raise ConfigError(
+            Problem(source, f"driver_args.{exc.name}", exc.value, exc.allowed)
+        ) from None
     except ValueError as exc:  # DriverError included: the factory raised
         raise ConfigError(Problem(source, "driver", spec, one_line(exc))) from None
 

@@ -16,7 +16,7 @@ from typing import Any, Protocol, cast
 import gymnasium as gym
 import numpy as np
 
-from tinyrace.drivers import Driver, DriverError, check_action
+from tinyrace.drivers import USER_CODE_ERRORS, Driver, DriverError, check_action
 from tinyrace.errors import one_line
 from tinyrace.race.env import RaceEnv
 
@@ -111,5 +111,5 @@ def drive_race(
 def _call(agent: str, method: Callable[..., Any], what: str, *args: Any) -> Any:
     try:
         return method(*args)
-    except Exception as exc:  # the driver is user code: any failure is reported as its car's
+    except USER_CODE_ERRORS as exc:  # the driver is user code: its failure is its car's
         raise CarDriverError(agent, f"{what} raised {one_line(exc)}") from exc

@@ -25,7 +25,6 @@ import multiprocessing
 import os
 import signal
 import sys
-import tempfile
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -37,6 +36,7 @@ from gymnasium import spaces
 
 from tinyrace.config.bounds import MAX_TRAIN_ENVS
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.experiment.files import unmakeable
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -147,28 +147,10 @@ def model_file(name: str, force: bool) -> Path:
             "(tinyrace train replaces only models, even with --force)"
         )
     else:
-        allowed = _unwritable(path)
+        allowed = unmakeable(path)
     if allowed is not None:
         raise ConfigError(Problem("<command line>", "--out", name, allowed))
     return path
-
-
-def _unwritable(path: Path) -> str | None:
-    """Why the model file cannot be written at ``path`` (None if it can): its nearest
-    existing folder above must be a folder where this user can make a file (the folders
-    between are made at the save); tried with a temporary file, as permissions alone do not
-    tell (``/proc`` lets root through)."""
-    existing = next(p for p in (path.parent, *path.parent.parents) if p.exists())
-    if not existing.is_dir():
-        return f"expected a path in folders: {str(existing)!r} is a file"
-    try:
-        with tempfile.TemporaryFile(dir=existing):
-            pass
-    except OSError as exc:
-        return (
-            f"expected a folder where a file can be made: {str(existing)!r} is not ({exc.strerror})"
-        )
-    return None
 
 
 def missing() -> str | None:

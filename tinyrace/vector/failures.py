@@ -33,6 +33,21 @@ def check_flag(name: str, value: object) -> None:
         raise ConfigError(Problem("<make_vec arguments>", name, value, "expected true or false"))
 
 
+def check_autoreset(mode: object) -> None:
+    """Gymnasium's ``autoreset_mode`` argument: a BatchVectorEnv resets an env at the step
+    after its episode ended (NEXT_STEP), the only mode it has."""
+    from gymnasium.vector import AutoresetMode
+
+    if mode in (AutoresetMode.NEXT_STEP, AutoresetMode.NEXT_STEP.value):
+        return
+    allowed = (
+        "expected AutoresetMode.NEXT_STEP ('NextStep'): a BatchVectorEnv resets an env at the "
+        "step after its episode ends; for SAME_STEP or DISABLED use gym.make_vec's sync or "
+        "async vectorization_mode"
+    )
+    raise ConfigError(Problem("<make_vec arguments>", "autoreset_mode", mode, allowed))
+
+
 NUMPY_FROM_NOTE = "(envs per process from which their tyre forces are one computation; more: never)"
 
 

@@ -12,7 +12,7 @@ import gymnasium as gym
 from tinyrace.config.bounds import MAX_ENVS
 from tinyrace.vector.batched import NUMPY_FROM
 from tinyrace.vector.env import BatchVectorEnv
-from tinyrace.vector.failures import check_count, check_flag
+from tinyrace.vector.failures import check_autoreset, check_count, check_flag
 
 
 def make_batch(
@@ -26,12 +26,15 @@ def make_batch(
     numpy_from: int = NUMPY_FROM,
     parent_steps: bool = False,
     cores: Sequence[int] | None = None,
+    autoreset_mode: Any = "NextStep",
     **kwargs: Any,
 ) -> BatchVectorEnv:
     """A BatchVectorEnv of ``num_envs`` copies of ``gym.make(id, **kwargs)``; ``workers=0``
     steps them all in this process, ``parent_steps=True`` a slice of them beside the
-    ``workers`` processes, ``cores`` pins the worker processes (``BatchVectorEnv``)."""
+    ``workers`` processes, ``cores`` pins the worker processes (``BatchVectorEnv``).
+    ``autoreset_mode`` is Gymnasium's: NEXT_STEP, the one mode a BatchVectorEnv has."""
     check_count("num_envs", num_envs, 1, MAX_ENVS)
+    check_autoreset(autoreset_mode)
     maker = functools.partial(_make, id, kwargs)
     return BatchVectorEnv(
         [maker] * num_envs,
