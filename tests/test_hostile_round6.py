@@ -387,3 +387,83 @@ def test_a_run_folder_where_no_file_can_be_made_is_named_before_running(tmp_path
     code, err = run_cli(["run", str(tmp_path / "e.yaml"), *QUIET], capsys)
     assert code == 2
     assert "output.dir (run folders): '/proc/tinyrace_runs': expected a folder where a file" in err
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "said"),
+    [
+        ("episodes: 1\nseed: \x07 3\n", "line 2", "U+0007 (a control character)"),
+        ("episodes: 1\x00\n", "line 1", "UTF-16 file? save it as UTF-8"),
+        ("episodes: 1\n\n\nseed: 3\x1b\n", "line 4", "U+001B"),
+    ],
+)
+def test_a_character_yaml_refuses_is_named_with_its_line(tmp_path, text, line, said):
+    from tinyrace.config.yaml_file import read_yaml
+
+    (tmp_path / "e.yaml").write_text(text)
+    with pytest.raises(ConfigError) as caught:
+        read_yaml(tmp_path / "e.yaml")
+    ((source, key, allowed),) = problems_of(caught)
+    assert (source, key) == (str(tmp_path / "e.yaml"), line)
+    assert said in allowed and "cannot be in a YAML file" in allowed
+    assert caught.value.problems[0].value != ""  # the line, not ''
+
+
+def test_a_message_quotes_the_line_yaml_counted(tmp_path):
+    """U+2028 ends a line for YAML: the quoted text is the line YAML names."""
+    from tinyrace.config.yaml_file import read_yaml
+
+    (tmp_path / "e.yaml").write_text("episodes: 1\u2028seed: 5\nmax_steps: 10\nseed: 4\n")
+    with pytest.raises(ConfigError) as caught:
+        read_yaml(tmp_path / "e.yaml")
+    problem = caught.value.problems[0]
+    assert problem.path == "line 4" and problem.value == "seed: 4"
+    assert "lines 2 and 4" in problem.allowed
+
+
+@pytest.mark.parametrize(
+    ("names", "text"),
+    [
+        (["ep 0", "1", "2", "5"], "ep 0-2, 5"),
+        (["ep 0", "2"], "ep 0, 2"),
+        (["ep 0", *map(str, range(1, 90))], "ep 0-89"),
+        (["ep 0", *map(str, range(2, 90, 2))], "ep 0, 2, 4, 6, 8, ... (45 episodes)"),
+    ],
+)
+def test_start_labels_of_many_episodes_stay_short(names, text):
+    from tinyrace.experiment.plots import _episodes_text
+
+    assert _episodes_text(names) == text
+
+
+def test_a_report_of_ninety_episodes_draws_without_a_warning(tmp_path, capsys, recwarn):
+    """--quiet printed matplotlib's "constrained_layout not applied" for 90 episodes that
+    start at one place: their start label was 90 numbers long."""
+    (tmp_path / "e.yaml").write_text(
+        "env: {environment: formula_student, cameras: [], sensors: [{id: s, type: state}]}\n"
+        "episodes: 90\nmax_steps: 3\noutput: {video: false}\n"
+    )
+    code, err = run_cli(
+        ["run", str(tmp_path / "e.yaml"), "-o", str(tmp_path / "r"), *QUIET], capsys
+    )
+    assert code == 0 and err == ""
+    assert not [w for w in recwarn if "constrained_layout" in str(w.message)]
+
+
+@pytest.mark.parametrize(
+    ("car", "keys"),
+    [
+        ({"model": "dynamic", "pixels_per_unit": 1000}, "(car.pixels_per_unit)"),
+        ({"model": "kinematic_throttle", "wheelbase": 40.0}, "(car.wheelbase, car.track_width)"),
+    ],
+)
+def test_a_car_too_big_for_its_start_names_the_keys_that_size_it(car, keys):
+    with pytest.raises(ConfigError) as caught:
+        gym.make(
+            "tinyrace/TinyRace-v0",
+            environment="f1tenth_loop",
+            cameras=[],
+            sensors=[{"id": "s", "type": "state"}],
+            car=car,
+        )
+    assert caught.value.problems[0].allowed.endswith(f"make the car smaller {keys}")

@@ -69,6 +69,7 @@ class CarModel:
     units: str  # the unit of its own parameters: "track" (the track's px, m or u) or "m"
     doc: str
     compat: frozenset[str] = frozenset()  # accepted ``car.compat`` values (another sim's car)
+    size_keys: tuple[str, ...] = ("car.wheelbase", "car.track_width")  # what sizes it
     # the tyre forces of ``n`` such cars as one computation (a vector env's), if it offers it
     batch: Callable[[int], TyreBatch] | None = None
 
@@ -223,6 +224,7 @@ register(
         throttle=True,
         units="track",
         doc="CarRacing-v3's rear-wheel-drive car with tyre slip",
+        size_keys=("car.pixels_per_unit",),
         batch=DynamicBatch,
     )
 )
@@ -272,6 +274,7 @@ register(
         "[steering velocity, acceleration]; car.preset f1tenth or CommonRoad's vehicle1..3; "
         "car.compat f1tenth_gym: f1tenth_gym's car step by step",
         compat=frozenset({F1TENTH_GYM}),
+        size_keys=("car.preset",),
     )
 )
 

@@ -10,7 +10,9 @@ the parser's event stream, which needs no recursion, before any object is built.
 from __future__ import annotations
 
 import os
+import re
 import stat
+import unicodedata
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +20,7 @@ import yaml  # type: ignore[import-untyped, unused-ignore]
 
 from tinyrace.errors import ConfigError, Problem
 
+_LINE_BREAK = re.compile("\r\n|[\n\r\x85\u2028\u2029]")  # YAML's line breaks
 MAX_YAML_BYTES = 1 << 20  # [bytes] a track.yaml or experiment file (1 MiB)
 MAX_DEPTH = 32  # nested mappings and lists; the schema itself nests 4 deep
 MAX_VALUES = 200_000  # scalars and collections after alias expansion
@@ -96,6 +99,14 @@ def parse_yaml(text: str, source: str) -> Any:
         raise ConfigError(
             Problem(source, _line(exc.mark), _text_at(text, exc.mark), exc.reason)
         ) from None
+    except yaml.reader.ReaderError as exc:  # a character YAML takes in no file
+        line, text_of_line = _line_at(text, exc.position)
+        allowed = (
+            f"invalid YAML: the character {_character(exc.character)} cannot be in a YAML file"
+        )
+        if exc.character == 0:
+            allowed += " (NUL bytes: a UTF-16 file? save it as UTF-8)"
+        raise ConfigError(Problem(source, f"line {line}", text_of_line, allowed)) from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         reason = getattr(exc, "problem", None) or str(exc)
@@ -185,12 +196,26 @@ def _line(mark: Any) -> str:
 
 
 def _text_at(text: str, mark: Any) -> str:
-    """The line a mark points at, shortened (a one-line file may be megabytes long)."""
+    """The line a mark points at, shortened (a one-line file may be megabytes long); lines
+    counted as YAML counts them (U+2028 and a lone CR end a line too)."""
     if mark is None:
         return ""
-    lines = text.split("\n", mark.line + 1)
+    lines = _LINE_BREAK.split(text, maxsplit=mark.line + 1)
     line = lines[mark.line] if mark.line < len(lines) else ""
     return line if len(line) <= 200 else line[:197] + "..."
+
+
+def _line_at(text: str, position: int) -> tuple[int, str]:
+    """The line number (from 1) and text of the character at ``position``."""
+    before = text[:position]
+    number = len(_LINE_BREAK.findall(before))
+    return number + 1, _text_at(text, yaml.Mark("", 0, number, 0, "", 0))
+
+
+def _character(code: object) -> str:
+    if isinstance(code, int):
+        return f"U+{code:04X} ({unicodedata.name(chr(code), 'a control character')})"
+    return repr(code)
 
 
 def _short(value: object) -> str:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tinyrace.cars.registry import CarModel
+from tinyrace.cars.registry import CarModel, model_of
 from tinyrace.cars.state import CarState
 from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.errors import Problem
@@ -93,7 +93,7 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
             f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} "
             f"{unit}, length x width, at {pose} [{unit}, {unit}, rad]) overlaps no wall or "
             f"cone; it overlaps {what}{origin}: move the spawn (track.spawn) or make the car "
-            "smaller (car.wheelbase, car.track_width)"
+            f"smaller ({', '.join(model_of(config).size_keys)})"
         )
         value = list(spawn) if spawn is not None else getattr(track, key)
         problems.append(Problem(source, where, value, allowed))

@@ -152,9 +152,33 @@ def _start_labels(ax: Axes, paths: Sequence[Path2D], near: float) -> None:
     for start, names in groups:
         at = (float(start[0]), float(start[1]))
         ax.annotate(
-            ", ".join(names), at, xytext=(8, 8), textcoords="offset points", color="white",
+            _episodes_text(names), at, xytext=(8, 8), textcoords="offset points", color="white",
             fontsize=10, bbox={"boxstyle": "round,pad=0.2", "fc": "black", "alpha": 0.6},
         )  # fmt: skip
+
+
+def _episodes_text(names: list[str], longest: int = 40) -> str:
+    """``["ep 0", "1", "2", "5"]`` as "ep 0-2, 5": runs of numbers joined; a text longer
+    than ``longest`` characters (a label over the track) cut to its ends and the count."""
+    head, rest = names[0], names[1:]
+    prefix = "ep " if head.startswith("ep ") else ""
+    items = [head.removeprefix("ep "), *rest]
+    if not all(item.isdigit() for item in items):
+        text = ", ".join(names)
+    else:
+        numbers = sorted(int(item) for item in items)
+        runs: list[list[int]] = []
+        for n in numbers:
+            if runs and n == runs[-1][-1] + 1:
+                runs[-1].append(n)
+            else:
+                runs.append([n])
+        text = prefix + ", ".join(
+            f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs
+        )
+    if len(text) <= longest:
+        return text
+    return f"{text[: longest // 2].rsplit(',', 1)[0]}, ... ({len(names)} episodes)"
 
 
 def bars(
