@@ -51,7 +51,7 @@ MAX_ID_LENGTH = 64  # [characters] a car's id (race.cars[i].id): it names the ca
 ID_CHARACTERS = (
     "printable characters other than spaces (letters of any script, digits, punctuation)"
 )
-MAX_TRAIN_ENVS = 64  # envs of `tinyrace train --envs` (one process each)
+MAX_TRAIN_ENVS = 64  # envs of `tinyrace train --envs` (a slice per core with --subprocesses)
 MAX_SEED = 2**63 - 1  # the largest first seed of --seed (numpy's seeds are 64-bit)
 
 BOUNDS = (
@@ -94,7 +94,13 @@ BOUNDS = (
         "characters",
         f"a car id (race.cars[i].id) of {ID_CHARACTERS} (ID_CHARACTERS)",
     ),
-    Bound("MAX_TRAIN_ENVS", MAX_TRAIN_ENVS, "envs", "tinyrace train --envs (a process each)"),
+    Bound(
+        "MAX_TRAIN_ENVS",
+        MAX_TRAIN_ENVS,
+        "envs",
+        "tinyrace train --envs (stepped in this process; with --subprocesses, a slice per core: "
+        "this process steps one, a worker process each of the others)",
+    ),
     Bound(
         "MAX_LOCK_WAIT",
         MAX_LOCK_WAIT,

@@ -1,13 +1,13 @@
 """``tinyrace train``: PPO (Stable-Baselines3) on a tinyrace env, evaluated before and after.
 
-Needs the ``train`` extra: ``pip install ".[train]"`` from a clone, or the wheel's
-``pip install "$(ls tinyrace-*.whl)[train]"`` (without a GPU, install PyTorch's CPU build first).
-The env is the shipped ``f1tenth_lidar`` experiment by default (a lidar and the car's state
-on the F1TENTH loop: small vectors that PPO learns to drive in a minute or two on a CPU), or
-the env of any experiment or track (``tinyrace train carracing``: CarRacing's pixels, a far
-longer run), found as ``tinyrace run`` finds it. Pixels are stacked four frames deep; the
-policy fits the observation: a CNN for an image, one network per key for a dict, an MLP for
-a vector::
+Needs the ``train`` extra: ``pip install ".[train]"`` from a clone, or the wheel's path with
+``[train]`` inside the quotes (without a GPU, install PyTorch's CPU build first). The env is
+the shipped ``f1tenth_lidar`` experiment by default (a lidar and the car's state on the
+F1TENTH loop: small vectors that PPO learns to drive in 20,000 steps, seconds on a recent
+two-core machine), or the env of any experiment or track (``tinyrace train carracing``:
+CarRacing's pixels, a far longer run), found as ``tinyrace run`` finds it. Pixels are
+stacked four frames deep; the policy fits the observation: a CNN for an image, one network
+per key for a dict, an MLP for a vector::
 
     tinyrace train                                   # saves ppo_f1tenth_lidar.zip
     tinyrace train carracing --timesteps 200000 --out ppo_carracing.zip
@@ -34,6 +34,7 @@ from typing import TYPE_CHECKING, Any, SupportsFloat, cast
 import gymnasium as gym
 from gymnasium import spaces
 
+from tinyrace import __version__
 from tinyrace.config.bounds import MAX_TRAIN_ENVS
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.files import unmakeable
@@ -45,8 +46,9 @@ if TYPE_CHECKING:
 
 TINYRACE_ID = "tinyrace/TinyRace-v0"
 DEFAULT_TARGET = "f1tenth_lidar"  # the shipped experiment that learns in minutes
-TRAIN_EXTRA = (
-    'pip install ".[train]" (from a clone; from a wheel: pip install "$(ls tinyrace-*.whl)[train]")'
+TRAIN_EXTRA = (  # the wheel's path, wherever it lies, then [train] inside the quotes
+    'pip install ".[train]" (from a clone; from a wheel: pip install '
+    f'"path/to/tinyrace-{__version__}-py3-none-any.whl[train]")'
 )
 FRAMES = 4  # image observations stacked, so that the policy sees speed and turning
 PPO_SETTINGS = {"n_steps": 256, "batch_size": 256, "learning_rate": 3e-4}
