@@ -7,6 +7,7 @@ start. Tiles along it give CarRacing's tile reward and lap rule.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,6 +39,14 @@ class Circuit:
         for array in arrays:
             array.setflags(write=False)
         return cls(*arrays, polyline.perimeter(even))
+
+    def with_widths(self, widths: np.ndarray) -> Circuit:
+        """The same centreline with other ``widths`` (N, 2) [m], and the tiles they make."""
+        widths = np.array(widths, float)
+        tiles = polyline.tiles(self.centerline, widths)
+        for array in (widths, tiles):
+            array.setflags(write=False)
+        return dataclasses.replace(self, widths=widths, tiles=tiles)
 
     @property
     def start_pose(self) -> tuple[float, float, float]:

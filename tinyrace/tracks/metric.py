@@ -214,7 +214,7 @@ def _check_folds(circuit: Circuit, loop: Loop, width_key: tuple[str, str] | None
     if ratio[worst] <= MAX_INNER_WIDTH_OVER_RADIUS:
         return
     x, y = circuit.centerline[worst]
-    side = 1 if polyline.curvature(circuit.centerline)[worst] > 0 else 0
+    side = int(polyline.curve_turns_left(circuit.centerline, circuit.widths)[worst])
     width = float(circuit.widths[worst, side])
     radius = width / float(ratio[worst])
     allowed = (
@@ -237,8 +237,7 @@ def _unfolded(circuit: Circuit) -> Circuit:
     ratio = polyline.inner_width_over_radius(circuit.centerline, circuit.widths)
     if ratio.max() <= 1.0:
         return circuit
-    widths = circuit.widths / np.maximum(ratio, 1.0)[:, None]
-    return Circuit.build(circuit.centerline, widths, circuit.spacing)
+    return circuit.with_widths(circuit.widths / np.maximum(ratio, 1.0)[:, None])
 
 
 def _check_length(points: np.ndarray, spacing: float, source: str, where: str, path: str) -> None:

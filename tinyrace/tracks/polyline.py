@@ -86,21 +86,32 @@ def inner_width_over_radius(loop: np.ndarray, widths: np.ndarray) -> np.ndarray:
     straight). Above 1 the inner edge passes the curve's centre and the road folds over
     itself; measured at the width's own scale, the small kinks of surveyed data at a
     hairpin's apex count for little. ``widths`` (N, 2) = (to the right, to the left)."""
+    curve = _curve_over_width(loop, widths)
+    inner = np.where(curve > 0, widths[:, 1], widths[:, 0])
+    return np.asarray(inner * np.abs(curve))
+
+
+def curve_turns_left(loop: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """(N,) bool: the curve at each point, measured as ``inner_width_over_radius`` measures
+    it, turns left (its inside is the road's left)."""
+    return np.asarray(_curve_over_width(loop, widths) > 0)
+
+
+def _curve_over_width(loop: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """(N,) [1/unit] the turn over the arc of the wider width to each side of each point,
+    per unit of that arc (positive turning left)."""
     n = len(loop)
     angle = np.unwrap(headings(loop))
     close = angle[0] - angle[-1]
     turn_total = angle[-1] - angle[0] + (close + math.pi) % (2 * math.pi) - math.pi
     spacing = perimeter(loop) / n
-    wider = widths.max(axis=1)
-    k = np.clip(np.ceil(wider / spacing).astype(np.int64), 1, max(n // 4, 1))
+    k = np.clip(np.ceil(widths.max(axis=1) / spacing).astype(np.int64), 1, max(n // 4, 1))
     index = np.arange(n)
 
     def unwrapped(at: np.ndarray) -> np.ndarray:  # the heading at ``at`` mod n, laps counted
         return np.asarray(angle[at % n] + (at // n) * turn_total)
 
-    curve = (unwrapped(index + k) - unwrapped(index - k)) / (2 * k * spacing)  # [1/m], left > 0
-    inner = np.where(curve > 0, widths[:, 1], widths[:, 0])
-    return np.asarray(inner * np.abs(curve))
+    return np.asarray((unwrapped(index + k) - unwrapped(index - k)) / (2 * k * spacing))
 
 
 def signed_area(loop: np.ndarray) -> float:
