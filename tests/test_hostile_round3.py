@@ -110,7 +110,7 @@ def test_an_inline_metric_track_is_read_beside_the_experiment(tmp_path, monkeypa
     (here / "c.csv").unlink()
     with pytest.raises(ConfigError) as error:
         load_experiment(here / "e.yaml")
-    assert str(here / "e.yaml") in str(error.value) and "env.tracks[0].file" in str(error.value)
+    assert str(here / "e.yaml") in str(error.value) and "env.track.file" in str(error.value)
 
 
 def test_show_dot_inside_a_track_folder_names_the_picture_after_the_folder(
