@@ -122,6 +122,41 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
     assert PPO.load(here / "partial.zip").num_timesteps < 1_000_000
 
 
+@pytest.mark.parametrize("group", [False, True], ids=["the trainer", "its process group"])
+def test_sigterm_saves_the_policy_so_far_and_exits_143(here: Path, group: bool):
+    """A scheduler's SIGTERM (Slurm's at a job's time limit, to the whole group) stops the
+    run as Ctrl-C does: the policy trained so far is saved."""
+    command = [sys.executable, "-m", "tinyrace", "train", "--timesteps", "1000000"]
+    process = subprocess.Popen(
+        [*command, "--subprocesses", "--envs", "2", "--out", "partial.zip"],
+        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONFAULTHANDLER": "1"},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        assert process.stdout is not None
+        for line in process.stdout:
+            if line.startswith("untrained policy"):
+                break
+        time.sleep(5)
+        if group:
+            os.killpg(process.pid, signal.SIGTERM)
+        else:
+            process.terminate()
+        try:
+            _, err = process.communicate(timeout=120)
+        except subprocess.TimeoutExpired:
+            pytest.fail(hung(process))
+    finally:
+        process.kill()
+    assert process.returncode == 143, err[-2000:]
+    assert "interrupted by SIGTERM after" in err and "saved partial.zip" in err
+    assert "Traceback" not in err
+    assert PPO.load(here / "partial.zip").num_timesteps < 1_000_000
+
+
 BREAKING = """
 import gymnasium as gym
 

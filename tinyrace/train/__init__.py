@@ -14,7 +14,7 @@ per key for a dict, an MLP for a vector::
 
 It evaluates the untrained policy, trains with a progress bar (steps, steps/s, the mean
 return of recent episodes), saves the model and evaluates it again. Ctrl-C saves the policy
-trained so far and exits with 130.
+trained so far and exits with 130; SIGTERM (a scheduler's) does the same, exiting with 143.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -284,6 +285,34 @@ def make_envs(env: TrainEnv, envs: int, seed: int, subprocesses: bool = False) -
     return VecFrameStack(vec, n_stack=FRAMES) if has_images(vec.observation_space) else vec
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during training (a cluster's scheduler ending the job): stopped as Ctrl-C is,
+    the policy so far saved, exit status 143."""
+
+
+class _Sigterm:
+    """SIGTERM raising Terminated in this (the main) thread while installed; ``received``
+    says whether it came (a scheduler signals the whole group: a worker may die of it
+    before this process's handler runs)."""
+
+    def __init__(self) -> None:
+        self.received = False
+        self.previous: Any = None
+
+    def __enter__(self) -> _Sigterm:
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGTERM, self._raise)
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        if self.previous is not None:
+            signal.signal(signal.SIGTERM, self.previous)
+
+    def _raise(self, signum: int, frame: Any) -> None:
+        self.received = True
+        raise Terminated("SIGTERM")
+
+
 def _make(env_id: str, kwargs: dict[str, Any]) -> gym.Env[Any, Any]:
     """One env (module level, so that worker processes unpickle it and import tinyrace)."""
     import tinyrace  # noqa: F401  (registers the ids in a worker process)
@@ -453,17 +482,22 @@ def run_command(args: argparse.Namespace) -> int:
     print(f"tinyrace: PPO on {env.name}: {asked}, {args.envs} envs", flush=True)
     episodes = f"{args.eval_episodes} episode{'s' if args.eval_episodes > 1 else ''}"
     model = new_model(env, args.envs, args.seed, args.timesteps, args.subprocesses)
+    sigterm = _Sigterm()
     try:
-        before = evaluate(model, env, args.eval_episodes, seed=args.seed + 1000)
-        print(f"untrained policy: {_returns(before, episodes)}", flush=True)
-        learn(model, args.timesteps)
-    except KeyboardInterrupt:
-        model.save(out)
-        print(f"interrupted after {model.num_timesteps} steps: saved {out}", file=sys.stderr)
-        return INTERRUPTED
+        with sigterm:
+            before = evaluate(model, env, args.eval_episodes, seed=args.seed + 1000)
+            print(f"untrained policy: {_returns(before, episodes)}", flush=True)
+            learn(model, args.timesteps)
     except EnvFailed as exc:
         print(f"tinyrace: error: {exc}", file=sys.stderr)
         return 1
+    except (KeyboardInterrupt, RuntimeError) as exc:  # a worker killed by the group's SIGTERM
+        if not isinstance(exc, KeyboardInterrupt) and not sigterm.received:
+            raise
+        model.save(out)
+        by = " by SIGTERM" if sigterm.received else ""
+        print(f"interrupted{by} after {model.num_timesteps} steps: saved {out}", file=sys.stderr)
+        return 128 + signal.SIGTERM if sigterm.received else INTERRUPTED
     finally:
         close(model.get_env())
     model.save(out)
