@@ -254,3 +254,14 @@ def test_train_seeds_are_ascii_digits_within_numpys_range(here: Path, capsys, se
 def test_run_counts_are_ascii_digits(capsys, option: str, value: str):
     assert cli.main(["run", option, value]) == 2
     assert f"argument {option}: got {value!r}" in capsys.readouterr().err
+
+
+def test_a_model_file_in_a_track_folder_needs_force(here: Path):
+    """As tinyrace run's run folders: a track folder is the user's data."""
+    folder = here / "my_track"
+    folder.mkdir()
+    (folder / "track.yaml").write_text("track: {type: procedural}\n")
+    with pytest.raises(ConfigError) as caught:
+        train.model_file(str(folder / "sub" / "m.zip"), force=False)
+    assert f"expected a file outside the track folder {str(folder)!r}" in str(caught.value)
+    assert train.model_file(str(folder / "m.zip"), force=True) == folder / "m.zip"

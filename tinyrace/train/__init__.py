@@ -150,10 +150,26 @@ def model_file(name: str, force: bool) -> Path:
             "(tinyrace train replaces only models, even with --force)"
         )
     else:
-        allowed = unmakeable(path)
+        allowed = unmakeable(path) or _in_track_folder(path, force)
     if allowed is not None:
         raise ConfigError(Problem("<command line>", "--out", name, allowed))
     return path
+
+
+def _in_track_folder(path: Path, force: bool) -> str | None:
+    """A model file inside a track folder is refused unless ``force``, as ``tinyrace run``
+    refuses run folders there (a track folder is the user's data, or the installed one)."""
+    from tinyrace.validate import track_folder_holding
+
+    try:
+        inside = track_folder_holding(path.resolve())
+    except (OSError, ValueError):
+        return None
+    if inside is None or force:
+        return None
+    return (
+        f"expected a file outside the track folder {str(inside)!r} (give another --out, or --force)"
+    )
 
 
 def missing() -> str | None:
