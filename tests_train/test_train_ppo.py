@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -91,11 +92,13 @@ def hung(process: subprocess.Popen[str]) -> str:
     return f"120 s after Ctrl-C the trainer was {state}:\n{group}\nits stderr ends:\n{err[-6000:]}"
 
 
-def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
+def stopped_trainer(stop: Callable[[subprocess.Popen[str]], None]) -> tuple[int, str]:
+    """A trainer of 1,000,000 steps (2 envs, a worker process) stopped by ``stop`` 5 s into
+    training: its exit status and stderr. A trainer that has not ended 120 s later fails."""
     command = [sys.executable, "-m", "tinyrace", "train", "--timesteps", "1000000"]
     process = subprocess.Popen(
         [*command, "--subprocesses", "--envs", "2", "--out", "partial.zip"],
-        # faulthandler: a trainer that hangs after Ctrl-C is aborted and shows where it waits
+        # faulthandler: a trainer that hangs after the signal is aborted and shows where it waits
         env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONFAULTHANDLER": "1"},
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -109,14 +112,20 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
             if line.startswith("untrained policy"):
                 break
         time.sleep(5)
-        os.killpg(process.pid, signal.SIGINT)  # Ctrl-C: the trainer and its workers
+        stop(process)
         try:
             _, err = process.communicate(timeout=120)
         except subprocess.TimeoutExpired:
             pytest.fail(hung(process))
     finally:
         process.kill()
-    assert process.returncode == 130, err[-2000:]
+    return process.returncode, err
+
+
+def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
+    # Ctrl-C: the trainer and its workers
+    code, err = stopped_trainer(lambda process: os.killpg(process.pid, signal.SIGINT))
+    assert code == 130, err[-2000:]
     assert "interrupted after" in err and "saved partial.zip" in err
     assert "BrokenPipeError" not in err and "Traceback" not in err
     assert PPO.load(here / "partial.zip").num_timesteps < 1_000_000
@@ -126,32 +135,15 @@ def test_ctrl_c_saves_the_policy_so_far_and_exits_130(here: Path):
 def test_sigterm_saves_the_policy_so_far_and_exits_143(here: Path, group: bool):
     """A scheduler's SIGTERM (Slurm's at a job's time limit, to the whole group) stops the
     run as Ctrl-C does: the policy trained so far is saved."""
-    command = [sys.executable, "-m", "tinyrace", "train", "--timesteps", "1000000"]
-    process = subprocess.Popen(
-        [*command, "--subprocesses", "--envs", "2", "--out", "partial.zip"],
-        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONFAULTHANDLER": "1"},
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
-    try:
-        assert process.stdout is not None
-        for line in process.stdout:
-            if line.startswith("untrained policy"):
-                break
-        time.sleep(5)
+
+    def stop(process: subprocess.Popen[str]) -> None:
         if group:
             os.killpg(process.pid, signal.SIGTERM)
         else:
             process.terminate()
-        try:
-            _, err = process.communicate(timeout=120)
-        except subprocess.TimeoutExpired:
-            pytest.fail(hung(process))
-    finally:
-        process.kill()
-    assert process.returncode == 143, err[-2000:]
+
+    code, err = stopped_trainer(stop)
+    assert code == 143, err[-2000:]
     assert "interrupted by SIGTERM after" in err and "saved partial.zip" in err
     assert "Traceback" not in err
     assert PPO.load(here / "partial.zip").num_timesteps < 1_000_000
