@@ -7,6 +7,7 @@ Run by .ci/run's train stage (Stable-Baselines3 and torch installed).
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -260,3 +261,72 @@ def test_negative_indices_count_from_the_end_as_in_sb3s_own_vec_envs(two):
             assert two.get_attr("spec", indices) == dummy.get_attr("spec", indices)
     finally:
         dummy.close()
+
+
+# -- a saved model as a driver ------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def pixel_model(tmp_path_factory) -> Path:
+    """A PPO CNN trained for one rollout on 4 stacked CarRacing frames, as tinyrace train
+    trains pixels."""
+    envs = VecFrameStack(make_vec_env("tinyrace/CarRacing-v0", n_envs=2, seed=0, workers=0), 4)
+    model = PPO("CnnPolicy", envs, n_steps=32, batch_size=64, n_epochs=1, seed=0)
+    model.learn(64)
+    envs.close()
+    path = tmp_path_factory.mktemp("model") / "pixels.zip"
+    model.save(path)
+    return path
+
+
+def test_a_model_driver_acts_as_the_model_does_through_sb3s_frame_stack(pixel_model: Path):
+    """ModelDriver on one env, fed one observation at a time, takes the actions the model
+    takes through SB3's VecFrameStack (zeros before the first frame, the newest last)."""
+    from tinyrace.sb3 import ModelDriver
+
+    model = PPO.load(pixel_model, device="cpu")
+    envs = VecFrameStack(make_vec_env("tinyrace/CarRacing-v0", n_envs=1, seed=7, workers=0), 4)
+    observations = envs.reset()
+    expected = []
+    for _ in range(30):
+        action, _ = model.predict(observations, deterministic=True)
+        expected.append(action[0])
+        observations, _, dones, _ = envs.step(action)
+        assert not dones[0]
+    envs.close()
+    env = gym.make("tinyrace/CarRacing-v0")
+    observation, info = env.reset(seed=7)
+    driver = ModelDriver(str(pixel_model))
+    driver.reset(env)
+    got = []
+    for _ in range(30):
+        action = driver.act(observation, info)
+        got.append(action)
+        observation, _, _, _, info = env.step(action)
+    env.close()
+    assert np.array_equal(np.array(expected), np.array(got))
+
+
+def test_a_model_driver_runs_an_experiment_and_names_a_mismatch(
+    pixel_model: Path, tmp_path: Path, capsys, monkeypatch
+):
+    from tinyrace import cli
+
+    monkeypatch.chdir(tmp_path)
+    experiment = (
+        "env: {}\nepisodes: 1\nmax_steps: 20\noutput: {video: false}\n"
+        f"driver: tinyrace.sb3:ModelDriver\ndriver_args: {{model: {pixel_model}}}\n"
+    )
+    (tmp_path / "e.yaml").write_text(experiment)
+    assert cli.main(["run", "e.yaml", "--quiet"]) == 0, capsys.readouterr().err
+    (tmp_path / "bad.yaml").write_text(
+        experiment.replace("env: {}", "env: {environment: f1tenth_loop}")
+    )
+    assert cli.main(["run", "bad.yaml", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "the model was trained on observations (12, 96, 96)" in err
+    (tmp_path / "none.yaml").write_text(experiment.replace(str(pixel_model), "missing.zip"))
+    assert cli.main(["run", "none.yaml", "--quiet"]) == 2
+    assert "driver_args.model: got 'missing.zip'; expected the path of a saved model" in (
+        capsys.readouterr().err
+    )

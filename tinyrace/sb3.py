@@ -23,7 +23,8 @@ from __future__ import annotations
 import functools
 import inspect
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from pathlib import Path
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -317,3 +318,125 @@ def _groups(options: Sequence[dict[str, Any]]) -> list[list[int]]:
         else:
             groups.append((option, [index]))
     return [members for _, members in groups]
+
+
+class ModelDriver:
+    """A saved Stable-Baselines3 model (``tinyrace train``'s or a script's) as a driver, so
+    that ``tinyrace run`` writes its episodes, videos and report::
+
+        driver: tinyrace.sb3:ModelDriver
+        driver_args: {model: ppo_f1tenth_lidar.zip}   # algorithm: PPO; deterministic: true
+
+    It gives the model the observation as training did: a dict's entries that are not arrays
+    flattened (as ``tinyrace train`` does), and each array stacked along its last axis as
+    deep as the model's is over the env's, the newest last and zeros before the first step,
+    as SB3's ``VecFrameStack`` stacks (``tinyrace train`` stacks pictures four deep)."""
+
+    def __init__(self, model: str, algorithm: str = "PPO", deterministic: bool = True):
+        import stable_baselines3
+
+        from tinyrace.drivers import DriverArgumentError
+
+        found: Any = (
+            getattr(stable_baselines3, algorithm, None) if isinstance(algorithm, str) else None
+        )
+        if not isinstance(found, type):
+            names = "A2C, DDPG, DQN, PPO, SAC, TD3"
+            raise DriverArgumentError(
+                "algorithm", algorithm, f"expected a Stable-Baselines3 algorithm: {names}"
+            )
+        if not isinstance(model, str) or not Path(model).is_file():
+            raise DriverArgumentError(
+                "model", model, "expected the path of a saved model (.zip), from the folder run in"
+            )
+        if not isinstance(deterministic, bool):
+            raise DriverArgumentError("deterministic", deterministic, "expected true or false")
+        self.model: Any = cast(Any, found).load(model, device="cpu")
+        self.deterministic = deterministic
+        self._nested: dict[str, gym.Space[Any]] = {}
+        self._stacks: dict[str | None, np.ndarray] = {}  # as the env gives them, stacked
+        self._transposed: set[str | None] = set()  # pictures the model takes channels-first
+
+    def reset(self, env: gym.Env) -> None:
+        """Fit the stacks to ``env``'s observations; a model trained on other observations
+        is a DriverError naming both."""
+        from tinyrace.drivers import DriverError
+
+        space = env.observation_space
+        trained = self.model.observation_space
+        self._nested = {}
+        given: dict[str | None, gym.Space[Any]]
+        wanted: dict[str | None, gym.Space[Any]]
+        if isinstance(space, gym.spaces.Dict):
+            self._nested = {
+                k: s for k, s in space.spaces.items() if not isinstance(s, gym.spaces.Box)
+            }
+            given = {
+                k: gym.spaces.flatten_space(s) if k in self._nested else s
+                for k, s in space.spaces.items()
+            }
+            wanted = {}
+            for name, entry in (
+                trained.spaces.items() if isinstance(trained, gym.spaces.Dict) else ()
+            ):
+                wanted[name] = entry
+        else:
+            given, wanted = {None: space}, {None: trained}
+        self._stacks, self._transposed = {}, set()
+        for key, sub in given.items():
+            want = wanted.get(key)
+            stacked = _stacked_shape(
+                tuple(sub.shape or ()), tuple(getattr(want, "shape", ()) or ())
+            )
+            if want is None or stacked is None or set(wanted) != set(given):
+                raise DriverError(
+                    f"the model was trained on observations {_shapes(trained)}; this env gives "
+                    f"{_shapes(space)} (its frames stacked along the last axis at most)"
+                )
+            shape, transposed = stacked
+            if transposed:  # SB3 gave a CNN channels-first pictures (VecTransposeImage)
+                self._transposed.add(key)
+            self._stacks[key] = np.zeros(shape, dtype=want.dtype)
+
+    def act(self, observation: Any, info: dict[str, Any]) -> Any:
+        if None in self._stacks:
+            stacked: Any = self._push(None, observation)
+        else:
+            stacked = {
+                key: self._push(
+                    key,
+                    gym.spaces.flatten(self._nested[key], value) if key in self._nested else value,
+                )
+                for key, value in observation.items()
+            }
+        action, _ = self.model.predict(stacked, deterministic=self.deterministic)
+        return action
+
+    def _push(self, key: str | None, value: Any) -> np.ndarray:
+        stack = self._stacks[key]
+        width = np.shape(value)[-1]
+        stack[..., :-width] = stack[..., width:].copy()
+        stack[..., -width:] = value
+        return np.array(stack.transpose(2, 0, 1) if key in self._transposed else stack)
+
+
+def _stacked_shape(
+    given: tuple[int, ...], wanted: tuple[int, ...]
+) -> tuple[tuple[int, ...], bool] | None:
+    """The shape of ``given`` stacked to the model's ``wanted`` along its last axis, and
+    whether the model takes it channels-first (an (H, W, C) picture as (C, H, W)); None when
+    no stack of ``given`` is ``wanted``."""
+    if not given or given[-1] <= 0:
+        return None
+    if len(given) == len(wanted) and given[:-1] == wanted[:-1] and wanted[-1] % given[-1] == 0:
+        return wanted, False
+    if len(given) == len(wanted) == 3 and wanted[1:] == given[:2] and wanted[0] % given[2] == 0:
+        return (*given[:2], wanted[0]), True
+    return None
+
+
+def _shapes(space: gym.Space[Any]) -> str:
+    if isinstance(space, gym.spaces.Dict):
+        inner = ", ".join(f"{k}: {tuple(s.shape or ())}" for k, s in space.spaces.items())
+        return f"{{{inner}}}"
+    return str(tuple(space.shape or ()))
