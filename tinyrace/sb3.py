@@ -330,7 +330,9 @@ class ModelDriver:
     It gives the model the observation as training did: a dict's entries that are not arrays
     flattened (as ``tinyrace train`` does), and each array stacked along its last axis as
     deep as the model's is over the env's, the newest last and zeros before the first step,
-    as SB3's ``VecFrameStack`` stacks (``tinyrace train`` stacks pictures four deep)."""
+    as SB3's ``VecFrameStack`` stacks (``tinyrace train`` stacks pictures four deep). A
+    model trained under ``VecNormalize`` saw normalised observations, whose statistics are
+    saved apart from it: this driver does not apply them."""
 
     def __init__(self, model: str, algorithm: str = "PPO", deterministic: bool = True):
         import stable_baselines3
