@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from pathlib import Path
 
 import cv2
@@ -467,3 +468,19 @@ def test_a_car_too_big_for_its_start_names_the_keys_that_size_it(car, keys):
             car=car,
         )
     assert caught.value.problems[0].allowed.endswith(f"make the car smaller {keys}")
+
+
+def test_run_model_is_checked_before_running(tmp_path, capsys, monkeypatch):
+    """``tinyrace run NAME --model FILE.zip``: a missing file, a race, or no
+    Stable-Baselines3 are named as --model before any episode."""
+    monkeypatch.chdir(tmp_path)
+    code, err = run_cli(["run", "f1tenth_lidar", "--model", "missing.zip", *QUIET], capsys)
+    assert code == 2 and "argument --model: got 'missing.zip'; expected a saved model file" in err
+    (tmp_path / "m.zip").write_bytes(b"PK")
+    code, err = run_cli(["run", "circuit_race", "--model", "m.zip", *QUIET], capsys)
+    assert code == 2 and "a race's cars have drivers of their own" in err
+    monkeypatch.setitem(sys.modules, "stable_baselines3", None)  # as if not installed
+    code, err = run_cli(["run", "f1tenth_lidar", "--model", "m.zip", *QUIET], capsys)
+    assert code == 2 and "argument --model: a model's driver needs " in err
+    assert "stable-baselines3: pip install" in err
+    assert not (tmp_path / "runs").exists()

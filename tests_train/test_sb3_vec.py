@@ -325,6 +325,12 @@ def test_a_model_driver_runs_an_experiment_and_names_a_mismatch(
     assert cli.main(["run", "bad.yaml", "--quiet"]) == 2
     err = capsys.readouterr().err
     assert "the model was trained on observations (12, 96, 96)" in err
+    assert cli.main(["run", "carracing", "--model", str(pixel_model), "--episodes", "1",
+                     "--no-video", "--quiet"]) == 0  # fmt: skip
+    assert cli.main(["run", "f1tenth_lidar", "--model", str(pixel_model), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f"<command line>: --model: got {str(pixel_model)!r}" in err  # not the experiment
+    assert "the model was trained on observations (12, 96, 96)" in err
     (tmp_path / "none.yaml").write_text(experiment.replace(str(pixel_model), "missing.zip"))
     assert cli.main(["run", "none.yaml", "--quiet"]) == 2
     assert "driver_args.model: got 'missing.zip'; expected the path of a saved model" in (

@@ -125,6 +125,12 @@ def _parser() -> argparse.ArgumentParser:
         type=_count(0, f"a whole number from 0 to {MAX_SEED}", MAX_SEED),
         help="override the first seed",
     )
+    run.add_argument(
+        "--model",
+        metavar="FILE.zip",
+        help="drive with a saved Stable-Baselines3 model, e.g. tinyrace train's (the driver "
+        "tinyrace.sb3:ModelDriver; needs the train extra)",
+    )
     run.add_argument("--no-video", action="store_true", help="write no videos")
     run.add_argument("--force", action="store_true", help="allow run folders inside a track folder")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
@@ -228,7 +234,12 @@ def _run(args: argparse.Namespace) -> int:
             what = f"{episodes}, a race of {len(experiment.agents)} cars"
         kind = "the track " if track else ""
         print(f"tinyrace: running {kind}{experiment.source} ({what})")
-    result = run_experiment(experiment, out, show_progress=not args.quiet)
+    try:
+        result = run_experiment(experiment, out, show_progress=not args.quiet)
+    except ConfigError as exc:  # --model's driver: named as the command line gave it
+        if args.model is None:
+            raise
+        raise ConfigError([_from_model(p, args.model) for p in exc.problems]) from None
     if args.json:
         print(json.dumps(_json_summary(result), indent=2))
     elif not args.quiet:
@@ -244,7 +255,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
-    """The experiment with the command line's --episodes, --seed and --no-video."""
+    """The experiment with the command line's --episodes, --seed, --no-video and --model."""
     config = experiment.config
     if args.episodes is not None:
         config = dataclasses.replace(config, episodes=args.episodes)
@@ -252,7 +263,42 @@ def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
         config = dataclasses.replace(config, seed=args.seed)
     if args.no_video:
         config = dataclasses.replace(config, output=dataclasses.replace(config.output, video=False))
+    if args.model is not None:
+        config = dataclasses.replace(
+            config, driver=MODEL_DRIVER, driver_args={"model": _model(args.model, experiment)}
+        )
     return dataclasses.replace(experiment, config=config)
+
+
+MODEL_DRIVER = "tinyrace.sb3:ModelDriver"  # --model's driver
+
+
+def _from_model(problem: Problem, model: str) -> Problem:
+    """A problem of the driver that ``--model`` chose, named as the command line's."""
+    if problem.path != "driver" and not problem.path.startswith("driver_args."):
+        return problem
+    return Problem("<command line>", "--model", model, problem.allowed)
+
+
+def _model(name: str, experiment: Experiment) -> str:
+    """``--model`` checked: one car's run, a file, and Stable-Baselines3 importable."""
+    from tinyrace.train import missing
+
+    if experiment.is_race:
+        raise UsageError(
+            f"argument --model: a race's cars have drivers of their own: give each car "
+            f"driver: {MODEL_DRIVER} with driver_args: {{model: ...}} in drivers.<car>"
+        )
+    try:
+        found = Path(name).is_file()
+    except (OSError, ValueError):
+        found = False
+    if not found:
+        raise UsageError(f"argument --model: got {_short(name)!r}; expected a saved model file")
+    lacking = missing("a model's driver")
+    if lacking:
+        raise UsageError(f"argument --model: {lacking}")
+    return name
 
 
 def _out_folder(out: str | None, default: str, force: bool) -> Path | None:

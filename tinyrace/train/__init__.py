@@ -172,7 +172,7 @@ def _in_track_folder(path: Path, force: bool) -> str | None:
     )
 
 
-def missing() -> str | None:
+def missing(who: str = "tinyrace train") -> str | None:
     """What training lacks here (None when stable-baselines3 and torch import): every
     missing package, named as pip knows it."""
     lacking = []
@@ -184,7 +184,7 @@ def missing() -> str | None:
     if not lacking:
         return None
     return (
-        f"tinyrace train needs {' and '.join(lacking)}: {TRAIN_EXTRA} "
+        f"{who} needs {' and '.join(lacking)}: {TRAIN_EXTRA} "
         "(without a GPU, install PyTorch's CPU build first)"
     )
 
