@@ -36,7 +36,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("experiment",),
     ("validate",),
     ("play",),
-    ("train", "rllib", "sb3"),
+    ("train", "rllib", "sb3", "flat_observations"),
     ("cli", "__main__"),
 )
 

@@ -15,6 +15,7 @@ import tinyrace  # noqa: F401  (registers the ids)
 from tinyrace import cli, train
 from tinyrace.errors import ConfigError
 from tinyrace.examples import shipped_track
+from tinyrace.train import envs
 
 
 @pytest.fixture
@@ -106,7 +107,7 @@ def test_nested_dict_observations_are_flattened_per_key():
     finally:
         env.close()
     plain = train._make(**_kwargs(train.train_env(None)))
-    assert isinstance(plain, train.Reporting) and not isinstance(plain, train.FlatEntries)
+    assert isinstance(plain, envs.Reporting) and not isinstance(plain, envs.FlatEntries)
     plain.close()
 
 
@@ -135,14 +136,14 @@ class _Breaks(gym.Wrapper):
 
 
 def test_an_env_error_is_reported_not_raised_and_ends_the_episode():
-    env = train.Reporting(_Breaks(gym.make("tinyrace/TinyRace-v0", **train.train_env().kwargs)))
+    env = envs.Reporting(_Breaks(gym.make("tinyrace/TinyRace-v0", **train.train_env().kwargs)))
     try:
         env.reset(seed=0)
         for _ in range(2):
             env.step(env.action_space.sample())
         observation, reward, terminated, _, info = env.step(env.action_space.sample())
         assert terminated and reward == 0.0 and env.observation_space.contains(observation)
-        assert info[train.FAILED] == "FloatingPointError: the car blew up"
+        assert info[envs.FAILED] == "FloatingPointError: the car blew up"
         with pytest.raises(train.EnvFailed, match="FloatingPointError: the car blew up"):
             train.raise_failure([{}, info])
         train.raise_failure([{}, {"x": 1}])  # no report: nothing raised

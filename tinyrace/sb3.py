@@ -36,6 +36,7 @@ from stable_baselines3.common.vec_env.base_vec_env import (
 )
 
 from tinyrace.errors import shown
+from tinyrace.flat_observations import flat_observation, flat_space, nested_entries
 from tinyrace.vector import BatchVectorEnv, make_batch
 from tinyrace.vector.arguments import env_indices
 from tinyrace.vector.failures import check_autoreset
@@ -369,14 +370,9 @@ class ModelDriver:
         self._nested = {}
         given: dict[str | None, gym.Space[Any]]
         wanted: dict[str | None, gym.Space[Any]]
-        if isinstance(space, gym.spaces.Dict):
-            self._nested = {
-                k: s for k, s in space.spaces.items() if not isinstance(s, gym.spaces.Box)
-            }
-            given = {
-                k: gym.spaces.flatten_space(s) if k in self._nested else s
-                for k, s in space.spaces.items()
-            }
+        if isinstance(space, gym.spaces.Dict):  # flattened as tinyrace train flattens it
+            self._nested = nested_entries(space)
+            given = {key: sub for key, sub in flat_space(space).spaces.items()}
             wanted = {}
             for name, entry in (
                 trained.spaces.items() if isinstance(trained, gym.spaces.Dict) else ()
@@ -404,13 +400,8 @@ class ModelDriver:
         if None in self._stacks:
             stacked: Any = self._push(None, observation)
         else:
-            stacked = {
-                key: self._push(
-                    key,
-                    gym.spaces.flatten(self._nested[key], value) if key in self._nested else value,
-                )
-                for key, value in observation.items()
-            }
+            flat = flat_observation(self._nested, observation)
+            stacked = {key: self._push(key, value) for key, value in flat.items()}
         action, _ = self.model.predict(stacked, deterministic=self.deterministic)
         return action
 

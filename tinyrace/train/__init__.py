@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import multiprocessing
 import os
 import signal
 import sys
@@ -30,7 +29,7 @@ import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, SupportsFloat, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 from gymnasium import spaces
@@ -39,6 +38,7 @@ from tinyrace import __version__
 from tinyrace.config.bounds import MAX_TRAIN_ENVS
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.experiment.files import unmakeable
+from tinyrace.train.envs import EnvFailed, _make, raise_failure
 
 if TYPE_CHECKING:
     from stable_baselines3 import PPO
@@ -56,12 +56,7 @@ PPO_SETTINGS = {"n_steps": 256, "batch_size": 256, "learning_rate": 3e-4}
 MIN_STEPS = 16  # the shortest rollout per env (a very short training run)
 MAX_TRAIN_SEED = 2**32 - 1  # SB3 seeds numpy's global generator with it (np.random.seed)
 MIN_CNN_SIDE = 36  # [px] the smallest image SB3's NatureCNN takes (8/4, 4/2 and 3/1 kernels)
-FAILED = "tinyrace_env_error"  # the info key by which a worker's env reports its exception
 INTERRUPTED = 130  # the exit status after Ctrl-C, as for ``tinyrace run``
-
-
-class EnvFailed(RuntimeError):
-    """An env raised while training or evaluating (in this process or a worker's)."""
 
 
 @dataclass(frozen=True)
@@ -327,84 +322,6 @@ class _Sigterm:
     def _raise(self, signum: int, frame: Any) -> None:
         self.received = True
         raise Terminated("SIGTERM")
-
-
-def _make(env_id: str, kwargs: dict[str, Any]) -> gym.Env[Any, Any]:
-    """One env (module level, so that worker processes unpickle it and import tinyrace)."""
-    import tinyrace  # noqa: F401  (registers the ids in a worker process)
-
-    if multiprocessing.parent_process() is not None:  # a worker: Ctrl-C is the trainer's
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-    env: gym.Env[Any, Any] = Reporting(gym.make(env_id, **kwargs))
-    if isinstance(env.observation_space, spaces.Dict) and not _flat(env.observation_space):
-        env = FlatEntries(env)
-    return env
-
-
-def _flat(space: spaces.Dict) -> bool:
-    return all(isinstance(s, spaces.Box) for s in space.spaces.values())
-
-
-class Reporting(gym.Wrapper[Any, Any, Any, Any]):
-    """An env whose exceptions become an episode end with ``info[FAILED]`` (the error as
-    text), so that a worker process stays alive and the trainer ends the run with it."""
-
-    def __init__(self, env: gym.Env[Any, Any]):
-        super().__init__(env)
-        self._last: Any = None
-
-    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
-        try:
-            observation, info = self.env.reset(**kwargs)
-        except Exception as exc:  # reported to the trainer, which raises it
-            return self._stand_in(), {FAILED: _described(exc)}
-        self._last = observation
-        return observation, info
-
-    def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
-        try:
-            observation, reward, terminated, truncated, info = self.env.step(action)
-        except Exception as exc:  # reported to the trainer, which raises it
-            return self._stand_in(), 0.0, True, False, {FAILED: _described(exc)}
-        self._last = observation
-        return observation, reward, terminated, truncated, info
-
-    def _stand_in(self) -> Any:
-        return self._last if self._last is not None else self.observation_space.sample()
-
-
-def _described(exc: BaseException) -> str:
-    return f"{type(exc).__name__}: {exc}"
-
-
-def raise_failure(infos: Any) -> None:
-    """Raise EnvFailed when one env's info (a sequence of them) reports an exception."""
-    for info in infos or ():
-        if isinstance(info, dict) and FAILED in info:
-            raise EnvFailed(f"an env raised during training: {info[FAILED]}")
-
-
-class FlatEntries(gym.ObservationWrapper[Any, Any, Any]):
-    """A dict observation whose entries are all arrays: each entry that is not a Box (the
-    ``cones`` sensor's dict, a count) flattened into one (SB3 takes no nested dicts)."""
-
-    def __init__(self, env: gym.Env[Any, Any]):
-        super().__init__(env)
-        space = env.observation_space
-        assert isinstance(space, spaces.Dict)
-        self._nested = {k: s for k, s in space.spaces.items() if not isinstance(s, spaces.Box)}
-        self.observation_space = spaces.Dict(
-            {
-                key: spaces.flatten_space(sub) if key in self._nested else sub
-                for key, sub in space.spaces.items()
-            }
-        )
-
-    def observation(self, observation: dict[str, Any]) -> dict[str, Any]:
-        return {
-            key: spaces.flatten(self._nested[key], value) if key in self._nested else value
-            for key, value in observation.items()
-        }
 
 
 def new_model(
