@@ -143,6 +143,8 @@ class Parser:
                 return value
         allowed = " or ".join(_describe(m, meta) for m in members)
         names = [str(a) for m in members if typing.get_origin(m) is Literal for a in m.__args__]
+        if int in members or float in members:
+            allowed += _number_as_text(raw)
         return self.problem(path, raw, f"{did_you_mean(raw, names)}expected {allowed}")
 
     def tuple(self, args: tuple[Any, ...], raw: object, path: str, meta: Mapping[str, Any]) -> Any:
@@ -177,7 +179,7 @@ class Parser:
     def number(self, hint: type, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
         allowed = f"expected {_describe(hint, meta)}"
         if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-            return self.problem(path, raw, allowed)
+            return self.problem(path, raw, allowed + _number_as_text(raw))
         if isinstance(raw, float) and not math.isfinite(raw):
             return self.problem(path, raw, allowed)
         magnitude = meta.get("magnitude", MAX_MAGNITUDE)
@@ -194,6 +196,21 @@ class Parser:
         if too_low or (high is not None and raw > high):
             return self.problem(path, raw, allowed)
         return hint(raw)
+
+
+def _number_as_text(raw: object) -> str:
+    """A hint for a number YAML read as text: ``1e3`` (YAML 1.1 wants ``1.0e+3``) or a quoted
+    ``'30'``; empty for anything else."""
+    if not isinstance(raw, str) or len(raw) > 40:
+        return ""
+    try:
+        number = float(raw)
+    except ValueError:
+        return ""
+    if not math.isfinite(number):
+        return ""
+    written = str(int(number)) if number.is_integer() and abs(number) < 1e15 else repr(number)
+    return f" ({raw!r} is text in YAML: write {written}, unquoted)"
 
 
 def _key_ok(key: object, numbers: bool) -> bool:

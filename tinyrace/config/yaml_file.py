@@ -190,6 +190,51 @@ class _StrictLoader(_BaseLoader):  # type: ignore[misc, valid-type]
         mapping: dict[Any, Any] = super().construct_mapping(node, deep=deep)
         return mapping
 
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int:
+        _refuse_yaml11_number(node, "int")
+        value: int = super().construct_yaml_int(node)
+        return value
+
+    def construct_yaml_float(self, node: yaml.ScalarNode) -> float:
+        _refuse_yaml11_number(node, "float")
+        value: float = super().construct_yaml_float(node)
+        return value
+
+
+_StrictLoader.add_constructor("tag:yaml.org,2002:int", _StrictLoader.construct_yaml_int)
+_StrictLoader.add_constructor("tag:yaml.org,2002:float", _StrictLoader.construct_yaml_float)
+_OCTAL = re.compile(r"[-+]?0[0-7_]+")  # YAML 1.1's octal: 010 is 8
+
+
+def _refuse_yaml11_number(node: yaml.ScalarNode, kind: str) -> None:
+    """Refuse YAML 1.1's numbers that read otherwise than they look: base 60 (``1:30`` is 90)
+    and a leading zero (``010`` is 8). YAML 1.2 reads both as text; neither is silent here."""
+    text = node.value
+    if node.style not in (None, "") or not isinstance(text, str):  # quoted: text
+        return
+    if ":" in text:
+        number = _base60(text.replace("_", ""), kind)
+        reason = (
+            f"{text} is YAML 1.1's base-60 number {number}: write {number}, "
+            f"or quote it ('{text}') for text"
+        )
+        raise _Refused(node.start_mark, reason)
+    digits = text.replace("_", "")
+    if _OCTAL.fullmatch(text) and int(digits, 8) != int(digits, 10):
+        reason = (
+            f"{text} is YAML 1.1's octal number {int(digits, 8)}: write {int(digits, 10)} "
+            f"without the leading zero, or quote it ('{text}') for text"
+        )
+        raise _Refused(node.start_mark, reason)
+
+
+def _base60(text: str, kind: str) -> str:
+    sign = -1 if text.startswith("-") else 1
+    value = 0.0 if kind == "float" else 0
+    for part in text.lstrip("+-").split(":"):
+        value = value * 60 + (float(part) if kind == "float" else int(part))
+    return repr(sign * value)
+
 
 def _line(mark: Any) -> str:
     return f"line {mark.line + 1}" if mark is not None else ""
