@@ -97,3 +97,13 @@ def test_text_that_is_no_finite_number_gets_no_hint(tmp_path: Path, written: str
     with pytest.raises(ConfigError) as error:
         load_env_config(config)
     assert "is text in YAML" not in error.value.problems[0].allowed
+
+
+def test_a_name_yaml_reads_as_a_boolean_is_named_with_the_quote_to_add(tmp_path: Path) -> None:
+    config = tmp_path / "track.yaml"
+    config.write_text("track: {type: procedural}\ncameras: [{id: no}]\n")
+    with pytest.raises(ConfigError) as error:
+        load_env_config(config)
+    (problem,) = error.value.problems
+    assert (problem.path, problem.value) == ("cameras[0].id", False)
+    assert "YAML reads yes, no, on, off, true and false as booleans: quote it" in problem.allowed

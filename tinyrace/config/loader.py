@@ -171,7 +171,10 @@ class Parser:
         if hint is str:
             if isinstance(raw, str) and raw.strip():
                 return raw
-            return self.problem(path, raw, "expected a non-empty string")
+            allowed = "expected a non-empty string"
+            if isinstance(raw, bool):  # a name written yes, no, on or off
+                allowed += " (YAML reads yes, no, on, off, true and false as booleans: quote it)"
+            return self.problem(path, raw, allowed)
         if hint in (int, float):
             return self.number(hint, raw, path, meta)
         raise TypeError(f"schema type {hint!r} at {path} has no parser")  # a bug in the schema
