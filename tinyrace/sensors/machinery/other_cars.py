@@ -115,7 +115,7 @@ def _distances(
     """(B,) float64 distance along each beam to one car's footprint; inf where it misses."""
     sx, sy, ax, ay, half_length, half_width = box(*origin, *row.tolist())
     dx, dy = bx * ax + by * ay, bx * -ay + by * ax  # the beams in the box's frame
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # inf: parallel
         near_x, far_x = _slab(sx, dx, half_length)
         near_y, far_y = _slab(sy, dy, half_width)
     near = np.fmax(near_x, near_y)  # entry (NaN: parallel on the slab's edge, ignored)
