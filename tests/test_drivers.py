@@ -88,6 +88,25 @@ def test_constant_driver_gives_its_action_in_the_space() -> None:
     assert driver.act(None, {}) == 3
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "expected"),
+    [
+        ({}, [0.0, 0.0, 0.0]),  # CarRacing's steer, gas, brake
+        ({"environment": "circuit"}, [0.0, 0.0]),  # the kinematic car's steer and throttle
+        ({"car": {"actions": "discrete"}}, 0),  # CarRacing's "nothing"
+    ],
+)
+def test_constant_driver_does_nothing_by_default_in_any_action_space(kwargs, expected) -> None:
+    env = gym.make("tinyrace/TinyRace-v0", **kwargs)
+    driver = ConstantDriver()
+    env.reset(seed=0)
+    driver.reset(env)
+    action = driver.act(None, {})
+    assert env.action_space.contains(action)
+    assert np.array_equal(action, expected)
+    env.close()
+
+
 def test_random_driver_samples_the_space_reproducibly() -> None:
     def episodes(seed: int) -> list[np.ndarray]:
         env, driver = gym.make("tinyrace/CarRacing-v0"), RandomDriver()

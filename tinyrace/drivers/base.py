@@ -144,16 +144,20 @@ class DiscreteChooser:
 
 
 class ConstantDriver:
-    """Always the same action (in the env's own action space)."""
+    """Always the same action (in the env's own action space): ``action``, or by default the
+    one nearest to doing nothing (0 clipped into a Box, the first of a Discrete), whatever
+    the car's actions are."""
 
-    def __init__(self, action: Any = (0.0, 0.0, 0.0)):
+    def __init__(self, action: Any = None):
         self.action = action
         self._value: Any = None
 
     def reset(self, env: gym.Env) -> None:
         space = env.action_space
         if isinstance(space, spaces.Discrete):
-            self._value = int(self.action)
+            self._value = int(space.start if self.action is None else self.action)
+        elif self.action is None and isinstance(space, spaces.Box):
+            self._value = np.clip(np.zeros(space.shape), space.low, space.high).astype(space.dtype)
         else:
             self._value = np.asarray(self.action, space.dtype)
 
