@@ -15,11 +15,13 @@ from typing import Any, TypeVar
 T = TypeVar("T", bound=type)
 
 _FAMILIES: dict[Any, dict[str, type]] = {}
+_TYPE_REQUIRED: set[Any] = set()  # families whose entries must name their type
 
 
 def add(family: Any, member: T) -> T:
     """Make ``member`` (a dataclass with a ``type`` field) a member of ``family``; the first
-    member added is what an entry without ``type`` is. Returns ``member`` (a decorator)."""
+    member added is what an entry without ``type`` is (unless the family was declared with
+    ``type_required``). Returns ``member`` (a decorator)."""
     name = type_of(member)
     known = _FAMILIES.setdefault(family, {})
     if name in known and known[name] is not member:
@@ -28,9 +30,17 @@ def add(family: Any, member: T) -> T:
     return member
 
 
-def declare(family: Any) -> None:
-    """Make ``family`` a family, with no member yet (its entries are parsed by ``type``)."""
+def declare(family: Any, type_required: bool = False) -> None:
+    """Make ``family`` a family, with no member yet (its entries are parsed by ``type``);
+    ``type_required``: an entry without ``type`` is refused (no member stands for it)."""
     _FAMILIES.setdefault(family, {})
+    if type_required:
+        _TYPE_REQUIRED.add(family)
+
+
+def type_required(family: Any) -> bool:
+    """Whether ``family``'s entries must name their ``type``."""
+    return family in _TYPE_REQUIRED
 
 
 def remove(family: Any, name: str) -> None:

@@ -99,6 +99,10 @@ class Parser:
         if family is not None:  # an open union: told apart by type
             if raw is None:
                 return self.problem(path, raw, f"expected {_describe(hint, meta)}")
+            if families.type_required(hint) and isinstance(raw, Mapping) and "type" not in raw:
+                known = ", ".join(family) or "(none registered)"
+                allowed = f"a required key is missing: the entry's type, one of: {known}"
+                return self.problem(_join(path, "type"), None, allowed)
             return self.union_of_dataclasses(tuple(family.values()), raw, path)
         origin, args = typing.get_origin(hint), typing.get_args(hint)
         if origin in (Union, types.UnionType):

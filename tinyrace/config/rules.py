@@ -16,7 +16,7 @@ class RuleConfig(Protocol):
     def type(self) -> str: ...
 
 
-families.declare(RuleConfig)
+families.declare(RuleConfig, type_required=True)  # no part is what an entry means
 
 
 def rule_configs() -> dict[str, type]:
