@@ -5,6 +5,8 @@ CommonRoad); CarRacing's Discrete(5) ``right`` turns right everywhere."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -44,12 +46,13 @@ def turn_after(model: str, actions: str, kind: str) -> str:
     """Where the car turns (left or right, as seen from its seat) under a positive command
     (CarRacing's ``right`` for Discrete(5), after a little gas)."""
     environment, _ = TRACKS[kind]
-    keys = {} if environment is None else {"environment": environment}
+    keys: dict[str, Any] = {} if environment is None else {"environment": environment}
     env = gym.make("tinyrace/TinyRace-v0", car={"model": model, "actions": actions}, **keys)
-    raw = env.unwrapped
+    raw: Any = env.unwrapped
     _, info = env.reset(seed=0)
     heading = info["pose"][2]
     spec = raw.action_spec
+    action: Any
     for step in range(40):
         if spec.kind == "discrete":
             action = GAS if step < 10 else RIGHT

@@ -10,12 +10,13 @@ import gymnasium as gym
 import numpy as np
 import pymunk
 import pytest
+from test_steer_convention import turn_after
 
 import tinyrace  # noqa: F401  (registers the env ids)
 from tinyrace.actions import ActionSpec
 from tinyrace.cars.base import Car, Pose
 from tinyrace.cars.collision import footprint_sensor
-from tinyrace.cars.registry import CarModel, register, unregister
+from tinyrace.cars.registry import POSITIVE_STEER_TURNS, CarModel, register, unregister
 from tinyrace.cars.state import CarFacts, CarState
 from tinyrace.config import CarConfig, EnvConfig
 from tinyrace.drivers.centerline import CenterlineDriver
@@ -27,7 +28,8 @@ LENGTH, WIDTH, TOP_SPEED, LOCK = 1.2, 0.8, 6.0, 0.5  # [m], [m], [m/s], [rad]
 
 
 class Hopper:
-    """A toy car: a unicycle whose action is [turn -1..1 (+ right), speed 0..1 of the top]."""
+    """A toy car: a unicycle whose action is [turn -1..1 (+ left, as every car in metres),
+    speed 0..1 of the top]."""
 
     def __init__(self, space: pymunk.Space, pose: Pose):
         self.body = pymunk.Body(1.0, math.inf)
@@ -41,7 +43,7 @@ class Hopper:
     def apply_forces(self, dt: float, on_road: object = None) -> None:
         heading = self.body.angle
         self.body.velocity = (self.v * math.cos(heading), self.v * math.sin(heading))
-        self.body.angular_velocity = -self.turn * LOCK * self.v / LENGTH  # + right, y up
+        self.body.angular_velocity = self.turn * LOCK * self.v / LENGTH  # + left, y up
 
     def stop(self) -> None:
         self.v = 0.0
@@ -83,7 +85,7 @@ def build(space: pymunk.Space, pose: Pose, config: CarConfig, track: Track) -> C
 
 
 def facts(config: EnvConfig) -> CarFacts:
-    return CarFacts(LENGTH, WIDTH, TOP_SPEED, TOP_SPEED * LOCK / LENGTH, LOCK, 1.0 / LOCK)
+    return CarFacts(LENGTH, WIDTH, TOP_SPEED, TOP_SPEED * LOCK / LENGTH, LOCK, -1.0 / LOCK)
 
 
 HOPPER = CarModel(
@@ -131,6 +133,15 @@ def test_a_toy_model_drives_through_make_a_sensor_and_the_centreline_driver(hopp
     assert observation["motion"][0] > 0.25 * TOP_SPEED  # it drives forward
     assert np.hypot(*(np.array(info["pose"][:2]) - start)) > 10.0  # [m] of 4 s at <= 6 m/s
     assert info["tiles_visited"] > 5 and info["on_road"]
+    env.close()
+
+
+def test_a_toy_model_keeps_the_steering_convention_of_tracks_in_metres(hopper):
+    """What tests/test_steer_convention.py asks of every shipped model, asked of the toy:
+    the recipe's car is one to copy into the package."""
+    assert turn_after("hopper", "continuous", "centerline") == POSITIVE_STEER_TURNS["m"]
+    env = gym.make("tinyrace/TinyRace-v0", environment="circuit", car={"model": "hopper"})
+    assert env.unwrapped.car_facts.steer_per_rad < 0  # a positive command turns left
     env.close()
 
 

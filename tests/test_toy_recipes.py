@@ -127,38 +127,45 @@ class SpeedLimitConfig:
 
     type: Literal["speed_limit"] = knob("speed_limit", "rule part")
     limit: float = knob(10.0, "the top speed allowed", "track units/s", low=0.0)
-    penalty: float = knob(0.01, "subtracted per step, per track unit/s over the limit", low=0.0)
-    strikes: int = knob(20, "steps over the limit that end the episode", low=1)
+    penalty: float = knob(0.5, "subtracted per second, per track unit/s over the limit", low=0.0)
+    seconds: float = knob(
+        0.4, "time over the limit that ends the episode", "s", low=0.0, low_open=True
+    )
 
 
 class SpeedLimit(RuleBase):
-    """One car's speeding: how far over the limit now, and for how many steps so far."""
+    """One car's speeding: how far over the limit now, and for how long so far."""
 
     def __init__(self, track: Track, settings: SpeedLimitConfig) -> None:
-        self.limit, self.strikes = settings.limit, 0
+        self.limit, self.steps_over, self.seconds = settings.limit, 0, 0.0
 
     def judge(self, contacts: Contacts, car: CarState, facts: StepFacts) -> None:
         over = max(0.0, car.speed - self.limit)  # [track units/s]
-        self.strikes += over > 0
-        facts.more["speed_limit"] = (over, self.strikes)
+        self.steps_over += over > 0
+        self.seconds = self.steps_over * facts.dt  # [s]
+        facts.more["speed_limit"] = (over, self.seconds)
 
     def info(self, info: Info) -> None:
-        info["speeding_steps"] = self.strikes
+        info["speeding_seconds"] = self.seconds
 
 
 def _speeding(facts: StepFacts, design: Design) -> float | None:
     over, _ = facts.more["speed_limit"]
-    return -design.settings["speed_limit"].penalty * over if over else None
+    return -design.settings["speed_limit"].penalty * over * facts.dt if over else None
+
+
+def _configured(design: Design) -> bool:
+    return "speed_limit" in design.settings
 
 
 def _banned(facts: StepFacts, design: Design) -> bool:
-    return bool(facts.more["speed_limit"][1] >= design.settings["speed_limit"].strikes)
+    return bool(facts.more["speed_limit"][1] >= design.settings["speed_limit"].seconds)
 
 
 SPEED_LIMIT = RulePart(
     "speed_limit",
     SpeedLimit,
-    terms=(Term("speeding", _speeding),),
+    terms=(Term("speeding", _speeding, can_pay=_configured),),
     ends=(End("speeding", _banned),),
     config=SpeedLimitConfig,
 )
@@ -298,7 +305,7 @@ def test_a_registered_sensor_type_is_checked_like_a_built_in_one(compass):
 def test_a_rule_part_with_its_own_knobs_term_and_end_drives_through_gym_make(
     speed_limit: None,
 ) -> None:
-    rules = [{"type": "speed_limit", "limit": 10.0, "strikes": 20}]
+    rules = [{"type": "speed_limit", "limit": 10.0, "seconds": 0.4}]
     env = gym.make("tinyrace/TinyRace-v0", rules=rules)
     env.reset(seed=0)
     rewards, speeding = [], []
@@ -309,9 +316,11 @@ def test_a_rule_part_with_its_own_knobs_term_and_end_drives_through_gym_make(
         if terminated or truncated:
             break
     assert terminated and info["termination"] == "speeding" and not truncated
-    assert info["speeding_steps"] == 20  # ended on the 20th step over the limit
+    assert info["speeding_seconds"] == 0.4  # ended on the 20th step over the limit (50 fps)
     paid = [value for value in speeding if value]
     assert len(paid) == 20 and all(value < 0 for value in paid)
+    over = [-value / (0.5 / 50) for value in paid]  # [units/s] over the limit: paid per second
+    assert all(0.0 < value < 60.0 for value in over), over
     assert paid[-1] < paid[0]  # faster and faster: more to pay
     core: Any = env.unwrapped
     assert core.car.speed > 10.0
@@ -326,8 +335,11 @@ def test_a_rule_part_with_its_own_knobs_term_and_end_drives_through_gym_make(
 
 def test_a_rule_parts_knobs_are_checked_like_built_in_ones(speed_limit: None) -> None:
     with pytest.raises(ConfigError) as caught:
-        gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limit", "strikes": 0}])
-    assert "rules[0].strikes" in str(caught.value) and ">= 1" in str(caught.value)
+        gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limit", "seconds": 0}])
+    assert "rules[0].seconds" in str(caught.value) and "> 0" in str(caught.value)
+    with pytest.raises(ConfigError) as caught:
+        gym.make("tinyrace/TinyRace-v0", rules=[{"limit": 5.0}])  # no part stands for it
+    assert "rules[0].type" in str(caught.value) and "speed_limit" in str(caught.value)
     with pytest.raises(ConfigError) as caught:
         gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limt"}])
     assert "rules[0].type" in str(caught.value) and "did you mean 'speed_limit'" in str(
@@ -337,7 +349,7 @@ def test_a_rule_parts_knobs_are_checked_like_built_in_ones(speed_limit: None) ->
 
 def test_a_rule_parts_term_and_end_come_after_the_built_in_ones(speed_limit: None) -> None:
     assert list(TERMS)[-1] == "speeding" and list(ENDS)[-1] == "speeding"
-    assert next(iter(TERMS)) == "time" and list(ENDS)[-2] == "lap_finished"
+    assert next(iter(TERMS)) == "time" and "lap_finished" in list(ENDS)[:-1]
 
 
 def test_a_toy_type_is_gone_when_its_test_ends() -> None:

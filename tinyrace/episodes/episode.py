@@ -238,6 +238,10 @@ class Episode:
             claimed[paid] = True
             fact.new_tiles = len(paid)
 
+    def judging(self, car: int = 0) -> Judging:
+        """The reward terms and ends car ``car``'s steps are judged by (once started)."""
+        return self._judging[car]
+
     def snapshot(self) -> Snapshot:
         """A copy of the world's state now, labelled with the clock and car 0's score."""
         return self.world.snapshot(self.t, self.steps, self.scores[0])
@@ -251,9 +255,10 @@ class Episode:
             self.world.park(car)
 
     def _judge(self) -> list[StepFacts]:
-        world = self.world
+        world, referee = self.world, self.referee
+        assert referee is not None  # judging starts with start(referee)
         states, contacts, parked = world.states(), world.contacts, world.parked
-        facts = [StepFacts() for _ in world.cars]
+        facts = [StepFacts(referee.dt) for _ in world.cars]
         for car, rules in enumerate(self.rules):
             if car in parked:
                 continue

@@ -11,8 +11,10 @@ How to add a sensor type:
    fields (units, bounds, docs) with ``id`` and ``type: Literal["<type>"]``, subclassing
    ``SensorDefaults`` (``tinyrace.config.sensors``). The ``SensorContext`` gives the env
    config, the ground and the car's facts; what sensor types share is in
-   ``sensors/machinery/``.
-   ``tinyrace/sensors/birdseye_camera.py`` is the example to copy.
+   ``sensors/machinery/``. For a type in the package the config dataclass lives in
+   ``tinyrace/config/sensors.py`` (so that ``import tinyrace`` alone knows it);
+   ``tinyrace/sensors/birdseye_camera.py`` with ``CameraConfig`` there is the
+   example to copy.
 2. Register it in ``tinyrace/sensors/registry.py``: one ``SensorType`` entry with its
    name (the entry's ``type``), config class, builder and what its tracks must hold; the
    loader then parses ``type: <type>`` entries into its config class.

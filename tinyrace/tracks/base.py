@@ -10,10 +10,13 @@ How to add a track source (one new kind of ``track.type``):
    constructor takes ``(config: EnvConfig, base_dir: Path, source: str)``, loads every
    file once and raises ``ConfigError`` listing every problem; ``draw(rng, options)``
    returns the ``TrackDraw`` of a new episode, drawing from ``rng`` only.
-2. Add its config dataclass (``type: Literal["<kind>"]``) to ``tinyrace/config/schema.py``.
-3. Register it in ``tinyrace/tracks/registry.py`` (``TRACK_SOURCES``). Its ``Track`` says
+2. Its config dataclass (a ``TrackFacts`` with ``type: Literal["<kind>"]``): for a kind in
+   the package in ``tinyrace/config/tracks.py``, added to the family there (so that
+   ``import tinyrace`` alone knows it); for one from outside, beside its source.
+3. One ``register(config, Source)`` in ``tinyrace/tracks/registry.py``. Its ``Track`` says
    what it holds (unit, reference line, walls, cones, picture, ...): cars, rules, sensors
    and pictures choose by that, never by the kind.
+docs/ARCHITECTURE.md's recipe does it whole, with what else a kind in the package needs.
 """
 
 from __future__ import annotations

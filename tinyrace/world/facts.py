@@ -15,6 +15,7 @@ from typing import Any
 class StepFacts:
     """What happened during one step, as the sensors saw it."""
 
+    dt: float = 0.0  # [s] the step's sim time (a rule "per second" scales by it)
     new_tiles: int = 0  # tiles visited for the first time
     tiles: list[int] = field(default_factory=list)  # which: the tiles first visited this step
     tiles_total: int = 0
