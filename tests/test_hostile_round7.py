@@ -107,3 +107,60 @@ def test_a_name_yaml_reads_as_a_boolean_is_named_with_the_quote_to_add(tmp_path:
     (problem,) = error.value.problems
     assert (problem.path, problem.value) == ("cameras[0].id", False)
     assert "YAML reads yes, no, on, off, true and false as booleans: quote it" in problem.allowed
+
+
+# -- a contributor's walk: what validate says of the rules, the reference page ---------------
+
+
+@pytest.mark.parametrize(
+    ("design", "rewards"),
+    [
+        ("", "rewards: out_of_bounds, time, tiles; ends: out_of_bounds, lap_finished"),
+        ("reward_design: {time_penalty: 0}\n", "rewards: out_of_bounds, tiles; ends:"),
+        (
+            "reward_design: {off_road_penalty: 0.5}\n",
+            "rewards: out_of_bounds, time, tiles, off_road;",
+        ),
+    ],
+)
+def test_validate_names_the_reward_terms_that_can_pay_and_the_ends(
+    tmp_path: Path, design: str, rewards: str
+) -> None:
+    config = tmp_path / "track.yaml"
+    config.write_text("track: {type: procedural}\n" + design)
+    problems, summary = validate_path(config)
+    assert problems == [] and f"; {rewards}" in summary, summary
+    assert summary.index("rewards:") < summary.index("observes:")
+
+
+def test_the_reference_generator_writes_a_new_page_and_refuses_one_without_markers(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tinyrace.config.reference import END, START, main
+
+    page = tmp_path / "parts.md"
+    assert main([str(page)]) == 0
+    text = page.read_text()
+    assert START in text and END in text and "## `track.yaml`" in text
+    other = tmp_path / "notes.md"
+    other.write_text("my notes\n")
+    assert main([str(other)]) == 1
+    assert other.read_text() == "my notes\n"
+    assert "has no reference markers" in capsys.readouterr().err
+    assert main([str(tmp_path / "missing" / "ref.md")]) == 1
+    assert "No such file or directory" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("environment", "fps"), [(None, 50.0), ("formula_student", 30.0)])
+def test_a_steps_facts_carry_its_sim_time(environment: str | None, fps: float) -> None:
+    """A rule part "per second" scales by ``facts.dt``: 1 / sim.fps, whatever the track."""
+    import gymnasium as gym
+
+    keys = {} if environment is None else {"environment": environment}
+    env = gym.make("tinyrace/TinyRace-v0", **keys)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    core = env.unwrapped
+    assert core.config.sim.fps == fps
+    assert [facts.dt for facts in core.episode.facts] == [1.0 / fps]
+    env.close()

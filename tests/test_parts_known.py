@@ -320,13 +320,14 @@ def test_a_rule_part_registered_by_user_code_is_in_the_reference_and_validates(
         "from tinyrace.validate import validate_path\n"
         "before = validate_path(Path(r'TRACK'))[0]\n"
         "register(toy_rules.SPEED_LIMIT)\n"
-        "after = validate_path(Path(r'TRACK'))[0]\n"
+        "after, summary = validate_path(Path(r'TRACK'))\n"
         "page = markdown()\n"
-        "print(json.dumps({'before': before, 'after': after, 'page': 'rules[i]: type "
-        "speed_limit' in page and 'steps over the limit that end the episode' in page}))\n"
+        "print(json.dumps({'before': before, 'after': after, 'summary': summary, 'page': "
+        "'rules[i]: type speed_limit' in page and 'time over the limit that ends' in page}))\n"
     ).replace("TRACK", str(track))
     done = _run(script, tmp_path, ROOT / "tests")
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert any("rules[0].type" in line for line in result["before"])
     assert result["after"] == [] and result["page"] is True
+    assert re.search(r"rewards: [^;]*speeding; ends: [^;]*speeding", result["summary"])

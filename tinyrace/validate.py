@@ -79,17 +79,28 @@ def start_summary(parts: Parts) -> str:
 
 
 def try_one_step(loaded: LoadedConfig) -> str:
-    """Build the env of ``loaded``, reset it with seed 0 and take one neutral step; what
-    its cars observe (``observation_summary``)."""
+    """Build the env of ``loaded``, reset it with seed 0 and take one neutral step; how its
+    steps are judged (``judging_summary``) and what its cars observe
+    (``observation_summary``)."""
     from tinyrace.env import TinyRaceEnv
 
     env = TinyRaceEnv(config=loaded)
     try:
         env.reset(seed=0)
         env.step(neutral_action(env.action_space))
-        return observation_summary(env)
+        return f"{judging_summary(env)}; {observation_summary(env)}"
     finally:
         env.close()
+
+
+def judging_summary(env: TinyRaceEnv) -> str:
+    """The reward terms that can pay and the ends of the first car's steps, in the order
+    they are summed and asked (``rewards: time, tiles; ends: out_of_bounds, ...``)."""
+    assert env.episode is not None  # reset
+    judging = env.episode.judging(0)
+    terms = [term.name for term in (*judging.alone, *judging.terms)]
+    ends = [end.reason for end in judging.ends]
+    return f"rewards: {', '.join(terms) or 'none'}; ends: {', '.join(ends) or 'none'}"
 
 
 def neutral_action(space: gym.Space[Any]) -> Any:

@@ -192,12 +192,26 @@ def embed(readme: str) -> str:
 
 
 def main(argv: list[str]) -> int:
+    """Put the reference between the markers of a Markdown page (``docs/reference.md`` by
+    default), or write a new page holding it alone where no file is yet."""
     path = Path(argv[0] if argv else "docs/reference.md")
-    text = path.read_text()
-    if START not in text or END not in text:
-        print(f"{path} has no reference markers", file=sys.stderr)
+    try:
+        if not path.exists():
+            path.write_text(embed(f"# The YAML reference\n\n{START}\n{END}\n"))
+            print(f"wrote the YAML reference to {path}")
+            return 0
+        text = path.read_text(encoding="utf-8")
+        if START not in text or END not in text:
+            print(
+                f"{path} has no reference markers: put the lines\n{START}\n{END}\nwhere the "
+                "reference goes, or name a file that does not exist yet",
+                file=sys.stderr,
+            )
+            return 1
+        path.write_text(embed(text), encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        print(f"{path}: {exc.strerror if isinstance(exc, OSError) else exc}", file=sys.stderr)
         return 1
-    path.write_text(embed(text))
     print(f"updated the YAML reference in {path}")
     return 0
 
