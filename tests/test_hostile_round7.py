@@ -1,4 +1,6 @@
-"""Hostile input, seventh round: YAML 1.1's numbers that read otherwise than they look.
+"""Hostile input, seventh round: YAML 1.1's numbers that read otherwise than they look; what
+a contributor's walk found (validate names the rules, the reference page, a step's time);
+``tinyrace show`` writing its picture as a run's files are written.
 
 PyYAML reads YAML 1.1, where ``1:30`` is the base-60 number 90 and ``010`` the octal 8;
 YAML 1.2 (and a reader of the file) takes the first for text and the second for ten. Both are
@@ -9,13 +11,19 @@ with what to write instead.
 
 from __future__ import annotations
 
+import os
+import shutil
+import stat
 from pathlib import Path
 
+import cv2
+import numpy as np
 import pytest
 
 from tinyrace.config import ConfigError
 from tinyrace.config.load import load_env_config
 from tinyrace.config.yaml_file import parse_yaml
+from tinyrace.examples import TRACKS_DIR
 from tinyrace.validate import validate_path
 
 
@@ -164,3 +172,61 @@ def test_a_steps_facts_carry_its_sim_time(environment: str | None, fps: float) -
     assert core.config.sim.fps == fps
     assert [facts.dt for facts in core.episode.facts] == [1.0 / fps]
     env.close()
+
+
+# -- tinyrace show writes its picture as a run's files are written ---------------------------
+
+
+def _show(output: Path, *more: str) -> int:
+    from tinyrace import cli
+
+    return cli.main(["show", "formula_student", "-o", str(output), *more])
+
+
+def test_show_writes_a_name_that_is_not_utf8(tmp_path: Path) -> None:
+    """OpenCV's writer crashed the interpreter (a segmentation fault) on such a name."""
+    output = Path(os.fsdecode(bytes(tmp_path) + b"/caf\xe9.png"))
+    assert _show(output) == 0
+    (written,) = os.listdir(bytes(tmp_path))
+    assert written == b"caf\xe9.png"
+    assert cv2.imdecode(np.fromfile(output, np.uint8), cv2.IMREAD_COLOR).shape[1] == 1600
+
+
+def test_show_never_writes_over_an_input_by_another_name(tmp_path: Path) -> None:
+    track = tmp_path / "fs"
+    shutil.copytree(TRACKS_DIR / "formula_student", track)
+    picture = track / "formula_student.png"
+    before = picture.read_bytes()
+    (tmp_path / "hard.png").hardlink_to(picture)
+    from tinyrace import cli
+
+    code = cli.main(["show", str(track), "-o", str(tmp_path / "hard.png"), "--force"])
+    assert code == 2 and picture.read_bytes() == before
+
+
+@pytest.mark.parametrize("kind", ["fifo", "link_to_file", "link_to_device"])
+def test_show_refuses_a_fifo_or_a_link_and_leaves_it(
+    tmp_path: Path, kind: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    output = tmp_path / "out.png"
+    notes = tmp_path / "notes.txt"
+    notes.write_text("notes\n")
+    if kind == "fifo":
+        os.mkfifo(output)  # OpenCV's writer blocked on it forever
+    elif kind == "link_to_file":
+        output.symlink_to(notes)  # OpenCV's writer wrote the picture into notes.txt
+    else:
+        output.symlink_to("/dev/full")  # a failed write removed the link
+    assert _show(output, "--force") == 2
+    assert "-o/--output" in capsys.readouterr().err
+    assert notes.read_text() == "notes\n"
+    assert output.is_symlink() or stat.S_ISFIFO(os.lstat(output).st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt", "out.png"]  # no temp
+
+
+def test_show_replaces_a_file_of_its_own_whole(tmp_path: Path) -> None:
+    output = tmp_path / "out.jpg"
+    output.write_bytes(b"old")
+    assert _show(output, "--force") == 0
+    assert output.read_bytes()[:3] == b"\xff\xd8\xff"  # a JPEG, as the name says
+    assert [p.name for p in tmp_path.iterdir()] == ["out.jpg"]

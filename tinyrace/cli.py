@@ -434,7 +434,7 @@ def _validate(args: argparse.Namespace) -> int:
 def _show(args: argparse.Namespace) -> int:
     import cv2
 
-    from tinyrace.validate import check_output, picture, system_reason
+    from tinyrace.validate import check_output, picture, system_reason, write_picture
 
     target = args.path if args.path == "procedural" else str(find_example(args.path))
     shown = picture(target, args.seed)
@@ -446,13 +446,9 @@ def _show(args: argparse.Namespace) -> int:
     except OSError as exc:
         allowed = f"a path whose folder can be made ({system_reason(exc)})"
         raise ConfigError(Problem("<command line>", "-o/--output", str(output), allowed)) from None
-    try:
-        written = cv2.imwrite(str(output), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
-    except cv2.error:
-        written = False
-    if not written:
-        allowed = "a .png or .jpg path that can be written"
-        raise ConfigError(Problem("<command line>", "-o/--output", str(output), allowed))
+    encoded, data = cv2.imencode(output.suffix.lower(), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    assert encoded, output.suffix  # check_output allows the suffixes OpenCV encodes
+    write_picture(output, data.tobytes())
     print(f"wrote {output} ({image.shape[1]}x{image.shape[0]})")
     return 0
 

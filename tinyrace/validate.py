@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -232,6 +233,27 @@ def check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
         raise ConfigError(Problem(COMMAND_LINE, "-o/--output", str(output), allowed)) from None
 
 
+def write_picture(output: Path, data: bytes) -> None:
+    """Write ``data`` as ``output`` whole, as a run's files are written: to a temporary file
+    renamed over the target, never through a link (another name of the same file keeps
+    it), never into a FIFO or device; OpenCV's own writer follows links, blocks on a FIFO,
+    removes the target when a write fails and crashes on a name that is not UTF-8."""
+    from tinyrace.experiment.files import check_writable, write_file
+
+    where = "-o/--output"
+    try:
+        check_writable(output)
+    except ConfigError as exc:
+        raise ConfigError(
+            Problem(COMMAND_LINE, where, str(output), exc.problems[0].allowed)
+        ) from None
+    try:
+        write_file(output, data)
+    except OSError as exc:
+        allowed = f"a path that can be written ({system_reason(exc)})"
+        raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed)) from None
+
+
 def system_reason(exc: BaseException) -> str:
     """Why the system refused a path, short (an OSError's text repeats the whole path)."""
     reason = getattr(exc, "strerror", None) or str(exc)
@@ -248,13 +270,20 @@ def track_folder_holding(path: Path) -> Path | None:
     return next((f for f in folders if (f / TRACK_FILE).is_file()), None)
 
 
+def _another_name_of(output: Path, inputs: tuple[Path, ...]) -> bool:
+    """Whether ``output`` is a hard link to one of ``inputs`` (the same file by another name)."""
+    if not output.is_file():
+        return False
+    return any(path.is_file() and os.path.samefile(output, path) for path in inputs)
+
+
 def _check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     where = "-o/--output"
     if output.suffix.lower() not in PICTURE_SUFFIXES:
         allowed = f"a picture file name ending in {', '.join(PICTURE_SUFFIXES)}"
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
     resolved = output.resolve()
-    if resolved in inputs:
+    if resolved in inputs or _another_name_of(output, inputs):
         allowed = "a path that is not one of the files this command reads: choose another -o"
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))
     if resolved.is_dir():
