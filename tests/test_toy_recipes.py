@@ -13,6 +13,7 @@ knobs (a ``rules:`` entry), facts, reward term (``speeding``) and end reason
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
@@ -345,6 +346,28 @@ def test_a_rule_parts_knobs_are_checked_like_built_in_ones(speed_limit: None) ->
     assert "rules[0].type" in str(caught.value) and "did you mean 'speed_limit'" in str(
         caught.value
     )
+
+
+def test_a_rule_part_that_needs_what_the_track_lacks_is_named_at_its_entry() -> None:
+    """``RulePart.needs``, as a sensor type's: a ``TrackFacts.holds`` entry."""
+    register_rule(dataclasses.replace(SPEED_LIMIT, needs="metric ground"))
+    try:
+        with pytest.raises(ConfigError) as caught:  # CarRacing's track: a painted ground
+            gym.make("tinyrace/TinyRace-v0", rules=[{"type": "speed_limit"}])
+        (problem,) = caught.value.problems
+        assert (problem.source, problem.path, problem.value) == (
+            "<kwargs>",
+            "rules[0].type",
+            "speed_limit",
+        )
+        assert "needs a track that holds metric ground, not a procedural track" in problem.allowed
+        env = gym.make(
+            "tinyrace/TinyRace-v0", environment="circuit", rules=[{"type": "speed_limit"}]
+        )
+        env.reset(seed=0)
+        env.close()
+    finally:
+        unregister_rule("speed_limit")
 
 
 def test_a_rule_parts_term_and_end_come_after_the_built_in_ones(speed_limit: None) -> None:

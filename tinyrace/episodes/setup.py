@@ -18,6 +18,7 @@ from tinyrace.cars.registry import CarModel, car_model_problems, choose_car_mode
 from tinyrace.config import EnvConfig, LoadedConfig, RaceCar, race_cars
 from tinyrace.episodes.course import Course
 from tinyrace.episodes.episode import Racer
+from tinyrace.episodes.rules import rule_problems
 from tinyrace.episodes.start_pose import start_fits, start_problems
 from tinyrace.errors import ConfigError, Problem
 from tinyrace.tracks.base import TrackSource
@@ -39,6 +40,7 @@ def prepare(loaded: LoadedConfig) -> Parts:
     """Choose the cars, load the tracks, prepare the course; ConfigError lists every problem."""
     cars = race_cars(loaded.config)
     problems: list[Problem] = car_model_problems(loaded.config, loaded.source)
+    problems += rule_problems(loaded.config, loaded.source)
     for car in cars:
         if car.own_car:
             problems += _own_car_problems(loaded.config, car, loaded.source, problems)

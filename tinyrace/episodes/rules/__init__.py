@@ -15,7 +15,7 @@ naming it, its terms, its ends and its config dataclass, then ``register(PART)``
 
 from __future__ import annotations
 
-from tinyrace.config import families
+from tinyrace.config import EnvConfig, families
 from tinyrace.config.rules import RuleConfig
 from tinyrace.episodes.rules import (
     centreline_progress,
@@ -30,6 +30,7 @@ from tinyrace.episodes.rules import (
     trajectory_error,
 )
 from tinyrace.episodes.rules.base import Info, Rule, RuleBase, RulePart, TileProgress
+from tinyrace.errors import Problem
 from tinyrace.rewards import ENDS, TERMS, add_end, add_term
 
 __all__ = [
@@ -40,6 +41,7 @@ __all__ = [
     "RulePart",
     "TileProgress",
     "register",
+    "rule_problems",
     "rule_type",
     "unregister",
 ]
@@ -82,6 +84,22 @@ def unregister(name: str) -> None:
     for end in part.ends:
         if not any(end in other.ends for other in others):
             ENDS.pop(end.reason, None)
+
+
+def rule_problems(config: EnvConfig, source: str) -> list[Problem]:
+    """A problem for each ``rules:`` entry whose part needs what the config's tracks do not
+    hold, named at the entry's ``type``."""
+    problems = []
+    holds = config.facts.holds
+    for i, entry in enumerate(config.rules):
+        needs = rule_type(entry.type).needs
+        if needs is not None and needs not in holds:
+            allowed = (
+                f"a {entry.type} rule part needs a track that holds {needs}, "
+                f"not a {config.kind} track"
+            )
+            problems.append(Problem(source, f"rules[{i}].type", entry.type, allowed))
+    return problems
 
 
 def rule_type(name: str) -> RulePart:

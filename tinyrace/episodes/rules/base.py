@@ -75,7 +75,9 @@ class RulePart:
     entry adds the part to every car's episode. ``always``: in every episode whatever the
     track lists (the clock's time cost, the end of the race's last lap).
     ``wheels_only``: only for cars that model wheels; ``road_tiles``: its tiles are the
-    wheels' road (off them a wheel grips as on grass)."""
+    wheels' road (off them a wheel grips as on grass). ``needs``: what its track must hold
+    (a ``TrackFacts.holds`` entry, as a sensor type's), checked where a ``rules:`` entry
+    adds it."""
 
     name: str
     make: Callable[[Track, Any], Rule] | None
@@ -86,6 +88,7 @@ class RulePart:
     always: bool = False
     wheels_only: bool = False
     road_tiles: bool = False
+    needs: str | None = None
     doc: str = ""
 
 
