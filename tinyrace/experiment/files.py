@@ -13,6 +13,7 @@ import contextlib
 import os
 import stat
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
 
 from tinyrace.errors import ConfigError, Problem
@@ -22,18 +23,45 @@ TEMP_PREFIX = ".tinyrace-"
 
 def write_file(path: Path, data: bytes) -> Path:
     """Write ``data`` as ``path`` (a new file, or one replacing the regular file there)."""
-    check_writable(path)
-    handle, temp = tempfile.mkstemp(prefix=TEMP_PREFIX, dir=path.parent)
+    write_files({path: data})
+    return path
+
+
+def write_files(files: Mapping[Path, bytes]) -> None:
+    """Write each file whole under a temporary name beside it, then rename them all: a
+    failure (or Ctrl-C) before the renames leaves every old file as it was, and the renames
+    take microseconds. A folder where no file can be made is a ConfigError naming it."""
+    for path in files:
+        check_writable(path)
+    temps: dict[Path, str] = {}
+    try:
+        for path, data in files.items():
+            temps[path] = _temp_copy(path, data)
+        for path, temp in temps.items():
+            os.replace(temp, path)
+    except BaseException:
+        for temp in temps.values():
+            with contextlib.suppress(OSError):
+                os.unlink(temp)
+        raise
+
+
+def _temp_copy(path: Path, data: bytes) -> str:
+    """``data`` written to a new temporary file beside ``path``; its name."""
+    try:
+        handle, temp = tempfile.mkstemp(prefix=TEMP_PREFIX, dir=path.parent)
+    except OSError as exc:  # refused, read-only, gone
+        allowed = f"expected a folder where files can be written ({exc.strerror})"
+        raise ConfigError(Problem(str(path.parent), "", path.name, allowed)) from None
     try:
         with os.fdopen(handle, "wb") as file:
             file.write(data)
         os.chmod(temp, 0o644 & ~_umask())
-        os.replace(temp, path)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(temp)
         raise
-    return path
+    return temp
 
 
 def write_text(path: Path, text: str) -> Path:
