@@ -221,7 +221,7 @@ def test_report_never_writes_over_a_file_it_reads(tmp_path, capsys):
     before = digest(run / "report.html")
     assert cli.main(["report", str(run)]) == 2
     err = capsys.readouterr().err
-    assert "episodes.csv: got 'report.html'" in err, err  # the file that named it
+    assert "episodes.csv: line 2, trace: got 'report.html'" in err, err  # the file naming it
     assert digest(run / "report.html") == before
 
 

@@ -14,7 +14,8 @@ def rebuild_report(run_dir: Path) -> Path:
     ConfigError names the file, the field and what was expected). A race's results.json
     lists its ``cars``; its episodes.csv has a row per car and episode."""
     header = read_header(run_dir)
+    tracks = list(header.get("tracks") or {})
     if "cars" in header:
         names = [str(car["id"]) for car in header["cars"]]
-        return write_race_report(run_dir, header, read_cars(run_dir, names))
-    return write_report(run_dir, header, read_episodes(run_dir))
+        return write_race_report(run_dir, header, read_cars(run_dir, names, tracks))
+    return write_report(run_dir, header, read_episodes(run_dir, tracks))
