@@ -14,7 +14,7 @@ from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
 NO_LAP = "no lap finished"
 SPEED_MAP = "turbo"
@@ -63,10 +63,7 @@ def trajectories(
     figure, ax = track_axes(background, extent, lap_line, "lap line (start/finish)", size)
     finite = [p.speed[np.isfinite(p.speed)] for p in paths]
     top = max([float(s.max()) for s in finite if len(s)] + [1e-9])
-    norm = Normalize(0.0, top)
-    lines = None
-    for k, path in enumerate(paths):
-        lines = _draw_path(ax, path, norm, first=k == 0) or lines
+    lines = _draw_paths(ax, paths, Normalize(0.0, top))
     _start_labels(ax, paths, 0.02 * abs(extent[1] - extent[0]))
     if lines is not None:  # a colour scale as tall as the picture
         figure.colorbar(lines, cax=ax.inset_axes((1.02, 0.0, 0.03, 1.0)), label=f"speed [{unit}/s]")
@@ -116,22 +113,36 @@ def _legend(figure: Figure, ax: Axes) -> None:
         )  # fmt: skip
 
 
-def _draw_path(ax: Axes, path: Path2D, norm: Normalize, first: bool) -> LineCollection | None:
-    ok = np.isfinite(path.points).all(axis=1)
-    points, speed = path.points[ok], np.nan_to_num(path.speed[ok])
-    if len(points) < 2:
+def _draw_paths(ax: Axes, paths: Sequence[Path2D], norm: Normalize) -> LineCollection | None:
+    """Every path in one collection of segments coloured by speed, the starts, obstacle
+    hits and crashes each one line of markers: a few artists however many episodes."""
+    segments, speeds, starts, hits, crashes = [], [], [], [], []
+    for path in paths:
+        ok = np.isfinite(path.points).all(axis=1)
+        points, speed = path.points[ok], np.nan_to_num(path.speed[ok])
+        if len(points) < 2:
+            continue
+        segments.append(np.stack([points[:-1], points[1:]], axis=1))
+        speeds.append(speed[1:])
+        starts.append(points[0])
+        hits.append(points[path.hits[ok]])
+        if path.crashed:
+            crashes.append(points[-1])
+    if not segments:
         return None
-    segments = np.stack([points[:-1], points[1:]], axis=1)
-    lines = LineCollection(list(segments), cmap=SPEED_MAP, norm=norm, linewidths=2.2)
-    lines.set_array(speed[1:])
-    ax.add_collection(lines)
-    start = "start" if first else None
-    ax.plot(*points[0], "o", ms=9, mfc="#28c83c", mec="black", label=start, zorder=6)  # on top
-    hits = path.hits[ok]
-    if hits.any():
-        ax.plot(*points[hits].T, "o", ms=7, mfc="none", mec="#ff9600", label="obstacle hit")
-    if path.crashed:
-        ax.plot(*points[-1], "X", ms=12, color="#e61e1e", mec="black", label="crash")
+    lines = LineCollection(
+        list(np.concatenate(segments)), cmap=SPEED_MAP, norm=norm, linewidths=2.2
+    )
+    lines.set_array(np.concatenate(speeds))
+    ax.add_collection(lines, autolim=False)  # the axes span the picture
+    start = np.array(starts)
+    ax.plot(*start.T, "o", ms=9, mfc="#28c83c", mec="black", ls="none", label="start", zorder=6)
+    hit = np.concatenate(hits)
+    if len(hit):
+        ax.plot(*hit.T, "o", ms=7, mfc="none", mec="#ff9600", ls="none", label="obstacle hit")
+    if crashes:
+        ax.plot(*np.array(crashes).T, "X", ms=12, color="#e61e1e", mec="black", ls="none",
+                label="crash")  # fmt: skip
     return lines
 
 
@@ -190,8 +201,17 @@ def bars(
     ax = figure.add_subplot()
     x = np.arange(len(values))
     numbers = np.array([np.nan if v is None else v for v in values], float)
-    ax.bar(x[np.isfinite(numbers)], numbers[np.isfinite(numbers)], color=BAR, width=0.6)
-    ax.set_xticks(x, labels)
+    ok = np.isfinite(numbers)
+    if len(values) <= LABELLED_BARS:
+        ax.bar(x[ok], numbers[ok], color=BAR, width=0.6)
+        ax.set_xticks(x, labels)
+    else:  # one collection of bars (a Rectangle each takes seconds), a tick now and then
+        width = max(72.0 * 5.0 * 0.6 / len(values), 0.3)  # [pt] 0.6 of a bar's share of 5 in
+        ax.vlines(x[ok], 0.0, numbers[ok], color=BAR, lw=width)
+        ax.xaxis.set_major_locator(MaxNLocator(10, integer=True))
+        ax.xaxis.set_major_formatter(
+            FuncFormatter(lambda v, _: labels[int(v)] if 0 <= v < len(labels) else "")
+        )
     ax.set_xlim(-0.6, max(len(values), 1) - 0.4)
     ax.set_xlabel("episode")
     ax.set_ylabel(y_label)
@@ -203,11 +223,17 @@ def bars(
     ax.axhline(0.0, color="black", lw=0.8)
     ax.grid(axis="y", color="#dddddd")
     ax.set_axisbelow(True)
-    for k in np.flatnonzero(~np.isfinite(numbers)):
+    lacking = np.flatnonzero(~np.isfinite(numbers))
+    if len(values) > LABELLED_BARS and len(lacking):  # one note, not a word per bar
+        ax.text(0.01, 0.97, f"{missing}: {len(lacking)} of {len(values)} episodes",
+                transform=ax.transAxes, ha="left", va="top", color="#b00000")  # fmt: skip
+        return figure
+    for k in lacking:
         ax.text(x[k], 0.0, missing, ha="center", va="bottom", rotation=90, color="#b00000")
     return figure
 
 
+LABELLED_BARS = 40  # episodes up to which each bar is named (and a missing value said)
 BAND_FROM = 5  # episodes from which the time series show a median and a band, not lines
 
 
@@ -242,13 +268,17 @@ def _band(ax: Axes, series: Sequence[Series], panel: str) -> None:
     the longest episode's times (an episode that ended counts no more)."""
     longest = max(series, key=lambda s: len(s.t)).t
     rows = np.full((len(series), len(longest)), np.nan)
+    lines = []
     for k, entry in enumerate(series):
         ok = np.isfinite(entry.values[panel]) & np.isfinite(entry.t)
         if ok.sum() >= 2:
             inside = (longest >= entry.t[ok][0]) & (longest <= entry.t[ok][-1])
             rows[k, inside] = np.interp(longest[inside], entry.t[ok], entry.values[panel][ok])
-        ax.plot(entry.t, entry.values[panel], lw=0.6, color="#9a9a9a", alpha=0.6,
-                label="each episode" if k == 0 else None)  # fmt: skip
+        lines.append(np.stack([entry.t, entry.values[panel]], axis=1)[ok])
+    ax.add_collection(  # every episode in one collection
+        LineCollection(lines, lw=0.6, color="#9a9a9a", alpha=0.6, label="each episode")
+    )
+    ax.autoscale_view()
     counted = np.isfinite(rows).any(axis=0)
     if not counted.any():
         return

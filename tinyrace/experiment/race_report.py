@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from tinyrace.experiment.files import write_text
 from tinyrace.experiment.race_results import (
     RACE_TRACE_COLUMNS,
     CarResult,
@@ -23,11 +22,14 @@ from tinyrace.experiment.report import (  # the page's parts, shared with one ca
     REPORT_FILE,
     STYLE,
     Picture,
+    drawn,
+    drawn_note,
     figures_html,
     length_unit,
+    picture,
     picture_extent,
     report_inputs,
-    save_pictures,
+    save_report,
     state_html,
     table_html,
     trace_points,
@@ -44,26 +46,29 @@ def write_race_report(run_dir: Path, header: dict[str, Any], rows: Sequence[CarR
 
     Refused (a ConfigError) when one of the files to write is one the report reads."""
     episodes = sorted({r.episode for r in rows})
+    charted = [episodes[k] for k in drawn(len(episodes), MAX_RACE_EPISODES)]
     outputs = [REPORT_FILE]
-    outputs += [f"report_{what}_{e:03d}.png" for e in episodes for what in ("paths", "positions")]
+    outputs += [f"report_{what}_{e:03d}.png" for e in charted for what in ("paths", "positions")]
     check_outputs(run_dir, outputs, report_inputs(header, rows))
     colors = {car["id"]: car["color"] for car in header.get("cars") or []}
-    traces = {(r.episode, r.car): _trace(run_dir, r) for r in rows}
     pictures: list[Picture] = []
-    for episode in episodes:
+    for episode in charted:
         mine = [r for r in rows if r.episode == episode]
+        traces = {r.car: _trace(run_dir, r, len(colors) or len(mine)) for r in mine}
         pictures += _episode_pictures(run_dir, header, episode, mine, traces, colors)
-    blobs = save_pictures(run_dir, pictures)
-    path = run_dir / REPORT_FILE
-    write_text(path, _html(header, rows, blobs))
-    return path
+    note = drawn_note(len(charted), len(episodes)).strip()
+    return save_report(run_dir, pictures, _html(header, rows, pictures, note))
 
 
-def _trace(run_dir: Path, result: CarResult) -> Trace | None:
+MAX_RACE_EPISODES = 20  # episodes charted (two pictures each), evenly spaced over the run
+
+
+def _trace(run_dir: Path, result: CarResult, cars: int) -> Trace | None:
     path = run_dir / result.trace if result.trace else None
     if path is None or not path.is_file():
         return None
-    return read_trace(path, RACE_TRACE_COLUMNS[:-1])  # cars_hit holds names: not drawn
+    places = {"position": (1.0, float(cars), f"a place from 1 to {cars} (the race's cars)")}
+    return read_trace(path, RACE_TRACE_COLUMNS[:-1], places)  # cars_hit: names, not drawn
 
 
 def _episode_pictures(
@@ -71,7 +76,7 @@ def _episode_pictures(
     header: dict[str, Any],
     episode: int,
     rows: Sequence[CarResult],
-    traces: dict[tuple[int, str], Trace | None],
+    traces: dict[str, Trace | None],
     colors: dict[str, str],
 ) -> list[Picture]:
     """The episode's track with every car's path, and its positions over time."""
@@ -79,7 +84,7 @@ def _episode_pictures(
 
     pictures = []
     section = f"Episode {episode}"
-    traced = [(r, t) for r in rows if (t := traces[(episode, r.car)]) is not None]
+    traced = [(r, t) for r in rows if (t := traces[r.car]) is not None]
     key = rows[0].track
     entry = (header.get("tracks") or {}).get(key)
     background = track_background(run_dir, key, entry["image"]) if entry else None
@@ -96,7 +101,8 @@ def _episode_pictures(
         unit = entry.get("unit", "")
         figure = race_plots.car_paths(background[..., ::-1], extent, lines, lap_line, unit)
         caption = f"Episode {episode} on track {key}: every car's path, each in its colour."
-        pictures.append(Picture(f"report_paths_{episode:03d}.png", caption, figure, True, section))
+        name = f"report_paths_{episode:03d}.png"
+        pictures.append(picture(name, caption, figure, True, section))
     lines = [
         race_plots.CarLine(r.car, colors.get(r.car, "#808080"), t["t"], t["position"])
         for r, t in traced
@@ -107,12 +113,12 @@ def _episode_pictures(
         "track); a line ends where its car left the race."
     )
     name = f"report_positions_{episode:03d}.png"
-    pictures.append(Picture(name, caption, figure, True, section))
+    pictures.append(picture(name, caption, figure, True, section))
     return pictures
 
 
 def _html(
-    header: dict[str, Any], rows: Sequence[CarResult], blobs: list[tuple[Picture, bytes]]
+    header: dict[str, Any], rows: Sequence[CarResult], pictures: Sequence[Picture], note: str
 ) -> str:
     title = f"tinyrace race {header.get('started', '')}"
     cars = [str(car["id"]) for car in header.get("cars") or []]
@@ -122,7 +128,7 @@ def _html(
     head, cells = car_table_rows(rows)
     text = [k for k, title in enumerate(head) if title in ("car", "driver", "end")]
     stats_head, stats = car_summary_rows(header.get("summary") or {})
-    figures = figures_html(blobs, {})
+    figures = figures_html(pictures, {"Charts": [note]} if note else {})
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>{STYLE}</style></head><body>

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from tinyrace.config.image_file import DEFAULT_MAX_IMAGE_PIXELS, read_image_bgr
-from tinyrace.experiment.files import write_file, write_text
+from tinyrace.experiment.files import write_files
 from tinyrace.experiment.results import (
     EPISODES_FILE,
     RESULTS_FILE,
@@ -38,22 +38,52 @@ CTE_LEFT_OUT = (
 )
 
 
+MAX_DRAWN = 100  # episodes whose traces one picture draws (evenly spaced over the run)
+MAX_TRACK_PICTURES = 12  # tracks drawn (a procedural run has one per seed): the first ones
+
+
 @dataclass
 class Picture:
-    """One chart of the report: its file name, caption and figure."""
+    """One chart of the report: its file name, caption and PNG bytes."""
 
     name: str
     caption: str
-    figure: Figure
+    data: bytes
     wide: bool = False
     section: str = "Per episode"
+
+
+def picture(
+    name: str, caption: str, figure: Figure, wide: bool = False, section: str = "Per episode"
+) -> Picture:
+    """The figure rendered to PNG at once (then let go: a run of many tracks or episodes
+    keeps bytes, not figures)."""
+    from tinyrace.experiment.plots import png
+
+    data = png(figure)
+    figure.clear()
+    return Picture(name, caption, data, wide, section)
+
+
+def drawn(count: int, most: int = MAX_DRAWN) -> list[int]:
+    """Which of ``count`` items (indices) a picture draws: all, or ``most`` evenly spaced."""
+    if count <= most:
+        return list(range(count))
+    return sorted({round(k * (count - 1) / (most - 1)) for k in range(most)})
+
+
+def drawn_note(shown: int, count: int, what: str = "episodes") -> str:
+    """A caption's note when a picture draws only some of the run's ``what``."""
+    if shown >= count:
+        return ""
+    return f" Drawn: {shown} of the {count:,} {what}, evenly spaced (the tables list all)."
 
 
 def rebuild_report(run_dir: Path) -> Path:
     """Rebuild ``report.html`` and its pictures from a run folder's files (checked: a
     ConfigError names the file, the field and what was expected)."""
     header = read_header(run_dir)
-    return write_report(run_dir, header, read_episodes(run_dir))
+    return write_report(run_dir, header, read_episodes(run_dir, list(header.get("tracks") or {})))
 
 
 class RowFiles(Protocol):
@@ -77,46 +107,47 @@ def report_inputs(header: dict[str, Any], rows: Sequence[RowFiles]) -> dict[str,
 def write_report(run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]) -> Path:
     """Draw the charts, save them as PNG and write report.html; returns its path.
 
-    Refused (a ConfigError) when one of the files to write is one the report reads."""
+    Refused (a ConfigError) when one of the files to write is one the report reads. A
+    picture draws the traces of at most MAX_DRAWN episodes and the report at most
+    MAX_TRACK_PICTURES tracks; the captions say so."""
     from tinyrace.experiment import plots
 
+    tracks = list(header.get("tracks") or {})[:MAX_TRACK_PICTURES]
     outputs = [REPORT_FILE, "report_returns.png", "report_lap_times.png"]
     outputs += ["report_time_series.png"]
-    outputs += [f"report_track_{key}.png" for key in header.get("tracks") or {}]
+    outputs += [f"report_track_{key}.png" for key in tracks]
     check_outputs(run_dir, outputs, report_inputs(header, results))
     unit = length_unit(header)
-    traces = {r.episode: _trace(run_dir, r) for r in results}
-    pictures = _track_pictures(run_dir, header, results, traces)
+    pictures = _track_pictures(run_dir, header, results)
     labels = [str(r.episode) for r in results]
     returns = plots.bars([r.episode_return for r in results], labels, "return", "no return")
-    pictures.append(Picture("report_returns.png", "Return (sum of rewards) per episode.", returns))
+    caption = "Return (sum of rewards) per episode."
+    pictures.append(picture("report_returns.png", caption, returns))
     lap_times = [r.lap_time for r in results]
     laps = plots.bars(lap_times, labels, "lap time [s]", plots.NO_LAP)
-    pictures.append(Picture("report_lap_times.png", _lap_caption(lap_times), laps))
+    pictures.append(picture("report_lap_times.png", _lap_caption(lap_times), laps))
     notes = []
-    series, panels = _series(results, traces, unit)
+    chosen = [results[k] for k in drawn(len(results))]
+    series, panels = _series(chosen, {r.episode: _trace(run_dir, r) for r in chosen}, unit)
     if series:
         caption = "Speed, steering and cross-track error over each episode."
         if not any(p.startswith("cross-track") for p in panels):
             caption, notes = "Speed and steering over each episode.", [CTE_LEFT_OUT]
+        caption += drawn_note(len(chosen), len(results))
         figure = plots.time_series(series, panels)
-        pictures.append(Picture("report_time_series.png", caption, figure, True, "Over time"))
-    blobs = save_pictures(run_dir, pictures)
+        pictures.append(picture("report_time_series.png", caption, figure, True, "Over time"))
+    page = _html(header, results, pictures, notes, unit)
+    return save_report(run_dir, pictures, page)
+
+
+def save_report(run_dir: Path, pictures: Sequence[Picture], page: str) -> Path:
+    """The pictures (PNG) and report.html written together: each whole under a temporary
+    name, then all renamed (an interruption leaves the old report and pictures)."""
+    files = {run_dir / p.name: p.data for p in pictures}
     path = run_dir / REPORT_FILE
-    write_text(path, _html(header, results, blobs, notes, unit))
+    files[path] = page.encode("utf-8", "backslashreplace")  # report.html last
+    write_files(files)
     return path
-
-
-def save_pictures(run_dir: Path, pictures: Sequence[Picture]) -> list[tuple[Picture, bytes]]:
-    """Each picture saved as PNG beside the report; with its bytes (inlined in the page)."""
-    from tinyrace.experiment.plots import png
-
-    blobs = []
-    for picture in pictures:
-        data = png(picture.figure)
-        write_file(run_dir / picture.name, data)
-        blobs.append((picture, data))
-    return blobs
 
 
 def _lap_caption(lap_times: Sequence[float | None]) -> str:
@@ -167,24 +198,25 @@ def _series(
 
 
 def _track_pictures(
-    run_dir: Path,
-    header: dict[str, Any],
-    results: Sequence[EpisodeResult],
-    traces: dict[int, dict[str, np.ndarray] | None],
+    run_dir: Path, header: dict[str, Any], results: Sequence[EpisodeResult]
 ) -> list[Picture]:
-    """One picture per track with the trajectories of the episodes run on it."""
+    """One picture per track (the first MAX_TRACK_PICTURES) with the trajectories of the
+    episodes run on it (at most MAX_DRAWN of them)."""
     from tinyrace.experiment import plots
 
     pictures = []
     tracks: dict[str, Any] = header.get("tracks") or {}
-    for key, entry in tracks.items():
+    for key in list(tracks)[:MAX_TRACK_PICTURES]:
+        entry = tracks[key]
         background = track_background(run_dir, key, entry["image"])
         if background is None:
             continue
         extent = picture_extent(entry["frame"], background.shape)
+        mine = [r for r in results if r.track == key]
+        chosen = [mine[k] for k in drawn(len(mine))]
         paths = []
-        for result in (r for r in results if r.track == key):
-            trace = traces[result.episode]
+        for result in chosen:
+            trace = _trace(run_dir, result)
             if trace is not None:
                 points = trace_points(trace, extent)
                 hits, crashed = trace["obstacle_hit"] > 0, result.end in CRASHES
@@ -192,17 +224,23 @@ def _track_pictures(
                     plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
                 )
         lap_line = entry.get("lap_line")
-        if lap_line is not None and not np.isfinite(np.asarray(lap_line, np.float64)).all():
-            lap_line = None
         unit = entry.get("unit", "")
         size = 10.0 if len(tracks) == 1 else 6.5  # [in] wide: two pictures side by side
         figure = plots.trajectories(background[..., ::-1], extent, paths, lap_line, unit, size)
         episodes = ", ".join(p.label.removeprefix("ep ") for p in paths) or "none"
+        if len(episodes) > 200:  # runs of numbers joined: "0-99"
+            episodes = plots._episodes_text([p.label.removeprefix("ep ") for p in paths], 200)
         caption = f"Track {key}: the path of episode(s) {episodes}, coloured by speed."
-        if lap_line is None and any(r.laps for r in results if r.track == key):
+        caption += drawn_note(len(chosen), len(mine))
+        if lap_line is None and any(r.laps for r in mine):
             caption += " Laps here are counted by progress round the track's drawn trajectory."
+        if key == list(tracks)[-1] and len(tracks) > MAX_TRACK_PICTURES:
+            caption += drawn_note(MAX_TRACK_PICTURES, len(tracks), "tracks").replace(
+                "evenly spaced", "the first ones"
+            )
         name = f"report_track_{key}.png"
-        pictures.append(Picture(name, caption, figure, len(tracks) == 1, "Where the car went"))
+        wide = len(tracks) == 1
+        pictures.append(picture(name, caption, figure, wide, "Where the car went"))
     return pictures
 
 
@@ -262,8 +300,8 @@ def table_html(head: Sequence[str], rows: Sequence[Sequence[str]], text: Sequenc
     return f"<table>\n<thead><tr>{cells}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>"
 
 
-def _figure(picture: Picture, data: bytes) -> str:
-    source = base64.b64encode(data).decode()
+def _figure(picture: Picture) -> str:
+    source = base64.b64encode(picture.data).decode()
     caption = html.escape(picture.caption)
     return (
         f"<figure class={'wide' if picture.wide else 'small'}>"
@@ -288,7 +326,7 @@ figure.small { display: inline-block; vertical-align: top; width: 48%; margin-ri
 def _html(
     header: dict[str, Any],
     results: Sequence[EpisodeResult],
-    blobs: list[tuple[Picture, bytes]],
+    pictures: Sequence[Picture],
     notes: Sequence[str],
     unit: str,
 ) -> str:
@@ -296,7 +334,7 @@ def _html(
     planned = header.get("episodes_planned", len(results))
     head, rows = table_rows(results, unit)
     stats_head, stats = summary_rows(header.get("summary") or {}, unit)
-    figures = figures_html(blobs, {"Over time": notes} if notes else {})
+    figures = figures_html(pictures, {"Over time": notes} if notes else {})
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>
 <style>{STYLE}</style></head><body>
@@ -376,12 +414,12 @@ def state_html(header: dict[str, Any]) -> str:
     return "".join(state)
 
 
-def figures_html(blobs: Sequence[tuple[Picture, bytes]], notes: Mapping[str, Sequence[str]]) -> str:
+def figures_html(pictures: Sequence[Picture], notes: Mapping[str, Sequence[str]]) -> str:
     """The pictures inline under a heading per section (in first-seen order), each
     section's ``notes`` after its pictures."""
     sections: dict[str, list[str]] = {}
-    for picture, data in blobs:
-        sections.setdefault(picture.section, []).append(_figure(picture, data))
+    for shown in pictures:
+        sections.setdefault(shown.section, []).append(_figure(shown))
     for section, texts in notes.items():
         sections.setdefault(section, []).extend(
             f"<p class=note>{html.escape(n)}</p>" for n in texts
