@@ -49,13 +49,7 @@ VIDEO_NAME = "a video file name (episode_NNN.mp4 or .webm)"
 def plain_name(text: object) -> bool:
     """A plain file name of the run folder: no folder, not '.' or '..'."""
     return (
-        isinstance(text, str)
-        and FILE_NAME.fullmatch(text) is not None
-        and text
-        not in (
-            ".",
-            "..",
-        )
+        isinstance(text, str) and FILE_NAME.fullmatch(text) is not None and text not in {".", ".."}
     )
 
 
