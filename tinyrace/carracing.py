@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from tinyrace.env import TinyRaceEnv
+from tinyrace.env import TinyRaceEnv, flag
 
 
 class CarRacingEnv(TinyRaceEnv):
@@ -16,6 +16,9 @@ class CarRacingEnv(TinyRaceEnv):
         domain_randomize: bool = False,
         continuous: bool = True,
     ):
+        # each a bool, as CarRacing-v3 reads them, not any truthy object: "no" would be true
+        continuous = flag(continuous, "continuous")
+        domain_randomize = flag(domain_randomize, "domain_randomize")
         super().__init__(
             config={
                 "track": {

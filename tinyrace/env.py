@@ -31,6 +31,7 @@ from tinyrace.world.world import World
 RENDER_MODES = ("human", "rgb_array", "state_pixels")
 RESET_OPTIONS = ("randomize", "track", "spawn", "poses")
 RESET_SOURCE = "<reset options>"
+KWARGS_SOURCE = "<kwargs>"
 
 
 class TinyRaceEnv(gym.Env):
@@ -84,6 +85,7 @@ class TinyRaceEnv(gym.Env):
         verbose: bool = False,
         **overrides: Any,
     ):
+        verbose = flag(verbose, "verbose")  # before the config: any object was taken as a flag
         loaded = load_env_config(config, environment, overrides)
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ConfigError(
@@ -355,6 +357,15 @@ class TinyRaceEnv(gym.Env):
 def _rgb(image: np.ndarray) -> np.ndarray:
     """Gray and class-label images as RGB, for pictures."""
     return image if image.ndim == 3 else np.repeat(image[..., None], 3, axis=2)
+
+
+def flag(value: object, key: str, source: str = KWARGS_SOURCE) -> bool:
+    """A true/false keyword argument (``verbose``, CarRacing's ``continuous``): a bool or a
+    numpy bool, else a ConfigError naming ``key`` (text such as "no" is not read as a flag:
+    any non-empty string would be true)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ConfigError(Problem(source, key, value, "expected true or false"))
+    return bool(value)
 
 
 def _check_options(options: object) -> dict[str, Any]:
