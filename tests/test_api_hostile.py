@@ -46,3 +46,25 @@ def test_carracing_flags_take_bools_and_numpy_bools(flag, capsys):
     assert "Track generation" in capsys.readouterr().out  # verbose=True prints it
     assert isinstance(env.unwrapped.verbose, bool)
     env.close()
+
+
+# -- F17: an empty config= names no file ----------------------------------------------------------
+@pytest.mark.parametrize(
+    ("kwargs", "key", "value"),
+    [
+        ({"config": ""}, "config", ""),
+        ({"config": "  "}, "config", "  "),
+        ({"config": "", "environment": "formula_student"}, "config", ""),
+        ({"environment": ""}, "environment", ""),
+    ],
+)
+def test_an_empty_config_or_environment_is_refused_as_a_keyword(kwargs, key, value):
+    with pytest.raises(ConfigError) as raised:
+        gym.make(TINYRACE, **kwargs)
+    text = str(raised.value)
+    assert f"<kwargs>: {key}: got {value!r}; expected a " in text
+    assert "track.yaml: got" not in text  # not the working folder's track.yaml
+    if key == "config":
+        assert "a YAML file path, a track folder or a mapping" in text
+    else:
+        assert "formula_student" in text  # the shipped tracks it could name

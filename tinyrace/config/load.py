@@ -100,6 +100,9 @@ def _read_source(
         if not isinstance(environment, (str, Path)):
             allowed = "expected a track folder (a path)"
             raise ConfigError(Problem("<kwargs>", "environment", environment, allowed))
+        if isinstance(environment, str) and not environment.strip():  # not the working folder
+            allowed = f"expected a track folder or a shipped track: {', '.join(track_names())}"
+            raise ConfigError(Problem(KWARGS, "environment", environment, allowed))
         folder = find_track(environment)  # a path that exists wins over a shipped track's name
         config = folder / TRACK_FILE
         if not _safely(lambda: os.path.lexists(config)):  # a FIFO or a folder: read_yaml says
@@ -108,8 +111,10 @@ def _read_source(
         return {}, DEFAULTS, Path.cwd()
     if isinstance(config, Mapping):
         return dict(config), "<dict>", Path.cwd()
-    if not isinstance(config, (str, Path)):
-        raise ConfigError(Problem(KWARGS, "config", config, "expected a YAML path or a dict"))
+    if not isinstance(config, (str, Path)) or (isinstance(config, str) and not config.strip()):
+        # an empty name is no file: Path("") would be the working folder, read as a track folder
+        allowed = "expected a YAML file path, a track folder or a mapping (dict)"
+        raise ConfigError(Problem(KWARGS, "config", config, allowed))
     path = Path(config)
     if _safely(path.is_dir):
         path = path / TRACK_FILE
