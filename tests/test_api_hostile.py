@@ -68,3 +68,48 @@ def test_an_empty_config_or_environment_is_refused_as_a_keyword(kwargs, key, val
         assert "a YAML file path, a track folder or a mapping" in text
     else:
         assert "formula_student" in text  # the shipped tracks it could name
+
+
+# -- F18: the race env's unknown agents and a step after the race -------------------------------
+@pytest.fixture
+def race():
+    from tinyrace.race import parallel_env
+
+    env = parallel_env(environment="f1tenth_loop", num_agents=2)
+    yield env
+    env.close()
+
+
+@pytest.mark.parametrize("space", ["observation_space", "action_space"])
+@pytest.mark.parametrize("agent", ["car_9", 5, ["car_0"]])
+def test_an_unknown_agent_is_a_key_error_that_lists_the_agents(race, space, agent):
+    from tinyrace.race import UnknownAgent
+
+    with pytest.raises(KeyError) as raised:
+        getattr(race, space)(agent)
+    assert isinstance(raised.value, UnknownAgent)
+    assert str(raised.value) == f"no agent {agent!r}; the agents are car_0, car_1"
+
+
+def test_the_same_space_object_for_a_known_agent(race):
+    assert race.observation_space("car_1") is race.observation_space("car_1")
+    assert race.action_space("car_0") is race.action_space("car_0")
+
+
+def test_a_step_after_the_race_says_the_race_is_over(race):
+    with pytest.raises(gym.error.ResetNeeded, match=r"^call reset\(\) before step\(\)$"):
+        race.step({})
+    race.reset(seed=0)
+    for _ in range(20_000):
+        if not race.agents:
+            break
+        race.step({agent: race.action_space(agent).sample() for agent in race.agents})
+    assert race.agents == []
+    zeros = {agent: np.zeros(2, np.float32) for agent in race.possible_agents}
+    for actions in (zeros, {}):
+        with pytest.raises(gym.error.ResetNeeded) as raised:
+            race.step(actions)
+        assert str(raised.value) == "the race is over (every car is done): call reset()"
+    race.reset(seed=1)
+    assert race.agents == ["car_0", "car_1"]  # and it races again
+    race.step(zeros)

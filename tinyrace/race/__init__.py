@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from tinyrace.race.env import RaceEnv
+from tinyrace.race.env import RaceEnv, UnknownAgent
 
 
 def parallel_env(**kwargs: Any) -> RaceEnv:
@@ -26,4 +26,4 @@ def aec_env(**kwargs: Any) -> Any:
     return parallel_to_aec(parallel_env(**kwargs))
 
 
-__all__ = ["RaceEnv", "aec_env", "parallel_env"]
+__all__ = ["RaceEnv", "UnknownAgent", "aec_env", "parallel_env"]

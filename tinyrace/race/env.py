@@ -24,18 +24,32 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 from pettingzoo import ParallelEnv
 
 from tinyrace.actions import ActionSpec
 from tinyrace.config import car_names
 from tinyrace.env import TinyRaceEnv
 from tinyrace.episodes.episode import Episode
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, shown
 from tinyrace.race.checks import read_actions, reset_options
 from tinyrace.sensors.base import Sensor
 from tinyrace.world.snapshot import Snapshot
 
 ACTIONS_SOURCE = "<step actions>"
+
+
+class UnknownAgent(KeyError):
+    """An agent id the race does not have: a KeyError (as a dict of agents gives) whose text
+    lists the agents."""
+
+    def __init__(self, agent: object, agents: list[str]):
+        super().__init__(agent)
+        self.agent = agent
+        self.text = f"no agent {shown(agent)}; the agents are {', '.join(agents)}"
+
+    def __str__(self) -> str:
+        return self.text
 
 
 @dataclass
@@ -121,10 +135,17 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
 
     # -- PettingZoo API ---------------------------------------------------------------------
     def observation_space(self, agent: str) -> spaces.Space[Any]:
-        return self._observation_spaces[agent]
+        return self._space(self._observation_spaces, agent)
 
     def action_space(self, agent: str) -> spaces.Space[Any]:
-        return self._action_spaces[agent]
+        return self._space(self._action_spaces, agent)
+
+    def _space(self, spaces_: dict[str, spaces.Space[Any]], agent: object) -> spaces.Space[Any]:
+        """The agent's space (the same object each time); ``UnknownAgent`` for another id."""
+        try:
+            return spaces_[agent]  # type: ignore[index]  # any key: a list is refused below
+        except (KeyError, TypeError):  # TypeError: an unhashable id (a list)
+            raise UnknownAgent(agent, self.possible_agents) from None
 
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
@@ -149,8 +170,10 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
     ) -> tuple[dict[str, Any], dict[str, float], dict[str, bool], dict[str, bool], dict[str, Any]]:
         core = self.core
         episode = core.episode
-        if episode is None or not self.agents:
-            raise ConfigError(Problem(ACTIONS_SOURCE, "", None, "call reset() before step()"))
+        if episode is None:
+            raise ResetNeeded("call reset() before step()")
+        if not self.agents:
+            raise ResetNeeded("the race is over (every car is done): call reset()")
         self._check_agents(actions)
         world = episode.world
         live = self._live()
