@@ -113,3 +113,59 @@ def test_a_step_after_the_race_says_the_race_is_over(race):
     race.reset(seed=1)
     assert race.agents == ["car_0", "car_1"]  # and it races again
     race.step(zeros)
+
+
+# -- F19: the RLlib adapters name the env they take -----------------------------------------------
+def _envs():
+    from tinyrace.race import parallel_env
+
+    single = gym.make(CARRACING, max_episode_steps=5)
+    vector = gym.make_vec(CARRACING, num_envs=2, vectorization_mode="vector_entry_point", workers=0)
+    race = parallel_env(environment="f1tenth_loop", num_agents=2)
+    return {"TimeLimit": single, "BatchVectorEnv": vector, "RaceEnv": race}
+
+
+@pytest.mark.parametrize(
+    ("wrapper", "takes", "expected"),
+    [
+        ("FloatPixels", "TimeLimit", "a Gymnasium env (gym.make(...))"),
+        ("FloatPixelsVector", "BatchVectorEnv", "a Gymnasium vector env (gym.make_vec(...))"),
+        ("FloatPixelsParallel", "RaceEnv", "a PettingZoo ParallelEnv (tinyrace.race.parallel_env)"),
+    ],
+)
+def test_a_float_pixels_wrapper_given_another_kind_of_env_is_a_type_error(wrapper, takes, expected):
+    import tinyrace.rllib as rllib
+
+    envs = _envs()
+    make = getattr(rllib, wrapper)
+    advice = {"TimeLimit": "FloatPixels", "BatchVectorEnv": "FloatPixelsVector"}
+    advice["RaceEnv"] = "FloatPixelsParallel"
+    for given, env in envs.items():
+        if given == takes:
+            make(env)  # its own kind is taken
+            continue
+        with pytest.raises(TypeError) as raised:
+            make(env)
+        assert str(raised.value) == f"expected {expected}, got {given}: wrap it in {advice[given]}"
+    for junk in (None, "tinyrace/CarRacing-v0"):
+        with pytest.raises(TypeError) as raised:
+            make(junk)
+        assert str(raised.value) == f"expected {expected}, got {type(junk).__name__}"
+    for env in envs.values():
+        env.close()
+
+
+@pytest.mark.parametrize(
+    ("config", "said"),
+    [
+        (None, "<RLlib env_config>: got None; expected a dict"),
+        ({}, '<RLlib env_config>: got {}; expected a dict with "num_envs"'),
+        ({"num_envs": 2, "id": 5}, "<RLlib env_config>: id: got 5; expected an env id"),
+    ],
+)
+def test_make_vector_env_checks_its_config_as_make_env_does(config, said):
+    from tinyrace.rllib import make_vector_env
+
+    with pytest.raises(ConfigError) as raised:
+        make_vector_env(config)
+    assert said in str(raised.value)

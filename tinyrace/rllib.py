@@ -34,6 +34,7 @@ import numpy as np
 from gymnasium import spaces
 from gymnasium.vector import VectorEnv, VectorObservationWrapper
 from gymnasium.vector.utils import batch_space
+from pettingzoo import ParallelEnv
 from pettingzoo.utils.wrappers import BaseParallelWrapper
 
 from tinyrace.errors import ConfigError, Problem
@@ -83,6 +84,7 @@ class FloatPixels(gym.ObservationWrapper[Any, Any, Any]):
     """
 
     def __init__(self, env: gym.Env[Any, Any]):
+        _expect(env, gym.Env, "a Gymnasium env (gym.make(...))")
         super().__init__(env)
         self._pixels = env.observation_space
         self.observation_space = float_space(env.observation_space)
@@ -97,6 +99,7 @@ class FloatPixelsVector(VectorObservationWrapper):
     batch at once. The single and the batched observation spaces follow."""
 
     def __init__(self, env: VectorEnv):
+        _expect(env, VectorEnv, "a Gymnasium vector env (gym.make_vec(...))")
         super().__init__(env)
         self._pixels = env.single_observation_space
         self.single_observation_space = float_space(self._pixels)
@@ -116,6 +119,7 @@ class FloatPixelsParallel(BaseParallelWrapper):  # type: ignore[misc]  # petting
     """
 
     def __init__(self, env: Any):
+        _expect(env, ParallelEnv, "a PettingZoo ParallelEnv (tinyrace.race.parallel_env)")
         super().__init__(env)
         self._pixels = {agent: env.observation_space(agent) for agent in env.possible_agents}
         self._float_spaces = {agent: float_space(s) for agent, s in self._pixels.items()}
@@ -137,6 +141,32 @@ class FloatPixelsParallel(BaseParallelWrapper):  # type: ignore[misc]  # petting
         return self._floats(observations), rewards, terminations, truncations, infos
 
 
+def _checked(env_config: object) -> dict[str, Any]:
+    """RLlib's env_config as a dict, its ``id`` (if any) text; else a ConfigError."""
+    if not isinstance(env_config, Mapping):
+        allowed = (
+            'expected a dict (RLlib passes its EnvContext), e.g. {"id": "tinyrace/CarRacing-v0"}'
+        )
+        raise ConfigError(Problem("<RLlib env_config>", "", env_config, allowed))
+    config = dict(env_config)
+    if not isinstance(config.get("id", CARRACING_ID), str):
+        allowed = 'expected an env id, e.g. "tinyrace/CarRacing-v0"'
+        raise ConfigError(Problem("<RLlib env_config>", "id", config["id"], allowed))
+    return config
+
+
+def _expect(env: object, kind: type, expected: str) -> None:
+    """A TypeError naming what a wrapper takes and what it was given (and the wrapper for
+    that), before the wrapper reads an attribute the object lacks."""
+    if isinstance(env, kind):
+        return
+    given = type(env).__name__
+    for other, wrapper in _WRAPPERS:
+        if other is not kind and isinstance(env, other):
+            raise TypeError(f"expected {expected}, got {given}: wrap it in {wrapper}")
+    raise TypeError(f"expected {expected}, got {given}")
+
+
 def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any] | VectorEnv:
     """RLlib's env creator: ``register_env("tinyrace", make_env)``.
 
@@ -149,15 +179,7 @@ def make_env(env_config: Mapping[str, Any]) -> gym.Env[Any, Any] | VectorEnv:
     With ``"num_envs"`` in ``env_config`` (RLlib adds it in ``vector_entry_point`` mode)
     the answer is ``make_vector_env``'s: one vector env of that many envs.
     """
-    if not isinstance(env_config, Mapping):
-        allowed = (
-            'expected a dict (RLlib passes its EnvContext), e.g. {"id": "tinyrace/CarRacing-v0"}'
-        )
-        raise ConfigError(Problem("<RLlib env_config>", "", env_config, allowed))
-    config = dict(env_config)
-    if not isinstance(config.get("id", CARRACING_ID), str):
-        allowed = 'expected an env id, e.g. "tinyrace/CarRacing-v0"'
-        raise ConfigError(Problem("<RLlib env_config>", "id", config["id"], allowed))
+    config = _checked(env_config)
     if NUM_ENVS in config:
         return make_vector_env(config)
     if WORKERS in config:
@@ -181,7 +203,10 @@ def make_vector_env(env_config: Mapping[str, Any]) -> FloatPixelsVector:
     is a process of its own, given one CPU (``num_cpus_per_env_runner``), and the vector
     entry point's default (one process per core) in each runner would crowd the cores.
     """
-    config = dict(env_config)
+    config = _checked(env_config)
+    if NUM_ENVS not in config:
+        allowed = f'expected a dict with "{NUM_ENVS}" (how many envs), e.g. {{"{NUM_ENVS}": 4}}'
+        raise ConfigError(Problem("<RLlib env_config>", "", env_config, allowed))
     env_id = config.pop("id", CARRACING_ID)
     num_envs = config.pop(NUM_ENVS)
     config.setdefault(WORKERS, 0)
@@ -190,6 +215,13 @@ def make_vector_env(env_config: Mapping[str, Any]) -> FloatPixelsVector:
     )
     return FloatPixelsVector(vector)
 
+
+# what each float-pixels wrapper takes, for ``_expect``'s advice
+_WRAPPERS: tuple[tuple[type, str], ...] = (
+    (gym.Env, "FloatPixels"),
+    (VectorEnv, "FloatPixelsVector"),
+    (ParallelEnv, "FloatPixelsParallel"),
+)
 
 __all__ = [
     "CARRACING_ID",
