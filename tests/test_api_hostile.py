@@ -169,3 +169,40 @@ def test_make_vector_env_checks_its_config_as_make_env_does(config, said):
     with pytest.raises(ConfigError) as raised:
         make_vector_env(config)
     assert said in str(raised.value)
+
+
+# -- F16: the *_list render modes on TinyRace-v0 as on CarRacing-v0 -----------------------------
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"id": CARRACING},
+        {"id": TINYRACE},
+        {"id": TINYRACE, "environment": "formula_student"},
+        {"id": TINYRACE, "environment": "formula_student", "opponents": [{"driver": "centerline"}]},
+    ],
+    ids=["carracing", "tinyrace", "formula_student", "with_opponents"],
+)
+@pytest.mark.parametrize("mode", ["rgb_array", "state_pixels"])
+def test_a_list_render_mode_collects_the_frames_since_the_last_render(kwargs, mode):
+    kwargs = dict(kwargs)
+    env = gym.make(kwargs.pop("id"), render_mode=f"{mode}_list", **kwargs)
+    single = gym.make(env.spec.id, render_mode=mode, **kwargs)
+    assert env.render_mode == f"{mode}_list"
+    env.reset(seed=0)
+    single.reset(seed=0)
+    action = env.action_space.sample()
+    env.step(action)
+    single.step(action)
+    frames = env.render()
+    assert isinstance(frames, list) and len(frames) == 2  # the reset's and the step's
+    assert np.array_equal(frames[-1], single.render())
+    assert env.render() == []  # emptied by the last render()
+    env.close()
+    single.close()
+
+
+def test_the_env_class_names_the_list_modes_gym_make_adds():
+    from tinyrace.env import TinyRaceEnv
+
+    with pytest.raises(ConfigError, match=r"render_mode: got 'rgb_array_list'; .*gym\.make also"):
+        TinyRaceEnv(render_mode="rgb_array_list")

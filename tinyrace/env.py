@@ -93,7 +93,8 @@ class TinyRaceEnv(gym.Env):
                     "<kwargs>",
                     "render_mode",
                     render_mode,
-                    f"expected one of: {', '.join(RENDER_MODES)} or None",
+                    f"expected one of: {', '.join(RENDER_MODES)} or None (gym.make also takes "
+                    "rgb_array_list and state_pixels_list: the frames since the last render())",
                 )
             )
         parts = prepare(loaded)

@@ -47,6 +47,11 @@ def make_env(*, opponents: Sequence[Any] | None = None, **kwargs: Any) -> gym.En
     return Opponents(TinyRaceEnv(race=race, **kwargs), drivers)
 
 
+# gym.make reads the entry point's render modes: with them it turns "rgb_array_list" (and
+# every "<mode>_list") into the mode and a RenderCollection wrapper, as for CarRacing-v0's class
+make_env.metadata = TinyRaceEnv.metadata  # type: ignore[attr-defined]
+
+
 def opponent_drivers(opponents: object) -> list[Any]:
     """One driver per opponent spec; a ConfigError names every bad spec (``opponents[i]``)."""
     if isinstance(opponents, (str, bytes)) or not isinstance(opponents, Sequence):
