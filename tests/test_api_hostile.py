@@ -206,3 +206,107 @@ def test_the_env_class_names_the_list_modes_gym_make_adds():
 
     with pytest.raises(ConfigError, match=r"render_mode: got 'rgb_array_list'; .*gym\.make also"):
         TinyRaceEnv(render_mode="rgb_array_list")
+
+
+# -- F20: tinyrace cache on a path that is no folder it can read -----------------------------------
+def _cache_cli(args, capsys):
+    from tinyrace import cli
+
+    code = cli.main(["cache", *args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def cache_env(monkeypatch, tmp_path):
+    from tinyrace import cache
+
+    for name in (cache.DIR_VARIABLE, "XDG_CACHE_HOME"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+@pytest.mark.parametrize("action", ["info", "clear"])
+@pytest.mark.parametrize("variable", ["TINYRACE_CACHE_DIR", "XDG_CACHE_HOME", "--dir"])
+@pytest.mark.parametrize("kind", ["file", "device"])
+def test_a_cache_folder_that_is_a_file_or_device_is_refused(
+    cache_env, monkeypatch, capsys, action, variable, kind
+):
+    path = cache_env / "precious"
+    path.write_text("mine\n")
+    named = "precious" if kind == "file" else "/dev/null"  # short: shown whole
+    args = [action]
+    if variable == "--dir":
+        args += ["--dir", named]
+    else:
+        monkeypatch.setenv(variable, named)
+    code, out, err = _cache_cli(args, capsys)
+    assert code == 2 and out == ""
+    source = "<command line>: --dir" if variable == "--dir" else f"<environment>: ${variable}"
+    what = "a file" if kind == "file" else "a character device"
+    assert err == (
+        f"tinyrace: error: {source}: got {named!r}; expected a readable folder: "
+        f"{named} is {what}, not a folder\n"
+    )
+    assert path.read_text() == "mine\n"  # the file is left as it was
+
+
+@pytest.mark.parametrize("action", ["info", "clear"])
+def test_a_cache_folder_that_cannot_be_read_is_refused(cache_env, monkeypatch, capsys, action):
+    import os
+
+    folder = cache_env / "c"
+    folder.mkdir()
+    real = os.scandir
+
+    def refused(path="."):  # chmod 000 as a user sees it (root reads any folder)
+        if os.fspath(path) == "c":
+            raise PermissionError(13, "Permission denied", path)
+        return real(path)
+
+    monkeypatch.setattr(os, "scandir", refused)
+    code, _, err = _cache_cli([action, "--dir", "c"], capsys)
+    assert code == 2
+    assert err == (
+        "tinyrace: error: <command line>: --dir: got 'c'; expected a readable folder: "
+        "c cannot be read (Permission denied)\n"
+    )
+
+
+def test_a_cache_folder_that_does_not_exist_yet_holds_nothing(cache_env, capsys):
+    code, out, _ = _cache_cli(["info"], capsys)
+    assert code == 0
+    assert f"cache folder: {cache_env / 'home' / '.cache' / 'tinyrace'}\n0 file(s)" in out
+    assert _cache_cli(["clear", "--dir", "new"], capsys)[:2] == (
+        0,
+        "removed 0 cache file(s) from new\n",
+    )
+
+
+def test_clear_says_which_cache_files_it_could_not_remove(cache_env, monkeypatch, capsys):
+    from pathlib import Path
+
+    from tinyrace.cache import disk
+
+    folder = cache_env / "c"
+    folder.mkdir()
+    entries = [folder / f"{digit * 64}.npc" for digit in "01"]
+    for entry in entries:
+        entry.write_bytes(disk.MAGIC + b"an entry")
+    real = Path.unlink
+
+    def read_only(self, missing_ok=False):  # a read-only folder, as a user sees it
+        if self.name == entries[0].name:
+            raise PermissionError(13, "Permission denied", str(self))
+        return real(self, missing_ok)
+
+    monkeypatch.setattr(Path, "unlink", read_only)
+    code, out, err = _cache_cli(["clear", "--dir", "c"], capsys)
+    assert code == 2 and out == ""
+    assert err == (
+        "tinyrace: error: <command line>: --dir: got 'c'; expected a folder whose files can be "
+        "removed: 1 cache file(s) left in c (Permission denied; removed 1)\n"
+    )
+    assert entries[0].exists() and not entries[1].exists()

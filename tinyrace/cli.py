@@ -400,11 +400,27 @@ def _examples(args: argparse.Namespace) -> int:
 
 # -- cache -------------------------------------------------------------------------------------
 def _cache(args: argparse.Namespace) -> int:
-    from tinyrace.cache import default_folder, disk, folder_of
+    from tinyrace.cache import chosen_folder, disk, folder_of
 
-    folder = folder_of(args.dir, "<command line>", "--dir") if args.dir else default_folder()
+    if args.dir:
+        where = Problem("<command line>", "--dir", args.dir, "")
+        folder = folder_of(args.dir, where.source, where.path)
+    else:
+        folder, where = chosen_folder()
+    unusable = disk.unusable(folder)
+    if unusable is not None:  # a file, a device or a folder it cannot list: not "0 file(s)"
+        allowed = f"expected a readable folder: {unusable}"
+        raise ConfigError(dataclasses.replace(where, allowed=allowed))
     if args.action == "clear":
-        removed = disk.clear(folder)
+        failed: list[OSError] = []
+        removed = disk.clear(folder, failed)
+        if failed:
+            reason = failed[0].strerror or str(failed[0])
+            allowed = (
+                f"expected a folder whose files can be removed: {len(failed)} cache file(s) "
+                f"left in {folder} ({reason}; removed {removed})"
+            )
+            raise ConfigError(dataclasses.replace(where, allowed=allowed))
         print(f"removed {removed} cache file(s) from {folder}")
         return 0
     files = disk.entries(folder)

@@ -55,12 +55,23 @@ class Settings:
 def default_folder() -> Path:
     """``$TINYRACE_CACHE_DIR``, else ``$XDG_CACHE_HOME/tinyrace``, else ``~/.cache/tinyrace``.
     A ConfigError when the variable names no folder the system can have."""
+    return chosen_folder()[0]
+
+
+def chosen_folder() -> tuple[Path, Problem]:
+    """``default_folder()`` and where it came from, as the Problem that names it (its
+    source, key and value; ``allowed`` empty): the environment variable as it is set, or
+    ``<default>`` for ``~/.cache/tinyrace``."""
     chosen = os.environ.get(DIR_VARIABLE)
     if chosen:
-        return folder_of(chosen, "<environment>", f"${DIR_VARIABLE}")
+        where = Problem("<environment>", f"${DIR_VARIABLE}", chosen, "")
+        return folder_of(chosen, where.source, where.path), where
     xdg = os.environ.get("XDG_CACHE_HOME")
-    base = folder_of(xdg, "<environment>", "$XDG_CACHE_HOME") if xdg else Path.home() / ".cache"
-    return base / "tinyrace"
+    if xdg:
+        where = Problem("<environment>", "$XDG_CACHE_HOME", xdg, "")
+        return folder_of(xdg, where.source, where.path) / "tinyrace", where
+    folder = Path.home() / ".cache" / "tinyrace"
+    return folder, Problem("<default>", "cache folder", str(folder), "")
 
 
 def folder_of(text: str, source: str, key: str) -> Path:

@@ -317,17 +317,61 @@ def trim(folder: Path, max_bytes: int) -> None:
         total -= size
 
 
-def clear(folder: Path) -> int:
+def unusable(folder: Path) -> str | None:
+    """Why ``folder`` cannot be a cache folder that is listed or cleared: a part of its path
+    that is no folder, or a folder that cannot be read; None for a folder that can be read,
+    or one that does not exist yet (nothing is cached there)."""
+    for part in (*reversed(folder.parents), folder):
+        try:
+            mode = os.stat(part).st_mode
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError) as error:
+            return f"{part} cannot be read ({_reason(error)})"
+        if not stat.S_ISDIR(mode):
+            return f"{part} is {_kind(mode)}, not a folder"
+    try:
+        with os.scandir(folder):
+            pass
+    except OSError as error:
+        return f"{folder} cannot be read ({_reason(error)})"
+    return None
+
+
+def _kind(mode: int) -> str:
+    kinds = {
+        stat.S_ISREG: "a file",
+        stat.S_ISCHR: "a character device",
+        stat.S_ISBLK: "a block device",
+        stat.S_ISFIFO: "a FIFO",
+        stat.S_ISSOCK: "a socket",
+    }
+    return next((name for test, name in kinds.items() if test(mode)), "no folder")
+
+
+def _reason(error: BaseException) -> str:
+    return (getattr(error, "strerror", None) or str(error)).rstrip(".")
+
+
+def clear(folder: Path, failed: list[OSError] | None = None) -> int:
     """Remove every cache file, lock file, leftover temporary file and the key of ``folder``; the
     number of entries removed. Only regular files the cache wrote are removed: named as it
     names them and, for entries and temporary files, starting with its MAGIC (a lock file
-    holds at most a process id). Nothing else in the folder is touched."""
+    holds at most a process id). Nothing else in the folder is touched. An entry that cannot
+    be removed (a read-only folder) is left, its error added to ``failed``."""
     removed = 0
     for pattern in (ENTRY_NAME, TEMP_NAME, LOCK_NAME):
         for path in _names(folder, pattern):
             if _written_here(path, pattern):
+                try:
+                    path.unlink()
+                except FileNotFoundError:  # removed meanwhile (another clear, a trim)
+                    continue
+                except OSError as error:
+                    if failed is not None and pattern is ENTRY_NAME:
+                        failed.append(error)
+                    continue
                 removed += pattern is ENTRY_NAME
-                _remove(path)
     key = folder / KEY_FILE
     with contextlib.suppress(OSError, ValueError):
         if stat.S_ISREG(os.lstat(key).st_mode) and os.lstat(key).st_size == KEY_BYTES:
