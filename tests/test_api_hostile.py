@@ -310,3 +310,90 @@ def test_clear_says_which_cache_files_it_could_not_remove(cache_env, monkeypatch
         "removed: 1 cache file(s) left in c (Permission denied; removed 1)\n"
     )
     assert entries[0].exists() and not entries[1].exists()
+
+
+# -- F21: examples copy writes no link and nothing into the package -------------------------------
+def test_copy_refuses_a_target_that_is_a_link_pointing_nowhere(tmp_path, capsys):
+    from tinyrace import cli
+
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    here = tmp_path / "here"
+    here.mkdir()
+    (here / "carracing.yaml").symlink_to(outside / "nowhere.yaml")
+    (here / "circuit").symlink_to(outside / "no_folder")
+    for name in ("carracing", "circuit"):
+        assert cli.main(["examples", "copy", name, str(here)]) == 2
+        err = capsys.readouterr().err
+        assert f"{here / name}" in err and "exists (a symbolic link); nothing is overwritten" in err
+    assert list(outside.iterdir()) == []  # nothing written through the links
+
+
+@pytest.mark.parametrize("where", ["package", "package_sub", "tracks", "configs"])
+def test_copy_and_run_refuse_a_folder_inside_the_package(where, capsys):
+    from tinyrace import cli
+    from tinyrace.examples import CONFIGS_DIR, PACKAGE_DIR, TRACKS_DIR
+
+    folder = {
+        "package": PACKAGE_DIR,
+        "package_sub": PACKAGE_DIR / "copies",
+        "tracks": TRACKS_DIR,
+        "configs": CONFIGS_DIR / "mine",
+    }[where]
+    before = sorted(p.name for p in folder.parent.iterdir())
+    assert cli.main(["examples", "copy", "carracing", str(folder)]) == 2
+    err = capsys.readouterr().err
+    assert "a folder outside the installed package" in err and str(folder) in err
+    assert cli.main(["run", "carracing", "-o", str(folder), "--episodes", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "lies inside the installed package" in err and "--force" in err
+    assert sorted(p.name for p in folder.parent.iterdir()) == before  # nothing made there
+
+
+@pytest.fixture
+def shipped(tmp_path, monkeypatch):
+    """A copy of two shipped examples in a package of the test's own."""
+    import shutil
+
+    from tinyrace import examples
+
+    package = tmp_path / "package"
+    tracks, configs = package / "example_tracks", package / "configs"
+    configs.mkdir(parents=True)
+    shutil.copytree(examples.TRACKS_DIR / "circuit", tracks / "circuit")
+    shutil.copyfile(examples.CONFIGS_DIR / "carracing.yaml", configs / "real.yaml")
+    monkeypatch.setattr(examples, "PACKAGE_DIR", package)
+    monkeypatch.setattr(examples, "TRACKS_DIR", tracks)
+    monkeypatch.setattr(examples, "CONFIGS_DIR", configs)
+    return package
+
+
+def test_a_shipped_link_inside_is_copied_as_its_file_under_its_own_name(shipped, tmp_path):
+    from tinyrace.examples import copy_example
+
+    (shipped / "configs" / "carracing.yaml").symlink_to("real.yaml")
+    target = tmp_path / "mine"
+    assert copy_example("carracing", target) == [target / "carracing.yaml"]
+    copied = target / "carracing.yaml"
+    assert not copied.is_symlink()
+    assert copied.read_bytes() == (shipped / "configs" / "real.yaml").read_bytes()
+    assert sorted(p.name for p in target.iterdir()) == ["carracing.yaml"]
+
+
+@pytest.mark.parametrize("link", ["config", "config_dangling", "track_file"])
+def test_a_shipped_link_out_of_the_package_is_refused(shipped, tmp_path, link):
+    from tinyrace.examples import copy_example
+
+    secret = tmp_path / "secret.txt"
+    secret.write_text("not the package's")
+    name = "circuit" if link == "track_file" else "carracing"
+    if link == "track_file":
+        (shipped / "example_tracks" / "circuit" / "notes.txt").symlink_to(secret)
+    else:
+        points = secret if link == "config" else shipped.parent / "nowhere.yaml"
+        (shipped / "configs" / "carracing.yaml").symlink_to(points)
+    target = tmp_path / "mine"
+    with pytest.raises(ConfigError, match="does not resolve inside it"):
+        copy_example(name, target)
+    assert not target.exists()  # nothing copied
+    assert not (shipped.parent / "nowhere.yaml").exists()

@@ -302,7 +302,9 @@ def _model(name: str, experiment: Experiment) -> str:
 
 
 def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
-    """``--out`` checked: a folder, and (unless ``force``) not inside a track folder."""
+    """``--out`` checked: a folder, and (unless ``force``) not inside a track folder nor
+    the installed package (``shipped_holding``, as ``tinyrace examples copy`` refuses)."""
+    from tinyrace.examples import shipped_holding
     from tinyrace.experiment.files import unmakeable
     from tinyrace.validate import system_reason, track_folder_holding
 
@@ -323,6 +325,12 @@ def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
     if inside is not None and not force:
         raise UsageError(
             f"{where}: {str(path)!r} lies inside the track folder {str(inside)!r}; "
+            "expected a folder outside it (run elsewhere, give -o, or --force)"
+        )
+    shipped = shipped_holding(path)
+    if shipped is not None and not force:
+        raise UsageError(
+            f"{where}: {str(path)!r} lies inside the installed package {str(shipped)!r}; "
             "expected a folder outside it (run elsewhere, give -o, or --force)"
         )
     return None if out is None else path

@@ -14,6 +14,7 @@ installed package; a source checkout or an editable install reads them beside it
 
 from __future__ import annotations
 
+import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -141,8 +142,12 @@ def local_path(value: str | Path) -> Path:
 def copy_example(name: str, folder: Path) -> list[Path]:
     """Copy every shipped example called ``name`` (track folder and/or config) into ``folder``.
 
-    Refuses, copying nothing, when a target already exists. A copied config keeps its
-    bare ``environment:`` name, which now finds the copied track folder next to it.
+    Refuses, copying nothing, when a target already exists (a symbolic link too, even one
+    that points nowhere: nothing is written through a link), when ``folder`` lies inside the
+    installed package or its shipped folders, or when a shipped file is a link that does
+    not resolve inside its shipped folder. A link inside is copied as the file it names,
+    under the link's own name. A copied config keeps its bare ``environment:`` name, which
+    now finds the copied track folder next to it.
     """
     chosen = [e for e in examples() if e.name == name]
     if not chosen:
@@ -151,25 +156,86 @@ def copy_example(name: str, folder: Path) -> list[Path]:
     if _exists(folder) and not folder.is_dir():
         allowed = "a folder (or a path that does not exist yet), not a file"
         raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed))
+    shipped = shipped_holding(folder)
+    if shipped is not None:
+        allowed = (
+            f"a folder outside the installed package ({shipped} holds tinyrace's own "
+            "files): copy it elsewhere"
+        )
+        raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed))
     targets = [(e, folder / e.path.name) for e in chosen]
     for _, target in targets:
-        if _exists(target):
+        if _lexists(target):
+            kind = " (a symbolic link)" if target.is_symlink() else ""
             allowed = (
-                f"a folder where {target.name} does not exist yet ({target} exists; "
+                f"a folder where {target.name} does not exist yet ({target} exists{kind}; "
                 "nothing is overwritten)"
             )
             raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed))
+    for example, _ in targets:
+        _check_links(example)
     try:
         folder.mkdir(parents=True, exist_ok=True)
         for example, target in targets:
             if example.kind == "track":
-                shutil.copytree(example.path, target)
+                shutil.copytree(example.path, target, copy_function=_copy_file)
             else:
-                shutil.copyfile(example.path, target)
+                _copy_file(example.path, target)
     except (OSError, ValueError) as exc:  # no permission, a name too long, a NUL byte
         allowed = f"a folder that can be written ({type(exc).__name__}: {exc})"
         raise ConfigError(Problem("<command line>", "DIR", str(folder), allowed)) from None
     return [target for _, target in targets]
+
+
+def shipped_holding(path: Path) -> Path | None:
+    """The installed package's folder, or the shipped tracks' or configs' folder, that
+    ``path`` lies in (resolved: through links), or None: no user file belongs there."""
+    try:
+        resolved = path.resolve()
+        roots = (PACKAGE_DIR, TRACKS_DIR.resolve(), CONFIGS_DIR.resolve())
+    except (OSError, ValueError, RuntimeError):  # a name the OS refuses, a link loop
+        return None
+    return next((root for root in roots if resolved.is_relative_to(root)), None)
+
+
+def _check_links(example: Example) -> None:
+    """Every link among the example's files resolves to a file or folder inside the
+    shipped folder it lies in; else a ConfigError (the package was altered)."""
+    root = example.path.parent.resolve()
+    paths = [example.path]
+    if example.kind == "track" and example.path.is_dir() and not example.path.is_symlink():
+        paths += sorted(example.path.rglob("*"))
+    for path in paths:
+        if not path.is_symlink():
+            continue
+        try:
+            resolved = path.resolve(strict=True)
+        except (OSError, RuntimeError):
+            resolved = None
+        if resolved is None or not resolved.is_relative_to(root):
+            allowed = (
+                f"a shipped example whose files lie in the package: {path} is a symbolic "
+                "link that does not resolve inside it (reinstall tinyrace)"
+            )
+            raise ConfigError(Problem("<command line>", "name", example.name, allowed))
+
+
+def _copy_file(source: str | Path, target: str | Path) -> None:
+    """``source``'s content (through a link) as a new file ``target``, never through a link
+    at ``target`` nor over a file there (O_EXCL); mode 0644 less the umask."""
+    data = Path(source).read_bytes()
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+    fd = os.open(target, flags, 0o644)
+    with os.fdopen(fd, "wb") as file:
+        file.write(data)
+
+
+def _lexists(path: Path) -> bool:
+    """Whether anything is at ``path``, a link that points nowhere too."""
+    try:
+        return os.path.lexists(path)
+    except (OSError, ValueError):  # a name the OS refuses (too long, NUL byte)
+        return False
 
 
 def _is_file(path: Path) -> bool:
