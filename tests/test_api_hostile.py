@@ -397,3 +397,40 @@ def test_a_shipped_link_out_of_the_package_is_refused(shipped, tmp_path, link):
         copy_example(name, target)
     assert not target.exists()  # nothing copied
     assert not (shipped.parent / "nowhere.yaml").exists()
+
+
+# -- F22: show --seed on a track whose picture does not depend on it ----------------------------
+def _shipped_tracks():
+    from tinyrace.examples import track_names
+
+    return track_names()
+
+
+@pytest.mark.parametrize("name", [*_shipped_tracks(), "carracing", "procedural"])
+def test_a_picture_says_whether_the_seed_chose_it(name):
+    from tinyrace.examples import find_example
+    from tinyrace.validate import picture
+
+    target = name if name == "procedural" else str(find_example(name))
+    first, other = picture(target, 0), picture(target, 3)
+    assert first.seeded == other.seeded
+    assert first.seeded is not np.array_equal(first.image, other.image)
+
+
+@pytest.mark.parametrize(
+    ("args", "noted"),
+    [
+        (["formula_student", "--seed", "3"], True),
+        (["formula_student", "--seed", "0"], True),  # given: said, even for the default
+        (["formula_student"], False),
+        (["procedural", "--seed", "3"], False),
+    ],
+)
+def test_show_notes_a_seed_that_changes_nothing(args, noted, tmp_path, capsys):
+    from tinyrace import cli
+
+    assert cli.main(["show", *args, "-o", str(tmp_path / "p.png")]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("wrote ")
+    note = f"tinyrace: note: --seed {args[-1]} is ignored: only a procedural track's picture "
+    assert err == (note + "depends on the seed\n" if noted else "")

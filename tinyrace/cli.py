@@ -151,8 +151,8 @@ def _parser() -> argparse.ArgumentParser:
     show.add_argument(
         "--seed",
         type=_count(0, "a whole number >= 0"),
-        default=0,
-        help="procedural tracks: which seed's track",
+        default=None,
+        help="procedural tracks: which seed's track (default 0; other tracks have one picture)",
     )
     show.add_argument("-o", "--output", help="PNG file (default: <name>.png in this folder)")
     show.add_argument(
@@ -461,7 +461,13 @@ def _show(args: argparse.Namespace) -> int:
     from tinyrace.validate import check_output, picture, system_reason, write_picture
 
     target = args.path if args.path == "procedural" else str(find_example(args.path))
-    shown = picture(target, args.seed)
+    shown = picture(target, 0 if args.seed is None else args.seed)
+    if args.seed is not None and not shown.seeded:  # the same picture for every seed
+        print(
+            f"tinyrace: note: --seed {args.seed} is ignored: only a procedural track's picture "
+            "depends on the seed",
+            file=sys.stderr,
+        )
     image = shown.image
     output = Path(args.output or f"{shown.name}.png")
     check_output(output, shown.inputs, args.force)

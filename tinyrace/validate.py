@@ -165,6 +165,7 @@ class Picture:
     image: np.ndarray  # (H, W, 3) uint8 RGB
     name: str
     inputs: tuple[Path, ...]  # resolved paths of every file read: never to be written over
+    seeded: bool = False  # whether the seed chose it (a procedural track: one per seed)
 
 
 def picture(target: str, seed: int) -> Picture:
@@ -174,7 +175,7 @@ def picture(target: str, seed: int) -> Picture:
 
     if target == "procedural":  # the CLI's name for CarRacing's track
         image = procedural_picture(load_env_config().config, seed)
-        return Picture(image, f"procedural-seed{seed}", ())
+        return Picture(image, f"procedural-seed{seed}", (), seeded=True)
     path = Path(target)
     loaded = load_any(path)
     named = (path if path.is_dir() or path.name != TRACK_FILE else path.parent).resolve()
@@ -183,7 +184,8 @@ def picture(target: str, seed: int) -> Picture:
     parts = build_course(loaded)
     ground = make_ground(parts.config, parts.source)  # what the env's pictures are drawn on
     if ground.rescalable() is not None:  # a new track per seed, painted from its tiles
-        return Picture(procedural_picture(loaded.config, seed), f"{name}-seed{seed}", inputs)
+        image = procedural_picture(loaded.config, seed)
+        return Picture(image, f"{name}-seed{seed}", inputs, seeded=True)
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
     if ground.carries_pictures:
         return Picture(image_picture(parts.config, first), name, inputs)
