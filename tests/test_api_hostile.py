@@ -434,3 +434,51 @@ def test_show_notes_a_seed_that_changes_nothing(args, noted, tmp_path, capsys):
     assert out.startswith("wrote ")
     note = f"tinyrace: note: --seed {args[-1]} is ignored: only a procedural track's picture "
     assert err == (note + "depends on the seed\n" if noted else "")
+
+
+# -- F23: render_mode="human" with no display -------------------------------------------------
+@pytest.fixture
+def headless(monkeypatch):
+    """A Linux machine with no display and no SDL driver chosen."""
+    import sys
+
+    monkeypatch.setattr(sys, "platform", "linux")
+    for name in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER"):
+        monkeypatch.delenv(name, raising=False)
+
+
+@pytest.mark.parametrize("kwargs", [{"id": CARRACING}, {"id": TINYRACE, "environment": "circuit"}])
+def test_a_human_window_with_no_display_is_a_clear_error(headless, kwargs):
+    from tinyrace.render.window import NoDisplay
+
+    kwargs = dict(kwargs)
+    env = gym.make(kwargs.pop("id"), render_mode="human", **kwargs)
+    with pytest.raises(NoDisplay) as raised:
+        env.reset(seed=0)
+    assert str(raised.value).startswith(
+        'render_mode="human" needs a display: no DISPLAY or WAYLAND_DISPLAY is set'
+    )
+    assert "SDL_VIDEODRIVER=dummy" in str(raised.value)
+    env.close()
+
+
+@pytest.mark.parametrize(
+    "environ",
+    [{"SDL_VIDEODRIVER": "dummy"}, {"SDL_VIDEODRIVER": "offscreen"}, {"DISPLAY": ":0"}],
+)
+def test_a_display_or_a_chosen_sdl_driver_is_no_error(headless, monkeypatch, environ):
+    from tinyrace.render.window import display_missing
+
+    for name, value in environ.items():
+        monkeypatch.setenv(name, value)
+    assert display_missing() is None
+
+
+def test_the_dummy_driver_still_renders_human_mode(headless, monkeypatch):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    monkeypatch.setenv("SDL_AUDIODRIVER", "dummy")
+    env = gym.make(CARRACING, render_mode="human")
+    env.reset(seed=0)
+    assert env.unwrapped._window.screen.get_size() == (1000, 800)
+    assert env.render() is None
+    env.close()

@@ -2,11 +2,35 @@
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 from typing import Any
 
 import numpy as np
 from gymnasium.error import DependencyNotInstalled
+
+
+class NoDisplay(RuntimeError):
+    """``render_mode="human"`` where no window can open: no display, no SDL driver chosen."""
+
+
+def display_missing() -> str | None:
+    """Why a window cannot open here, or None: on Linux, no ``DISPLAY`` or
+    ``WAYLAND_DISPLAY`` and no ``SDL_VIDEODRIVER`` set (pygame would then draw to its
+    offscreen driver and show nothing). A driver set explicitly is taken as chosen: the
+    tests' ``dummy``, ``offscreen``, ``kmsdrm`` on a console."""
+    if not sys.platform.startswith("linux"):
+        return None
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return None
+    if os.environ.get("SDL_VIDEODRIVER"):
+        return None
+    return (
+        'render_mode="human" needs a display: no DISPLAY or WAYLAND_DISPLAY is set. Use '
+        'render_mode="rgb_array" for the frames, or set SDL_VIDEODRIVER=dummy to draw '
+        "into no window"
+    )
 
 
 class Window:
@@ -19,6 +43,9 @@ class Window:
             raise DependencyNotInstalled(
                 'render_mode="human" needs pygame: pip install "tinyrace[human]" (pygame-ce)'
             ) from exc
+        missing = display_missing()
+        if missing is not None:
+            raise NoDisplay(missing)
         self.pygame = pygame
         self.title = title
         self.fps = fps
