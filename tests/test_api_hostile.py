@@ -22,7 +22,7 @@ TINYRACE = "tinyrace/TinyRace-v0"
 
 # -- F15: CarRacing's flags are true or false -----------------------------------------------------
 @pytest.mark.parametrize("key", ["continuous", "verbose", "domain_randomize"])
-@pytest.mark.parametrize("value", ["no", "False", "yes", 0, 2, None, [True]])
+@pytest.mark.parametrize("value", ["no", "False", "yes", 2, -1, 0.0, None, [True]])
 def test_a_carracing_flag_that_is_not_true_or_false_is_refused(key, value):
     with pytest.raises(ConfigError) as raised:
         gym.make(CARRACING, **{key: value})
@@ -34,6 +34,11 @@ def test_a_carracing_flag_that_is_not_true_or_false_is_refused(key, value):
 def test_tinyrace_verbose_is_true_or_false_too():
     with pytest.raises(ConfigError, match=r"<kwargs>: verbose: got 'loud'; expected true or false"):
         gym.make(TINYRACE, verbose="loud")
+
+
+def test_carracing_continuous_takes_0_and_1_as_carracing_v3_does():
+    assert gym.make(CARRACING, continuous=0).action_space == gym.spaces.Discrete(5)
+    assert gym.make(CARRACING, continuous=np.int64(1)).action_space.shape == (3,)
 
 
 @pytest.mark.parametrize("flag", [np.False_, False])

@@ -361,12 +361,15 @@ def _rgb(image: np.ndarray) -> np.ndarray:
 
 
 def flag(value: object, key: str, source: str = KWARGS_SOURCE) -> bool:
-    """A true/false keyword argument (``verbose``, CarRacing's ``continuous``): a bool or a
-    numpy bool, else a ConfigError naming ``key`` (text such as "no" is not read as a flag:
+    """A true/false keyword argument (``verbose``, CarRacing's ``continuous``): a bool, a
+    numpy bool, or 0 or 1 (CarRacing-v3 reads any object's truth; code written for it may
+    pass 0), else a ConfigError naming ``key`` (text such as "no" is not read as a flag:
     any non-empty string would be true)."""
-    if not isinstance(value, (bool, np.bool_)):
-        raise ConfigError(Problem(source, key, value, "expected true or false"))
-    return bool(value)
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)) and value in (0, 1):
+        return bool(value)
+    raise ConfigError(Problem(source, key, value, "expected true or false"))
 
 
 def _check_options(options: object) -> dict[str, Any]:
