@@ -408,34 +408,9 @@ def _examples(args: argparse.Namespace) -> int:
 
 # -- cache -------------------------------------------------------------------------------------
 def _cache(args: argparse.Namespace) -> int:
-    from tinyrace.cache import chosen_folder, disk, folder_of
+    from tinyrace.cache import command
 
-    if args.dir:
-        where = Problem("<command line>", "--dir", args.dir, "")
-        folder = folder_of(args.dir, where.source, where.path)
-    else:
-        folder, where = chosen_folder()
-    unusable = disk.unusable(folder)
-    if unusable is not None:  # a file, a device or a folder it cannot list: not "0 file(s)"
-        allowed = f"expected a readable folder: {unusable}"
-        raise ConfigError(dataclasses.replace(where, allowed=allowed))
-    if args.action == "clear":
-        failed: list[OSError] = []
-        removed = disk.clear(folder, failed)
-        if failed:
-            reason = failed[0].strerror or str(failed[0])
-            allowed = (
-                f"expected a folder whose files can be removed: {len(failed)} cache file(s) "
-                f"left in {folder} ({reason}; removed {removed})"
-            )
-            raise ConfigError(dataclasses.replace(where, allowed=allowed))
-        print(f"removed {removed} cache file(s) from {folder}")
-        return 0
-    files = disk.entries(folder)
-    size = sum(path.stat().st_size for path in files)
-    print(f"cache folder: {folder}")
-    print(f"{len(files)} file(s), {size / 2**20:.1f} MB (cache.max_size caps it; default 2048 MB)")
-    print("empty it: tinyrace cache clear")
+    print("\n".join(command.clear(args.dir) if args.action == "clear" else command.info(args.dir)))
     return 0
 
 
