@@ -27,12 +27,14 @@ def test_a_carracing_flag_that_is_not_true_or_false_is_refused(key, value):
     with pytest.raises(ConfigError) as raised:
         gym.make(CARRACING, **{key: value})
     assert str(raised.value).splitlines()[-1].strip() == (
-        f"<kwargs>: {key}: got {value!r}; expected true or false"
+        f"<kwargs>: {key}: got {value!r}; expected true or false (or 0 or 1)"
     )
 
 
 def test_tinyrace_verbose_is_true_or_false_too():
-    with pytest.raises(ConfigError, match=r"<kwargs>: verbose: got 'loud'; expected true or false"):
+    with pytest.raises(
+        ConfigError, match=r"<kwargs>: verbose: got 'loud'; expected true or false \(or 0 or 1\)"
+    ):
         gym.make(TINYRACE, verbose="loud")
 
 
@@ -464,6 +466,20 @@ def test_a_human_window_with_no_display_is_a_clear_error(headless, kwargs):
         'render_mode="human" needs a display: no DISPLAY or WAYLAND_DISPLAY is set'
     )
     assert "SDL_VIDEODRIVER=dummy" in str(raised.value)
+    env.close()
+
+
+def test_an_sdl_driver_that_does_not_exist_is_a_clear_error(headless, monkeypatch):
+    """pygame's own error (``bogus not available``) came as a traceback from inside it."""
+    from tinyrace.render.window import NoDisplay
+
+    monkeypatch.setenv("SDL_VIDEODRIVER", "bogus")
+    env = gym.make(CARRACING, render_mode="human")
+    with pytest.raises(NoDisplay) as raised:
+        env.reset(seed=0)
+    text = str(raised.value)
+    assert text.startswith('render_mode="human" cannot open a window (SDL_VIDEODRIVER=bogus): ')
+    assert "SDL_VIDEODRIVER=dummy" in text
     env.close()
 
 

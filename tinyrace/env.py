@@ -369,7 +369,7 @@ def flag(value: object, key: str, source: str = KWARGS_SOURCE) -> bool:
         return bool(value)
     if isinstance(value, (int, np.integer)) and value in (0, 1):
         return bool(value)
-    raise ConfigError(Problem(source, key, value, "expected true or false"))
+    raise ConfigError(Problem(source, key, value, "expected true or false (or 0 or 1)"))
 
 
 def _check_options(options: object) -> dict[str, Any]:

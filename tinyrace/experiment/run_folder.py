@@ -381,7 +381,7 @@ def _values(
         raise _problem(path, f"line {line}, episode", values["episode"], "expected 0 to 1e9")
     visited, total = values.get("tiles_visited"), values.get("tiles_total")
     if visited is not None and total is not None and visited > total:
-        allowed = f"expected at most tiles_total ({total}): the tiles visited of the track's"
+        allowed = f"expected at most tiles_total ({total}): a track has no more tiles to visit"
         raise _problem(path, f"line {line}, tiles_visited", visited, allowed)
     return values
 

@@ -56,9 +56,17 @@ class Window:
         pygame = self.pygame
         height, width = frame.shape[:2]
         if self.screen is None or self.screen.get_size() != (width, height):
-            pygame.display.init()
-            pygame.display.set_caption(self.title)
-            self.screen = pygame.display.set_mode((width, height))
+            try:
+                pygame.display.init()
+                pygame.display.set_caption(self.title)
+                self.screen = pygame.display.set_mode((width, height))
+            except pygame.error as exc:  # no such SDL driver, no video device
+                driver = os.environ.get("SDL_VIDEODRIVER")
+                chosen = f" (SDL_VIDEODRIVER={driver})" if driver else ""
+                raise NoDisplay(
+                    f'render_mode="human" cannot open a window{chosen}: {exc}. Use '
+                    'render_mode="rgb_array" for the frames, or SDL_VIDEODRIVER=dummy'
+                ) from None
         pygame.event.pump()
         surface = pygame.surfarray.make_surface(np.ascontiguousarray(frame.transpose(1, 0, 2)))
         self.screen.blit(surface, (0, 0))
