@@ -227,9 +227,10 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
         if step < reference_steps:
             origin = lidar.origin(snapshot, raw.layout)
             beams = directions(lidar.angles, snapshot.car.pose[2], raw.layout.y_down)
-            distance = f1tenth_distance(lidar.field)  # once per map in F1TENTH: not timed
+            field = lidar.field if lidar.field is not None else lidar.exact  # a ROS map's
+            distance = f1tenth_distance(field)  # once per map in F1TENTH: not timed
             began = time.perf_counter()
-            ranges = f1tenth_scan(lidar.field, distance, origin, beams, lidar.max_range)
+            ranges = f1tenth_scan(field, distance, origin, beams, lidar.max_range)
             reference_seconds += time.perf_counter() - began
             ours = lidar.observe(snapshot, raw.layout, rng)
             differences.append(np.abs(ranges - ours))
@@ -237,7 +238,9 @@ def measure_case(name: str, steps: int, reference_steps: int) -> dict[str, Any]:
     micros = {k: 1e6 * float(np.median(v)) for k, v in samples.items()}
     means = {k: 1e6 * float(np.mean(v)) for k, v in samples.items()}
     micros["f1tenth_reference_lidar_1080"] = 1e6 * reference_seconds / max(reference_steps, 1)
-    cell = 1.0 / lidar.field.cells_per_unit
+    field = lidar.field if lidar.field is not None else lidar.exact
+    assert field is not None  # the lidar has observed a track
+    cell = 1.0 / field.cells_per_unit
     return {
         "steps": steps,
         "lidar_kernel": lidar.kernel,
