@@ -370,6 +370,22 @@ def test_a_rule_part_that_needs_what_the_track_lacks_is_named_at_its_entry() -> 
         unregister_rule("speed_limit")
 
 
+def test_an_end_marked_as_a_crash_is_drawn_as_one_in_the_report() -> None:
+    """``End.crash``: the report's pictures mark such an ending as a crash, the built-in
+    ends (out of bounds, an obstacle, a collision, in one car's report as in a race's) and a
+    part's own alike."""
+    from tinyrace.experiment.report import crash_ends
+
+    assert crash_ends() == {"out_of_bounds", "obstacle", "collision"}
+    crashing = dataclasses.replace(SPEED_LIMIT, ends=(End("speeding", _banned, crash=True),))
+    register_rule(crashing)
+    try:
+        assert crash_ends() == {"out_of_bounds", "obstacle", "collision", "speeding"}
+    finally:
+        unregister_rule("speed_limit")
+    assert "speeding" not in crash_ends()
+
+
 def test_a_rule_parts_term_and_end_come_after_the_built_in_ones(speed_limit: None) -> None:
     assert list(TERMS)[-1] == "speeding" and list(ENDS)[-1] == "speeding"
     assert next(iter(TERMS)) == "time" and "lap_finished" in list(ENDS)[:-1]

@@ -78,10 +78,12 @@ class Term:
 
 @dataclass(frozen=True)
 class End:
-    """One way an episode ends: ``when(facts, design)`` True ends it, for ``reason``."""
+    """One way an episode ends: ``when(facts, design)`` True ends it, for ``reason``.
+    ``crash``: the report's pictures mark an episode that ended so as a crash."""
 
     reason: str
     when: Callable[[StepFacts, Design], bool]
+    crash: bool = False
 
 
 # Every registered term and end, in the order the terms are summed (the order is part of
@@ -89,6 +91,11 @@ class End:
 # rule parts' registration (``tinyrace.episodes.rules.register``).
 TERMS: dict[str, Term] = {}
 ENDS: dict[str, End] = {}
+
+
+def crash_reasons() -> frozenset[str]:
+    """The end reasons of the registered parts that are crashes (``End.crash``)."""
+    return frozenset(reason for reason, end in ENDS.items() if end.crash)
 
 
 def add_term(term: Term) -> None:

@@ -30,7 +30,7 @@ class Path2D:
     points: np.ndarray  # (N, 2) [track units]
     speed: np.ndarray  # (N,) [track units/s]
     hits: np.ndarray  # (N,) bool: an obstacle was touched at this step
-    crashed: bool  # the episode ended out of bounds or on an obstacle
+    crashed: bool  # the episode ended for a crash (End.crash: out of bounds, an obstacle, ...)
 
 
 @dataclass

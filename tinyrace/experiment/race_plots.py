@@ -22,7 +22,7 @@ class CarLine:
     color: str  # '#rrggbb'
     x: np.ndarray  # (N,) [track units] or time [s]
     y: np.ndarray  # (N,) [track units] or position
-    crashed: bool = False  # its episode ended out of bounds or in a collision
+    crashed: bool = False  # its episode ended for a crash (End.crash)
 
 
 def car_paths(

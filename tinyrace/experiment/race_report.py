@@ -22,6 +22,7 @@ from tinyrace.experiment.report import (  # the page's parts, shared with one ca
     REPORT_FILE,
     STYLE,
     Picture,
+    crash_ends,
     drawn,
     drawn_note,
     figures_html,
@@ -37,7 +38,6 @@ from tinyrace.experiment.report import (  # the page's parts, shared with one ca
 )
 from tinyrace.experiment.run_folder import check_outputs, read_trace
 
-CRASHES = ("out_of_bounds", "obstacle", "collision")
 Trace = dict[str, np.ndarray]
 
 
@@ -83,6 +83,7 @@ def _episode_pictures(
     from tinyrace.experiment import race_plots
 
     pictures = []
+    crashes = crash_ends()
     section = f"Episode {episode}"
     traced = [(r, t) for r in rows if (t := traces[r.car]) is not None]
     key = rows[0].track
@@ -94,7 +95,7 @@ def _episode_pictures(
         for row, trace in traced:
             points = trace_points(trace, extent)
             color = colors.get(row.car, "#808080")
-            crashed = row.end in CRASHES
+            crashed = row.end in crashes
             x, y = points[:, 0], points[:, 1]
             lines.append(race_plots.CarLine(row.car, color, x, y, crashed=crashed))
         lap_line = entry.get("lap_line")

@@ -30,7 +30,17 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 REPORT_FILE = "report.html"
-CRASHES = ("out_of_bounds", "obstacle")
+
+
+def crash_ends() -> frozenset[str]:
+    """The end reasons drawn as crashes: every registered part's ``End.crash`` (the built-in
+    ones: out of bounds, an obstacle, a collision; a part a run registered too)."""
+    import tinyrace.episodes.rules  # noqa: F401  (the built-in parts' ends)
+    from tinyrace.rewards import crash_reasons
+
+    return crash_reasons()
+
+
 CTE_LEFT_OUT = (
     "The cross-track error panel is left out: this track has no reference line to measure "
     "it against (an image track needs reward_design.cross_track_error.use_cte and its "
@@ -205,6 +215,7 @@ def _track_pictures(
     from tinyrace.experiment import plots
 
     pictures = []
+    crashes = crash_ends()
     tracks: dict[str, Any] = header.get("tracks") or {}
     for key in list(tracks)[:MAX_TRACK_PICTURES]:
         entry = tracks[key]
@@ -219,7 +230,7 @@ def _track_pictures(
             trace = _trace(run_dir, result)
             if trace is not None:
                 points = trace_points(trace, extent)
-                hits, crashed = trace["obstacle_hit"] > 0, result.end in CRASHES
+                hits, crashed = trace["obstacle_hit"] > 0, result.end in crashes
                 paths.append(
                     plots.Path2D(f"ep {result.episode}", points, trace["speed"], hits, crashed)
                 )

@@ -73,6 +73,6 @@ PART = RulePart(
         Term("cones", _cones_pay, _cones_charged),
         Term("walls", _walls_pay, _walls_charged),
     ),
-    ends=(End("collision", _ends),),
+    ends=(End("collision", _ends, crash=True),),
     doc="walls stop the car, cones are knocked over",
 )

@@ -59,6 +59,6 @@ PART = RulePart(
     ObstacleColours,
     furnish,
     terms=(Term("obstacles", _obstacles_pay, _pays),),
-    ends=(End("obstacle", _done),),
+    ends=(End("obstacle", _done, crash=True),),
     doc="obstacle colours under the footprint",
 )

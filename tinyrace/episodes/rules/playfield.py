@@ -40,6 +40,6 @@ PART = RulePart(
     "playfield",
     Playfield,
     terms=(OUT_OF_BOUNDS,),
-    ends=(End("out_of_bounds", _out),),
+    ends=(End("out_of_bounds", _out, crash=True),),
     doc="leaving the bounds ends the episode",
 )
