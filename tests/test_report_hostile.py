@@ -5,7 +5,6 @@ episodes or tracks take bounded time; an interrupted report leaves the old one w
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import re
@@ -15,25 +14,17 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from test_report import run
 
 from tinyrace import cli
-from tinyrace.examples import CONFIGS_DIR
-from tinyrace.experiment import files, load_experiment, plots, report, run_experiment
+from tinyrace.experiment import files, plots, report
 from tinyrace.experiment.report import MAX_DRAWN
 
 Edit = Callable[[Path], None]
 
 
 def _run(root: Path, name: str, episodes: int, max_steps: int) -> Path:
-    experiment = load_experiment(CONFIGS_DIR / f"{name}.yaml")
-    config = dataclasses.replace(
-        experiment.config,
-        episodes=episodes,
-        max_steps=max_steps,
-        output=dataclasses.replace(experiment.config.output, video=False),
-    )
-    experiment = dataclasses.replace(experiment, config=config)
-    return run_experiment(experiment, root, show_progress=False).run_dir
+    return run(root, name, episodes, max_steps).run_dir  # test_report's run, without video
 
 
 @pytest.fixture(scope="module")
