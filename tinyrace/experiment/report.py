@@ -30,6 +30,13 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 REPORT_FILE = "report.html"
+CTE_LEFT_OUT = (
+    "The cross-track error panel is left out: this track has no reference line to measure "
+    "it against (an image track needs reward_design.cross_track_error.use_cte and its "
+    "trajectory_color; a ros_map track a waypoint or raceline CSV)."
+)
+MAX_DRAWN = 100  # episodes whose traces one picture draws (evenly spaced over the run)
+MAX_TRACK_PICTURES = 12  # tracks drawn (a procedural run has one per seed): the first ones
 
 
 def crash_ends() -> frozenset[str]:
@@ -39,17 +46,6 @@ def crash_ends() -> frozenset[str]:
     from tinyrace.rewards import crash_reasons
 
     return crash_reasons()
-
-
-CTE_LEFT_OUT = (
-    "The cross-track error panel is left out: this track has no reference line to measure "
-    "it against (an image track needs reward_design.cross_track_error.use_cte and its "
-    "trajectory_color; a ros_map track a waypoint or raceline CSV)."
-)
-
-
-MAX_DRAWN = 100  # episodes whose traces one picture draws (evenly spaced over the run)
-MAX_TRACK_PICTURES = 12  # tracks drawn (a procedural run has one per seed): the first ones
 
 
 @dataclass
