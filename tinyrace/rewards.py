@@ -93,11 +93,6 @@ TERMS: dict[str, Term] = {}
 ENDS: dict[str, End] = {}
 
 
-def crash_reasons() -> frozenset[str]:
-    """The end reasons of the registered parts that are crashes (``End.crash``)."""
-    return frozenset(reason for reason, end in ENDS.items() if end.crash)
-
-
 def add_term(term: Term) -> None:
     """Put ``term`` in ``TERMS`` (after the others); the same name twice must be one term."""
     known = TERMS.get(term.name)

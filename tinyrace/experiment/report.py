@@ -42,8 +42,7 @@ MAX_TRACK_PICTURES = 12  # tracks drawn (a procedural run has one per seed): the
 def crash_ends() -> frozenset[str]:
     """The end reasons drawn as crashes: every registered part's ``End.crash`` (the built-in
     ones: out of bounds, an obstacle, a collision; a part a run registered too)."""
-    import tinyrace.episodes.rules  # noqa: F401  (the built-in parts' ends)
-    from tinyrace.rewards import crash_reasons
+    from tinyrace.episodes.rules import crash_reasons
 
     return crash_reasons()
 

@@ -40,6 +40,7 @@ __all__ = [
     "RuleBase",
     "RulePart",
     "TileProgress",
+    "crash_reasons",
     "register",
     "rule_problems",
     "rule_type",
@@ -100,6 +101,12 @@ def rule_problems(config: EnvConfig, source: str) -> list[Problem]:
             )
             problems.append(Problem(source, f"rules[{i}].type", entry.type, allowed))
     return problems
+
+
+def crash_reasons() -> frozenset[str]:
+    """The end reasons of the registered parts that are crashes (``End.crash``): the ones
+    the report's pictures mark as a crash."""
+    return frozenset(end.reason for part in RULES.values() for end in part.ends if end.crash)
 
 
 def rule_type(name: str) -> RulePart:
