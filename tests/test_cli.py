@@ -10,7 +10,7 @@ from pathlib import Path
 import cv2
 import pytest
 
-from tinyrace import cli
+from tinyrace import cli, run_command
 from tinyrace.config.reference import END, START, markdown
 from tinyrace.examples import CONFIGS_DIR, TRACKS_DIR
 
@@ -31,7 +31,7 @@ def test_run_a_config(tmp_path: Path, capsys):
 
 def test_run_without_arguments_finds_the_default_experiment(monkeypatch, tmp_path: Path):
     monkeypatch.chdir(tmp_path)  # no configs/ here: the checkout's default is used
-    assert cli.default_experiment() == CONFIGS_DIR / "carracing.yaml"
+    assert run_command.default_experiment() == CONFIGS_DIR / "carracing.yaml"
 
 
 def test_python_dash_m_runs_the_command():

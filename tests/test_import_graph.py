@@ -37,7 +37,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("validate",),
     ("play",),
     ("train", "rllib", "sb3", "flat_observations"),
-    ("cli", "__main__"),
+    ("cli", "run_command", "__main__"),
 )
 
 

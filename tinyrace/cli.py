@@ -3,25 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import json
 import os
 import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import NoReturn
 
-from tinyrace.errors import ConfigError, Problem, one_line
+from tinyrace import run_command
+from tinyrace.errors import ConfigError, Problem, UsageError, cut_middle, one_line
 from tinyrace.examples import find_example
-
-if TYPE_CHECKING:
-    from tinyrace.experiment import Experiment, RunResult
-    from tinyrace.experiment.race_runner import RaceRunResult
-
-
-class UsageError(Exception):
-    """A bad command line: one line on stderr, exit 2."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -57,12 +48,12 @@ def main(argv: list[str] | None = None) -> int:
             raise
         from tinyrace.validate import system_reason
 
-        name = _short(str(exc.filename)) if exc.filename is not None else "a path"
+        name = cut_middle(str(exc.filename)) if exc.filename is not None else "a path"
         return _user_error(f"{name!r}: the system refuses it ({system_reason(exc)})")
     except Exception as exc:
         if args.debug:
             raise
-        text = _short(f"{type(exc).__name__}: {exc}", 2000)
+        text = cut_middle(f"{type(exc).__name__}: {exc}", 2000)
         print(f"tinyrace: internal error: {text} (--debug shows where)", file=sys.stderr)
         return 1
 
@@ -88,7 +79,7 @@ def _count(low: int, what: str, high: int | None = None) -> Callable[[str], int]
         digits = text.strip()
         value = int(digits) if len(digits) <= 40 and re.fullmatch(r"[+-]?[0-9]+", digits) else None
         if value is None or value < low or (high is not None and value > high):
-            raise argparse.ArgumentTypeError(f"got {_short(text)!r}; expected {what}")
+            raise argparse.ArgumentTypeError(f"got {cut_middle(text)!r}; expected {what}")
         return value
 
     return parse
@@ -135,7 +126,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--force", action="store_true", help="allow run folders inside a track folder")
     run.add_argument("--quiet", action="store_true", help="print nothing but errors")
     run.add_argument("--json", action="store_true", help="print the results summary as JSON")
-    run.set_defaults(handler=_run)
+    run.set_defaults(handler=run_command.run)
     report = commands.add_parser("report", help="rebuild report.html of a run folder")
     report.add_argument("run_dir", help="a run folder (holding results.json and episodes.csv)")
     report.set_defaults(handler=_report)
@@ -208,149 +199,6 @@ def _train_parser(commands: argparse._SubParsersAction[_Parser]) -> None:
     )
     add_arguments(train, _count)
     train.set_defaults(handler=_train)
-
-
-# -- run ---------------------------------------------------------------------------------------
-def default_experiment() -> Path:
-    """The shipped CarRacing experiment (package data, found from any folder)."""
-    from tinyrace.examples import DEFAULT_EXPERIMENT
-
-    return DEFAULT_EXPERIMENT
-
-
-def _run(args: argparse.Namespace) -> int:
-    from tinyrace.experiment import print_report, run_experiment
-    from tinyrace.experiment.target import load_target
-
-    target = args.experiment if args.experiment is not None else default_experiment()
-    experiment, track = load_target(target, "NAME_OR_PATH")
-    experiment = _overridden(experiment, args)
-    out = _out_folder(args.out, experiment.config.output.dir, args.force)
-    config = experiment.config
-    if not (args.quiet or args.json):
-        episodes = f"{config.episodes} episode{'s' if config.episodes != 1 else ''}"
-        what = f"{episodes}, driver {config.driver}"
-        if experiment.is_race:
-            what = f"{episodes}, a race of {len(experiment.agents)} cars"
-        kind = "the track " if track else ""
-        print(f"tinyrace: running {kind}{experiment.source} ({what})")
-    try:
-        result = run_experiment(experiment, out, show_progress=not args.quiet)
-    except ConfigError as exc:  # --model's driver: named as the command line gave it
-        if args.model is None:
-            raise
-        raise ConfigError([_from_model(p, args.model) for p in exc.problems]) from None
-    if args.json:
-        print(json.dumps(_json_summary(result), indent=2))
-    elif not args.quiet:
-        print_report(result)
-    if result.interrupted is None:
-        return 0
-    done = len(result.episodes)
-    print(
-        f"tinyrace: interrupted; {done} finished episode(s) written to {result.run_dir}",
-        file=sys.stderr,
-    )
-    return 128 + result.interrupted
-
-
-def _overridden(experiment: Experiment, args: argparse.Namespace) -> Experiment:
-    """The experiment with the command line's --episodes, --seed, --no-video and --model."""
-    config = experiment.config
-    if args.episodes is not None:
-        config = dataclasses.replace(config, episodes=args.episodes)
-    if args.seed is not None:
-        config = dataclasses.replace(config, seed=args.seed)
-    if args.no_video:
-        config = dataclasses.replace(config, output=dataclasses.replace(config.output, video=False))
-    if args.model is not None:
-        config = dataclasses.replace(
-            config, driver=MODEL_DRIVER, driver_args={"model": _model(args.model, experiment)}
-        )
-    return dataclasses.replace(experiment, config=config)
-
-
-MODEL_DRIVER = "tinyrace.sb3:ModelDriver"  # --model's driver
-
-
-def _from_model(problem: Problem, model: str) -> Problem:
-    """A problem of the driver that ``--model`` chose, named as the command line's."""
-    if problem.path != "driver" and not problem.path.startswith("driver_args."):
-        return problem
-    return Problem("<command line>", "--model", model, problem.allowed)
-
-
-def _model(name: str, experiment: Experiment) -> str:
-    """``--model`` checked: one car's run, a file, and Stable-Baselines3 importable."""
-    from tinyrace.train import missing
-
-    if experiment.is_race:
-        raise UsageError(
-            f"argument --model: a race's cars have drivers of their own: give each car "
-            f"driver: {MODEL_DRIVER} with driver_args: {{model: ...}} in drivers.<car>"
-        )
-    try:
-        found = Path(name).is_file()
-    except (OSError, ValueError):
-        found = False
-    if not found:
-        raise UsageError(f"argument --model: got {_short(name)!r}; expected a saved model file")
-    lacking = missing("a model's driver")
-    if lacking:
-        raise UsageError(f"argument --model: {lacking}")
-    return name
-
-
-def _out_folder(out: str | None, default: str, force: bool) -> Path | None:
-    """``--out`` checked: a folder, and (unless ``force``) not inside a track folder nor
-    the installed package (``shipped_holding``, as ``tinyrace examples copy`` refuses)."""
-    from tinyrace.examples import shipped_holding
-    from tinyrace.experiment.files import unmakeable
-    from tinyrace.validate import system_reason, track_folder_holding
-
-    path = Path(out if out is not None else default)
-    where = "argument -o/--out" if out is not None else "output.dir (run folders)"
-    try:
-        if path.exists() and not path.is_dir():
-            raise UsageError(f"{where}: {_short(str(path))!r} is a file; expected a folder")
-        inside = track_folder_holding(path.resolve())
-    except (OSError, ValueError) as exc:  # a name too long, a NUL byte
-        raise UsageError(
-            f"{where}: {_short(str(path))!r} is no folder the system can make "
-            f"({system_reason(exc)})"
-        ) from None
-    unmade = unmakeable(path / "probe")  # the run folders go inside it
-    if unmade is not None:
-        raise UsageError(f"{where}: {_short(str(path))!r}: {unmade}")
-    if inside is not None and not force:
-        raise UsageError(
-            f"{where}: {str(path)!r} lies inside the track folder {str(inside)!r}; "
-            "expected a folder outside it (run elsewhere, give -o, or --force)"
-        )
-    shipped = shipped_holding(path)
-    if shipped is not None and not force:
-        raise UsageError(
-            f"{where}: {str(path)!r} lies inside the installed package {str(shipped)!r}; "
-            "expected a folder outside it (run elsewhere, give -o, or --force)"
-        )
-    return None if out is None else path
-
-
-def _short(text: str, limit: int = 80) -> str:
-    """``text``, its middle cut out when longer than ``limit`` characters."""
-    half = (limit - 3) // 2
-    return text if len(text) <= limit else text[:half] + "..." + text[-half:]
-
-
-def _json_summary(result: RunResult | RaceRunResult) -> dict[str, Any]:
-    from dataclasses import asdict
-
-    return {
-        "run_dir": str(result.run_dir),
-        "interrupted": result.interrupted is not None,
-        "episodes": [asdict(e) for e in result.episodes],
-        "summary": result.summary,
-    }
 
 
 # -- train -------------------------------------------------------------------------------------

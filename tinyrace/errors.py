@@ -39,6 +39,17 @@ def shown(value: object) -> str:
     return text if len(text) <= 80 else text[:38] + "..." + text[-39:]  # both ends of a path
 
 
+def cut_middle(text: str, limit: int = 80) -> str:
+    """``text``, its middle cut out when longer than ``limit`` characters (a long path keeps
+    both ends)."""
+    half = (limit - 3) // 2
+    return text if len(text) <= limit else text[:half] + "..." + text[-half:]
+
+
+class UsageError(Exception):
+    """A bad command line: one line on stderr, exit 2."""
+
+
 def did_you_mean(value: object, names: Iterable[str], cutoff: float = 0.6) -> str:
     """``"did you mean 'x'? "`` when ``value`` is a close misspelling of one of ``names``, else
     ``""``: put before the list of valid names in a message."""
