@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import difflib
 import reprlib
+import stat
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -44,6 +45,20 @@ def cut_middle(text: str, limit: int = 80) -> str:
     both ends)."""
     half = (limit - 3) // 2
     return text if len(text) <= limit else text[:half] + "..." + text[-half:]
+
+
+def file_kind(mode: int) -> str:
+    """What a file of ``os.stat``'s ``mode`` is, for a message: "a folder", "a FIFO", ..."""
+    kinds = (
+        (stat.S_ISREG, "a file"),
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISLNK, "a symbolic link"),
+        (stat.S_ISFIFO, "a FIFO"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    )
+    return next((name for test, name in kinds if test(mode)), "a special file")
 
 
 class UsageError(Exception):

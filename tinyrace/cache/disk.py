@@ -58,6 +58,7 @@ from tinyrace.cache.files import (
     mac,
     open_regular,
 )
+from tinyrace.errors import file_kind
 
 MAGIC = b"TINYRACE-CACHE\x00\x00"  # 16 bytes
 FORMAT = 2  # the layout of this file format (2: the checksum is keyed)
@@ -329,24 +330,13 @@ def unusable(folder: Path) -> str | None:
         except (OSError, ValueError) as error:
             return f"{part} cannot be read ({_reason(error)})"
         if not stat.S_ISDIR(mode):
-            return f"{part} is {_kind(mode)}, not a folder"
+            return f"{part} is {file_kind(mode)}, not a folder"
     try:
         with os.scandir(folder):
             pass
     except OSError as error:
         return f"{folder} cannot be read ({_reason(error)})"
     return None
-
-
-def _kind(mode: int) -> str:
-    kinds = {
-        stat.S_ISREG: "a file",
-        stat.S_ISCHR: "a character device",
-        stat.S_ISBLK: "a block device",
-        stat.S_ISFIFO: "a FIFO",
-        stat.S_ISSOCK: "a socket",
-    }
-    return next((name for test, name in kinds.items() if test(mode)), "no folder")
 
 
 def _reason(error: BaseException) -> str:

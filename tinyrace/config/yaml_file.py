@@ -18,7 +18,7 @@ from typing import Any
 
 import yaml  # type: ignore[import-untyped, unused-ignore]
 
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, file_kind
 
 _LINE_BREAK = re.compile("\r\n|[\n\r\x85\u2028\u2029]")  # YAML's line breaks
 MAX_YAML_BYTES = 1 << 20  # [bytes] a track.yaml or experiment file (1 MiB)
@@ -75,7 +75,7 @@ def read_bytes(path: Path, limit: int, what: str) -> bytes:
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
-            allowed = f"expected {what} (a regular file), not {_file_kind(info.st_mode)}"
+            allowed = f"expected {what} (a regular file), not {file_kind(info.st_mode)}"
             raise ConfigError(Problem(source, "", source, allowed))
         if info.st_size > limit:
             allowed = f"expected {what} of at most {limit:,} bytes (it has {info.st_size:,})"
@@ -271,17 +271,6 @@ def _short(value: object) -> str:
 def _reason(exc: BaseException) -> str:
     text = str(exc) or type(exc).__name__
     return text if len(text) <= 120 else text[:117] + "..."
-
-
-def _file_kind(mode: int) -> str:
-    kinds = (
-        (stat.S_ISDIR, "a folder"),
-        (stat.S_ISFIFO, "a FIFO"),
-        (stat.S_ISCHR, "a character device"),
-        (stat.S_ISBLK, "a block device"),
-        (stat.S_ISSOCK, "a socket"),
-    )
-    return next((name for test, name in kinds if test(mode)), "a special file")
 
 
 def document_kind(document: object) -> str:

@@ -16,7 +16,7 @@ import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, file_kind
 
 TEMP_PREFIX = ".tinyrace-"
 
@@ -78,20 +78,12 @@ def check_writable(path: Path) -> None:
         return
     if stat.S_ISREG(info.st_mode):
         return
-    kind = "a symbolic link" if stat.S_ISLNK(info.st_mode) else _kind(info.st_mode)
+    kind = file_kind(info.st_mode)
     allowed = (
         f"expected a regular file or no file there, not {kind}: tinyrace never writes "
         "through a link nor removes what it did not write (move it away, or use another folder)"
     )
     raise ConfigError(Problem(str(path), "", path.name, allowed))
-
-
-def _kind(mode: int) -> str:
-    if stat.S_ISDIR(mode):
-        return "a folder"
-    if stat.S_ISFIFO(mode):
-        return "a FIFO"
-    return "a device or socket"
 
 
 def _umask() -> int:
