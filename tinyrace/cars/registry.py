@@ -69,6 +69,9 @@ class CarModel:
     units: str  # the unit of its own parameters: "track" (the track's px, m or u) or "m"
     doc: str
     compat: frozenset[str] = frozenset()  # accepted ``car.compat`` values (another sim's car)
+    # the ``car`` knobs it reads besides ``model`` and ``actions`` (None: every one); one it
+    # does not read is refused when a config sets it (``config.checks``), never ignored
+    reads: frozenset[str] | None = None
     size_keys: tuple[str, ...] = ("car.wheelbase", "car.track_width")  # what sizes it
     # the tyre forces of ``n`` such cars as one computation (a vector env's), if it offers it
     batch: Callable[[int], TyreBatch] | None = None
@@ -195,6 +198,9 @@ def _build_single_track(space: pymunk.Space, pose: Pose, config: CarConfig, trac
 
 
 CAR_MODELS: dict[str, CarModel] = {}
+KINEMATIC_KNOBS = frozenset(
+    {"wheelbase", "track_width", "velocity", "max_steering_angle", "max_steering_change"}
+)
 
 
 def register(model: CarModel) -> None:
@@ -202,7 +208,8 @@ def register(model: CarModel) -> None:
     config layer lists it then (``car.model``'s values in the YAML reference)."""
     CAR_MODELS[model.name] = model
     units = tuple(sorted(model.track_units))
-    car_models.add(CarModelEntry(model.name, units, model.doc))
+    default_for = tuple(sorted(model.default_for))
+    car_models.add(CarModelEntry(model.name, units, model.doc, default_for, model.reads))
 
 
 def unregister(name: str) -> None:
@@ -226,6 +233,7 @@ register(
         doc="CarRacing-v3's rear-wheel-drive car with tyre slip",
         size_keys=("car.pixels_per_unit",),
         batch=DynamicBatch,
+        reads=frozenset({"pixels_per_unit"}),
     )
 )
 register(
@@ -241,6 +249,7 @@ register(
         throttle=False,
         units="track",
         doc="tinycarlo's constant-speed kinematic bicycle",
+        reads=KINEMATIC_KNOBS,
     )
 )
 register(
@@ -256,6 +265,7 @@ register(
         throttle=True,
         units="track",
         doc="a kinematic bicycle with throttle in metres (tinycarlo 2's car): [steer, throttle]",
+        reads=KINEMATIC_KNOBS | {"max_acceleration", "max_deceleration"},
     )
 )
 register(
@@ -275,6 +285,7 @@ register(
         "car.compat f1tenth_gym: f1tenth_gym's car step by step",
         compat=frozenset({F1TENTH_GYM}),
         size_keys=("car.preset",),
+        reads=frozenset({"preset", "substeps", "kinematic_below", "compat"}),
     )
 )
 

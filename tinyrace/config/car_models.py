@@ -23,6 +23,10 @@ class CarModelEntry:
     name: str
     track_units: tuple[str, ...]  # the track units it drives in: u (CarRacing's), px, m
     doc: str
+    default_for: tuple[str, ...] = ()  # the track units where ``car.model: null`` means it
+    # the ``car`` knobs it reads besides ``model`` and ``actions`` (None: every one); a knob
+    # it does not read is refused when set, never silently ignored
+    reads: frozenset[str] | None = None
 
 
 _MODELS: dict[str, CarModelEntry] = {}
@@ -36,6 +40,11 @@ def add(entry: CarModelEntry) -> None:
 def remove(name: str) -> None:
     """Take car model ``name`` away again (a test's toy, when the test ends)."""
     _MODELS.pop(name, None)
+
+
+def default_model(unit: str) -> CarModelEntry | None:
+    """The model ``car.model: null`` means on tracks in ``unit``, if one is registered."""
+    return next((m for m in car_models().values() if unit in m.default_for), None)
 
 
 def car_models() -> dict[str, CarModelEntry]:

@@ -8,9 +8,16 @@ import dataclasses
 
 from tinyrace.cache import folder_problems
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
+from tinyrace.config.car_models import CarModelEntry, car_models, default_model
 from tinyrace.config.loader import Parser
 from tinyrace.config.race import race_cars, race_pixel_problems, race_problems
-from tinyrace.config.schema import MAX_RACE_CARS, EnvConfig, RewardConfig
+from tinyrace.config.schema import MAX_RACE_CARS, CarConfig, EnvConfig, RewardConfig
+
+# the car knobs a model may or may not read, with their defaults (a knob left at its default
+# was not set); ``model`` and ``actions`` every model reads (checked by the car registry)
+CAR_KNOB_DEFAULTS = {
+    f.name: f.default for f in dataclasses.fields(CarConfig) if f.name not in ("model", "actions")
+}
 
 
 def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
@@ -28,7 +35,9 @@ def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
         )
         parser.problem(f"{at}cameras", [], allowed)
     _check_observation(config, parser, at, f"{at}observation")
-    # the car model and its actions are checked by tinyrace.cars.registry
+    # the car model and its actions are checked by tinyrace.cars.registry; its knobs here,
+    # before the track kind's defaults fill them
+    _check_car_knobs(config, parser, at)
     picture = facts is not None and facts.colour_picture
     if not picture and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
@@ -83,6 +92,42 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
             allowed = f"car {car.id!r} on an {config.kind} track needs at least one camera"
             parser.problem(f"{car_at}cameras", [], allowed)
         _check_observation(own, parser, car_at, f"{car_at}sensors")
+
+
+def _check_car_knobs(config: EnvConfig, parser: Parser, at: str) -> None:
+    """A ``car`` knob that its car model does not read is refused, never ignored: set in the
+    car section, some car of the env must read it; set in a ``race.cars`` entry, its car."""
+    if not config.tracks:
+        return
+    unit = config.facts.unit
+    models = car_models()
+    top, entries = config.car, config.race.cars
+    cars = [entry.car for entry in entries] or [top]
+    chosen = [models.get(c.model) if c.model is not None else default_model(unit) for c in cars]
+    found = [m for m in chosen if m is not None]
+    if len(found) < len(chosen):
+        return  # an unknown model: the car registry names it
+    for name, default in CAR_KNOB_DEFAULTS.items():
+        value = getattr(top, name)
+        if value != default and not any(_reads(m, name) for m in found):
+            parser.problem(f"{at}car.{name}", value, _unread(name, found))
+        for i, (entry, model) in enumerate(zip(entries, found[: len(entries)], strict=True)):
+            own = getattr(entry.car, name)  # the car section's value where it gave none
+            if own != default and own != value and not _reads(model, name):
+                parser.problem(f"{at}race.cars[{i}].car.{name}", own, _unread(name, [model]))
+
+
+def _reads(model: CarModelEntry, knob: str) -> bool:
+    return model.reads is None or knob in model.reads
+
+
+def _unread(knob: str, models: list[CarModelEntry]) -> str:
+    """Why ``knob`` is refused: which knobs the models read instead."""
+    described = []
+    for model in dict.fromkeys(models):  # each model once, in the cars' order
+        reads = ", ".join(sorted(model.reads or ())) or "no other knob"
+        described.append(f"car model {model.name!r} reads {reads}")
+    return f"no car of this env reads car.{knob} ({'; '.join(described)}): leave it out"
 
 
 def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:

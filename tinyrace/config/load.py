@@ -11,7 +11,8 @@ from pathlib import Path
 from typing import Any, cast
 
 from tinyrace.config.camera_info import with_camera_info
-from tinyrace.config.checks import check_consistency
+from tinyrace.config.car_models import car_models
+from tinyrace.config.checks import CAR_KNOB_DEFAULTS, check_consistency
 from tinyrace.config.defaults import resolve_defaults
 from tinyrace.config.loader import Parser, deep_merge, read_yaml
 from tinyrace.config.overrides import (
@@ -67,7 +68,7 @@ def load_env_config(
         config, laid = None, _config_over_folder(config, environment, laid)
     raw, source, base_dir = _read_source(cast(_Source, config), environment)
     if laid.keys:
-        raw = deep_merge(raw, spelled_as(laid.keys, raw))
+        raw = deep_merge(_without_its_car_knobs(raw, laid.keys), spelled_as(laid.keys, raw))
     if environment is not None and "tracks" not in raw and "track" not in raw:
         raw["tracks"] = [{}]  # a tinycarlo folder without tracks: its empty black plane
     spelling = spelling_of(raw)
@@ -91,6 +92,22 @@ def _config_over_folder(config: Any, environment: str | Path, laid: Overrides) -
     keys = deep_merge(raw, spelled_as(laid.keys, raw))
     named = f"{source} + {laid.source}" if laid.keys else source  # where a bad key came from
     return Overrides(keys, named, laid.prefix)
+
+
+def _without_its_car_knobs(raw: dict[str, Any], keys: Mapping[str, Any]) -> dict[str, Any]:
+    """``raw`` without the knobs of its car section that the overrides' car model does not
+    read, when the overrides choose another model (``car={"model": "single_track"}`` on a
+    track whose file sizes a kinematic car): another car, not the file's car with knobs it
+    would refuse. Knobs the new model reads stay laid under the overrides'."""
+    over, own = keys.get("car"), raw.get("car")
+    if not isinstance(over, Mapping) or not isinstance(own, Mapping):
+        return raw
+    name = over.get("model")
+    model = car_models().get(name) if isinstance(name, str) and name != own.get("model") else None
+    if model is None or model.reads is None:
+        return raw
+    kept = {k: v for k, v in own.items() if k not in CAR_KNOB_DEFAULTS or k in model.reads}
+    return {**raw, "car": kept}
 
 
 def _read_source(

@@ -162,15 +162,17 @@ def car_models_section() -> str:
         "## `car.model`",
         "",
         "The registered car models (a model your code or a plugin registers before the "
-        "reference is made is listed too).",
+        "reference is made is listed too). A `car` knob that the car's model does not read is "
+        "refused, not ignored.",
         "",
-        "| model | track types | what it is |",
-        "|---|---|---|",
+        "| model | track types | what it is | the `car` knobs it reads |",
+        "|---|---|---|---|",
     ]
     for model in car_models().values():
         tracks = ", ".join(track_types_in(model.track_units))
         doc = model.doc.replace("|", "\\|")
-        lines.append(f"| `{model.name}` | {tracks} | {doc} |")
+        reads = "all" if model.reads is None else ", ".join(sorted(model.reads)) or "none"
+        lines.append(f"| `{model.name}` | {tracks} | {doc} | {reads} |")
     return "\n".join(lines)
 
 
