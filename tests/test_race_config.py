@@ -272,7 +272,9 @@ def test_a_bad_knob_or_model_of_one_car_is_named_at_its_entry():
 
 
 def test_an_unknown_opponent_driver_is_named_by_its_index():
-    with pytest.raises(ConfigError, match=r"opponents\[2\]: .*unknown opponent driver 'nobody'"):
+    with pytest.raises(
+        ConfigError, match=r"opponents\[2\]\.driver: .*unknown opponent driver 'nobody'"
+    ):
         gym.make(
             "tinyrace/TinyRace-v0",
             environment="circuit",

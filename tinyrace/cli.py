@@ -1,4 +1,4 @@
-"""The ``tinyrace`` command: run experiments, validate configs, picture tracks, drive by hand."""
+"""The tinyrace command: run experiments, validate configs, picture tracks, drive by hand."""
 
 from __future__ import annotations
 
@@ -322,7 +322,12 @@ def _play_missing() -> str | None:
     try:
         import pygame  # noqa: F401
     except ImportError:
-        return 'pygame: pip install "tinyrace[human]"'
+        from tinyrace import __version__
+
+        return (
+            'pygame: pip install ".[human]" (from a clone; from a wheel: pip install '
+            f'"path/to/tinyrace-{__version__}-py3-none-any.whl[human]"; or pip install pygame-ce)'
+        )
     headless = not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     if (
         sys.platform.startswith("linux")

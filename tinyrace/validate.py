@@ -300,7 +300,7 @@ def _check_output(output: Path, inputs: tuple[Path, ...], force: bool) -> None:
     inside = inside or track_folder_holding(resolved)
     if inside is not None:
         allowed = (
-            f"a path outside the track folder {inside} (it holds {TRACK_FILE}): "
-            "give -o elsewhere, or --force"
+            f"expected a path outside the track folder {inside}, which holds {TRACK_FILE} "
+            "(this one is inside it): give -o elsewhere, or --force"
         )
         raise ConfigError(Problem(COMMAND_LINE, where, str(output), allowed))

@@ -62,7 +62,9 @@ def opponent_drivers(opponents: object) -> list[Any]:
         try:
             drivers.append(_driver(spec))
         except ValueError as exc:
-            problems.append(Problem(SOURCE, f"opponents[{i}]", _short(spec), str(exc)))
+            key = getattr(exc, "key", None)  # the entry's key at fault, if one is
+            at, value = (f"opponents[{i}].{key}", spec[key]) if key else (f"opponents[{i}]", spec)
+            problems.append(Problem(SOURCE, at, _short(value), str(exc)))
     if len(opponents) > 15:
         problems.append(
             Problem(SOURCE, "opponents", len(opponents), "at most 15 opponents (16 cars)")
@@ -70,6 +72,14 @@ def opponent_drivers(opponents: object) -> list[Any]:
     if problems:
         raise ConfigError(problems)
     return drivers
+
+
+class _BadKey(ValueError):
+    """A problem of one key of an opponent's entry."""
+
+    def __init__(self, key: str, message: str) -> None:
+        super().__init__(message)
+        self.key = key
 
 
 def _driver(spec: object) -> Any:
@@ -80,15 +90,15 @@ def _driver(spec: object) -> Any:
         raise ValueError(f"unknown keys {unknown}; known: {', '.join(OPPONENT_KEYS)}")
     driver, speed = spec.get("driver", "centerline"), spec.get("speed", 1.0)
     if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not 0 < speed <= 2:
-        raise ValueError(f"speed must be a number in (0, 2], got {speed!r}")
+        raise _BadKey("speed", "expected a number in (0, 2]: the factor of the line's speeds")
     if isinstance(driver, str):
         if driver not in RACING_DRIVERS:
             other = " (it cannot drive a car of a race)" if driver in DRIVERS else ""
             known = ", ".join(RACING_DRIVERS)
-            raise ValueError(f"unknown opponent driver {driver!r}{other}; drivers: {known}")
+            raise _BadKey("driver", f"unknown opponent driver {driver!r}{other}; drivers: {known}")
         return _scaled_centerline(float(speed))
     if not callable(getattr(driver, "controls", None)):
-        raise ValueError("a driver object needs a method controls(pose, speed) -> controls")
+        raise _BadKey("driver", "a driver object needs a method controls(pose, speed) -> controls")
     return driver
 
 
@@ -202,6 +212,9 @@ def follow(driver: Any, index: int, args: tuple[Route, Any, float], kind: str | 
     raise ConfigError(Problem(SOURCE, f"opponents[{index}].driver.follow", _short(driver), allowed))
 
 
-def _short(value: object) -> str:
+def _short(value: object) -> object:
+    """``value`` as a message shows it: a number or a short name itself, else its repr, cut."""
+    if isinstance(value, (int, float)) or (isinstance(value, str) and len(value) <= 60):
+        return value
     text = repr(value)
     return text if len(text) <= 60 else text[:57] + "..."

@@ -266,6 +266,8 @@ def read_info(path: Path, text: str, allow_outside: bool = False) -> MapInfo:
     problems: list[Problem] = []
 
     def bad(key: str, allowed: str) -> None:
+        if key not in data:  # (map_server's keys have no default but these)
+            allowed = f"the key is missing; {allowed}"
         problems.append(Problem(str(path), _where(text, key), data.get(key), allowed))
 
     image = data.get("image")
