@@ -137,11 +137,10 @@ class TinyRaceEnv(gym.Env):
         context = self._sensor_context
         at = ""
         if car:
-            racer = self.course.racers[car]
-            config = dataclasses.replace(
-                self.config, car=racer.car.car, cameras=racer.car.cameras, sensors=racer.car.sensors
+            config = self.car_config(car)
+            context = SensorContext(
+                config, self.ground, self.course.racers[car].model.describe(config)
             )
-            context = SensorContext(config, self.ground, racer.model.describe(config))
             at = f"race.cars[{car}]." if self.config.race.cars else ""
         try:
             sensors = build_sensors(context, self._config_source)
@@ -150,6 +149,16 @@ class TinyRaceEnv(gym.Env):
             raise ConfigError(self._blame(problems)) from None
         default = None if sensors else default_sensor(context)
         return sensors if default is None else [default]
+
+    def car_config(self, car: int = 0) -> EnvConfig:
+        """The config as car ``car`` sees it: its own car, cameras and sensors (a race's
+        ``race.cars`` entry, else the shared sections) over the rest (``config`` is car 0's)."""
+        if car == 0:
+            return self.config
+        own = self.course.racers[car].car
+        return dataclasses.replace(
+            self.config, car=own.car, cameras=own.cameras, sensors=own.sensors
+        )
 
     def box_sensor(self, sensors: list[Sensor], car: int = 0) -> str | None:
         """The id of the one sensor whose reading is car ``car``'s whole observation (a

@@ -13,7 +13,6 @@ import numpy as np
 from gymnasium import spaces
 
 from tinyrace.cars import CARRACING_WHEELBASE
-from tinyrace.cars.registry import model_of
 from tinyrace.drivers.base import ActionAdapter, Controls
 from tinyrace.drivers.loop import number_argument
 
@@ -165,10 +164,8 @@ class CenterlineDriver:
         self._adapt: ActionAdapter | None = None
 
     def reset(self, env: gym.Env) -> None:
-        unwrapped = cast("TinyRaceEnv", env.unwrapped)
-        config = unwrapped.config
-        kind = model_of(config).actions(config.car).kind
-        self.follow(route_of(env), env.action_space, unwrapped.dt, kind)
+        unwrapped = cast("TinyRaceEnv", env.unwrapped)  # in a race: its car's CarView
+        self.follow(route_of(env), env.action_space, unwrapped.dt, unwrapped.action_spec.kind)
 
     def follow(
         self, route: Route, action_space: spaces.Space[Any], dt: float, kind: str | None = None

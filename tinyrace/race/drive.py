@@ -2,10 +2,13 @@
 one car), and what a driver's ``reset(env)`` sees of its car.
 
 A driver is the same object as for one car (``reset(env)``, ``act(observation, info)``): it
-gets its car's observation and info, and at each reset a ``CarView`` of the race whose
-``action_space`` and ``observation_space`` are its car's, whose random seed is its car's
-own (two random drivers drive differently), and whose other attributes are the race's
-``TinyRaceEnv`` (``config``, ``dt``, ``track``: what the centreline driver reads).
+gets its car's observation and info, and at each reset a ``CarView`` of the race that shows
+its own car as a ``TinyRaceEnv`` shows its one car: ``action_space``, ``action_spec`` (the
+actions' kind), ``observation_space``, ``config`` (its car, cameras and sensors over the
+race's sections), ``car_facts`` and ``car`` are its car's, its random seed is its car's own
+(two random drivers drive differently), and the other attributes are the race's
+``TinyRaceEnv`` (``dt``, ``track``, ``snapshot()``). A race may mix car models: each driver
+speaks its own car's actions.
 """
 
 from __future__ import annotations
@@ -46,18 +49,30 @@ class RaceObserver(Protocol):
 
 
 class CarView:
-    """A race seen by one car's driver: that car's spaces and seed, else the race's env."""
+    """A race seen by one car's driver: that car's spaces, actions, config, facts, live car
+    and seed, else the race's env."""
 
     def __init__(self, race: RaceEnv, agent: str, seed: int | None):
+        core = race.core
+        index = race.possible_agents.index(agent)
         self.agent = agent
+        self.index = index
         self.action_space = race.action_space(agent)
+        self.action_spec = race.seats[index].actions
         self.observation_space = race.observation_space(agent)
-        self.np_random_seed = car_seed(seed, race.possible_agents.index(agent))
-        self._core = race.core
+        self.config = core.car_config(index)
+        self.car_facts = core.course.racers[index].model.describe(self.config)
+        self.np_random_seed = car_seed(seed, index)
+        self._core = core
 
     @property
     def unwrapped(self) -> CarView:
         return self
+
+    @property
+    def car(self) -> Any:
+        """This car in the current episode's world (as ``TinyRaceEnv.car`` is car 0)."""
+        return self._core.world.cars[self.index]
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self._core, name)

@@ -160,7 +160,7 @@ class Opponents(gym.Wrapper[Any, Any, Any, Any]):
         racer = core.course.racers[car]
         if racer.model is core.course.racers[0].model and racer.car.car == core.config.car:
             return route
-        facts = racer.model.describe(dataclasses.replace(core.config, car=racer.car.car))
+        facts = racer.model.describe(core.car_config(car))
         length = core.snapshot().cars[car].footprint[0]
         return dataclasses.replace(
             route,

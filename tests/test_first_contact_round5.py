@@ -1,0 +1,81 @@
+"""First contact, fifth round: what a newcomer's mixed races and the racing docs found.
+
+A race of mixed car models drives each car with its own model's actions (a driver sees its
+own car).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from tinyrace.drivers import CenterlineDriver
+from tinyrace.race import parallel_env
+from tinyrace.race.drive import drive_race
+
+KINEMATIC = {"model": "kinematic_throttle"}
+SINGLE_TRACK = {"model": "single_track"}
+
+
+class CarStates:
+    """A race observer keeping every car's speed [m/s] and front-wheel angle [rad] per step."""
+
+    def __init__(self, race: Any):
+        self.race = race
+        self.speeds: dict[str, list[float]] = {a: [] for a in race.possible_agents}
+        self.wheels: dict[str, list[float]] = {a: [] for a in race.possible_agents}
+
+    def start(self, observations: dict[str, Any], infos: dict[str, Any]) -> None:
+        """The reset: nothing driven yet."""
+
+    def step(self, actions: Any, *results: Any) -> None:
+        cars = self.race.core.snapshot().cars
+        for i, agent in enumerate(self.race.possible_agents):
+            self.speeds[agent].append(cars[i].speed)
+            self.wheels[agent].append(abs(cars[i].steer))
+
+
+@pytest.mark.parametrize("shared, own", [(KINEMATIC, SINGLE_TRACK), (SINGLE_TRACK, KINEMATIC)])
+def test_a_mixed_race_drives_each_car_with_its_own_models_actions(shared, own):
+    race = parallel_env(
+        environment="f1tenth_loop",
+        car=shared,
+        race={"cars": [{"id": "first"}, {"id": "second", "car": own}]},
+    )
+    states = CarStates(race)
+    drivers = {agent: CenterlineDriver() for agent in race.possible_agents}
+    drive_race(race, drivers, seed=0, max_steps=400, observer=states)
+    core = race.core
+    for i, (agent, car) in enumerate(zip(race.possible_agents, (shared, own), strict=True)):
+        if car["model"] == "single_track":  # a throttle (-1..1) read as a speed [m/s]: < 1
+            assert max(states.speeds[agent]) > 2.0, agent
+        else:  # a wheel angle [rad] read as a steering action (-1..1): 42 % of the lock
+            lock = core.course.racers[i].model.describe(core.car_config(i)).steer_lock
+            assert max(states.wheels[agent]) > 0.9 * lock, agent
+    race.close()
+
+
+class Looker:
+    """A driver that keeps what its ``reset(env)`` saw of its car (it is never asked to act)."""
+
+    def reset(self, env: Any) -> None:
+        view = env.unwrapped
+        self.seen = (view.config.car.model, view.action_spec.kind, view.car.pose)
+
+    def act(self, observation: Any, info: dict[str, Any]) -> Any:
+        raise AssertionError("max_steps=0: no step")
+
+
+def test_a_drivers_view_of_a_race_is_its_own_cars():
+    race = parallel_env(
+        environment="f1tenth_loop",
+        car=KINEMATIC,
+        race={"cars": [{"id": "first"}, {"id": "second", "car": SINGLE_TRACK}]},
+    )
+    drivers = {agent: Looker() for agent in race.possible_agents}
+    drive_race(race, drivers, seed=0, max_steps=0)
+    poses = [car.pose for car in race.core.snapshot().cars]
+    assert drivers["first"].seen == ("kinematic_throttle", "steer_throttle", poses[0])
+    assert drivers["second"].seen == ("single_track", "angle_speed", poses[1])
+    race.close()
