@@ -79,3 +79,30 @@ def test_a_drivers_view_of_a_race_is_its_own_cars():
     assert drivers["first"].seen == ("kinematic_throttle", "steer_throttle", poses[0])
     assert drivers["second"].seen == ("single_track", "angle_speed", poses[1])
     race.close()
+
+
+def test_reset_places_every_car_first_and_the_trace_ranks_the_grid(tmp_path):
+    """As docs/racing.md says: ``info["position"]`` shares a place between cars level on
+    tiles (all 1 at reset); a run's trace gives each car a place of its own (the grid's)."""
+    import csv
+
+    from tinyrace import cli
+
+    race = parallel_env(environment="f1tenth_loop", num_agents=3)
+    _, infos = race.reset(seed=0)
+    assert {agent: info["position"] for agent, info in infos.items()} == dict.fromkeys(
+        race.possible_agents, 1
+    )
+    race.close()
+    path = tmp_path / "race.yaml"
+    path.write_text(
+        "env: {environment: f1tenth_loop, race: {num_agents: 3}}\n"
+        "driver: centerline\nepisodes: 1\nmax_steps: 3\n"
+    )
+    assert cli.main(["run", str(path), "--no-video", "-o", str(tmp_path / "runs")]) == 0
+    (folder,) = (tmp_path / "runs").iterdir()
+    first = {}
+    for agent in ("car_0", "car_1", "car_2"):
+        with (folder / f"episode_000_{agent}_trace.csv").open() as handle:
+            first[agent] = int(next(csv.DictReader(handle))["position"])
+    assert first == {"car_0": 1, "car_1": 2, "car_2": 3}  # the pole, then the grid behind

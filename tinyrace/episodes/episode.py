@@ -139,7 +139,8 @@ class Episode:
 
     def position(self, car: int) -> int:
         """Car ``car``'s place in the race: 1 + the cars further on (more tiles visited, or
-        as many and the race finished earlier)."""
+        as many and the race finished earlier); cars level share a place (all 1 at reset:
+        the race hashes record it so)."""
         return self.positions()[car]
 
     def positions(self) -> list[int]:

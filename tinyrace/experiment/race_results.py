@@ -20,7 +20,7 @@ from tinyrace.experiment.results import fixed_width, mean_std, write_results
 LIST_SEPARATOR = " "  # lists (lap times, cars touched) in one CSV cell
 RACE_TRACE_COLUMNS = (  # a car's trace in a race
     *TRACE_COLUMNS,
-    "position",  # the car's place after this step (1 leading)
+    "position",  # the car's place after this step (1 leading; each car its own, see race_record)
     "cars_hit",  # the cars it touched at this step, apart by spaces
 )
 

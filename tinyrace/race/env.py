@@ -77,7 +77,8 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
 
     ## Rewards, ends, infos
     Per car, as a ``TinyRaceEnv`` computes them for its one car; infos add ``car`` (the
-    index), ``id``, ``position`` (place in the race: laps and tiles, 1 = leading),
+    index), ``id``, ``position`` (place in the race: laps and tiles, 1 = leading; cars level
+    share a place: every car is 1 at reset),
     ``cars_hit`` (the ids of the other cars it touched this step), ``lap_times`` ([s] of
     sim time, steps x dt, of each lap finished) and ``best_lap`` ([s], None before a lap).
     """
