@@ -106,3 +106,30 @@ def test_reset_places_every_car_first_and_the_trace_ranks_the_grid(tmp_path):
         with (folder / f"episode_000_{agent}_trace.csv").open() as handle:
             first[agent] = int(next(csv.DictReader(handle))["position"])
     assert first == {"car_0": 1, "car_1": 2, "car_2": 3}  # the pole, then the grid behind
+
+
+def test_two_numbers_of_cars_that_differ_are_refused_naming_both():
+    import gymnasium as gym
+
+    from tinyrace.errors import ConfigError
+
+    with pytest.raises(ConfigError) as caught:
+        parallel_env(environment="f1tenth_loop", num_agents=2, race={"num_agents": 3})
+    (problem,) = caught.value.problems
+    assert (problem.path, problem.value) == ("race.num_agents", 3)
+    assert "num_agents=2 asks for 2 cars" in problem.allowed
+    with pytest.raises(ConfigError, match=r"race.num_agents: got 3; .*opponents"):
+        gym.make(
+            "tinyrace/TinyRace-v0",
+            environment="f1tenth_loop",
+            opponents=[{"driver": "centerline"}],
+            race={"num_agents": 3},
+        )
+    with pytest.raises(ConfigError, match=r"race: got 'x'; expected a mapping"):
+        parallel_env(environment="f1tenth_loop", num_agents=2, race="x")
+
+
+def test_the_same_number_of_cars_twice_is_taken():
+    race = parallel_env(environment="f1tenth_loop", num_agents=3, race={"num_agents": 3})
+    assert race.possible_agents == ["car_0", "car_1", "car_2"]
+    race.close()

@@ -1,4 +1,9 @@
-"""What a race env checks at its doors: the reset options and every car's action.
+"""What a race env checks at its doors: its number of cars, the reset options and every
+car's action.
+
+The number of cars may come from two keywords (``num_agents=`` and ``race={"num_agents":
+...}``, or ``opponents=`` and ``race=``): given twice, it must be the same number, else a
+ConfigError names both (``race_with_cars``).
 
 A bad value is refused before anything changes, and the error names the car: ``reset``'s
 options must be a mapping (or None); ``step``'s actions are read car by car with the car's
@@ -16,8 +21,8 @@ import gymnasium as gym
 from gymnasium.error import InvalidAction
 
 from tinyrace.actions import ActionSpec
-from tinyrace.env import RESET_OPTIONS, RESET_SOURCE
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.env import KWARGS_SOURCE, RESET_OPTIONS, RESET_SOURCE
+from tinyrace.errors import ConfigError, Problem, shown
 
 _SHORT = reprlib.Repr()
 _SHORT.maxstring, _SHORT.maxother, _SHORT.maxlist, _SHORT.maxtuple = 40, 40, 6, 6
@@ -27,6 +32,25 @@ class HasActions(Protocol):
     """A car's seat: what ``read_actions`` needs of it."""
 
     actions: ActionSpec
+
+
+def race_with_cars(race: object, count: object, asked_by: str) -> object:
+    """The ``race`` keyword with ``num_agents`` set to ``count``, the number of cars that
+    ``asked_by`` (another keyword) asks for. A ``race`` that is no mapping is given back as it
+    is (the config's checks name it); one whose own ``num_agents`` is another number is a
+    ConfigError naming both."""
+    if race is None:
+        race = {}
+    if not isinstance(race, Mapping):
+        return race
+    own = race.get("num_agents")
+    if own is not None and (own != count or type(own) is not type(count)):
+        allowed = (
+            f"expected {shown(count)} or no race.num_agents: {asked_by} asks for "
+            f"{shown(count)} cars (give the number of cars once, or the same in both)"
+        )
+        raise ConfigError(Problem(KWARGS_SOURCE, "race.num_agents", own, allowed))
+    return {**race, "num_agents": count}
 
 
 def reset_options(options: object, owner: str = "RaceEnv") -> dict[str, Any] | None:

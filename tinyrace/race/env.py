@@ -32,7 +32,7 @@ from tinyrace.config import car_names
 from tinyrace.env import TinyRaceEnv
 from tinyrace.episodes.episode import Episode
 from tinyrace.errors import ConfigError, Problem, shown
-from tinyrace.race.checks import read_actions, reset_options
+from tinyrace.race.checks import race_with_cars, read_actions, reset_options
 from tinyrace.sensors.base import Sensor
 from tinyrace.world.snapshot import Snapshot
 
@@ -98,9 +98,9 @@ class RaceEnv(ParallelEnv):  # type: ignore[misc]  # pettingzoo ships no type in
         render_mode: str | None = None,
         **overrides: Any,
     ):
-        if num_agents is not None:
-            race = dict(overrides.get("race") or {})
-            overrides = {**overrides, "race": {**race, "num_agents": num_agents}}
+        if num_agents is not None:  # race.num_agents too: the same number, or an error
+            race = race_with_cars(overrides.get("race"), num_agents, f"num_agents={num_agents!r}")
+            overrides = {**overrides, "race": race}
         self.core = core = TinyRaceEnv(config, environment, render_mode=render_mode, **overrides)
         self.render_mode = render_mode
         racers = core.course.racers

@@ -2,7 +2,8 @@
 
 ``gym.make("tinyrace/TinyRace-v0", environment=..., opponents=[{"driver": "centerline",
 "speed": 0.8}, ...])`` makes the track's env with one more car per opponent on the start
-grid (``race`` knobs). Car 0 is the learner's: its observation, reward and end are the
+grid (``race`` knobs; a ``race.num_agents`` keyword must count the learner and the
+opponents). Car 0 is the learner's: its observation, reward and end are the
 env's as without opponents. Before every step each opponent's driver reads its car's
 pose and speed and sets its controls; an opponent whose episode ends leaves the race as a
 ``RaceEnv``'s car does (after its last lap taken off the track, else parked where it
@@ -29,6 +30,7 @@ from tinyrace.drivers.base import CONTROLS_EXPECTED, checked_controls
 from tinyrace.drivers.centerline import Route, route_of
 from tinyrace.env import TinyRaceEnv
 from tinyrace.errors import ConfigError, Problem
+from tinyrace.race.checks import race_with_cars
 from tinyrace.race.env import race_info
 
 SOURCE = "<kwargs>"
@@ -42,8 +44,8 @@ def make_env(*, opponents: Sequence[Any] | None = None, **kwargs: Any) -> gym.En
     if opponents is None:
         return TinyRaceEnv(**kwargs)
     drivers = opponent_drivers(opponents)
-    race = dict(kwargs.pop("race", None) or {})
-    race["num_agents"] = 1 + len(drivers)
+    asked_by = f"opponents (the learner's car and {len(drivers)} more)"
+    race = race_with_cars(kwargs.pop("race", None), 1 + len(drivers), asked_by)
     return Opponents(TinyRaceEnv(race=race, **kwargs), drivers)
 
 
