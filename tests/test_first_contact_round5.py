@@ -133,3 +133,29 @@ def test_the_same_number_of_cars_twice_is_taken():
     race = parallel_env(environment="f1tenth_loop", num_agents=3, race={"num_agents": 3})
     assert race.possible_agents == ["car_0", "car_1", "car_2"]
     race.close()
+
+
+def test_the_centerline_drivers_knobs_are_documented_with_their_defaults():
+    import inspect
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).parents[1] / "docs" / "experiments.md").read_text()
+    rows = dict(re.findall(r"^\| `(\w+)` \| ([-\d.]+) \|", page, flags=re.MULTILINE))
+    defaults = {
+        name: parameter.default
+        for name, parameter in inspect.signature(CenterlineDriver).parameters.items()
+    }
+    assert {name: float(value) for name, value in rows.items()} == defaults
+
+
+def test_a_top_speed_in_u_per_s_is_scaled_by_the_cars_wheelbase():
+    """f1tenth_race's comment: top_speed 42 u/s is 4.3 m/s on the 0.33 m F1TENTH car."""
+    race = parallel_env(environment="f1tenth_loop", num_agents=1)
+    race.reset(seed=0)
+    driver = CenterlineDriver(top_speed=42.0)
+    driver.reset(race.core)
+    assert race.core.car_facts.length == pytest.approx(0.33)
+    assert max(driver.target_speeds) == pytest.approx(42.0 * 0.33 / 3.24)  # [m/s]
+    assert round(max(driver.target_speeds), 1) == 4.3
+    race.close()

@@ -53,7 +53,11 @@ class ExperimentConfig:
     driver: str = knob(
         "centerline", "random, constant, centerline, or module:callable (your own policy)"
     )
-    driver_args: dict[str, Any] = knob(MappingProxyType({}), "keyword arguments for the driver")
+    driver_args: dict[str, Any] = knob(
+        MappingProxyType({}),
+        "keyword arguments for the driver (the centerline driver's knobs, in CarRacing's "
+        "units scaled by the car's wheelbase: docs/experiments.md)",
+    )
     drivers: dict[str | int, Any] = knob(
         MappingProxyType({}),
         "races: a driver per car, by car name (car_1) or index (1): a driver as in 'driver', "

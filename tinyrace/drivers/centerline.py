@@ -20,6 +20,9 @@ if TYPE_CHECKING:
     from tinyrace.env import TinyRaceEnv
 
 
+SCALED = ": CarRacing's units, 1 u = the car's wheelbase / 3.24"  # the knobs' unit, in errors
+
+
 @dataclass(frozen=True)
 class Route:
     """The line a driver follows, with what it needs to read poses and speeds on it."""
@@ -117,19 +120,23 @@ class CenterlineDriver:
 
     The route is the procedural track's ``centerline`` or an image track's drawn
     trajectory (see ``route_of``); the pose is ``info["pose"]`` (x, y, heading).
-    Lengths and speeds below are in CarRacing's units (u, u/s) and scale with the
-    car's wheelbase on image tracks. The kinematic car's speed is fixed: there the
-    driver only steers. A car with a tyre model (``grip``) keeps the profile's lateral and
-    braking accelerations under ``grip_share`` of its grip; a car whose actions are a steering
-    angle and a speed (the single-track car) is given the profile's speed. ``offset`` [track
-    units] moves the line followed to the left (negative: right) of the route: cars of a race
-    on lanes of their own.
+    Lengths, speeds and accelerations below are in CarRacing's units (u, u/s, u/s^2) scaled
+    by the car: 1 u = the car's wheelbase / ``CARRACING_WHEELBASE`` (3.24 u), so on
+    CarRacing's tracks u itself, and on metric tracks 0.102 m for a 0.33 m F1TENTH car (42 u/s
+    = 4.3 m/s) or 0.77 m for a 2.5 m car; ``offset`` alone is in track units, and
+    ``lookahead_per_speed`` [s] multiplies the speed in track units/s (docs/experiments.md
+    lists every knob). The kinematic car's speed is fixed: there the driver only steers. A
+    car with a tyre model (``grip``) keeps the profile's lateral and braking accelerations
+    under ``grip_share`` of its grip; a car whose actions are a steering angle and a speed
+    (the single-track car) is given the profile's speed. ``offset`` [track units] moves the
+    line followed to the left (negative: right) of the route: cars of a race on lanes of
+    their own.
     """
 
     def __init__(
         self,
         lookahead: float = 3.0,  # [u] pursuit distance at standstill
-        lookahead_per_speed: float = 0.22,  # [s] extra pursuit distance per u/s
+        lookahead_per_speed: float = 0.22,  # [s] extra pursuit distance per track unit/s
         top_speed: float = 95.0,  # [u/s]
         lateral_accel: float = 140.0,  # [u/s^2] cornering grip used by the speed profile
         brake_accel: float = 90.0,  # [u/s^2] deceleration planned for curves ahead
@@ -141,21 +148,21 @@ class CenterlineDriver:
     ):
         self.grip_share = number_argument("grip_share", grip_share, low=0.0, above=True)
         self.offset = number_argument("offset", offset, unit="track units, + left")
-        self.lookahead = number_argument("lookahead", lookahead, 0.0, unit="track units")
+        self.lookahead = number_argument("lookahead", lookahead, 0.0, unit=f"u{SCALED}")
         self.lookahead_per_speed = number_argument(
             "lookahead_per_speed", lookahead_per_speed, 0.0, unit="s"
         )
         self.top_speed = number_argument(
-            "top_speed", top_speed, unit="track units/s", low=0.0, above=True
+            "top_speed", top_speed, unit=f"u/s{SCALED}", low=0.0, above=True
         )
         self.lateral_accel = number_argument(
-            "lateral_accel", lateral_accel, unit="track units/s^2", low=0.0, above=True
+            "lateral_accel", lateral_accel, unit=f"u/s^2{SCALED}", low=0.0, above=True
         )
         self.brake_accel = number_argument(
-            "brake_accel", brake_accel, unit="track units/s^2", low=0.0, above=True
+            "brake_accel", brake_accel, unit=f"u/s^2{SCALED}", low=0.0, above=True
         )
-        self.brake_margin = number_argument("brake_margin", brake_margin, 0.0, unit="track units/s")
-        self.gas_gain = number_argument("gas_gain", gas_gain, 0.0, unit="s/track unit")
+        self.brake_margin = number_argument("brake_margin", brake_margin, 0.0, unit=f"u/s{SCALED}")
+        self.gas_gain = number_argument("gas_gain", gas_gain, 0.0, unit=f"s/u{SCALED}")
         self.corner_gas_cut = number_argument("corner_gas_cut", corner_gas_cut, 0.0, 1.0)
         self.route: Route | None = None
         self.target_speeds = np.zeros(0)  # [track units/s] per route point
