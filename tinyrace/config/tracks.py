@@ -229,7 +229,11 @@ class ConeMapTrackConfig(MetreTrackFacts):
     spacing: float = knob(0.5, "distance between centreline points (and tiles)", "m", low=0.05)
     scale: float = knob(1.0, "multiply every coordinate by this", low=1e-6)
     max_cone_gap: float = knob(
-        6.0, "cones of one edge further apart than this do not close a loop", "m", low=0.1
+        6.0,
+        "cones of one edge further apart than this, in a straight line or along the other "
+        "edge beside them, do not close a loop",
+        "m",
+        low=0.1,
     )
     cone_hit_ends_episode: bool = knob(False, "knocking a cone over ends the episode")
     lap_complete_percent: float = _lap_percent()

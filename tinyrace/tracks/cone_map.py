@@ -128,12 +128,16 @@ def road_between(cones: Cones, spacing: float, max_gap: float) -> ConeRoad:
     """The centreline between the blue and yellow edges, sampled about ``spacing`` [m] apart.
 
     Each edge is ordered by chaining nearest cones; a gap longer than ``max_gap`` [m]
-    between neighbours is an error (the cones do not close a loop).
+    between neighbours is an error (the cones do not close a loop), and so is a step of
+    one edge beside which the other edge runs more than ``max_gap`` further (the chain
+    jumped across the infield over cones missing there).
     """
-    blue = _edge_loop(cones, "blue", max_gap)
-    yellow = _edge_loop(cones, "yellow", max_gap)
+    blue_index, blue = _edge_loop(cones, "blue", max_gap)
+    yellow_index, yellow = _edge_loop(cones, "yellow", max_gap)
     for tag, edge in (("blue", blue), ("yellow", yellow)):
         _check_edge_length(cones, tag, polyline.perimeter(edge), spacing)
+    _check_beside(cones, ("blue", "yellow"), blue_index, blue, yellow, max_gap)
+    _check_beside(cones, ("yellow", "blue"), yellow_index, yellow, blue, max_gap)
     dense_blue, _ = polyline.resample(blue, spacing / 4)
     dense_yellow, _ = polyline.resample(yellow, spacing / 4)
     guide, _ = polyline.resample(blue, spacing)
@@ -149,9 +153,10 @@ def road_between(cones: Cones, spacing: float, max_gap: float) -> ConeRoad:
     return ConeRoad(np.roll(middle, -start, axis=0), np.roll(widths, -start, axis=0))
 
 
-def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
-    """The cones of one edge in order around the loop (nearest neighbour chain); big orange
-    cones join the edge whose cones are nearest to them (they stand on the start line)."""
+def _edge_loop(cones: Cones, tag: str, max_gap: float) -> tuple[np.ndarray, np.ndarray]:
+    """The cones of one edge in order around the loop (nearest neighbour chain): their
+    indices into ``cones`` and their positions; big orange cones join the edge whose cones
+    are nearest to them (they stand on the start line)."""
     index = cones.of(tag)
     if len(index):
         index = np.concatenate((index, _start_cones_beside(cones, tag)))
@@ -173,7 +178,45 @@ def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
     closing = float(np.hypot(*(points[order[-1]] - points[order[0]])))
     if closing > max_gap:
         _gap_error(cones, index[order[-1]], tag, closing, max_gap)
-    return np.asarray(points[order], float)
+    return np.asarray(index[order], int), np.asarray(points[order], float)
+
+
+def _check_beside(
+    cones: Cones,
+    tags: tuple[str, str],
+    index: np.ndarray,
+    edge: np.ndarray,
+    other: np.ndarray,
+    max_gap: float,
+) -> None:
+    """Refuse neighbours of ``edge`` (cone ``index``, in loop order) between which the
+    ``other`` edge runs more than ``max_gap`` [m] further than they are apart: the chain
+    of nearest cones closed the loop across the infield, over a gap in this edge's cones.
+    The other edge's run is measured between the points of it nearest each cone, the
+    shorter way round; a road's outer edge in a curve is longer than its inner one by the
+    road's width times the angle turned, far below ``max_gap`` for cones ``max_gap`` apart."""
+    length = polyline.perimeter(other)  # [m]
+    dense, _ = polyline.resample(other, max(max_gap / 16, length / (4 * MAX_CONE_ROAD_POINTS)))
+    step = length / len(dense)
+    at = _nearest(dense, edge) * step  # [m] along the other edge, opposite each cone
+    run = np.abs(np.roll(at, -1) - at)
+    run = np.minimum(run, length - run)
+    apart = polyline.segment_lengths(edge)
+    worst = int(np.argmax(run - apart))
+    if run[worst] - apart[worst] <= max_gap:
+        return
+    tag, other_tag = tags
+    first, second = index[worst], index[(worst + 1) % len(index)]
+    allowed = (
+        f"expected the {tag} cones to follow the road with neighbours at most "
+        f"track.max_cone_gap ({max_gap:g} m) apart along it; these two {tag} cones are "
+        f"neighbours around the loop, {apart[worst]:.2f} m apart, but the {other_tag} edge "
+        f"runs {run[worst]:.1f} m between the points opposite them: the {tag} cones have a "
+        "gap there and the loop was closed across it (add the missing cones)"
+    )
+    where = f"lines {cones.lines[first]} and {cones.lines[second]}"
+    value = [cones.positions[first].tolist(), cones.positions[second].tolist()]
+    raise ConfigError(Problem(cones.path, where, value, allowed))
 
 
 def _check_edge_length(cones: Cones, tag: str, length: float, spacing: float) -> None:

@@ -1,0 +1,93 @@
+"""Tracks in metres, round 5: a newcomer's stadium as a cone map and as a centreline."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tinyrace.config import ConfigError, load_env_config
+from tinyrace.tracks.metric import MetricSource
+
+
+def stadium(radius: float, half: float = 4.0, step: float = 0.8) -> list[tuple[float, float]]:
+    """Points counter-clockwise round a stadium: straights y = -radius and +radius from
+    x = -half to half, half circles of ``radius`` about (+-half, 0); starts at (-half, -radius)."""
+    points = [(x, -radius) for x in np.arange(-half, half, step)]
+    arc = np.linspace(-math.pi / 2, math.pi / 2, 11)[:-1]
+    points += [(half + radius * math.cos(a), radius * math.sin(a)) for a in arc]
+    points += [(x, radius) for x in np.arange(half, -half, -step)]
+    points += [
+        (-half + radius * math.cos(a + math.pi), radius * math.sin(a + math.pi)) for a in arc
+    ]
+    return [(float(x), float(y)) for x, y in points]
+
+
+def cone_rows(blue: list[tuple[float, float]], yellow: list[tuple[float, float]]) -> list[str]:
+    rows = [f"blue,{x:.3f},{y:.3f},0,0,0,0" for x, y in blue]
+    rows += [f"yellow,{x:.3f},{y:.3f},0,0,0,0" for x, y in yellow]
+    return rows
+
+
+def write_cones(folder: Path, rows: list[str], separator: str = ",", **track: object) -> Path:
+    header = "tag,x,y,direction,x_variance,y_variance,covariance"
+    text = "\n".join(row.replace(",", separator) for row in [header, *rows]) + "\n"
+    (folder / "cones.csv").write_text(text)
+    knobs = "".join(f", {key}: {value}" for key, value in track.items())
+    (folder / "track.yaml").write_text(
+        "track: {type: cone_map, file: cones.csv" + knobs + "}\n"
+        "car: {model: kinematic_throttle, wheelbase: 0.33, track_width: 0.31, velocity: 5.0}\n"
+    )
+    return folder
+
+
+def load(folder: Path) -> MetricSource:
+    loaded = load_env_config(environment=folder)
+    return MetricSource(loaded.config, loaded.base_dir, loaded.source)
+
+
+def problems(folder: Path) -> list[str]:
+    with pytest.raises(ConfigError) as caught:
+        load(folder)
+    return [str(p) for p in caught.value.problems]
+
+
+# -- 1. a gap in one edge's cones ------------------------------------------------------------
+def test_a_whole_stadium_of_cones_loads(tmp_path):
+    track = load(write_cones(tmp_path, cone_rows(stadium(2.0), stadium(4.0)))).tracks[0]
+    assert track.centerline is not None
+    widths = track.circuit.widths.sum(axis=1)
+    assert widths.min() > 1.8 and widths.max() < 2.3  # 2 m between the edges all round
+
+
+def test_a_gap_in_the_blue_cones_is_named_not_bridged_across_the_infield(tmp_path):
+    kept = blue_with_a_gap()
+
+    def line(point: tuple[float, float]) -> int:  # the header is line 1
+        return 2 + int(np.argmin(np.hypot(*(np.array(kept) - point).T)))
+
+    found = problems(write_cones(tmp_path, cone_rows(kept, stadium(4.0))))
+    assert len(found) == 1
+    message = found[0]
+    first, second = (0.0, -2.0), (4.0, 2.0)  # the cones either side of the gap
+    found_lines = message.split("lines ")[1].split(":")[0]
+    assert sorted(found_lines.split(" and ")) == sorted([str(line(first)), str(line(second))])
+    assert "max_cone_gap (6 m)" in message
+    assert "5.66 m apart" in message  # across the infield
+    run = float(message.split("runs ")[1].split(" m")[0])
+    assert 12.0 < run < 25.0  # the yellow edge's run beside the gap
+
+
+def test_a_gap_wider_than_max_cone_gap_in_a_straight_line_is_named_as_before(tmp_path):
+    folder = write_cones(tmp_path, cone_rows(blue_with_a_gap(), stadium(4.0)), max_cone_gap=3)
+    (message,) = problems(folder)
+    assert "neighbours at most 3 m apart" in message and "5.66 m away" in message
+
+
+def blue_with_a_gap() -> list[tuple[float, float]]:
+    """The inner (blue) cones without the right half circle and the straight's last 3 m
+    before it (about 10 m of cones): the cones either side, (0, -2) and (4, 2), are 5.66 m
+    apart across the infield, nearer than max_cone_gap's default 6 m."""
+    return [p for p in stadium(2.0) if not (p[0] > 0.5 and p[1] < 1.95)]
