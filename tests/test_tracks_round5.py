@@ -10,6 +10,7 @@ import pytest
 
 from tinyrace.config import ConfigError, load_env_config
 from tinyrace.tracks.metric import MetricSource
+from tinyrace.validate import build_course
 
 
 def stadium(radius: float, half: float = 4.0, step: float = 0.8) -> list[tuple[float, float]]:
@@ -91,3 +92,30 @@ def blue_with_a_gap() -> list[tuple[float, float]]:
     before it (about 10 m of cones): the cones either side, (0, -2) and (4, 2), are 5.66 m
     apart across the infield, nearer than max_cone_gap's default 6 m."""
     return [p for p in stadium(2.0) if not (p[0] > 0.5 and p[1] < 1.95)]
+
+
+# -- 2. the advice of a start that overlaps a cone -----------------------------------------
+BIG_ORANGE = ["big_orange,0.000,-1.700,0,0,0,0", "big_orange,0.000,-4.300,0,0,0,0"]
+
+
+def test_a_cone_map_start_is_beside_its_big_orange_cones_else_its_first_blue_cone(tmp_path):
+    rows = cone_rows(stadium(2.0), stadium(4.0))
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    x, y, _ = load(write_cones(tmp_path / "a", rows + BIG_ORANGE)).tracks[0].spawns[0]
+    assert abs(x) < 0.3 and y == pytest.approx(-3.0, abs=0.05)  # between them, x = 0
+    x, y, _ = load(write_cones(tmp_path / "b", rows)).tracks[0].spawns[0]
+    assert math.hypot(x + 4.0, y + 2.0) < 1.5  # beside the first blue cone, (-4, -2)
+
+
+def test_a_cone_map_start_on_a_cone_says_what_moves_it_not_track_spawn(tmp_path):
+    folder = write_cones(tmp_path, cone_rows(stadium(2.0), stadium(4.0)) + BIG_ORANGE)
+    text = (folder / "track.yaml").read_text().replace("wheelbase: 0.33", "wheelbase: 2.5")
+    (folder / "track.yaml").write_text(text.replace("track_width: 0.31", "track_width: 1.6"))
+    with pytest.raises(ConfigError) as caught:
+        build_course(load_env_config(environment=folder))
+    (problem,) = caught.value.problems
+    assert problem.path == "track.file" and "overlaps a cone" in problem.allowed
+    assert "track.spawn" not in problem.allowed  # a cone map refuses that key
+    assert "big_orange cones" in problem.allowed and "move those cones" in problem.allowed
+    assert problem.allowed.endswith("make the car smaller (car.wheelbase, car.track_width)")

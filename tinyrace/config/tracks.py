@@ -49,6 +49,8 @@ class TrackFacts:
     holds: ClassVar[frozenset[str]] = frozenset()
     occupancy_map: ClassVar[bool] = False  # a map of occupied cells (F1TENTH's lidar on it)
     start_key: ClassVar[str] = "spawns"  # the key the start pose comes from, when not spawn
+    # where the start pose comes from when no spawn is given, and how to move it (messages)
+    start_advice: ClassVar[str] = "move the start pose (track.spawns)"
 
     def problems(self, files: FilesConfig) -> Problems:
         """What is wrong in this section that its fields alone cannot say."""
@@ -193,6 +195,10 @@ class MetreTrackFacts(TrackFacts):
     unit = "m"
     car_sizes = METRE_CAR
     start_key = "file"
+    start_advice = (
+        "the start pose is the file's first point, facing along the road: start the file "
+        "at another row"
+    )
     holds = frozenset({"metric ground"})
 
 
@@ -223,6 +229,11 @@ class ConeMapTrackConfig(MetreTrackFacts):
     Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right."""
 
     holds = frozenset({"cones", "metric ground"})
+    start_advice = (
+        "the start pose is the centreline point nearest the middle of the big_orange cones "
+        "(of the orange cones when there are none; with neither, beside the file's first "
+        "blue cone), facing along the road: move those cones"
+    )
 
     type: Literal["cone_map"] = knob("cone_map", "track kind")
     file: str = knob(REQUIRED, "the CSV, relative to the config's folder")
@@ -258,6 +269,10 @@ class RosMapTrackConfig(MetreTrackFacts):
     car_sizes = F1TENTH_CAR
     occupancy_map = True
     start_key = "waypoints"
+    start_advice = (
+        "the start pose is the waypoints' first point, facing along them: give track.spawn "
+        "[x, y, heading] or start the waypoints at another row"
+    )
 
     type: Literal["ros_map"] = knob("ros_map", "track kind")
     file: str = knob(REQUIRED, "the map YAML, relative to the config's folder")

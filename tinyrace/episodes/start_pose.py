@@ -88,12 +88,12 @@ def start_problems(config: EnvConfig, fits: list[StartFit], source: str) -> list
         unit = fit.unit
         what = "a wall" if fit.wall_clearance <= 0 else "a cone"
         pose = f"[{x:.3f}, {y:.3f}, {heading:.3f}]"
-        origin = "" if given else " (the start pose is this file's first point)"
+        advice = "move the spawn (track.spawn)" if given else track.start_advice
         allowed = (
             f"expected a start pose where the car's footprint ({length:.2f} x {width:.2f} "
             f"{unit}, length x width, at {pose} [{unit}, {unit}, rad]) overlaps no wall or "
-            f"cone; it overlaps {what}{origin}: move the spawn (track.spawn) or make the car "
-            f"smaller ({', '.join(model_of(config).size_keys)})"
+            f"cone; it overlaps {what}: {advice}, or make the car smaller "
+            f"({', '.join(model_of(config).size_keys)})"
         )
         value = list(spawn) if spawn is not None else getattr(track, key)
         problems.append(Problem(source, where, value, allowed))
