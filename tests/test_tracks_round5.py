@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tinyrace.config import ConfigError, load_env_config
+from tinyrace.errors import problem_count
 from tinyrace.tracks.metric import MetricSource
 from tinyrace.validate import build_course
 
@@ -119,3 +122,41 @@ def test_a_cone_map_start_on_a_cone_says_what_moves_it_not_track_spawn(tmp_path)
     assert "track.spawn" not in problem.allowed  # a cone map refuses that key
     assert "big_orange cones" in problem.allowed and "move those cones" in problem.allowed
     assert problem.allowed.endswith("make the car smaller (car.wheelbase, car.track_width)")
+
+
+# -- 4. separators, and long lists of problems ---------------------------------------------
+@pytest.mark.parametrize("separator", [";", "\t", ", "])
+def test_a_cone_map_takes_the_separators_a_centreline_csv_takes(tmp_path, separator):
+    rows = cone_rows(stadium(2.0), stadium(4.0)) + BIG_ORANGE
+    (tmp_path / "comma").mkdir()
+    (tmp_path / "other").mkdir()
+    comma = load(write_cones(tmp_path / "comma", rows)).tracks[0]
+    other = load(write_cones(tmp_path / "other", rows, separator)).tracks[0]
+    assert np.array_equal(comma.cones, other.cones)
+    assert np.array_equal(comma.centerline, other.centerline)
+
+
+def test_a_long_list_of_problems_says_how_many_more_it_leaves_out(tmp_path):
+    rows = [row.replace("blue", "purple").replace("yellow", "purple") for row in
+            cone_rows(stadium(2.0), stadium(4.0))]  # fmt: skip
+    found = problems(write_cones(tmp_path, rows))
+    assert len(found) == 21 and all("'purple'" in line for line in found[:20])
+    assert found[20].endswith(f"... and {len(rows) - 20} more problem(s) like these, not listed")
+    with pytest.raises(ConfigError) as caught:
+        load(tmp_path)
+    assert problem_count(caught.value.problems) == len(rows)
+    assert str(caught.value).startswith(f"{len(rows)} configuration problems:")
+
+
+def test_validate_counts_the_problems_it_does_not_list(tmp_path):
+    rows = [f"{k},0.0,-1,1" for k in range(30)]  # 30 negative widths
+    (tmp_path / "c.csv").write_text("# x_m,y_m,w_tr_right_m,w_tr_left_m\n" + "\n".join(rows))
+    (tmp_path / "track.yaml").write_text("track: {type: centerline, file: c.csv}\n")
+    done = subprocess.run(
+        [sys.executable, "-m", "tinyrace", "validate", str(tmp_path / "track.yaml")],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 1
+    assert "... and 10 more problem(s) like these, not listed" in done.stdout
+    assert done.stderr.strip().endswith("30 problem(s) found")

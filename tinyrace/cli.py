@@ -264,14 +264,15 @@ def _cache(args: argparse.Namespace) -> int:
 
 # -- validate ----------------------------------------------------------------------------------
 def _validate(args: argparse.Namespace) -> int:
-    from tinyrace.validate import validate_path
+    from tinyrace.errors import problem_count
+    from tinyrace.validate import validate_problems
 
     path = find_example(args.path)  # the file checked, named in the answer
-    problems, summary = validate_path(path)
+    problems, summary = validate_problems(path)
     for problem in problems:
         print(problem)
     if problems:
-        print(f"{len(problems)} problem(s) found", file=sys.stderr)
+        print(f"{problem_count(problems):,} problem(s) found", file=sys.stderr)
         return 1
     print(f"OK: {path}: {summary}")
     return 0

@@ -23,6 +23,34 @@ class Problem:
         return f"{where}: got {shown(self.value)}; {self.allowed}"
 
 
+@dataclass(frozen=True)
+class Omitted(Problem):
+    """The problems of a list cut short: how many more were found and not listed."""
+
+    count: int = 0  # problems found beyond those listed
+
+    def __str__(self) -> str:
+        where = f"{self.source}: {self.path}" if self.path else self.source
+        return f"{where}: ... and {self.count:,} more problem(s) like these, not listed"
+
+
+def capped(problems: list[Problem], limit: int = 20, found: int | None = None) -> list[Problem]:
+    """The first ``limit`` of ``problems`` and, when more were ``found`` (by default as many
+    as given), an ``Omitted`` problem that says how many more there are."""
+    total = len(problems) if found is None else found
+    shown_ = problems[:limit]
+    if total <= len(shown_):
+        return shown_
+    source = shown_[-1].source if shown_ else ""
+    more = total - len(shown_)
+    return [*shown_, Omitted(source, "", more, f"{more:,} more not listed", more)]
+
+
+def problem_count(problems: Iterable[Problem]) -> int:
+    """How many problems were found: each listed one, and the count each ``Omitted`` stands for."""
+    return sum(p.count if isinstance(p, Omitted) else 1 for p in problems)
+
+
 _SHORT = reprlib.Repr()  # containers are cut before they are turned into text
 _SHORT.maxstring, _SHORT.maxother, _SHORT.maxlong = 80, 80, 40
 _SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 8
@@ -98,9 +126,8 @@ class ConfigError(ValueError):
     def __init__(self, problems: list[Problem] | Problem):
         self.problems = [problems] if isinstance(problems, Problem) else list(problems)
         lines = [str(p) for p in self.problems]
-        head = (
-            "invalid configuration" if len(lines) == 1 else f"{len(lines)} configuration problems"
-        )
+        count = problem_count(self.problems)
+        head = "invalid configuration" if count == 1 else f"{count:,} configuration problems"
         super().__init__(head + ":\n  " + "\n  ".join(lines))
 
     def __reduce__(self) -> tuple[type[ConfigError], tuple[list[Problem]]]:

@@ -51,12 +51,19 @@ def validate_path(path: Path) -> tuple[list[str], str]:
     What passes has been built, reset (seed 0) and stepped once, as ``gym.make`` and
     ``tinyrace run`` would: they read the config through the same functions.
     """
+    problems, summary = validate_problems(path)
+    return [str(p) for p in problems], summary
+
+
+def validate_problems(path: Path) -> tuple[list[Problem], str]:
+    """``validate_path``'s answer as problems (a long list ends with an ``Omitted``, which
+    says how many more were found)."""
     try:
         loaded = load_any(path)
         parts = build_course(loaded)  # the same parts the env is made of
         observes = try_one_step(loaded)
     except ConfigError as exc:
-        return [str(p) for p in exc.problems], ""
+        return exc.problems, ""
     return [], describe(parts.config, observes) + start_summary(parts)
 
 

@@ -41,10 +41,12 @@ def blame(
     for p in problems:
         if p.source == source and (source == DEFAULTS or _overridden(p.path, overrides.keys)):
             path = f"{overrides.prefix}{as_written(p.path, laid)}"
-            p = Problem(overrides.source, path, p.value, as_written(p.allowed, laid))
+            p = dataclasses.replace(
+                p, source=overrides.source, path=path, allowed=as_written(p.allowed, laid)
+            )
         elif spelling:  # a message of a data file may name the key that named the file
             path = as_written(p.path, spelling) if p.source == source else p.path
-            p = Problem(p.source, path, p.value, as_written(p.allowed, spelling))
+            p = dataclasses.replace(p, path=path, allowed=as_written(p.allowed, spelling))
         renamed.append(p)
     return renamed
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from tinyrace.config.bounds import MAX_COORDINATE, MIN_ROAD_WIDTH
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, capped
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import Table, read_table
 
@@ -134,7 +134,8 @@ def _check_size(
         f"expected coordinates and widths within +-{MAX_COORDINATE:g} m after scale "
         f"(scale {scale:g})"
     )
-    return [table.problem(int(r), None, values[r].tolist(), allowed) for r in rows[:5]]
+    listed = [table.problem(int(r), None, values[r].tolist(), allowed) for r in rows[:5]]
+    return capped(listed, 5, len(rows))
 
 
 def _check_widths(
@@ -147,14 +148,16 @@ def _check_widths(
         table.problem(r, columns[s], float(widths[r, s]), "expected a width >= 0 [m]")
         for r, s in zip(rows[:20], sides[:20], strict=True)
     ]
+    problems = capped(problems, 20, len(rows))
     if problems:
         return problems
-    narrow = np.flatnonzero(widths.sum(axis=1) < MIN_ROAD_WIDTH)[:20]
+    narrow = np.flatnonzero(widths.sum(axis=1) < MIN_ROAD_WIDTH)
     allowed = (
         f"expected a road at least {MIN_ROAD_WIDTH:g} m wide (right + left width; narrower "
         "than any car, the car would start off it)"
     )
-    return [table.problem(r, columns[0], float(widths[r].sum()), allowed) for r in narrow]
+    listed = [table.problem(r, columns[0], float(widths[r].sum()), allowed) for r in narrow[:20]]
+    return capped(listed, 20, len(narrow))
 
 
 def _check_repeats(table: Table, points: np.ndarray) -> list[Problem]:
@@ -173,7 +176,7 @@ def _check_repeats(table: Table, points: np.ndarray) -> list[Problem]:
                 "one copy of the first point at the end is dropped, a second is refused"
             )
             problems.append(table.problem(int(i), None, points[i].tolist(), allowed))
-    return problems
+    return capped(problems, 20, len(repeats))
 
 
 def _check_crossing(table: Table, points: np.ndarray) -> list[Problem]:

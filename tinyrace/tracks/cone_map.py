@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from tinyrace.config.bounds import MAX_CONE_ROAD_POINTS, MAX_CONES, MAX_COORDINATE
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, capped
 from tinyrace.tracks import polyline
-from tinyrace.tracks.csv_rows import cell_number, read_text
+from tinyrace.tracks.csv_rows import cell_number, read_text, split_cells
 
 CLASSES = ("blue", "yellow", "orange", "big_orange", "unknown")  # class id = index + 1
 RADII = {"blue": 0.115, "yellow": 0.115, "orange": 0.115, "big_orange": 0.145, "unknown": 0.115}
@@ -51,14 +51,15 @@ class Cones:
 
 
 def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
-    """Read a cone map; a bad row is a ConfigError naming the file, line and column."""
+    """Read a cone map (cells separated by ',', ';' or tabs, as in a centreline CSV); a
+    bad row is a ConfigError naming the file, line and column."""
     text = read_text(path, source, key)
     positions: list[tuple[float, float]] = []
     tags: list[str] = []
     lines: list[int] = []
     problems: list[Problem] = []
     for number, raw in enumerate(text.splitlines(), start=1):
-        cells = [cell.strip() for cell in raw.split(",")]
+        cells = list(split_cells(raw))  # separated as a centreline CSV's rows may be
         if not raw.strip() or raw.lstrip().startswith("#") or cells[0].lower() == "tag":
             continue
         cone = _cone(str(path), number, cells, problems)
@@ -71,7 +72,7 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
             raise ConfigError(Problem(str(path), f"line {number}", f"cone {len(tags):,}", allowed))
     problems += _repeated(str(path), positions, lines)
     if problems:
-        raise ConfigError(problems[:20])
+        raise ConfigError(capped(problems))
     array = np.array(positions, np.float64).reshape(-1, 2) * scale
     far = np.flatnonzero(~(np.abs(array) <= MAX_COORDINATE).all(axis=1))
     if len(far):

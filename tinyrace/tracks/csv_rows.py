@@ -14,7 +14,7 @@ import numpy as np
 
 from tinyrace.config.bounds import MAX_DATA_BYTES, MAX_ROWS
 from tinyrace.config.yaml_file import read_bytes
-from tinyrace.errors import ConfigError, Problem
+from tinyrace.errors import ConfigError, Problem, capped
 
 
 @dataclass(frozen=True)
@@ -71,7 +71,7 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
             continue
         if line.startswith("#"):
             if not rows:
-                header = _split(line.lstrip("#"))
+                header = split_cells(line.lstrip("#"))
             continue
         if len(rows) >= MAX_ROWS:
             bound = f"expected at most {MAX_ROWS:,} rows of numbers (tinyrace's bound)"
@@ -82,7 +82,7 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
                 rows.append(row)
                 lines.append(number)
                 continue
-        cells = _split(line)
+        cells = split_cells(line)
         if not rows and not lines and _is_header(cells):
             header = cells  # a header line without '#'
             continue
@@ -92,7 +92,7 @@ def read_table(path: Path, source: str, key: str, columns: tuple[int, ...]) -> T
             rows.append(row)
             lines.append(number)
     if problems:
-        raise ConfigError(problems[:20])
+        raise ConfigError(capped(problems))
     width = len(rows[0]) if rows else columns[0]
     values = np.array(rows, np.float64).reshape(len(rows), width)
     return Table(str(path), values, np.array(lines, int), tuple(h.lower() for h in header))
@@ -110,14 +110,14 @@ def _fast_table(text: str, path: str, columns: tuple[int, ...]) -> Table | None:
             continue
         if line[0] == "#":
             if not data:
-                header = _split(line.lstrip("#"))
+                header = split_cells(line.lstrip("#"))
             continue
         data.append(line)
         numbers.append(number)
         if len(data) > MAX_ROWS + 1:
             return None
-    if data and _is_header(_split(data[0])):
-        header, data, numbers = _split(data[0]), data[1:], numbers[1:]
+    if data and _is_header(split_cells(data[0])):
+        header, data, numbers = split_cells(data[0]), data[1:], numbers[1:]
     if not data or len(data) > MAX_ROWS:
         return None
     first = data[0]
@@ -150,7 +150,8 @@ def _fast_numbers(line: str, width: int) -> list[float] | None:
     return values if len(values) == width and total - total == 0 else None
 
 
-def _split(line: str) -> tuple[str, ...]:
+def split_cells(line: str) -> tuple[str, ...]:
+    """The cells of a row separated by ';', ',' or tabs (the first of these it holds)."""
     separator = ";" if ";" in line else "," if "," in line or "\t" not in line else "\t"
     return tuple(cell.strip() for cell in line.split(separator))
 
