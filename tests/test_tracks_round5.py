@@ -160,3 +160,23 @@ def test_validate_counts_the_problems_it_does_not_list(tmp_path):
     assert done.returncode == 1
     assert "... and 10 more problem(s) like these, not listed" in done.stdout
     assert done.stderr.strip().endswith("30 problem(s) found")
+
+
+# -- 5. the road-width rule's message ------------------------------------------------------
+def write_circle(folder: Path, radius: float, left: float) -> Path:
+    angles = np.linspace(0, 2 * math.pi, 90, endpoint=False)
+    rows = [f"{radius * math.cos(a):.4f},{radius * math.sin(a):.4f},1.0,{left}" for a in angles]
+    (folder / "c.csv").write_text("# x_m,y_m,w_tr_right_m,w_tr_left_m\n" + "\n".join(rows))
+    (folder / "track.yaml").write_text("track: {type: centerline, file: c.csv, spacing: 0.5}\n")
+    return folder
+
+
+def test_a_road_folding_past_the_limit_says_the_limit_and_why_it_is_above_one(tmp_path):
+    (message,) = problems(write_circle(tmp_path, 10.0, 14.0))  # 1.4 x the radius
+    assert "at most 1.2 x the curve's radius" in message and "(1.41 x)" in message
+    assert "Above 1 x the inner edge passes the curve's centre" in message
+    assert "up to 1.2 x is let through only because surveyed circuits'" in message
+
+
+def test_a_road_up_to_the_limit_loads(tmp_path):
+    assert load(write_circle(tmp_path, 10.0, 11.0)).tracks[0].centerline is not None  # 1.1 x
