@@ -168,7 +168,9 @@ def raceline_text(points: np.ndarray, lateral: float = 4.0, top: float = 6.0) ->
 TRACK_YAMLS = {
     "circuit": """\
 # A 2.2 km circuit in the racetrack-database centreline format (metres).
-# Point it at a real circuit instead: file: /path/to/racetrack-database/tracks/Monza.csv
+# Point it at a real circuit instead: copy racetrack-database/tracks/Monza.csv into this
+# folder and write file: Monza.csv, or give the file's own path with
+# files: {paths_outside_folder: true} (a path outside this folder is refused otherwise).
 track: {type: centerline, file: circuit.csv, spacing: 2.0}   # spacing [m] of the tiles
 car:   # a kinematic car with throttle, in metres
   model: kinematic_throttle

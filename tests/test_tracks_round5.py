@@ -180,3 +180,26 @@ def test_a_road_folding_past_the_limit_says_the_limit_and_why_it_is_above_one(tm
 
 def test_a_road_up_to_the_limit_loads(tmp_path):
     assert load(write_circle(tmp_path, 10.0, 11.0)).tracks[0].centerline is not None  # 1.1 x
+
+
+# -- 6. the shipped circuit's comment: advice that works -----------------------------------
+def test_the_circuit_tracks_advice_for_a_real_circuit_works_both_ways(tmp_path):
+    shipped = Path(__file__).resolve().parents[1] / "example_tracks" / "circuit"
+    text = (shipped / "track.yaml").read_text()
+    assert "copy racetrack-database/tracks/Monza.csv into this" in text
+    assert "files: {paths_outside_folder: true}" in text
+    outside = tmp_path / "racetrack-database" / "tracks"
+    outside.mkdir(parents=True)
+    monza = (shipped / "circuit.csv").read_text()  # a stand-in for Monza.csv
+    (outside / "Monza.csv").write_text(monza)
+    copied, pointed = tmp_path / "copied", tmp_path / "pointed"
+    for folder in (copied, pointed):
+        folder.mkdir()
+    (copied / "Monza.csv").write_text(monza)
+    (copied / "track.yaml").write_text(text.replace("file: circuit.csv", "file: Monza.csv"))
+    absolute = text.replace("file: circuit.csv", f"file: {outside / 'Monza.csv'}")
+    (pointed / "track.yaml").write_text(absolute)
+    assert any("paths_outside_folder" in line for line in problems(pointed))  # refused so far
+    (pointed / "track.yaml").write_text(absolute + "files: {paths_outside_folder: true}\n")
+    for folder in (copied, pointed):
+        assert len(load(folder).tracks[0].centerline) == 1085  # the whole circuit
