@@ -13,7 +13,7 @@ import pytest
 from tinyrace.config import ConfigError, load_env_config
 from tinyrace.errors import problem_count
 from tinyrace.tracks.metric import MetricSource
-from tinyrace.validate import build_course
+from tinyrace.validate import build_course, picture
 
 
 def stadium(radius: float, half: float = 4.0, step: float = 0.8) -> list[tuple[float, float]]:
@@ -203,3 +203,20 @@ def test_the_circuit_tracks_advice_for_a_real_circuit_works_both_ways(tmp_path):
     (pointed / "track.yaml").write_text(absolute + "files: {paths_outside_folder: true}\n")
     for folder in (copied, pointed):
         assert len(load(folder).tracks[0].centerline) == 1085  # the whole circuit
+
+
+# -- 7. tinyrace show frames a small track on its road -------------------------------------
+def test_show_frames_a_small_centreline_track_on_its_road_not_its_playfield(tmp_path):
+    (tmp_path / "c.csv").write_text(
+        "# x_m,y_m\n" + "\n".join(f"{x:.4f},{y - 3:.4f}" for x, y in stadium(3.0, step=0.2))
+    )
+    (tmp_path / "track.yaml").write_text("track: {type: centerline, file: c.csv, spacing: 0.25, "
+                                         "default_width: 1.6}\n")  # fmt: skip
+    track = load(tmp_path).tracks[0]
+    x0, y0, x1, y1 = track.bounds
+    assert (x1 - x0, y1 - y0) == pytest.approx((115.6, 107.6), abs=0.1)  # the playfield stays
+    image = picture(str(tmp_path), 0).image
+    height, width, _ = image.shape
+    assert width == 1600 and height == pytest.approx(1600 * 9.6 / 17.6, abs=5)  # the road and 1 m
+    grey = (np.abs(image.astype(int) - image[..., :1]).max(axis=2) < 8) & (image[..., 0] > 60)
+    assert grey.mean() > 0.25  # the road (and the legend's box aside) fills the picture

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Sequence
@@ -178,7 +179,14 @@ class Picture:
 def picture(target: str, seed: int) -> Picture:
     """The picture of a track; ``target`` 'procedural' means CarRacing's track."""
     from tinyrace.ground.grounds import make_ground
-    from tinyrace.render.track_picture import image_picture, metric_picture, procedural_picture
+    from tinyrace.ground.metric import paint_ground
+    from tinyrace.render.track_picture import (
+        MAX_SIDE,
+        framed_bounds,
+        image_picture,
+        metric_picture,
+        procedural_picture,
+    )
 
     if target == "procedural":  # the CLI's name for CarRacing's track
         image = procedural_picture(load_env_config().config, seed)
@@ -196,7 +204,12 @@ def picture(target: str, seed: int) -> Picture:
     first = parts.source.draw(np.random.default_rng(seed), {"track": 0, "spawn": 0}).track
     if ground.carries_pictures:
         return Picture(image_picture(parts.config, first), name, inputs)
-    return Picture(metric_picture(first, ground.texture(first)), name, inputs)
+    # framed on the road, cones and walls, not the whole playfield, and painted for the
+    # picture alone at its own scale (the env's ground is the playfield's, unchanged)
+    framed = dataclasses.replace(first, bounds=framed_bounds(first))
+    x0, y0, x1, y1 = framed.bounds
+    texture = paint_ground(framed, MAX_SIDE / max(x1 - x0, y1 - y0))
+    return Picture(metric_picture(framed, texture, first.bounds), name, inputs)
 
 
 def input_files(path: Path, loaded: LoadedConfig) -> tuple[Path, ...]:

@@ -129,14 +129,43 @@ def metric_ground(track: Track, texture: GroundTexture) -> tuple[np.ndarray, Pic
     return texture.warp(frame.matrix(), size), frame
 
 
-def metric_picture(track: Track, texture: GroundTexture) -> np.ndarray:
-    """A track in metres, north up: the road or map, cones, the reference line, the start."""
+def framed_bounds(track: Track) -> tuple[float, float, float, float]:
+    """(x0, y0, x1, y1) [m] of what a picture of a track in metres shows: its road, cones
+    and walls with a margin (a twentieth of their extent, at least 1 m), within the
+    playfield (``track.bounds``, which also holds the grass an episode may cross: a
+    centreline track's 50 m margin would make a small track a speck)."""
+    held = [a.reshape(-1, 2) for a in (track.tiles, track.walls) if a is not None and a.size]
+    if len(track.cones):
+        held.append(track.cones[:, :2])
+    if not held:
+        return track.bounds
+    points = np.concatenate(held)
+    low, high = points.min(axis=0), points.max(axis=0)
+    margin = max(0.05 * float(np.max(high - low)), 1.0)
+    x0, y0, x1, y1 = track.bounds
+    return (
+        max(float(low[0]) - margin, x0),
+        max(float(low[1]) - margin, y0),
+        min(float(high[0]) + margin, x1),
+        min(float(high[1]) + margin, y1),
+    )
+
+
+def metric_picture(
+    track: Track,
+    texture: GroundTexture,
+    playfield: tuple[float, float, float, float] | None = None,
+) -> np.ndarray:
+    """A track in metres, north up: the road or map, cones, the reference line, the start;
+    all of ``track.bounds``, which the legend names ``playfield`` when that is larger."""
     image, frame = metric_ground(track, texture)
     matrix = frame.matrix()
     x0, y0, x1, y1 = track.bounds
-    entries: list[tuple[tuple[int, int, int] | None, str]] = [
-        (None, f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m")
-    ]
+    size = f"{track.kind} track, {(x1 - x0):.0f} x {(y1 - y0):.0f} m"
+    if playfield is not None and playfield != track.bounds:
+        px0, py0, px1, py1 = playfield
+        size += f" shown (playfield {(px1 - px0):.0f} x {(py1 - py0):.0f} m)"
+    entries: list[tuple[tuple[int, int, int] | None, str]] = [(None, size)]
     if track.circuit is not None:
         points = track.circuit.centerline
         line = transform_points(matrix, np.vstack((points, points[:1])))
