@@ -16,11 +16,13 @@ from tinyrace.tracks.metric import MetricSource
 from tinyrace.validate import build_course, picture
 
 
-def stadium(radius: float, half: float = 4.0, step: float = 0.8) -> list[tuple[float, float]]:
+def stadium(
+    radius: float, half: float = 4.0, step: float = 0.8, arc_points: int = 11
+) -> list[tuple[float, float]]:
     """Points counter-clockwise round a stadium: straights y = -radius and +radius from
     x = -half to half, half circles of ``radius`` about (+-half, 0); starts at (-half, -radius)."""
     points = [(x, -radius) for x in np.arange(-half, half, step)]
-    arc = np.linspace(-math.pi / 2, math.pi / 2, 11)[:-1]
+    arc = np.linspace(-math.pi / 2, math.pi / 2, arc_points)[:-1]
     points += [(half + radius * math.cos(a), radius * math.sin(a)) for a in arc]
     points += [(x, radius) for x in np.arange(half, -half, -step)]
     points += [
@@ -220,3 +222,36 @@ def test_show_frames_a_small_centreline_track_on_its_road_not_its_playfield(tmp_
     assert width == 1600 and height == pytest.approx(1600 * 9.6 / 17.6, abs=5)  # the road and 1 m
     grey = (np.abs(image.astype(int) - image[..., :1]).max(axis=2) < 8) & (image[..., 0] > 60)
     assert grey.mean() > 0.25  # the road (and the legend's box aside) fills the picture
+
+
+# -- 3. the start faces along a straight that begins there ---------------------------------
+@pytest.mark.parametrize("spacing", [2.0, 0.25])
+@pytest.mark.parametrize("first", [0, -1])  # the straight ahead of the start, or behind it
+def test_a_start_where_a_straight_meets_a_curve_faces_along_the_straight(tmp_path, spacing, first):
+    points = stadium(3.0, step=0.2, arc_points=61)  # the curve's chords under 0.25 m
+    if first == -1:  # driven the other way round: the straight behind the start
+        points = [points[0], *points[:0:-1]]
+    rows = "\n".join(f"{x:.4f},{y:.4f},0.8,0.8" for x, y in points)
+    (tmp_path / "c.csv").write_text("# x_m,y_m,w_tr_right_m,w_tr_left_m\n" + rows)
+    (tmp_path / "track.yaml").write_text(
+        f"track: {{type: centerline, file: c.csv, spacing: {spacing}}}\n"
+    )
+    track = load(tmp_path).tracks[0]
+    x, y, heading = track.spawns[0]
+    assert (x, y) == (-4.0, -3.0)
+    assert heading == (0.0 if first == 0 else math.pi)  # exactly along the straight
+    start = track.tiles[0]  # its first edge (left_0, right_0) is square to the straight
+    assert start[0][0] == pytest.approx(start[1][0], abs=1e-12)
+    assert track.circuit.headings[0] == heading
+
+
+def test_a_start_on_a_curve_keeps_the_tangent_from_its_two_neighbours(tmp_path):
+    angles = np.linspace(0, 2 * math.pi, 200, endpoint=False)
+    rows = "\n".join(f"{10 * math.cos(a):.6f},{10 * math.sin(a):.6f},1,1" for a in angles)
+    (tmp_path / "c.csv").write_text("# x_m,y_m,w_tr_right_m,w_tr_left_m\n" + rows)
+    (tmp_path / "track.yaml").write_text("track: {type: centerline, file: c.csv, spacing: 2}\n")
+    track = load(tmp_path).tracks[0]
+    line = track.centerline
+    chord = line[1] - line[-1]
+    assert track.spawns[0][2] == math.atan2(chord[1], chord[0])  # pi / 2 within 1e-3
+    assert track.spawns[0][2] == pytest.approx(math.pi / 2, abs=1e-3)

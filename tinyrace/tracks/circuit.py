@@ -27,15 +27,14 @@ class Circuit:
 
     @classmethod
     def build(cls, points: np.ndarray, widths: np.ndarray, spacing: float) -> Circuit:
-        """Resample ``points`` (N, 2) with ``widths`` (N, 2) to ``spacing`` [m], keeping point 0."""
+        """Resample ``points`` (N, 2) with ``widths`` (N, 2) to ``spacing`` [m], keeping point
+        0; the heading there is the tangent where a straight meets a curve at the start
+        (``polyline.start_heading``), and the start's tiles are square to it."""
         even, even_widths = polyline.resample(points, spacing, widths)
         assert even_widths is not None
-        arrays = (
-            even,
-            even_widths,
-            polyline.headings(even),
-            polyline.tiles(even, even_widths),
-        )
+        heading = polyline.headings(even)
+        heading[0] = polyline.start_heading(even, heading)
+        arrays = (even, even_widths, heading, polyline.tiles(even, even_widths, heading))
         for array in arrays:
             array.setflags(write=False)
         return cls(*arrays, polyline.perimeter(even))
@@ -43,7 +42,7 @@ class Circuit:
     def with_widths(self, widths: np.ndarray) -> Circuit:
         """The same centreline with other ``widths`` (N, 2) [m], and the tiles they make."""
         widths = np.array(widths, float)
-        tiles = polyline.tiles(self.centerline, widths)
+        tiles = polyline.tiles(self.centerline, widths, self.headings)
         for array in (widths, tiles):
             array.setflags(write=False)
         return dataclasses.replace(self, widths=widths, tiles=tiles)
@@ -61,7 +60,7 @@ class Circuit:
 
     def edges(self) -> tuple[np.ndarray, np.ndarray]:
         """(left, right) (N, 2) edge points [m]."""
-        return polyline.edges(self.centerline, self.widths)
+        return polyline.edges(self.centerline, self.widths, self.headings)
 
     def bounds(self, margin: float = 0.0) -> tuple[float, float, float, float]:
         """(x0, y0, x1, y1) [m] around the road's tiles, grown by ``margin``."""

@@ -54,6 +54,29 @@ def headings(loop: np.ndarray) -> np.ndarray:
     return np.array([math.atan2(y, x) for x, y in ahead.tolist()], float)
 
 
+def start_heading(loop: np.ndarray, heading: np.ndarray) -> float:
+    """The direction of travel at point 0 [rad], given ``heading`` (N,) from its neighbours.
+
+    Where a straight meets a curve at point 0 (points 0, 1, 2 lie on a line and -2, -1, 0
+    do not, or the other way round) the tangent there is the straight's direction: the
+    direction from the neighbour before to the one after leans toward the curve by half the
+    turn over one spacing (0.17 rad at 2 m on a 3 m radius). Elsewhere, on a curve or in a
+    straight, it is ``heading[0]``, the tangent of the circle through the three points."""
+    ahead = _in_line(loop[0], loop[1], loop[2])
+    behind = _in_line(loop[-2], loop[-1], loop[0])
+    if ahead == behind:
+        return float(heading[0])
+    dx, dy = (loop[1] - loop[0]) if ahead else (loop[0] - loop[-1])
+    return math.atan2(float(dy), float(dx))
+
+
+def _in_line(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> bool:
+    """Whether b -> c goes on in the direction of a -> b (within 1e-9 rad)."""
+    (ux, uy), (vx, vy) = (b - a).tolist(), (c - b).tolist()
+    cross, dot = ux * vy - uy * vx, ux * vx + uy * vy
+    return bool(dot > 0 and abs(cross) <= 1e-9 * math.hypot(ux, uy) * math.hypot(vx, vy))
+
+
 def curvature(loop: np.ndarray) -> np.ndarray:
     """(N,) signed curvature at each point [1/unit], positive turning left (counter-clockwise)."""
     angle = headings(loop)  # one pass of math.atan2 per point: computed once
@@ -62,21 +85,25 @@ def curvature(loop: np.ndarray) -> np.ndarray:
     return np.asarray(np.roll(turn, 1) / np.maximum(0.5 * (step + np.roll(step, 1)), 1e-12))
 
 
-def left_normals(loop: np.ndarray) -> np.ndarray:
-    """(N, 2) unit vectors pointing to the left of the driving direction."""
-    return np.array([(-math.sin(a), math.cos(a)) for a in headings(loop).tolist()], float)
+def left_normals(loop: np.ndarray, heading: np.ndarray | None = None) -> np.ndarray:
+    """(N, 2) unit vectors pointing to the left of the driving direction (``heading`` (N,)
+    [rad] when given, else ``headings(loop)``)."""
+    angles = headings(loop) if heading is None else heading
+    return np.array([(-math.sin(a), math.cos(a)) for a in angles.tolist()], float)
 
 
-def edges(loop: np.ndarray, widths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def edges(
+    loop: np.ndarray, widths: np.ndarray, heading: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(left, right) edge points, ``widths`` (N, 2) = (to the right, to the left) of each point."""
-    normal = left_normals(loop)
+    normal = left_normals(loop, heading)
     return loop + normal * widths[:, 1:2], loop - normal * widths[:, 0:1]
 
 
-def tiles(loop: np.ndarray, widths: np.ndarray) -> np.ndarray:
+def tiles(loop: np.ndarray, widths: np.ndarray, heading: np.ndarray | None = None) -> np.ndarray:
     """(N, 4, 2) road quads: tile i spans point i to point i + 1, vertices left_i, right_i,
     right_i+1, left_i+1 (a convex quad unless the road folds over itself)."""
-    left, right = edges(loop, widths)
+    left, right = edges(loop, widths, heading)
     return np.stack((left, right, np.roll(right, -1, axis=0), np.roll(left, -1, axis=0)), axis=1)
 
 
