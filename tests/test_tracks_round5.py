@@ -68,22 +68,16 @@ def test_a_whole_stadium_of_cones_loads(tmp_path):
     assert widths.min() > 1.8 and widths.max() < 2.3  # 2 m between the edges all round
 
 
-def test_a_gap_in_the_blue_cones_is_named_not_bridged_across_the_infield(tmp_path):
-    kept = blue_with_a_gap()
-
-    def line(point: tuple[float, float]) -> int:  # the header is line 1
-        return 2 + int(np.argmin(np.hypot(*(np.array(kept) - point).T)))
-
-    found = problems(write_cones(tmp_path, cone_rows(kept, stadium(4.0))))
-    assert len(found) == 1
-    message = found[0]
-    first, second = (0.0, -2.0), (4.0, 2.0)  # the cones either side of the gap
-    found_lines = message.split("lines ")[1].split(":")[0]
-    assert sorted(found_lines.split(" and ")) == sorted([str(line(first)), str(line(second))])
-    assert "max_cone_gap (6 m)" in message
-    assert "5.66 m apart" in message  # across the infield
-    run = float(message.split("runs ")[1].split(" m")[0])
-    assert 12.0 < run < 25.0  # the yellow edge's run beside the gap
+def test_a_hairpin_whose_inner_cones_stand_far_round_the_outer_edge_loads(tmp_path):
+    """EUFS's Hairpin track: inner cones 2.6 m apart at the end of a 1.5 m radius turn while
+    the outer edge runs some 20 m round it. A check that refused neighbours beside which
+    the other edge runs more than max_cone_gap further refused it (and two more of EUFS's
+    tracks); a gap shorter than max_cone_gap is not told from such a turn."""
+    inner = stadium(1.5, step=2.6, arc_points=3)
+    outer = stadium(5.0, step=2.6, arc_points=15)
+    track = load(write_cones(tmp_path, cone_rows(inner, outer))).tracks[0]
+    widths = track.circuit.widths.sum(axis=1)
+    assert widths.min() > 2.5 and widths.max() < 4.5
 
 
 def test_a_gap_wider_than_max_cone_gap_in_a_straight_line_is_named_as_before(tmp_path):
@@ -113,6 +107,34 @@ def test_a_cone_map_start_is_beside_its_big_orange_cones_else_its_first_blue_con
     assert math.hypot(x + 4.0, y + 2.0) < 1.5  # beside the first blue cone, (-4, -2)
 
 
+def test_a_car_start_row_places_the_car_and_the_start_line_stays_at_the_big_orange_cones(
+    tmp_path,
+):
+    """EUFS's tracks end with a ``car_start,x,y,direction,...`` row: the car's start pose."""
+    rows = cone_rows(stadium(2.0), stadium(4.0)) + BIG_ORANGE
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    with_start = load(write_cones(tmp_path / "a", [*rows, "car_start,-2.5,-3.0,0.1,0.01,0.01,0"]))
+    without = load(write_cones(tmp_path / "b", rows))
+    assert with_start.tracks[0].spawns[0] == (-2.5, -3.0, 0.1)
+    assert without.tracks[0].spawns[0] != (-2.5, -3.0, 0.1)
+    # the same road, laps counted from the same line
+    assert np.array_equal(with_start.tracks[0].centerline, without.tracks[0].centerline)
+
+
+@pytest.mark.parametrize(
+    ("extra", "where", "says"),
+    [
+        (["car_start,0,-3,0", "car_start,1,-3,0"], "line", "expected one car_start row"),
+        (["car_start,zero,-3,0"], "column 2 (x)", "the car's start pose is x, y, direction"),
+        (["car_start,0,-3,east"], "column 4 (direction)", "a finite number [rad]"),
+    ],
+)
+def test_a_bad_car_start_row_is_named(tmp_path, extra, where, says):
+    (message,) = problems(write_cones(tmp_path, cone_rows(stadium(2.0), stadium(4.0)) + extra))
+    assert where in message and says in message
+
+
 def test_a_cone_map_start_on_a_cone_says_what_moves_it_not_track_spawn(tmp_path):
     folder = write_cones(tmp_path, cone_rows(stadium(2.0), stadium(4.0)) + BIG_ORANGE)
     text = (folder / "track.yaml").read_text().replace("wheelbase: 0.33", "wheelbase: 2.5")
@@ -122,7 +144,10 @@ def test_a_cone_map_start_on_a_cone_says_what_moves_it_not_track_spawn(tmp_path)
     (problem,) = caught.value.problems
     assert problem.path == "track.file" and "overlaps a cone" in problem.allowed
     assert "track.spawn" not in problem.allowed  # a cone map refuses that key
-    assert "big_orange cones" in problem.allowed and "move those cones" in problem.allowed
+    assert (
+        "big_orange cones" in problem.allowed
+        and "move the car_start row or those cones" in problem.allowed
+    )
     assert problem.allowed.endswith("make the car smaller (car.wheelbase, car.track_width)")
 
 

@@ -226,13 +226,15 @@ class CenterlineTrackConfig(MetreTrackFacts):
 class ConeMapTrackConfig(MetreTrackFacts):
     """A ``track`` of ``type: cone_map``: a Formula Student Driverless cone map CSV, in metres.
 
-    Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right."""
+    Rows ``tag,x,y,direction,x_variance,y_variance,covariance``; blue left, yellow right;
+    a ``car_start`` row (EUFS's tracks) places the car: x, y, direction."""
 
     holds = frozenset({"cones", "metric ground"})
     start_advice = (
-        "the start pose is the centreline point nearest the middle of the big_orange cones "
-        "(of the orange cones when there are none; with neither, beside the file's first "
-        "blue cone), facing along the road: move those cones"
+        "the start pose is the file's car_start row if it has one, else the centreline point "
+        "nearest the middle of the big_orange cones (of the orange cones when there are "
+        "none; with neither, beside the file's first blue cone), facing along the road: "
+        "move the car_start row or those cones"
     )
 
     type: Literal["cone_map"] = knob("cone_map", "track kind")
@@ -240,11 +242,7 @@ class ConeMapTrackConfig(MetreTrackFacts):
     spacing: float = knob(0.5, "distance between centreline points (and tiles)", "m", low=0.05)
     scale: float = knob(1.0, "multiply every coordinate by this", low=1e-6)
     max_cone_gap: float = knob(
-        6.0,
-        "cones of one edge further apart than this, in a straight line or along the other "
-        "edge beside them, do not close a loop",
-        "m",
-        low=0.1,
+        6.0, "cones of one edge further apart than this do not close a loop", "m", low=0.1
     )
     cone_hit_ends_episode: bool = knob(False, "knocking a cone over ends the episode")
     lap_complete_percent: float = _lap_percent()

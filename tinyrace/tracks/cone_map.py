@@ -2,10 +2,12 @@
 
 Rows ``tag,x,y,direction,x_variance,y_variance,covariance`` in metres; tags
 ``blue`` (left edge in the driving direction), ``yellow`` (right edge), ``orange``
-(extra marks), ``big_orange`` (the start/finish line) and ``unknown``. The road
-is derived from the cones: each edge is put in order around the loop, the
-centreline is the middle between the edges, the widths are the distances to them,
-and the start is the centreline point nearest the big orange cones.
+(extra marks), ``big_orange`` (the start/finish line) and ``unknown``; one row tagged
+``car_start`` (EUFS's simulator writes one in each of its tracks) is no cone but the car's
+start pose, ``x, y, direction`` [m, m, rad]. The road is derived from the cones: each edge
+is put in order around the loop, the centreline is the middle between the edges, the widths
+are the distances to them, and the start line is at the centreline point nearest the big
+orange cones, where the car starts unless a ``car_start`` row places it.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ CLASSES = ("blue", "yellow", "orange", "big_orange", "unknown")  # class id = in
 RADII = {"blue": 0.115, "yellow": 0.115, "orange": 0.115, "big_orange": 0.145, "unknown": 0.115}
 MIN_EDGE_CONES = 3
 _COLUMNS = ("tag", "x", "y", "direction", "x_variance", "y_variance", "covariance")
+CAR_START = "car_start"  # the tag of the row that places the car (EUFS's tracks)
 
 
 @dataclass(frozen=True)
@@ -34,6 +37,7 @@ class Cones:
     positions: np.ndarray  # (K, 2) [m]
     tags: tuple[str, ...]  # one of CLASSES per cone
     lines: tuple[int, ...]  # file line of each cone (from 1)
+    start: tuple[float, float, float] | None = None  # the car_start row's pose [m, m, rad]
 
     def of(self, tag: str) -> np.ndarray:
         """Indices of the cones of class ``tag``."""
@@ -58,9 +62,20 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
     tags: list[str] = []
     lines: list[int] = []
     problems: list[Problem] = []
+    start: tuple[float, float, float] | None = None
+    start_line = 0
     for number, raw in enumerate(text.splitlines(), start=1):
         cells = list(split_cells(raw))  # separated as a centreline CSV's rows may be
         if not raw.strip() or raw.lstrip().startswith("#") or cells[0].lower() == "tag":
+            continue
+        if cells[0].lower() == CAR_START:
+            if start_line:
+                allowed = (
+                    f"expected one {CAR_START} row (the car's start pose); line {start_line} is one"
+                )
+                problems.append(Problem(str(path), f"line {number}", ",".join(cells), allowed))
+            else:
+                start, start_line = _car_start(str(path), number, cells, problems), number
             continue
         cone = _cone(str(path), number, cells, problems)
         if cone is not None:
@@ -79,7 +94,35 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
         allowed = f"expected x and y within +-{MAX_COORDINATE:g} m after scale (scale {scale:g})"
         where = f"line {lines[far[0]]}"
         raise ConfigError(Problem(str(path), where, array[far[0]].tolist(), allowed))
-    return Cones(str(path), array, tuple(tags), tuple(lines))
+    if start is not None:
+        start = (start[0] * scale, start[1] * scale, start[2])
+        if max(abs(start[0]), abs(start[1])) > MAX_COORDINATE:
+            allowed = (
+                f"expected x and y within +-{MAX_COORDINATE:g} m after scale (scale {scale:g})"
+            )
+            raise ConfigError(Problem(str(path), f"line {start_line}", list(start), allowed))
+    return Cones(str(path), array, tuple(tags), tuple(lines), start)
+
+
+def _car_start(
+    path: str, number: int, cells: list[str], problems: list[Problem]
+) -> tuple[float, float, float] | None:
+    """The pose of a ``car_start`` row: x, y and direction (0 when left out), or None."""
+    values = []
+    for column in (1, 2, 3):
+        if column == 3 and (len(cells) <= 3 or not cells[3]):
+            values.append(0.0)  # EUFS writes 0: the cars start facing +x
+            continue
+        value = cell_number(cells[column]) if column < len(cells) else float("nan")
+        if not np.isfinite(value):
+            where = f"line {number}, column {column + 1} ({_COLUMNS[column]})"
+            shown = cells[column] if column < len(cells) else None
+            unit = "rad" if column == 3 else "m"
+            allowed = f"expected a finite number [{unit}]: the car's start pose is x, y, direction"
+            problems.append(Problem(path, where, shown, allowed))
+            return None
+        values.append(value)
+    return values[0], values[1], values[2]
 
 
 def _repeated(path: str, positions: list[tuple[float, float]], lines: list[int]) -> list[Problem]:
@@ -103,7 +146,7 @@ def _cone(
         return None
     tag = cells[0].lower()
     if tag not in CLASSES:
-        allowed = f"expected a tag among: {', '.join(CLASSES)}"
+        allowed = f"expected a tag among: {', '.join(CLASSES)} (or one {CAR_START} row)"
         problems.append(Problem(path, f"line {number}, column 1 (tag)", cells[0], allowed))
         return None
     values = []
@@ -129,16 +172,12 @@ def road_between(cones: Cones, spacing: float, max_gap: float) -> ConeRoad:
     """The centreline between the blue and yellow edges, sampled about ``spacing`` [m] apart.
 
     Each edge is ordered by chaining nearest cones; a gap longer than ``max_gap`` [m]
-    between neighbours is an error (the cones do not close a loop), and so is a step of
-    one edge beside which the other edge runs more than ``max_gap`` further (the chain
-    jumped across the infield over cones missing there).
+    between neighbours is an error (the cones do not close a loop).
     """
-    blue_index, blue = _edge_loop(cones, "blue", max_gap)
-    yellow_index, yellow = _edge_loop(cones, "yellow", max_gap)
+    blue = _edge_loop(cones, "blue", max_gap)
+    yellow = _edge_loop(cones, "yellow", max_gap)
     for tag, edge in (("blue", blue), ("yellow", yellow)):
         _check_edge_length(cones, tag, polyline.perimeter(edge), spacing)
-    _check_beside(cones, ("blue", "yellow"), blue_index, blue, yellow, max_gap)
-    _check_beside(cones, ("yellow", "blue"), yellow_index, yellow, blue, max_gap)
     dense_blue, _ = polyline.resample(blue, spacing / 4)
     dense_yellow, _ = polyline.resample(yellow, spacing / 4)
     guide, _ = polyline.resample(blue, spacing)
@@ -154,10 +193,9 @@ def road_between(cones: Cones, spacing: float, max_gap: float) -> ConeRoad:
     return ConeRoad(np.roll(middle, -start, axis=0), np.roll(widths, -start, axis=0))
 
 
-def _edge_loop(cones: Cones, tag: str, max_gap: float) -> tuple[np.ndarray, np.ndarray]:
-    """The cones of one edge in order around the loop (nearest neighbour chain): their
-    indices into ``cones`` and their positions; big orange cones join the edge whose cones
-    are nearest to them (they stand on the start line)."""
+def _edge_loop(cones: Cones, tag: str, max_gap: float) -> np.ndarray:
+    """The cones of one edge in order around the loop (nearest neighbour chain); big orange
+    cones join the edge whose cones are nearest to them (they stand on the start line)."""
     index = cones.of(tag)
     if len(index):
         index = np.concatenate((index, _start_cones_beside(cones, tag)))
@@ -179,45 +217,7 @@ def _edge_loop(cones: Cones, tag: str, max_gap: float) -> tuple[np.ndarray, np.n
     closing = float(np.hypot(*(points[order[-1]] - points[order[0]])))
     if closing > max_gap:
         _gap_error(cones, index[order[-1]], tag, closing, max_gap)
-    return np.asarray(index[order], int), np.asarray(points[order], float)
-
-
-def _check_beside(
-    cones: Cones,
-    tags: tuple[str, str],
-    index: np.ndarray,
-    edge: np.ndarray,
-    other: np.ndarray,
-    max_gap: float,
-) -> None:
-    """Refuse neighbours of ``edge`` (cone ``index``, in loop order) between which the
-    ``other`` edge runs more than ``max_gap`` [m] further than they are apart: the chain
-    of nearest cones closed the loop across the infield, over a gap in this edge's cones.
-    The other edge's run is measured between the points of it nearest each cone, the
-    shorter way round; a road's outer edge in a curve is longer than its inner one by the
-    road's width times the angle turned, far below ``max_gap`` for cones ``max_gap`` apart."""
-    length = polyline.perimeter(other)  # [m]
-    dense, _ = polyline.resample(other, max(max_gap / 16, length / (4 * MAX_CONE_ROAD_POINTS)))
-    step = length / len(dense)
-    at = _nearest(dense, edge) * step  # [m] along the other edge, opposite each cone
-    run = np.abs(np.roll(at, -1) - at)
-    run = np.minimum(run, length - run)
-    apart = polyline.segment_lengths(edge)
-    worst = int(np.argmax(run - apart))
-    if run[worst] - apart[worst] <= max_gap:
-        return
-    tag, other_tag = tags
-    first, second = index[worst], index[(worst + 1) % len(index)]
-    allowed = (
-        f"expected the {tag} cones to follow the road with neighbours at most "
-        f"track.max_cone_gap ({max_gap:g} m) apart along it; these two {tag} cones are "
-        f"neighbours around the loop, {apart[worst]:.2f} m apart, but the {other_tag} edge "
-        f"runs {run[worst]:.1f} m between the points opposite them: the {tag} cones have a "
-        "gap there and the loop was closed across it (add the missing cones)"
-    )
-    where = f"lines {cones.lines[first]} and {cones.lines[second]}"
-    value = [cones.positions[first].tolist(), cones.positions[second].tolist()]
-    raise ConfigError(Problem(cones.path, where, value, allowed))
+    return np.asarray(points[order], float)
 
 
 def _check_edge_length(cones: Cones, tag: str, length: float, spacing: float) -> None:

@@ -163,7 +163,7 @@ def _cone_map(
     return MetricTrack(
         "cone_map",
         circuit,
-        circuit.start_pose,
+        circuit.start_pose if cones.start is None else cones.start,
         (float(low[0]), float(low[1]), float(high[0]), float(high[1])),
         cones.path,
         cones=np.column_stack((cones.positions, cones.class_ids)),
