@@ -128,6 +128,7 @@ def test_a_car_start_row_places_the_car_and_the_start_line_stays_at_the_big_oran
         (["car_start,0,-3,0", "car_start,1,-3,0"], "line", "expected one car_start row"),
         (["car_start,zero,-3,0"], "column 2 (x)", "the car's start pose is x, y, direction"),
         (["car_start,0,-3,east"], "column 4 (direction)", "a finite number [rad]"),
+        (["car_start,0,0,0"], "line", "expected the car's start on the road between the cones"),
     ],
 )
 def test_a_bad_car_start_row_is_named(tmp_path, extra, where, says):

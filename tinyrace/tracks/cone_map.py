@@ -38,6 +38,7 @@ class Cones:
     tags: tuple[str, ...]  # one of CLASSES per cone
     lines: tuple[int, ...]  # file line of each cone (from 1)
     start: tuple[float, float, float] | None = None  # the car_start row's pose [m, m, rad]
+    start_line: int = 0  # its file line
 
     def of(self, tag: str) -> np.ndarray:
         """Indices of the cones of class ``tag``."""
@@ -101,7 +102,26 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
                 f"expected x and y within +-{MAX_COORDINATE:g} m after scale (scale {scale:g})"
             )
             raise ConfigError(Problem(str(path), f"line {start_line}", list(start), allowed))
-    return Cones(str(path), array, tuple(tags), tuple(lines), start)
+    return Cones(str(path), array, tuple(tags), tuple(lines), start, start_line)
+
+
+def check_start_on_road(cones: Cones, road: ConeRoad) -> None:
+    """Refuse a ``car_start`` pose off the road between the cones (the car would start
+    out of its lane, or out of bounds)."""
+    if cones.start is None:
+        return
+    point = np.array(cones.start[:2])
+    nearest = polyline.nearest_index(road.centerline, point)
+    off = float(np.hypot(*(point - road.centerline[nearest])))
+    half = float(road.widths[nearest].max())
+    if off <= half:
+        return
+    x, y = road.centerline[nearest]
+    allowed = (
+        f"expected the car's start on the road between the cones; it is {off:.2f} m from the "
+        f"road's middle at ({x:.2f}, {y:.2f}) m, where the road is {2 * half:.2f} m wide"
+    )
+    raise ConfigError(Problem(cones.path, f"line {cones.start_line}", list(cones.start), allowed))
 
 
 def _car_start(
