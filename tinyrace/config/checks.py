@@ -127,7 +127,9 @@ def _unread(knob: str, models: list[CarModelEntry]) -> str:
     for model in dict.fromkeys(models):  # each model once, in the cars' order
         reads = ", ".join(sorted(model.reads or ())) or "no other knob"
         described.append(f"car model {model.name!r} reads {reads}")
-    return f"no car of this env reads car.{knob} ({'; '.join(described)}): leave it out"
+    readers = [m.name for m in car_models().values() if m.reads is not None and knob in m.reads]
+    other = f", or choose a car model that reads it ({', '.join(readers)})" if readers else ""
+    return f"no car of this env reads car.{knob} ({'; '.join(described)}): leave it out{other}"
 
 
 def _check_box(config: EnvConfig, parser: Parser, where: str) -> None:
