@@ -137,3 +137,16 @@ def test_a_model_that_does_not_say_what_it_reads_takes_every_knob(anything_goes)
     env = gym.make(ID, environment="circuit", car={"model": anything_goes, "preset": "vehicle3"})
     assert env.unwrapped.config.car.model == anything_goes
     env.close()
+
+
+def test_a_race_of_other_models_over_a_track_file_leaves_the_files_car_knobs_behind():
+    """Every car of the race a model of its own over circuit's kinematic car: none reads the
+    file's wheelbase, so the file's knobs are another car's, not refused in the file."""
+    both = {"cars": [{"car": {"model": "single_track"}}, {"car": {"model": "dynamic"}}]}
+    loaded = load_env_config(environment="circuit", overrides={"race": both})
+    assert [c.car.model for c in loaded.config.race.cars] == ["single_track", "dynamic"]
+    # a car that keeps the file's model keeps the file's knobs
+    one = {"cars": [{"car": {"model": "single_track"}}, {}]}
+    kept = load_env_config(environment="circuit", overrides={"race": one})
+    file_only = load_env_config(environment="circuit")
+    assert kept.config.race.cars[1].car.max_acceleration == file_only.config.car.max_acceleration

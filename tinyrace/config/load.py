@@ -95,19 +95,42 @@ def _config_over_folder(config: Any, environment: str | Path, laid: Overrides) -
 
 
 def _without_its_car_knobs(raw: dict[str, Any], keys: Mapping[str, Any]) -> dict[str, Any]:
-    """``raw`` without the knobs of its car section that the overrides' car model does not
-    read, when the overrides choose another model (``car={"model": "single_track"}`` on a
-    track whose file sizes a kinematic car): another car, not the file's car with knobs it
-    would refuse. Knobs the new model reads stay laid under the overrides'."""
-    over, own = keys.get("car"), raw.get("car")
-    if not isinstance(over, Mapping) or not isinstance(own, Mapping):
+    """``raw`` without the knobs of its car section that no car reads once the overrides
+    choose other car models (``car={"model": "single_track"}``, or a ``race.cars`` list of
+    such cars, on a track whose file sizes a kinematic car): other cars, not the file's car
+    with knobs they would refuse. Knobs some car reads stay laid under the overrides'."""
+    own = raw.get("car")
+    if not isinstance(own, Mapping) or not _chosen_models(keys):
         return raw
-    name = over.get("model")
-    model = car_models().get(name) if isinstance(name, str) and name != own.get("model") else None
-    if model is None or model.reads is None:
-        return raw
-    kept = {k: v for k, v in own.items() if k not in CAR_KNOB_DEFAULTS or k in model.reads}
+    merged = deep_merge(raw, spelled_as(keys, raw))
+    names = _chosen_models(merged, every_car=True)
+    if names is None or set(names) <= set(_chosen_models(raw, every_car=True) or ()):
+        return raw  # a car of the default model, or no model the file did not have already
+    models = [car_models().get(name) for name in names]
+    if any(model is None or model.reads is None for model in models):
+        return raw  # an unknown model (named by the checks), or one that reads every knob
+    reads = set().union(*(model.reads or () for model in models if model is not None))
+    kept = {k: v for k, v in own.items() if k not in CAR_KNOB_DEFAULTS or k in reads}
     return {**raw, "car": kept}
+
+
+def _chosen_models(raw: Mapping[str, Any], every_car: bool = False) -> list[str] | None:
+    """The car models ``raw`` names: its car section's and its ``race.cars`` entries' (with
+    ``every_car``: the model of each car of the env, a car without its own that of the car
+    section; None when one is left to the track's default or is no name)."""
+    top = raw.get("car")
+    name = top.get("model") if isinstance(top, Mapping) else None
+    race = raw.get("race")
+    cars = race.get("cars") if isinstance(race, Mapping) else None
+    entries = [cars] if isinstance(cars, Mapping) else cars if isinstance(cars, list) else []
+    names = []
+    for entry in entries:
+        car = entry.get("car") if isinstance(entry, Mapping) else None
+        names.append(car.get("model", name) if isinstance(car, Mapping) else name)
+    if not every_car:
+        return [n for n in [name, *names] if n is not None]
+    found = names or [name]
+    return found if all(isinstance(n, str) for n in found) else None
 
 
 def _read_source(
