@@ -271,6 +271,21 @@ def test_a_start_where_a_straight_meets_a_curve_faces_along_the_straight(tmp_pat
     assert track.circuit.headings[0] == heading
 
 
+@pytest.mark.parametrize("spacing", [2.0, 0.5, 0.05])
+@pytest.mark.parametrize("arc_points", [3, 5, 25])
+def test_the_start_faces_along_the_straight_at_any_spacing(tmp_path, spacing, arc_points):
+    """Judged on the resampled points, a spacing finer than the file's last chord made the
+    points behind the start lie in line too, and the heading leaned toward the corner again
+    (-0.196 rad with a 4-chord arc at spacing 0.5): the file's own points decide."""
+    points = stadium(3.0, step=0.5, arc_points=arc_points)
+    rows = "\n".join(f"{x:.4f},{y:.4f},0.8,0.8" for x, y in points)
+    (tmp_path / "c.csv").write_text("# x_m,y_m,w_tr_right_m,w_tr_left_m\n" + rows)
+    (tmp_path / "track.yaml").write_text(
+        f"track: {{type: centerline, file: c.csv, spacing: {spacing}}}\n"
+    )
+    assert load(tmp_path).tracks[0].spawns[0][2] == 0.0
+
+
 def test_a_start_on_a_curve_keeps_the_tangent_from_its_two_neighbours(tmp_path):
     angles = np.linspace(0, 2 * math.pi, 200, endpoint=False)
     rows = "\n".join(f"{10 * math.cos(a):.6f},{10 * math.sin(a):.6f},1,1" for a in angles)

@@ -29,11 +29,13 @@ class Circuit:
     def build(cls, points: np.ndarray, widths: np.ndarray, spacing: float) -> Circuit:
         """Resample ``points`` (N, 2) with ``widths`` (N, 2) to ``spacing`` [m], keeping point
         0; the heading there is the tangent where a straight meets a curve at the start
-        (``polyline.start_heading``), and the start's tiles are square to it."""
+        (``polyline.start_heading``, judged on ``points`` as given: at any spacing the
+        resampled points on both sides of a corner may lie in line), and the start's tiles
+        are square to it."""
         even, even_widths = polyline.resample(points, spacing, widths)
         assert even_widths is not None
         heading = polyline.headings(even)
-        heading[0] = polyline.start_heading(even, heading)
+        heading[0] = polyline.start_heading(np.asarray(points, float), heading)
         arrays = (even, even_widths, heading, polyline.tiles(even, even_widths, heading))
         for array in arrays:
             array.setflags(write=False)
