@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import pytest
 
 from tinyrace.drivers import CenterlineDriver
@@ -129,10 +130,25 @@ def test_two_numbers_of_cars_that_differ_are_refused_naming_both():
         parallel_env(environment="f1tenth_loop", num_agents=2, race="x")
 
 
-def test_the_same_number_of_cars_twice_is_taken():
-    race = parallel_env(environment="f1tenth_loop", num_agents=3, race={"num_agents": 3})
+@pytest.mark.parametrize(
+    ("keyword", "own"), [(3, 3), (3, 3.0), (np.int64(3), 3), (3, np.int64(3)), (3.0, np.int32(3))]
+)
+def test_the_same_number_of_cars_twice_is_taken(keyword, own):
+    """The same number in two types (a float 3.0, numpy's integers) is the same number: each
+    alone is taken as 3 cars, so both together are too."""
+    race = parallel_env(environment="f1tenth_loop", num_agents=keyword, race={"num_agents": own})
     assert race.possible_agents == ["car_0", "car_1", "car_2"]
     race.close()
+
+
+def test_numpy_numbers_are_numbers_to_the_config():
+    import gymnasium as gym
+
+    car = {"model": "single_track", "substeps": np.int64(4), "kinematic_below": np.float32(0.5)}
+    env = gym.make("tinyrace/TinyRace-v0", environment="circuit", car=car)
+    assert (env.unwrapped.config.car.substeps, env.unwrapped.config.car.kinematic_below) == (4, 0.5)
+    assert type(env.unwrapped.config.car.substeps) is int
+    env.close()
 
 
 def test_the_centerline_drivers_knobs_are_documented_with_their_defaults():

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 import types
 import typing
 from collections.abc import Mapping
@@ -185,8 +186,10 @@ class Parser:
 
     def number(self, hint: type, raw: object, path: str, meta: Mapping[str, Any]) -> Any:
         allowed = f"expected {_describe(hint, meta)}"
-        if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        if isinstance(raw, bool) or not isinstance(raw, numbers.Real):
             return self.problem(path, raw, allowed + _number_as_text(raw))
+        if not isinstance(raw, (int, float)):  # a numpy number (np.int64, np.float32): as Python's
+            raw = int(raw) if isinstance(raw, numbers.Integral) else float(raw)
         if isinstance(raw, float) and not math.isfinite(raw):
             return self.problem(path, raw, allowed)
         magnitude = meta.get("magnitude", MAX_MAGNITUDE)

@@ -13,11 +13,14 @@ which car sent it, what it was and the car's action space.
 
 from __future__ import annotations
 
+import math
+import numbers
 import reprlib
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 import gymnasium as gym
+import numpy as np
 from gymnasium.error import InvalidAction
 
 from tinyrace.actions import ActionSpec
@@ -44,13 +47,26 @@ def race_with_cars(race: object, count: object, asked_by: str) -> object:
     if not isinstance(race, Mapping):
         return race
     own = race.get("num_agents")
-    if own is not None and (own != count or type(own) is not type(count)):
+    if own is not None and not _same_number(own, count):
+        value = float(count) if _number(count) else math.nan  # type: ignore[arg-type]
+        number = shown(int(value) if value.is_integer() else count)
         allowed = (
-            f"expected {shown(count)} or no race.num_agents: {asked_by} asks for "
-            f"{shown(count)} cars (give the number of cars once, or the same in both)"
+            f"expected {number} or no race.num_agents: {asked_by} asks for {number} cars "
+            "(give the number of cars once, or the same in both)"
         )
         raise ConfigError(Problem(KWARGS_SOURCE, "race.num_agents", own, allowed))
     return {**race, "num_agents": count}
+
+
+def _number(value: object) -> bool:
+    """A real number, numpy's included, that is no boolean."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def _same_number(a: object, b: object) -> bool:
+    """Whether ``a`` and ``b`` are the same number (2, 2.0 and np.int64(2) alike); the
+    config's checks say what else is wrong with either."""
+    return _number(a) and _number(b) and float(a) == float(b)  # type: ignore[arg-type]
 
 
 def reset_options(options: object, owner: str = "RaceEnv") -> dict[str, Any] | None:
