@@ -67,3 +67,16 @@ def test_the_commands_help_shows_no_markup():
         [sys.executable, "-m", "tinyrace", "--help"], capture_output=True, text=True, timeout=60
     )
     assert "The tinyrace command" in result.stdout and "``" not in result.stdout
+
+
+def test_show_with_an_empty_output_name_writes_nothing(tmp_path: Path):
+    result = subprocess.run(
+        [sys.executable, "-m", "tinyrace", "show", "autocross", "-o", ""],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=tmp_path,
+    )
+    assert result.returncode == 2
+    assert "-o/--output: got ''; expected a PNG file's path" in result.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -127,7 +127,7 @@ def test_a_car_start_row_places_the_car_and_the_start_line_stays_at_the_big_oran
     [
         (["car_start,0,-3,0", "car_start,1,-3,0"], "line", "expected one car_start row"),
         (["car_start,zero,-3,0"], "column 2 (x)", "the car's start pose is x, y, direction"),
-        (["car_start,0,-3,east"], "column 4 (direction)", "a finite number [rad]"),
+        (["car_start,0,-3,east"], "column 4 (direction)", "a finite number within"),
         (["car_start,0,0,0"], "line", "expected the car's start on the road between the cones"),
     ],
 )
@@ -296,3 +296,21 @@ def test_a_start_on_a_curve_keeps_the_tangent_from_its_two_neighbours(tmp_path):
     chord = line[1] - line[-1]
     assert track.spawns[0][2] == math.atan2(chord[1], chord[0])  # pi / 2 within 1e-3
     assert track.spawns[0][2] == pytest.approx(math.pi / 2, abs=1e-3)
+
+
+def test_a_car_start_direction_is_bounded_as_a_spawns_heading(tmp_path):
+    rows = [*cone_rows(stadium(2.0), stadium(4.0)), *BIG_ORANGE, "car_start,-2.5,-3,1e300"]
+    (message,) = problems(write_cones(tmp_path, rows))
+    assert "column 4 (direction)" in message and "within +-1e+09 [rad]" in message
+
+
+def test_a_stray_cone_far_from_the_road_is_named(tmp_path):
+    """A cone 50 km away stretched the playfield (and the ground's pixels) to reach it, and
+    tinyrace show drew the track 2 px high."""
+    rows = [*cone_rows(stadium(2.0), stadium(4.0)), *BIG_ORANGE, "orange,-50000,0,0,0,0,0"]
+    (message,) = problems(write_cones(tmp_path, rows))
+    assert "line" in message and "[-50000.0, 0.0]" in message
+    assert "within 100 m of the road" in message and "49,99" in message
+    near = [*cone_rows(stadium(2.0), stadium(4.0)), *BIG_ORANGE, "orange,-60,0,0,0,0,0"]
+    (tmp_path / "near").mkdir()
+    assert load(write_cones(tmp_path / "near", near)).tracks[0].centerline is not None

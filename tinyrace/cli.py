@@ -284,6 +284,9 @@ def _show(args: argparse.Namespace) -> int:
 
     from tinyrace.validate import check_output, picture, system_reason, write_picture
 
+    if args.output is not None and not args.output.strip():  # -o '': no file name
+        allowed = "expected a PNG file's path (leave -o out for <name>.png in this folder)"
+        raise ConfigError(Problem("<command line>", "-o/--output", args.output, allowed))
     target = args.path if args.path == "procedural" else str(find_example(args.path))
     shown = picture(target, 0 if args.seed is None else args.seed)
     if args.seed is not None and not shown.seeded:  # the same picture for every seed

@@ -33,6 +33,9 @@ MAX_INNER_WIDTH_OVER_RADIUS = 1.2
 MAX_TRACK_POINTS = 100_000  # centreline points after resampling (track length / spacing)
 MAX_CONES = 5_000  # cones in one cone map (a Formula Student track has a few hundred)
 MAX_CONE_ROAD_POINTS = 5_000  # an edge of a cone map / spacing (the road is matched edge to edge)
+# [m] the farthest a cone may stand from a cone map's road (its middle line): a stray cone
+# far away would stretch the playfield, and the ground's pixels with it, to reach it
+MAX_CONE_OFF_ROAD = 100.0
 MIN_MAP_SIDE = 2  # [cells] a ROS map's width and height
 MAX_MAP_WALLS = 100_000  # wall rectangles of one ROS map (f1tenth_gym's example: 2,083)
 RESOLUTION_RANGE = (1e-4, 1e3)  # [m/px] a ROS map's resolution (F1TENTH maps: 0.05)
@@ -66,6 +69,7 @@ BOUNDS = (
         "points",
         "a cone map's edge length / spacing (2.5 km at the default 0.5 m)",
     ),
+    Bound("MAX_CONE_OFF_ROAD", MAX_CONE_OFF_ROAD, "m", "a cone from a cone map's road"),
     Bound("MIN_MAP_SIDE", MIN_MAP_SIDE, "cells", "a ROS map's width and height (at least)"),
     Bound("RESOLUTION_RANGE", RESOLUTION_RANGE[1], "m/px", "a ROS map's resolution, from 1e-4"),
     Bound(

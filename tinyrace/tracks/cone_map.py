@@ -17,7 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
-from tinyrace.config.bounds import MAX_CONE_ROAD_POINTS, MAX_CONES, MAX_COORDINATE
+from tinyrace.config.bounds import (
+    MAX_CONE_OFF_ROAD,
+    MAX_CONE_ROAD_POINTS,
+    MAX_CONES,
+    MAX_COORDINATE,
+)
 from tinyrace.errors import ConfigError, Problem, capped
 from tinyrace.tracks import polyline
 from tinyrace.tracks.csv_rows import cell_number, read_text, split_cells
@@ -27,6 +32,7 @@ RADII = {"blue": 0.115, "yellow": 0.115, "orange": 0.115, "big_orange": 0.145, "
 MIN_EDGE_CONES = 3
 _COLUMNS = ("tag", "x", "y", "direction", "x_variance", "y_variance", "covariance")
 CAR_START = "car_start"  # the tag of the row that places the car (EUFS's tracks)
+MAX_HEADING = 1e9  # [rad] the most a car_start's direction may be (as track.spawn's heading)
 
 
 @dataclass(frozen=True)
@@ -105,6 +111,24 @@ def read_cones(path: Path, source: str, key: str, scale: float = 1.0) -> Cones:
     return Cones(str(path), array, tuple(tags), tuple(lines), start, start_line)
 
 
+def check_cones_near_road(cones: Cones, road: ConeRoad) -> None:
+    """Refuse a cone farther than ``MAX_CONE_OFF_ROAD`` from the road's middle line (a stray
+    row: the playfield, and the ground's pixels, would stretch to reach it)."""
+    nearest = road.centerline[_nearest(road.centerline, cones.positions)]
+    off = np.hypot(*(cones.positions - nearest).T)
+    far = np.flatnonzero(off > MAX_CONE_OFF_ROAD)
+    if len(far) == 0:
+        return
+    worst = int(far[np.argmax(off[far])])
+    others = f" ({len(far) - 1} more cone(s) as far)" if len(far) > 1 else ""
+    allowed = (
+        f"expected every cone within {MAX_CONE_OFF_ROAD:g} m of the road between the blue and "
+        f"yellow cones; this {cones.tags[worst]} cone is {off[worst]:,.0f} m from it{others}"
+    )
+    where = f"line {cones.lines[worst]}"
+    raise ConfigError(Problem(cones.path, where, cones.positions[worst].tolist(), allowed))
+
+
 def check_start_on_road(cones: Cones, road: ConeRoad) -> None:
     """Refuse a ``car_start`` pose off the road between the cones (the car would start
     out of its lane, or out of bounds)."""
@@ -134,11 +158,14 @@ def _car_start(
             values.append(0.0)  # EUFS writes 0: the cars start facing +x
             continue
         value = cell_number(cells[column]) if column < len(cells) else float("nan")
-        if not np.isfinite(value):
+        if not (np.isfinite(value) and (column < 3 or abs(value) <= MAX_HEADING)):
             where = f"line {number}, column {column + 1} ({_COLUMNS[column]})"
             shown = cells[column] if column < len(cells) else None
             unit = "rad" if column == 3 else "m"
-            allowed = f"expected a finite number [{unit}]: the car's start pose is x, y, direction"
+            bound = f" within +-{MAX_HEADING:g}" if column == 3 else ""
+            allowed = (
+                f"expected a finite number{bound} [{unit}]: the car's start pose is x, y, direction"
+            )
             problems.append(Problem(path, where, shown, allowed))
             return None
         values.append(value)

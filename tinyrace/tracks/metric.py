@@ -30,7 +30,13 @@ from tinyrace.tracks import polyline
 from tinyrace.tracks.base import PaintedGround, Surface, Track, TrackDraw, TrackRules, pick_index
 from tinyrace.tracks.centerline_csv import Loop, read_loop
 from tinyrace.tracks.circuit import Circuit
-from tinyrace.tracks.cone_map import RADII, check_start_on_road, read_cones, road_between
+from tinyrace.tracks.cone_map import (
+    RADII,
+    check_cones_near_road,
+    check_start_on_road,
+    read_cones,
+    road_between,
+)
 from tinyrace.tracks.ros_map import OccupancyMap, read_map
 
 Pose = tuple[float, float, float]
@@ -146,6 +152,7 @@ def _cone_map(
 ) -> MetricTrack:
     cones = read_cones(base_dir / config.file, source, f"{where}.file", config.scale)
     road = road_between(cones, config.spacing, config.max_cone_gap)
+    check_cones_near_road(cones, road)
     check_start_on_road(cones, road)
     _check_length(road.centerline, config.spacing, source, where, cones.path)
     narrowest = int(np.argmin(road.widths.sum(axis=1)))
