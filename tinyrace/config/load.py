@@ -128,9 +128,10 @@ def _chosen_models(raw: Mapping[str, Any], every_car: bool = False) -> list[str]
         car = entry.get("car") if isinstance(entry, Mapping) else None
         names.append(car.get("model", name) if isinstance(car, Mapping) else name)
     if not every_car:
-        return [n for n in [name, *names] if n is not None]
+        return [n for n in [name, *names] if isinstance(n, str)]
     found = names or [name]
-    return found if all(isinstance(n, str) for n in found) else None
+    strings = [n for n in found if isinstance(n, str)]
+    return strings if len(strings) == len(found) else None
 
 
 def _read_source(
