@@ -150,3 +150,19 @@ def test_a_race_of_other_models_over_a_track_file_leaves_the_files_car_knobs_beh
     kept = load_env_config(environment="circuit", overrides={"race": one})
     file_only = load_env_config(environment="circuit")
     assert kept.config.race.cars[1].car.max_acceleration == file_only.config.car.max_acceleration
+
+
+def test_a_race_entrys_own_knob_is_refused_even_at_the_shared_value(tmp_path):
+    circuit = find_track("circuit")
+    assert circuit is not None
+    path = tmp_path / "race.yaml"
+    path.write_text(
+        f"track: {{type: centerline, file: {circuit / 'circuit.csv'}}}\n"
+        "files: {paths_outside_folder: true}\n"
+        "car: {model: kinematic_throttle, velocity: 15.0}\n"
+        "race: {cars: [{id: ego}, {id: st, car: {model: single_track, velocity: 15.0}}]}\n"
+    )
+    with pytest.raises(ConfigError) as caught:
+        load_env_config(path)
+    ((key, value),) = [(p.path, p.value) for p in caught.value.problems]
+    assert (key, value) == ("race.cars[1].car.velocity", 15.0)

@@ -5,6 +5,7 @@ reported on the parser, with the key path it names."""
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 from tinyrace.cache import folder_problems
 from tinyrace.config.bounds import MAX_CAMERA_PIXELS, PERSPECTIVE_PIXEL_WEIGHT
@@ -20,8 +21,11 @@ CAR_KNOB_DEFAULTS = {
 }
 
 
-def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
-    """Rules that span sections; ``at`` prefixes key paths."""
+def check_consistency(
+    config: EnvConfig, parser: Parser, at: str, given: Mapping[int, set[str]] | None = None
+) -> None:
+    """Rules that span sections; ``at`` prefixes key paths; ``given``: the car keys each
+    ``race.cars`` entry wrote itself (``lay_cars_over_car``), when known."""
     kinds = {t.type for t in config.tracks}
     if len(kinds) > 1:
         parser.problem(f"{at}tracks", sorted(kinds), "all tracks of one env must be of one type")
@@ -37,7 +41,7 @@ def check_consistency(config: EnvConfig, parser: Parser, at: str) -> None:
     _check_observation(config, parser, at, f"{at}observation")
     # the car model and its actions are checked by tinyrace.cars.registry; its knobs here,
     # before the track kind's defaults fill them
-    _check_car_knobs(config, parser, at)
+    _check_car_knobs(config, parser, at, given)
     picture = facts is not None and facts.colour_picture
     if not picture and config.reward_design.color_obstacles:
         obstacles = [repr(o.color) for o in config.reward_design.color_obstacles]
@@ -94,9 +98,12 @@ def _check_race(config: EnvConfig, parser: Parser, at: str, needs_camera: bool) 
         _check_observation(own, parser, car_at, f"{car_at}sensors")
 
 
-def _check_car_knobs(config: EnvConfig, parser: Parser, at: str) -> None:
+def _check_car_knobs(
+    config: EnvConfig, parser: Parser, at: str, given: Mapping[int, set[str]] | None
+) -> None:
     """A ``car`` knob that its car model does not read is refused, never ignored: set in the
-    car section, some car of the env must read it; set in a ``race.cars`` entry, its car."""
+    car section, some car of the env must read it; set in a ``race.cars`` entry (``given``,
+    else each value other than the car section's), its car."""
     if not config.tracks:
         return
     unit = config.facts.unit
@@ -113,7 +120,8 @@ def _check_car_knobs(config: EnvConfig, parser: Parser, at: str) -> None:
             parser.problem(f"{at}car.{name}", value, _unread(name, found))
         for i, (entry, model) in enumerate(zip(entries, found[: len(entries)], strict=True)):
             own = getattr(entry.car, name)  # the car section's value where it gave none
-            if own != default and own != value and not _reads(model, name):
+            written = name in given.get(i, set()) if given is not None else own != value
+            if own != default and written and not _reads(model, name):
                 parser.problem(f"{at}race.cars[{i}].car.{name}", own, _unread(name, [model]))
 
 

@@ -212,6 +212,6 @@ def parse_env_config(raw: Mapping[str, Any], source: str, prefix: str = "") -> E
     at = f"{prefix}." if prefix else ""
     parser.problems = inherited(parser.problems, given, at)  # reported at car.<key> once
     if parser.parsed(config):  # also when some keys were bad: report every problem at once
-        check_consistency(config, parser, at)
+        check_consistency(config, parser, at, given)
     parser.check()
     return resolve_race_cars(resolve_defaults(config))
