@@ -35,7 +35,7 @@ from hypothesis import strategies as st
 
 import tinyrace
 from tinyrace.config.yaml_file import MAX_YAML_BYTES
-from tinyrace.env import RESET_OPTIONS
+from tinyrace.env_checks import RESET_OPTIONS
 
 WORKER = Path(__file__).with_name("hostile_worker.py")
 MEMORY = 2 << 30  # [bytes] address space of a worker (its imports take about 300 MiB)

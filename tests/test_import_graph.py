@@ -28,6 +28,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("render",),
     ("rewards",),
     ("episodes",),
+    ("env_checks",),
     ("env", "carracing"),
     ("drivers",),
     ("__init__",),

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from tinyrace.env import TinyRaceEnv, flag
+from tinyrace.env import TinyRaceEnv
+from tinyrace.env_checks import flag
 
 
 class CarRacingEnv(TinyRaceEnv):

@@ -24,7 +24,7 @@ import numpy as np
 from gymnasium.error import InvalidAction
 
 from tinyrace.actions import ActionSpec
-from tinyrace.env import KWARGS_SOURCE, RESET_OPTIONS, RESET_SOURCE
+from tinyrace.env_checks import KWARGS_SOURCE, RESET_OPTIONS, RESET_SOURCE
 from tinyrace.errors import ConfigError, Problem, shown
 
 _SHORT = reprlib.Repr()
